@@ -1,0 +1,45 @@
+# One source of truth for the commands: the README gives `make paper` and `make test`,
+# and .ci/run calls `make test`.
+PYTHON ?= python3
+VENV   := .venv
+BIN    := $(VENV)/bin
+export PYO3_PYTHON := $(abspath $(BIN)/python)
+
+.PHONY: setup paper test test-rust test-python lint bench bench-rust clean
+
+## setup: create .venv, install burstloc (building the Rust extension) with its dev/bench extras
+setup:
+	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install -q --upgrade pip
+	$(BIN)/python -m pip install -q -e ".[dev,bench]"
+
+## paper: the main job, the paper's experiment on the shipped network
+paper: setup
+	$(BIN)/burstloc evaluate networks/paper15.inp
+
+## test: every test and lint (Rust and Python)
+test: setup lint test-rust test-python
+
+lint:
+	cargo fmt --all --check
+	cargo clippy --workspace --all-targets -- -D warnings
+	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
+	$(BIN)/python -m mypy.stubtest burstloc._core
+
+test-rust:
+	cargo test -p cpd-core
+	cargo test -p cpd-core --no-default-features
+
+test-python:
+	$(BIN)/python -m pytest -q
+
+## bench: Python-side benchmarks (bindings vs pure Python vs River vs TSNet)
+bench: setup
+	$(BIN)/python benches/bench_detectors.py
+
+bench-rust:
+	cargo bench -p cpd-core
+
+clean:
+	rm -rf $(VENV) target

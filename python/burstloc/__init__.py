@@ -1,0 +1,1 @@
+"""burstloc: real-time pipe-burst localization in water distribution networks."""
