@@ -8,10 +8,24 @@ export PYO3_PYTHON := $(abspath $(BIN)/python)
 .PHONY: setup paper test test-rust test-python lint bench bench-rust clean
 
 ## setup: create .venv, install burstloc (building the Rust extension) with its dev/bench extras
-setup:
-	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+# `pip install -e` runs maturin's PEP 660 editable build: the extension is compiled in release
+# mode into python/burstloc/ and the Python sources are used in place. It reruns only when the
+# Rust sources, a manifest or pyproject.toml changed (or the extension is missing), so a second
+# `make setup` is instant; Python edits never need it.
+PY_FOR_SUFFIX := $(shell test -x $(BIN)/python && echo $(BIN)/python || echo $(PYTHON))
+EXT          := python/burstloc/_core$(shell $(PY_FOR_SUFFIX) -c 'import sysconfig; print(sysconfig.get_config_var("EXT_SUFFIX"))')
+BUILD_INPUTS := pyproject.toml Cargo.toml $(wildcard Cargo.lock) \
+                $(shell find crates -name '*.rs' -o -name Cargo.toml -o -name build.rs 2>/dev/null)
+
+setup: $(EXT)
+
+$(BIN)/python:
+	$(PYTHON) -m venv $(VENV)
+
+$(EXT): $(BIN)/python $(BUILD_INPUTS)
 	$(BIN)/python -m pip install -q --upgrade pip
 	$(BIN)/python -m pip install -q -e ".[dev,bench]"
+	@touch $@
 
 ## paper: the main job, the paper's experiment on the shipped network
 paper: setup

@@ -1,0 +1,306 @@
+//! Streaming two-sided CUSUM (the paper's eq. 1–2 and Algorithm 1; TSNet 0.3.1's online pass).
+
+use alloc::vec::Vec;
+
+#[cfg(feature = "serde")]
+use serde::{Deserialize, Serialize};
+
+use crate::alarm::{Alarm, Direction};
+use crate::error::{first_non_finite, non_negative, positive, Error};
+
+/// Validated CUSUM parameters.
+///
+/// `threshold` must be finite and `> 0`; `drift` finite and `>= 0`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(Serialize, Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "CusumConfigRepr"))]
+pub struct CusumConfig {
+    threshold: f64,
+    drift: f64,
+}
+
+impl CusumConfig {
+    /// Builds a config, naming the offending parameter on error.
+    ///
+    /// ```
+    /// use cpd_core::CusumConfig;
+    /// assert!(CusumConfig::new(0.5, 0.0).is_ok());
+    /// let err = CusumConfig::new(-1.0, 0.0).unwrap_err();
+    /// assert!(err.is_config());
+    /// assert!(err.to_string().contains("threshold"));
+    /// ```
+    pub fn new(threshold: f64, drift: f64) -> Result<Self, Error> {
+        Ok(Self {
+            threshold: positive("threshold", threshold)?,
+            drift: non_negative("drift", drift)?,
+        })
+    }
+
+    /// Alarm threshold on the drift-free sums `gp_real` / `gn_real`.
+    pub fn threshold(&self) -> f64 {
+        self.threshold
+    }
+
+    /// Drift subtracted from every difference in `gp` / `gn`.
+    pub fn drift(&self) -> f64 {
+        self.drift
+    }
+}
+
+/// Unvalidated mirror used to validate deserialized configs.
+#[cfg(feature = "serde")]
+#[derive(Deserialize)]
+struct CusumConfigRepr {
+    threshold: f64,
+    drift: f64,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<CusumConfigRepr> for CusumConfig {
+    type Error = Error;
+    fn try_from(r: CusumConfigRepr) -> Result<Self, Error> {
+        CusumConfig::new(r.threshold, r.drift)
+    }
+}
+
+/// Alarm flag bits returned by [`CusumLane::step`].
+pub(crate) const RISE: u8 = 1;
+/// `gn_real` crossed the threshold.
+pub(crate) const DROP: u8 = 2;
+
+/// The per-channel CUSUM state; the single detector and the bank share its arithmetic,
+/// so both are bit-for-bit identical to TSNet.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(Serialize, Deserialize))]
+pub(crate) struct CusumLane {
+    pub x_prev: f64,
+    pub gp: f64,
+    pub gn: f64,
+    pub gp_real: f64,
+    pub gn_real: f64,
+    pub tap: u64,
+    pub tan: u64,
+    pub x_tap: f64,
+    pub x_tan: f64,
+}
+
+impl CusumLane {
+    pub(crate) const ZERO: Self = Self {
+        x_prev: 0.0,
+        gp: 0.0,
+        gn: 0.0,
+        gp_real: 0.0,
+        gn_real: 0.0,
+        tap: 0,
+        tan: 0,
+        x_tap: 0.0,
+        x_tan: 0.0,
+    };
+
+    /// Sample 0: only primes `x_prev` (and the start values, `tap = tan = 0`).
+    #[inline(always)]
+    pub(crate) fn prime(&mut self, x: f64) {
+        self.x_prev = x;
+        self.x_tap = x;
+        self.x_tan = x;
+    }
+
+    /// Sample `i >= 1`. Returns `RISE`/`DROP` bits (both may be set; TSNet then reports a rise).
+    /// Written with selects so that the bank loop vectorizes.
+    #[inline(always)]
+    pub(crate) fn step(&mut self, x: f64, i: u64, threshold: f64, drift: f64) -> u8 {
+        let s = x - self.x_prev;
+        self.x_prev = x;
+        // Same operation order as TSNet: (g + s) - drift.
+        let gp = self.gp + s - drift;
+        let gp_real = self.gp_real + s;
+        let gn = self.gn - s - drift;
+        let gn_real = self.gn_real - s;
+        let reset_p = gp < 0.0;
+        let reset_n = gn < 0.0;
+        let gp = if reset_p { 0.0 } else { gp };
+        let gp_real = if reset_p { 0.0 } else { gp_real };
+        self.tap = if reset_p { i } else { self.tap };
+        self.x_tap = if reset_p { x } else { self.x_tap };
+        let gn = if reset_n { 0.0 } else { gn };
+        let gn_real = if reset_n { 0.0 } else { gn_real };
+        self.tan = if reset_n { i } else { self.tan };
+        self.x_tan = if reset_n { x } else { self.x_tan };
+        let up = gp_real > threshold;
+        let down = gn_real > threshold;
+        let alarm = up | down;
+        self.gp = if alarm { 0.0 } else { gp };
+        self.gn = if alarm { 0.0 } else { gn };
+        self.gp_real = if alarm { 0.0 } else { gp_real };
+        self.gn_real = if alarm { 0.0 } else { gn_real };
+        (up as u8 * RISE) | (down as u8 * DROP)
+    }
+
+    /// The alarm for non-zero `flags` returned by [`CusumLane::step`] at sample `i` (value `x`).
+    #[inline]
+    pub(crate) fn alarm(&self, flags: u8, i: u64, x: f64) -> Alarm {
+        if flags & RISE != 0 {
+            Alarm {
+                index: i,
+                start: self.tap,
+                direction: Direction::Rise,
+                amplitude: x - self.x_tap,
+            }
+        } else {
+            Alarm {
+                index: i,
+                start: self.tan,
+                direction: Direction::Drop,
+                amplitude: x - self.x_tan,
+            }
+        }
+    }
+}
+
+/// Streaming two-sided CUSUM, one sample per call.
+///
+/// Semantics are TSNet 0.3.1's `detect_cusum` online pass (the paper's Algorithm 1):
+/// sample 0 only primes the previous value; for `i >= 1`, with `s = x[i] - x[i-1]`,
+/// `gp += s - drift`, `gp_real += s`, `gn += -s - drift`, `gn_real -= s`; when `gp < 0`
+/// both `gp` and `gp_real` reset to 0 and the rise start `tap = i` (likewise `gn`/`tan`);
+/// when `gp_real > threshold` or `gn_real > threshold` an [`Alarm`] is raised with
+/// start `tap` (rise) or `tan` (drop) and amplitude `x[i] - x[start]`, and all four sums
+/// reset to 0.
+///
+/// **Non-finite samples** (NaN, ±inf) are rejected with [`Error::NonFiniteSample`] and
+/// leave the detector exactly as it was: the sample is not counted, the next finite
+/// sample continues as if the bad one never arrived. Missing readings are the caller's
+/// business (skip them, or hold the last value).
+///
+/// ```
+/// use cpd_core::{Cusum, CusumConfig, Direction};
+///
+/// let mut det = Cusum::new(CusumConfig::new(0.5, 0.01)?);
+/// let heads = [200.0, 200.0, 200.0, 199.2, 199.2];
+/// let mut alarms = Vec::new();
+/// det.update_slice(&heads, &mut alarms)?;
+/// assert_eq!(alarms.len(), 1);
+/// let a = alarms[0];
+/// // gn crossed 0 for the last time at sample 2: the drop started there.
+/// assert_eq!((a.index, a.start, a.direction), (3, 2, Direction::Drop));
+/// assert!((a.amplitude + 0.8).abs() < 1e-9);
+/// // A NaN is refused and changes nothing.
+/// let before = det.clone();
+/// assert!(det.update(f64::NAN).is_err());
+/// assert_eq!(det, before);
+/// # Ok::<(), cpd_core::Error>(())
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(Serialize, Deserialize))]
+pub struct Cusum {
+    config: CusumConfig,
+    seen: u64,
+    lane: CusumLane,
+}
+
+impl Cusum {
+    /// A fresh detector.
+    pub fn new(config: CusumConfig) -> Self {
+        Self {
+            config,
+            seen: 0,
+            lane: CusumLane::ZERO,
+        }
+    }
+
+    /// Feeds one sample; returns the alarm it raises, if any.
+    ///
+    /// Errors with [`Error::NonFiniteSample`] (state unchanged) on NaN or ±inf.
+    #[inline]
+    pub fn update(&mut self, x: f64) -> Result<Option<Alarm>, Error> {
+        if !x.is_finite() {
+            return Err(Error::NonFiniteSample {
+                index: self.seen,
+                value: x,
+            });
+        }
+        Ok(self.update_unchecked(x))
+    }
+
+    #[inline(always)]
+    fn update_unchecked(&mut self, x: f64) -> Option<Alarm> {
+        let i = self.seen;
+        self.seen += 1;
+        if i == 0 {
+            self.lane.prime(x);
+            return None;
+        }
+        let flags = self
+            .lane
+            .step(x, i, self.config.threshold, self.config.drift);
+        if flags == 0 {
+            None
+        } else {
+            Some(self.lane.alarm(flags, i, x))
+        }
+    }
+
+    /// Feeds a slice of samples, appending the alarms to `out`.
+    ///
+    /// The whole slice is validated first: if any sample is non-finite, nothing is consumed,
+    /// the state is unchanged and the error names the first bad sample's stream index.
+    pub fn update_slice(&mut self, xs: &[f64], out: &mut Vec<Alarm>) -> Result<(), Error> {
+        if let Some((k, value)) = first_non_finite(xs) {
+            return Err(Error::NonFiniteSample {
+                index: self.seen + k as u64,
+                value,
+            });
+        }
+        for &x in xs {
+            if let Some(a) = self.update_unchecked(x) {
+                out.push(a);
+            }
+        }
+        Ok(())
+    }
+
+    /// Back to the state of [`Cusum::new`] with the same config.
+    pub fn reset(&mut self) {
+        *self = Self::new(self.config);
+    }
+
+    /// The detector's config.
+    pub fn config(&self) -> &CusumConfig {
+        &self.config
+    }
+
+    /// Number of (finite) samples consumed so far.
+    pub fn samples_seen(&self) -> u64 {
+        self.seen
+    }
+
+    /// Cumulative sum for a rise, with drift.
+    pub fn gp(&self) -> f64 {
+        self.lane.gp
+    }
+
+    /// Cumulative sum for a drop, with drift.
+    pub fn gn(&self) -> f64 {
+        self.lane.gn
+    }
+
+    /// Cumulative rise without drift (the amplitude tracked since `tap`).
+    pub fn gp_real(&self) -> f64 {
+        self.lane.gp_real
+    }
+
+    /// Cumulative drop without drift (the amplitude tracked since `tan`).
+    pub fn gn_real(&self) -> f64 {
+        self.lane.gn_real
+    }
+
+    /// Current start index of a rise (`tap`).
+    pub fn rise_start(&self) -> u64 {
+        self.lane.tap
+    }
+
+    /// Current start index of a drop (`tan`).
+    pub fn drop_start(&self) -> u64 {
+        self.lane.tan
+    }
+}

@@ -1,0 +1,150 @@
+//! The crate's single error type.
+
+use core::fmt;
+
+/// Everything that can go wrong in `cpd-core`.
+///
+/// Configuration problems ([`Error::InvalidParameter`], see [`Error::is_config`]) are
+/// reported when a config or bank is built; the other variants are bad *input*
+/// (a non-finite sample, a wrong number of readings). Whenever an input error is
+/// returned, the detector or bank is left exactly as it was before the call.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum Error {
+    /// A configuration parameter is out of its domain.
+    InvalidParameter {
+        /// The parameter's name, as spelled in the constructor (`"threshold"`, `"window"`, ...).
+        name: &'static str,
+        /// The rejected value (integers are converted to `f64`).
+        value: f64,
+        /// What the value must satisfy, e.g. `"must be finite and > 0"`.
+        reason: &'static str,
+    },
+    /// A NaN or infinite sample was fed to a single-channel detector or a batch function.
+    NonFiniteSample {
+        /// Index of the bad sample in the detector's stream (or in the batch slice).
+        index: u64,
+        /// The offending value.
+        value: f64,
+    },
+    /// A NaN or infinite reading was passed to a bank's `step`.
+    NonFiniteReading {
+        /// Channel (column) of the bad reading.
+        channel: usize,
+        /// The offending value.
+        value: f64,
+    },
+    /// A NaN or infinite value in the matrix passed to a bank's `step_many`.
+    NonFiniteMatrixReading {
+        /// Row (time step within the call) of the bad reading.
+        row: usize,
+        /// Channel (column) of the bad reading.
+        channel: usize,
+        /// The offending value.
+        value: f64,
+    },
+    /// A bank step got a number of readings different from its number of channels.
+    ChannelCount {
+        /// The bank's number of channels.
+        expected: usize,
+        /// The number of readings passed.
+        got: usize,
+    },
+    /// The row-major matrix passed to `step_many` is not a whole number of rows.
+    MatrixShape {
+        /// Length of the flat matrix.
+        len: usize,
+        /// The bank's number of channels (the row length).
+        channels: usize,
+    },
+    /// A deserialized state is internally inconsistent (e.g. a ring buffer of the wrong length).
+    CorruptState {
+        /// What is inconsistent.
+        reason: &'static str,
+    },
+}
+
+impl Error {
+    /// True for configuration errors ([`Error::InvalidParameter`]), false for bad input.
+    pub fn is_config(&self) -> bool {
+        matches!(self, Error::InvalidParameter { .. })
+    }
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Error::InvalidParameter {
+                name,
+                value,
+                reason,
+            } => write!(f, "invalid parameter `{name}` = {value}: {reason}"),
+            Error::NonFiniteSample { index, value } => {
+                write!(f, "non-finite sample {value} at index {index}")
+            }
+            Error::NonFiniteReading { channel, value } => {
+                write!(f, "non-finite reading {value} on channel {channel}")
+            }
+            Error::NonFiniteMatrixReading {
+                row,
+                channel,
+                value,
+            } => write!(
+                f,
+                "non-finite reading {value} at row {row}, channel {channel}"
+            ),
+            Error::ChannelCount { expected, got } => {
+                write!(
+                    f,
+                    "expected {expected} readings (one per channel), got {got}"
+                )
+            }
+            Error::MatrixShape { len, channels } => write!(
+                f,
+                "matrix of {len} values is not a whole number of rows of {channels} channels"
+            ),
+            Error::CorruptState { reason } => write!(f, "corrupt detector state: {reason}"),
+        }
+    }
+}
+
+impl core::error::Error for Error {}
+
+/// Checks that `value` is finite and strictly positive.
+pub(crate) fn positive(name: &'static str, value: f64) -> Result<f64, Error> {
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(Error::InvalidParameter {
+            name,
+            value,
+            reason: "must be finite and > 0",
+        })
+    }
+}
+
+/// Checks that `value` is finite and non-negative.
+pub(crate) fn non_negative(name: &'static str, value: f64) -> Result<f64, Error> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(value)
+    } else {
+        Err(Error::InvalidParameter {
+            name,
+            value,
+            reason: "must be finite and >= 0",
+        })
+    }
+}
+
+/// Index and value of the first non-finite element of `xs`, if any.
+#[inline]
+pub(crate) fn first_non_finite(xs: &[f64]) -> Option<(usize, f64)> {
+    // Branch-free (vectorizable) scan first; locate the culprit only when something is wrong.
+    if xs.iter().fold(true, |ok, v| ok & v.is_finite()) {
+        return None;
+    }
+    xs.iter()
+        .enumerate()
+        .find(|(_, v)| !v.is_finite())
+        .map(|(i, v)| (i, *v))
+}

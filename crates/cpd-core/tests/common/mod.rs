@@ -1,0 +1,80 @@
+//! Shared helpers for the integration tests: a seeded generator of pressure-like signals.
+#![allow(dead_code)]
+
+/// SplitMix64: tiny, seeded, good enough for test signals.
+pub struct Rng(u64);
+
+impl Rng {
+    pub fn new(seed: u64) -> Self {
+        Rng(seed)
+    }
+
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in [0, 1).
+    pub fn uniform(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+
+    /// Uniform integer in [0, n).
+    pub fn below(&mut self, n: u64) -> u64 {
+        self.next_u64() % n
+    }
+
+    /// Roughly normal (sum of 4 uniforms), mean 0, std 1.
+    pub fn normal(&mut self) -> f64 {
+        let s: f64 = (0..4).map(|_| self.uniform()).sum();
+        (s - 2.0) * (3.0f64).sqrt()
+    }
+}
+
+/// Signal families: each stresses something different.
+pub const KINDS: u64 = 6;
+
+/// `n` samples of signal family `kind` (see [`KINDS`]).
+pub fn signal(kind: u64, n: usize, rng: &mut Rng) -> Vec<f64> {
+    let mut x = Vec::with_capacity(n);
+    let mut level = 200.0;
+    for i in 0..n {
+        let v = match kind {
+            // Heads near 200 m with millimetre noise and occasional steps (bursts).
+            0 => {
+                if rng.below(100) == 0 {
+                    level -= 0.5 + 2.0 * rng.uniform();
+                }
+                level + 1e-3 * rng.normal()
+            }
+            // Small integers: exact ties everywhere (repeated starts, |x - μ| == s·σ).
+            1 => rng.below(5) as f64 - 2.0,
+            // Wide uniform floats.
+            2 => (rng.uniform() - 0.5) * 2e3,
+            // Random walk.
+            3 => {
+                level += rng.normal();
+                level
+            }
+            // Piecewise constant (plateaus) with rare jumps.
+            4 => {
+                if rng.below(25) == 0 {
+                    level = (rng.below(7) as f64 - 3.0) * 0.75;
+                }
+                level
+            }
+            // Decaying oscillation after a drop: a water-hammer transient.
+            _ => {
+                let t = i as f64 * 0.05;
+                200.0
+                    - 2.0 * (1.0 + (-0.3 * t).exp() * (7.0 * t).cos()) * ((i > n / 3) as u8 as f64)
+                    + 1e-3 * rng.normal()
+            }
+        };
+        x.push(v);
+    }
+    x
+}

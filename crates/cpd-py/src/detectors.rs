@@ -1,0 +1,231 @@
+//! `Cusum` and `Shewhart`: single-channel streaming detectors wrapping the core's.
+
+use cpd_core::{Cusum, CusumConfig, Error, Shewhart, ShewhartConfig};
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyTuple, PyType};
+
+use crate::alarm::{float_repr, PyAlarm};
+use crate::arrays;
+use crate::errors::{config_err, core_err};
+use crate::state;
+
+/// The methods every single-channel detector class shares: `update`, `update_many`, `reset`,
+/// `samples_seen`, `snapshot`/`restore`, pickle and copy; `$extra` holds the class's own
+/// methods (PyO3 takes one `#[pymethods]` block per class).
+macro_rules! detector_methods {
+    ($py_type:ident, $kind:literal, { $($extra:tt)* }) => {
+        #[pymethods]
+        impl $py_type {
+            /// Feeds one sample; returns the alarm it raises, if any.
+            ///
+            /// A NaN or infinite sample raises `InputError` and leaves the state unchanged.
+            fn update(&mut self, x: f64) -> PyResult<Option<PyAlarm>> {
+                match self.inner.update(x) {
+                    Ok(None) => Ok(None),
+                    Ok(Some(alarm)) => Ok(Some(alarm.into())),
+                    Err(err) => Err(core_err(err)),
+                }
+            }
+
+            /// Feeds every sample of a 1-D float64 array, releasing the GIL; returns the alarms.
+            ///
+            /// The array is validated first: a NaN or infinite sample anywhere raises
+            /// `InputError` and no sample is consumed. Another dtype or shape raises
+            /// `InputError` too. While the samples are processed other Python threads run; a
+            /// call on this same detector from one of them meanwhile raises `RuntimeError`.
+            fn update_many(&mut self, py: Python<'_>, x: &Bound<'_, PyAny>) -> PyResult<Vec<PyAlarm>> {
+                let view = arrays::vector(x, "x")?;
+                let samples = arrays::samples(&view);
+                let inner = &mut self.inner;
+                let mut alarms = Vec::new();
+                py.detach(|| inner.update_slice(&samples, &mut alarms))
+                    .map_err(core_err)?;
+                Ok(alarms.into_iter().map(PyAlarm::from).collect())
+            }
+
+            /// Forgets every sample seen, keeping the configuration.
+            fn reset(&mut self) {
+                self.inner.reset();
+            }
+
+            /// Number of samples consumed since creation or the last `reset()`.
+            #[getter]
+            fn samples_seen(&self) -> u64 {
+                self.inner.samples_seen()
+            }
+
+            /// The configuration and full state as bytes, for `restore()`.
+            fn snapshot<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
+                PyBytes::new(py, &state::encode($kind, &self.inner))
+            }
+
+            /// A detector in exactly the state captured by `snapshot()`.
+            ///
+            /// The core re-validates the configuration and the state's shape while decoding.
+            #[classmethod]
+            fn restore(_cls: &Bound<'_, PyType>, state: &[u8]) -> PyResult<Self> {
+                Ok(Self { inner: state::decode($kind, state)? })
+            }
+
+            fn __reduce__<'py>(
+                slf: &Bound<'py, Self>,
+            ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+                let restore = slf.get_type().getattr("restore")?;
+                let snapshot = slf.borrow().snapshot(slf.py());
+                Ok((restore, PyTuple::new(slf.py(), [snapshot])?))
+            }
+
+            fn __copy__(&self) -> Self {
+                Self { inner: self.inner.clone() }
+            }
+
+            fn __deepcopy__(&self, _memo: &Bound<'_, PyAny>) -> Self {
+                Self { inner: self.inner.clone() }
+            }
+
+            $($extra)*
+        }
+    };
+}
+
+/// Two-sided CUSUM change detector (TSNet's `detect_cusum`, online form), one sample at a time.
+///
+/// `Cusum(threshold, drift=0.0)`: `threshold > 0` is the change (in the signal's units) that
+/// raises an alarm, `drift >= 0` is subtracted from every step so that slow movements and noise
+/// do not accumulate. Sample 0 only primes the previous value; from then on the drift-corrected
+/// sums of the positive and negative differences (`gp`, `gn`) grow, and an alarm is raised
+/// when one of their real twins (`gp_real`, `gn_real`) exceeds `threshold`; the sums then
+/// reset. Alarms report where the change started (`start`) and its size (`amplitude`).
+#[pyclass(name = "Cusum", module = "burstloc._core")]
+pub struct PyCusum {
+    inner: Cusum,
+}
+
+detector_methods!(PyCusum, "Cusum", {
+    #[new]
+    #[pyo3(signature = (threshold, drift = 0.0))]
+    fn new(threshold: f64, drift: f64) -> PyResult<Self> {
+        let config = CusumConfig::new(threshold, drift).map_err(core_err)?;
+        Ok(Self {
+            inner: Cusum::new(config),
+        })
+    }
+
+    /// Alarm threshold on the real cumulative sums.
+    #[getter]
+    fn threshold(&self) -> f64 {
+        self.inner.config().threshold()
+    }
+
+    /// Drift subtracted from each difference in the drift-corrected sums.
+    #[getter]
+    fn drift(&self) -> f64 {
+        self.inner.config().drift()
+    }
+
+    /// Drift-corrected cumulative sum of positive changes.
+    #[getter]
+    fn gp(&self) -> f64 {
+        self.inner.gp()
+    }
+
+    /// Drift-corrected cumulative sum of negative changes.
+    #[getter]
+    fn gn(&self) -> f64 {
+        self.inner.gn()
+    }
+
+    /// Real (uncorrected) cumulative sum of positive changes, compared with `threshold`.
+    #[getter]
+    fn gp_real(&self) -> f64 {
+        self.inner.gp_real()
+    }
+
+    /// Real (uncorrected) cumulative sum of negative changes, compared with `threshold`.
+    #[getter]
+    fn gn_real(&self) -> f64 {
+        self.inner.gn_real()
+    }
+
+    fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
+        Ok(format!(
+            "Cusum(threshold={}, drift={})",
+            float_repr(py, self.threshold())?,
+            float_repr(py, self.drift())?,
+        ))
+    }
+});
+
+/// Shewhart control chart over a sliding window (the paper's Algorithm 2, streaming).
+///
+/// `Shewhart(window, threshold, sigma=None)`: the window holds the last `window >= 2` samples
+/// including the current one. Once it is full, a sample raises an alarm when its distance to
+/// the window mean exceeds both `sigma` times the window's (population) standard deviation and
+/// `threshold` (both `> 0`; `sigma` defaults to `threshold`, the paper's single parameter).
+/// The alarm's `amplitude` is the signed distance `x - mean`, its `start` its own index.
+#[pyclass(name = "Shewhart", module = "burstloc._core")]
+pub struct PyShewhart {
+    inner: Shewhart,
+}
+
+/// A Shewhart config from Python arguments: `window` as a Python int (negative values named),
+/// `sigma` defaulting to `threshold` (the paper's single parameter).
+pub(crate) fn shewhart_config(
+    window: i64,
+    threshold: f64,
+    sigma: Option<f64>,
+) -> PyResult<ShewhartConfig> {
+    let window = usize::try_from(window)
+        .map_err(|_| config_err(format!("window must be an integer >= 2, got {window}")))?;
+    ShewhartConfig::new(window, sigma.unwrap_or(threshold), threshold).map_err(|err| {
+        match (sigma, &err) {
+            // sigma was not given: name the parameter the caller did give.
+            (
+                None,
+                Error::InvalidParameter {
+                    name: "sigma",
+                    value,
+                    reason,
+                },
+            ) => config_err(format!("invalid parameter `threshold` = {value}: {reason}")),
+            _ => core_err(err),
+        }
+    })
+}
+
+detector_methods!(PyShewhart, "Shewhart", {
+    #[new]
+    #[pyo3(signature = (window, threshold, sigma = None))]
+    fn new(window: i64, threshold: f64, sigma: Option<f64>) -> PyResult<Self> {
+        Ok(Self {
+            inner: Shewhart::new(shewhart_config(window, threshold, sigma)?),
+        })
+    }
+
+    /// Number of samples in the sliding window (the current one included).
+    #[getter]
+    fn window(&self) -> usize {
+        self.inner.config().window()
+    }
+
+    /// Width of the control limits, in window standard deviations.
+    #[getter]
+    fn sigma(&self) -> f64 {
+        self.inner.config().sigma()
+    }
+
+    /// Minimum distance to the window mean for an alarm.
+    #[getter]
+    fn threshold(&self) -> f64 {
+        self.inner.config().threshold()
+    }
+
+    fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
+        Ok(format!(
+            "Shewhart(window={}, threshold={}, sigma={})",
+            self.window(),
+            float_repr(py, self.threshold())?,
+            float_repr(py, self.sigma())?,
+        ))
+    }
+});

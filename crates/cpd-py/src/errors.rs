@@ -1,0 +1,39 @@
+//! The two Python exception types and the mapping from [`cpd_core::Error`] onto them.
+
+use pyo3::create_exception;
+use pyo3::exceptions::PyValueError;
+use pyo3::PyErr;
+
+create_exception!(
+    burstloc._core,
+    ConfigError,
+    PyValueError,
+    "A detector was configured with an invalid parameter; the message names it and its value."
+);
+create_exception!(
+    burstloc._core,
+    InputError,
+    PyValueError,
+    "A detector was fed invalid input (a NaN or infinite sample, a wrong dtype, shape or \
+     channel count); the message names the sample, channel or argument. The detector's state \
+     is unchanged."
+);
+
+/// Converts a core error: bad configuration becomes `ConfigError`, everything else `InputError`.
+pub(crate) fn core_err(err: cpd_core::Error) -> PyErr {
+    if err.is_config() {
+        ConfigError::new_err(err.to_string())
+    } else {
+        InputError::new_err(err.to_string())
+    }
+}
+
+/// A `ConfigError` with the given message (for parameters checked before reaching the core).
+pub(crate) fn config_err(message: String) -> PyErr {
+    ConfigError::new_err(message)
+}
+
+/// An `InputError` with the given message.
+pub(crate) fn input_err(message: String) -> PyErr {
+    InputError::new_err(message)
+}

@@ -1,0 +1,200 @@
+"""Build ``networks/paper15.inp``, the paper's 15-junction, 25-pipe network, from figures.
+
+The network is TSNet's ``Tnet1`` example (reservoir R1, junctions N2..N8, pipes P1..P9 and a
+valve N7-N8) extended with junctions 1..8 and pipes 1..17 (no pipe 10), the valve replaced by
+pipe 16. Tnet1's figures for R1, N2..N8 and P1..P9 are *read* from Tnet1's INP file (it is not
+copied into this repository); the new figures are the table below (issue 4). Run from the
+repository root::
+
+    python networks/build_paper15.py                 # rewrite networks/paper15.inp
+    python networks/build_paper15.py --check         # exit 1 if the shipped file differs
+
+The output is deterministic: the same Tnet1 file always gives the same bytes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+DEFAULT_TNET1 = HERE.parent.parent / "shared" / "networks" / "Tnet1.inp"
+DEFAULT_OUT = HERE / "paper15.inp"
+
+#: Tnet1 elements kept with their figures (the valve N7-N8 is dropped and replaced by pipe 16).
+TNET1_RESERVOIRS = ("R1",)
+TNET1_JUNCTIONS = ("N2", "N3", "N4", "N5", "N6", "N7", "N8")
+TNET1_PIPES = ("P1", "P2", "P3", "P4", "P5", "P6", "P7", "P8", "P9")
+
+#: New junctions: name -> (elevation m, base demand L/s, plot x, plot y).
+#: Plot coordinates are ours, laid out around Tnet1's drawing (Tnet1 spans x -530..4092,
+#: y 5653..7428): junctions 1..5 and 8 in a row below it, 6 and 7 to the upper right.
+NEW_JUNCTIONS: dict[str, tuple[float, float, float, float]] = {
+    "1": (0.0, 15.0, 300.0, 4600.0),
+    "2": (0.0, 10.0, 1300.0, 4500.0),
+    "3": (0.0, 20.0, 2400.0, 4500.0),
+    "4": (0.0, 20.0, 3400.0, 4700.0),
+    "5": (0.0, 8.0, 4100.0, 4300.0),
+    "6": (0.0, 2.0, 3100.0, 7500.0),
+    "7": (0.0, 8.0, 4000.0, 6800.0),
+    "8": (0.0, 15.0, 4800.0, 4900.0),
+}
+
+#: New pipes: name -> (start node, end node, length m, diameter mm, Hazen-Williams C).
+#: Start -> end is the steady-state flow direction of the paper's tables.
+NEW_PIPES: dict[str, tuple[str, str, float, float, float]] = {
+    "1": ("N7", "4", 750, 500, 100),
+    "2": ("5", "8", 700, 500, 110),
+    "3": ("1", "2", 600, 500, 120),
+    "4": ("N3", "1", 650, 450, 120),
+    "5": ("2", "3", 450, 450, 100),
+    "6": ("3", "4", 350, 350, 130),
+    "7": ("4", "5", 350, 200, 130),
+    "8": ("N2", "2", 850, 500, 100),
+    "9": ("N5", "3", 700, 500, 110),
+    "11": ("6", "7", 400, 200, 100),
+    "12": ("N6", "6", 450, 500, 120),
+    "13": ("7", "N8", 900, 500, 110),
+    "14": ("N8", "8", 500, 350, 120),
+    "15": ("N7", "7", 800, 600, 100),
+    "16": ("N7", "N8", 900, 400, 110),
+    "17": ("1", "N2", 800, 300, 130),
+}
+
+
+def read_sections(path: Path) -> dict[str, list[list[str]]]:
+    """Return the data rows of every section of an INP file, comments stripped, split on space."""
+    sections: dict[str, list[list[str]]] = {}
+    current: list[list[str]] | None = None
+    for raw in path.read_text(encoding="utf-8").splitlines():
+        line = raw.split(";", 1)[0].strip()
+        if not line:
+            continue
+        if line.startswith("["):
+            current = sections.setdefault(line.upper(), [])
+            continue
+        if current is not None:
+            current.append(line.split())
+    return sections
+
+
+def _by_id(rows: list[list[str]], wanted: tuple[str, ...], section: str) -> dict[str, list[str]]:
+    found = {row[0]: row for row in rows if row[0] in wanted}
+    missing = [name for name in wanted if name not in found]
+    if missing:
+        raise SystemExit(f"Tnet1 file lacks {section} entries {missing}")
+    return found
+
+
+def _fmt(value: float | str) -> str:
+    """Format a figure without float noise: 900.0 -> '900', 0.25 -> '0.25'."""
+    if isinstance(value, str):
+        return value
+    return f"{value:.10g}"
+
+
+def _row(*fields: float | str) -> str:
+    return " " + "".join(f"{_fmt(f):<16}\t" for f in fields).rstrip() + "\n"
+
+
+def build(tnet1: Path) -> str:
+    """Return the text of paper15.inp built from Tnet1's figures and this module's tables."""
+    sec = read_sections(tnet1)
+    options = {row[0].upper(): row for row in sec.get("[OPTIONS]", [])}
+    units = options.get("UNITS", ["Units", "LPS"])[1].upper()
+    headloss = options.get("HEADLOSS", ["Headloss", "H-W"])[1].upper()
+    if units != "LPS" or headloss != "H-W":
+        raise SystemExit(f"expected Tnet1 in LPS with H-W head loss, got {units} / {headloss}")
+    junctions = _by_id(sec["[JUNCTIONS]"], TNET1_JUNCTIONS, "[JUNCTIONS]")
+    reservoirs = _by_id(sec["[RESERVOIRS]"], TNET1_RESERVOIRS, "[RESERVOIRS]")
+    pipes = _by_id(sec["[PIPES]"], TNET1_PIPES, "[PIPES]")
+    coords = _by_id(sec["[COORDINATES]"], TNET1_JUNCTIONS + TNET1_RESERVOIRS, "[COORDINATES]")
+
+    out: list[str] = []
+    out.append("[TITLE]\n")
+    out.append("paper15: TSNet Tnet1 (R1, N2..N8, P1..P9) extended with junctions 1..8\n")
+    out.append("and pipes 1..17; Tnet1's valve N7-N8 replaced by pipe 16.\n")
+    out.append("Generated by networks/build_paper15.py; see networks/README.md.\n\n")
+
+    out.append("[JUNCTIONS]\n;ID\tElev\tDemand\tPattern\n")
+    for name in TNET1_JUNCTIONS:
+        row = junctions[name]
+        out.append(_row(name, float(row[1]), float(row[2])))
+    for name, (elev, demand, _, _) in NEW_JUNCTIONS.items():
+        out.append(_row(name, elev, demand))
+    out.append("\n[RESERVOIRS]\n;ID\tHead\n")
+    for name in TNET1_RESERVOIRS:
+        out.append(_row(name, float(reservoirs[name][1])))
+
+    out.append("\n[PIPES]\n;ID\tNode1\tNode2\tLength\tDiameter\tRoughness\tMinorLoss\tStatus\n")
+    for name in TNET1_PIPES:
+        _, a, b, length, diameter, rough, *rest = pipes[name]
+        minor = float(rest[0]) if rest else 0.0
+        out.append(_row(name, a, b, float(length), float(diameter), float(rough), minor, "Open"))
+    for name, (a, b, length, diameter, rough) in NEW_PIPES.items():
+        out.append(_row(name, a, b, float(length), float(diameter), float(rough), 0.0, "Open"))
+
+    out.append("\n[OPTIONS]\n")
+    for key, value in (
+        ("Units", "LPS"),
+        ("Headloss", "H-W"),
+        ("Specific Gravity", "1"),
+        ("Viscosity", "1"),
+        ("Trials", "40"),
+        ("Accuracy", "0.001"),
+        ("Unbalanced", "Continue 10"),
+        ("Demand Multiplier", "1.0"),
+        ("Emitter Exponent", "0.5"),
+        # EPANET 2.2 pressure-driven demand parameters, used when a solver runs PDD (TSNet's
+        # Initializer with engine="PDD" does). 0.1 m is EPANET's lower limit for the
+        # required pressure (WNTR would raise its 0.07 m default to 0.1 with a warning).
+        ("Demand Model", "DDA"),
+        ("Minimum Pressure", "0"),
+        ("Required Pressure", "0.1"),
+        ("Pressure Exponent", "0.5"),
+    ):
+        out.append(f" {key:<20}\t{value}\n")
+
+    out.append("\n[TIMES]\n Duration           \t0:00\n Hydraulic Timestep \t1:00\n")
+    out.append(" Report Timestep    \t1:00\n")
+
+    out.append("\n[REPORT]\n Status             \tNo\n Summary            \tNo\n")
+
+    out.append("\n[COORDINATES]\n;Node\tX-Coord\tY-Coord\n")
+    for name in TNET1_JUNCTIONS + TNET1_RESERVOIRS:
+        row = coords[name]
+        out.append(_row(name, float(row[1]), float(row[2])))
+    for name, (_, _, x, y) in NEW_JUNCTIONS.items():
+        out.append(_row(name, x, y))
+
+    out.append("\n[END]\n")
+    return "".join(out)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command line: write (or check) paper15.inp."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--tnet1", type=Path, default=DEFAULT_TNET1, help="Tnet1.inp to read")
+    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="INP file to write")
+    parser.add_argument(
+        "--check", action="store_true", help="do not write; exit 1 if --out differs"
+    )
+    args = parser.parse_args(argv)
+    if not args.tnet1.is_file():
+        parser.error(f"Tnet1 INP not found: {args.tnet1}")
+    text = build(args.tnet1)
+    if args.check:
+        current = args.out.read_text(encoding="utf-8") if args.out.is_file() else None
+        if current != text:
+            print(f"{args.out} is not what {args.tnet1} builds", file=sys.stderr)
+            return 1
+        print(f"{args.out} is up to date")
+        return 0
+    args.out.write_text(text, encoding="utf-8", newline="\n")
+    print(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

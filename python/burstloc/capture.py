@@ -1,0 +1,87 @@
+"""What pressure meters transmit: a simulated timeline sampled every capture interval.
+
+A meter with capture interval Δ transmits, at each tick of its clock, the latest value of the
+pressure it measures: sample-and-hold of the simulated timeline. The clock ticks at
+``phase + k·Δ`` (k = 0, 1, ...), inside the simulated span. With a burst starting at time
+``t_b``, the offset of the capture clock relative to the burst is ``(phase - t_b) mod Δ``:
+sweeping ``phase`` over ``[0, Δ)`` moves the readings relative to the burst onset without
+simulating again.
+
+Pure NumPy: no simulator import (the live path may use it).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from burstloc.exceptions import ConfigError, InputError
+
+__all__ = ["resample", "time_step_of"]
+
+
+def time_step_of(time: ArrayLike) -> float:
+    """Return the largest step of a strictly increasing timeline (the simulation's time step).
+
+    Raises:
+        InputError: fewer than two times, non-finite times, or times not strictly increasing.
+    """
+    t = np.asarray(time, dtype=np.float64)
+    if t.ndim != 1 or t.size < 2:
+        raise InputError(f"time must be 1-D with at least 2 entries, got shape {t.shape}")
+    if not np.all(np.isfinite(t)):
+        raise InputError("time contains NaN or infinite values")
+    steps = np.diff(t)
+    if np.any(steps <= 0):
+        bad = int(np.argmax(steps <= 0)) + 1
+        raise InputError(f"time must be strictly increasing; time[{bad}] = {t[bad]!r}")
+    return float(steps.max())
+
+
+def resample(
+    time: ArrayLike, heads: ArrayLike, capture_interval: float, phase: float = 0.0
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Sample-and-hold a simulated timeline at a capture interval.
+
+    Args:
+        time: simulated times, shape ``(T,)``, strictly increasing (TSNet's grid).
+        heads: values at those times, shape ``(T,)`` or ``(T, M)`` (one column per meter).
+        capture_interval: Δ in seconds; must not be finer than the simulation's time step.
+        phase: the capture clock's first tick, in ``[0, Δ)``; ticks are ``phase + k·Δ``.
+
+    Returns:
+        ``(sample_times, samples)``: the ticks inside ``[time[0], time[-1]]`` and, for each,
+        the row of ``heads`` at the last simulated time at or before the tick.
+
+    Raises:
+        ConfigError: Δ is not a positive finite number or is finer than the time step; phase is
+            outside ``[0, Δ)``.
+        InputError: malformed ``time`` or ``heads``.
+    """
+    t = np.asarray(time, dtype=np.float64)
+    dt = time_step_of(t)
+    values = np.asarray(heads, dtype=np.float64)
+    if values.ndim not in (1, 2) or values.shape[0] != t.size:
+        raise InputError(
+            f"heads must have shape ({t.size},) or ({t.size}, M) to match time, got {values.shape}"
+        )
+    delta = float(capture_interval)
+    if not (math.isfinite(delta) and delta > 0):
+        raise ConfigError(f"capture_interval must be a positive number, got {capture_interval!r}")
+    if delta < dt * (1 - 1e-9):
+        raise ConfigError(
+            f"capture_interval {delta:g} s is finer than the simulation time step {dt:g} s; "
+            "simulate with a smaller time_step or capture less often"
+        )
+    offset = float(phase)
+    if not (math.isfinite(offset) and 0 <= offset < delta):
+        raise ConfigError(f"phase must be in [0, {delta:g}), got {phase!r}")
+    # Absorbs float error between k·Δ and the simulation's k·dt grid (far below any time step).
+    tol = 1e-9 * max(1.0, abs(float(t[-1])))
+    first = math.ceil((t[0] - offset - tol) / delta)
+    last = math.floor((t[-1] - offset + tol) / delta)
+    ticks = offset + delta * np.arange(first, last + 1, dtype=np.float64)
+    index = np.searchsorted(t, ticks + tol, side="right") - 1
+    return ticks, values[index].copy()

@@ -1,0 +1,471 @@
+"""Burst every pipe, stream the meters' readings, localize, and score (paper section V).
+
+For a network and one or more runs (detector x capture interval x parameters x mode):
+
+1. one burst scenario per pipe is simulated (or loaded from the cache) with the
+   :data:`burstloc.paper.SCENARIO` choices, long enough for every run to see ``2 x interval``
+   readings after the burst;
+2. each scenario is sampled at the run's capture interval at ``phases`` clock offsets and
+   replayed through the real-time loop (:class:`burstloc.localize.BurstLocator`): the first
+   window whose changes make the rules name a pipe decides (the paper's single localization
+   attempt); no decision means "not located", never a guess;
+3. a prediction is correct when it names the burst pipe; accuracy = correct / pipes (eq. 4).
+
+**Phases.** Phase ``k`` of ``N`` shifts the capture clock by ``k / N`` of one capture interval
+(``phase_span="capture"``, the default) or of one localization window, ``interval x capture
+interval`` (``phase_span="window"``: the window grid then also moves relative to the burst
+onset). Accuracy is reported at phase 0 (the per-pipe tables) and as mean, min and max over the
+phases. The time to localize is the decision time (the timestamp of the newest reading of the
+deciding window) minus the burst start; its median is taken over every located attempt, all
+phases.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import statistics
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from burstloc import paper
+from burstloc.capture import resample
+from burstloc.detection import DetectorConfig, Mode, make_detector
+from burstloc.exceptions import ConfigError, NetworkError
+from burstloc.localize import BurstLocator, Localization
+from burstloc.stream import replay
+
+if TYPE_CHECKING:
+    import networkx as nx
+
+    from burstloc.simulate import ScenarioResult
+
+__all__ = [
+    "PHASE_SPANS",
+    "Attempt",
+    "Evaluation",
+    "RunResult",
+    "RunSpec",
+    "evaluate",
+    "locate_burst",
+    "paper_runs",
+    "phase_offsets",
+    "required_duration",
+]
+
+#: What the phases of an evaluation are spread over.
+PHASE_SPANS: tuple[str, ...] = ("capture", "window")
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """One run of the experiment: a detector configuration at a capture interval.
+
+    ``label`` names the paper's scenario (``"S_C1"``...) when the run is one of Tables I/II.
+    """
+
+    detector: DetectorConfig
+    capture_interval: float
+    localization_interval: int
+    mode: Mode = Mode.WINDOW
+    label: str | None = None
+
+    def __post_init__(self) -> None:
+        ci = self.capture_interval
+        if isinstance(ci, bool) or not isinstance(ci, (int, float)) or not math.isfinite(ci):
+            raise ConfigError(f"capture interval must be a number of seconds, got {ci!r}")
+        if ci <= 0:
+            raise ConfigError(f"capture interval must be > 0 s, got {ci}")
+        li = self.localization_interval
+        if isinstance(li, bool) or not isinstance(li, int):
+            raise ConfigError(f"localization interval must be an integer, got {li!r}")
+        if li < 1:
+            raise ConfigError(f"localization interval must be >= 1, got {li}")
+        object.__setattr__(self, "capture_interval", float(ci))
+        object.__setattr__(self, "mode", Mode(self.mode))
+
+    def params(self) -> dict[str, Any]:
+        """The run's parameters (JSON ``params``)."""
+        return {
+            **self.detector.params(),
+            "localization_interval": self.localization_interval,
+            "mode": self.mode.value,
+        }
+
+    def paper_run(self) -> paper.PaperRun | None:
+        """The paper's run with the same detector, capture interval, threshold and interval."""
+        for run in paper.PAPER_RUNS:
+            if (
+                run.detector == self.detector.kind
+                and run.capture_interval == self.capture_interval
+                and run.threshold == self.detector.threshold
+                and run.localization_interval == self.localization_interval
+            ):
+                return run
+        return None
+
+
+def paper_runs(
+    detectors: Sequence[str] = ("cusum", "shewhart"),
+    capture_intervals: Sequence[float] | None = None,
+    modes: Sequence[Mode | str] = (paper.DEFAULT_MODE,),
+    *,
+    threshold: float | None = None,
+    drift: float | None = None,
+    sigma: float | None = None,
+    localization_interval: int | None = None,
+) -> list[RunSpec]:
+    """Runs for detectors x capture intervals x modes, with Tables I/II parameters by default.
+
+    A capture interval the paper did not use needs ``threshold`` and ``localization_interval``.
+    ``threshold``, ``drift`` (CUSUM), ``sigma`` (Shewhart) and ``localization_interval``
+    override the paper's values for every run.
+    """
+    intervals = list(paper.CAPTURE_INTERVALS if capture_intervals is None else capture_intervals)
+    runs: list[RunSpec] = []
+    for kind in detectors:
+        table = {r.capture_interval: r for r in paper.PAPER_RUNS if r.detector == kind}
+        if kind not in ("cusum", "shewhart"):
+            raise ConfigError(f"unknown detector {kind!r}; choose cusum, shewhart or both")
+        for ci in intervals:
+            ci = float(ci)
+            base = table.get(ci)
+            thr = threshold if threshold is not None else (base.threshold if base else None)
+            li = (
+                localization_interval
+                if localization_interval is not None
+                else (base.localization_interval if base else None)
+            )
+            if thr is None or li is None:
+                raise ConfigError(
+                    f"capture interval {ci:g} s is not one of the paper's "
+                    f"({', '.join(f'{c:g}' for c in paper.CAPTURE_INTERVALS)}); give "
+                    "--threshold and --localization-interval for it"
+                )
+            if kind == "cusum":
+                if sigma is not None:
+                    raise ConfigError("--sigma applies to the Shewhart chart only")
+                cfg = DetectorConfig("cusum", thr, drift=drift or 0.0)
+            else:
+                if drift is not None:
+                    raise ConfigError("--drift applies to the CUSUM only")
+                cfg = DetectorConfig("shewhart", thr, sigma=sigma)
+            for mode in modes:
+                spec = RunSpec(cfg, ci, li, Mode(mode))
+                label = spec.paper_run()
+                runs.append(
+                    RunSpec(cfg, ci, li, Mode(mode), label.scenario if label else None)
+                )
+    return runs
+
+
+def phase_offsets(spec: RunSpec, phases: int, span: str = "capture") -> list[float]:
+    """The clock offsets (s) of the ``phases`` attempts of a run, evenly spread."""
+    if isinstance(phases, bool) or not isinstance(phases, int) or phases < 1:
+        raise ConfigError(f"phases must be an integer >= 1, got {phases!r}")
+    if span not in PHASE_SPANS:
+        raise ConfigError(f"phase span must be one of {PHASE_SPANS}, got {span!r}")
+    period = spec.capture_interval
+    if span == "window":
+        period *= spec.localization_interval
+    return [k * period / phases for k in range(phases)]
+
+
+def required_duration(spec: RunSpec, burst_start: float) -> float:
+    """Simulated time a run needs: ``2 x interval`` readings after the burst at any phase.
+
+    ``burst_start + (2 x interval + 1) x capture_interval``: one capture interval of margin for
+    the clock phase and for TSNet's grid, which ends up to one time step short of the duration.
+    """
+    return burst_start + (2 * spec.localization_interval + 1) * spec.capture_interval
+
+
+def readings_after(times: np.ndarray, burst_start: float) -> int:
+    """How many capture ticks fall strictly after the burst start."""
+    return int(np.count_nonzero(times > burst_start + 1e-9))
+
+
+@dataclass(frozen=True)
+class Attempt:
+    """One burst streamed at one clock offset: what was decided, when, and by which rule."""
+
+    pipe: str
+    offset: float
+    burst_start: float
+    localization: Localization | None
+
+    @property
+    def located(self) -> bool:
+        """Whether the rules named a pipe."""
+        return self.localization is not None
+
+    @property
+    def correct(self) -> bool:
+        """Whether the named pipe is the burst pipe."""
+        return self.localization is not None and self.localization.pipe == self.pipe
+
+    @property
+    def predicted(self) -> tuple[str, str] | None:
+        """The named pipe's ``(start, end)`` in flow direction, or ``None``."""
+        loc = self.localization
+        return None if loc is None else (loc.start_node, loc.end_node)
+
+    @property
+    def time_to_localize(self) -> float | None:
+        """Seconds from the burst start to the decision, or ``None``."""
+        loc = self.localization
+        return None if loc is None else loc.decision_time - self.burst_start
+
+
+def _capture(result: ScenarioResult, spec: RunSpec, offset: float) -> tuple[Any, Any]:
+    """The readings of a run at a clock offset: ``offset = j x interval + phase``.
+
+    The capture clock ticks at ``phase + k x capture_interval``; ``j`` more ticks before the
+    simulation's start carry its initial steady state (TSNet starts from it, so this is exact)
+    and move the window grid ``j`` readings earlier relative to the burst.
+    """
+    ci = spec.capture_interval
+    j = int(math.floor(offset / ci + 1e-9))
+    phase = min(max(offset - j * ci, 0.0), math.nextafter(ci, 0.0))
+    times, values = resample(result.time, result.heads, ci, phase)
+    if j:
+        lead = times[0] - ci * np.arange(j, 0, -1, dtype=np.float64)
+        times = np.concatenate([lead, times])
+        values = np.concatenate([np.repeat(result.heads[:1], j, axis=0), values])
+    return times, values
+
+
+def locate_burst(
+    result: ScenarioResult,
+    graph: nx.DiGraph,
+    spec: RunSpec,
+    offset: float = 0.0,
+) -> Attempt:
+    """Stream one simulated burst at a clock offset through the real-time loop.
+
+    The sub-interval part of the offset is the sampling phase; whole capture intervals move
+    the window grid relative to the burst (see ``_capture``).
+    """
+    times, values = _capture(result, spec, offset)
+    meters = list(result.junctions)
+    detector = make_detector(spec.detector, meters, spec.localization_interval, spec.mode)
+    locator = BurstLocator(graph, meters, detector, spec.localization_interval)
+    outcome = locator.first(replay(times, values))
+    burst_start = float(result.metadata["burst_start"])
+    return Attempt(result.pipe, offset, burst_start, outcome.localization if outcome else None)
+
+
+@dataclass
+class RunResult:
+    """All attempts of one run: ``attempts[pipe][k]`` is the burst on ``pipe`` at offset ``k``."""
+
+    spec: RunSpec
+    pipes: list[str]
+    truth: dict[str, tuple[str, str]]
+    offsets: list[float]
+    attempts: dict[str, list[Attempt]]
+
+    def phase_accuracies(self) -> list[float]:
+        """Accuracy (fraction) at each clock offset."""
+        n = len(self.pipes)
+        return [
+            sum(self.attempts[p][k].correct for p in self.pipes) / n
+            for k in range(len(self.offsets))
+        ]
+
+    @property
+    def correct(self) -> int:
+        """Pipes located correctly at phase 0."""
+        return sum(self.attempts[p][0].correct for p in self.pipes)
+
+    @property
+    def total(self) -> int:
+        """Pipes burst."""
+        return len(self.pipes)
+
+    @property
+    def accuracy(self) -> float:
+        """Correct / pipes at phase 0 (eq. 4, as a fraction)."""
+        return self.correct / self.total
+
+    def median_time_to_localize(self) -> float | None:
+        """Median seconds from burst to decision over every located attempt (all phases)."""
+        times = [
+            a.time_to_localize
+            for p in self.pipes
+            for a in self.attempts[p]
+            if a.time_to_localize is not None
+        ]
+        return float(statistics.median(times)) if times else None
+
+    def to_json(self) -> dict[str, Any]:
+        """The run as the CLI's JSON contract (tests/evaluate_schema.json)."""
+        acc = self.phase_accuracies()
+        pipes = []
+        for p in self.pipes:
+            a = self.attempts[p][0]
+            loc = a.localization
+            pipes.append(
+                {
+                    "pipe": p,
+                    "true": list(self.truth[p]),
+                    "predicted": list(a.predicted) if a.predicted else None,
+                    "predicted_pipe": loc.pipe if loc else None,
+                    "correct": a.correct,
+                    "time_to_localize_s": a.time_to_localize,
+                    "rule": loc.rule.value if loc else None,
+                    "trigger_node": loc.trigger_node if loc else None,
+                    "phases_correct": sum(x.correct for x in self.attempts[p]),
+                }
+            )
+        run = self.spec.paper_run()
+        published = None
+        if run is not None:
+            k = paper.CAPTURE_INTERVALS.index(run.capture_interval)
+            published = {
+                "scenario": run.scenario,
+                "correct_in_table": paper.published_correct(run.detector)[k],
+                "correct_printed": paper.PRINTED_TOTALS[run.detector][k],
+                "accuracy_table_v": paper.TABLE_V[run.detector][k] / 100.0,
+            }
+        return {
+            "detector": self.spec.detector.kind,
+            "capture_interval": self.spec.capture_interval,
+            "params": self.spec.params(),
+            "mode": self.spec.mode.value,
+            "correct": self.correct,
+            "total": self.total,
+            "accuracy": self.accuracy,
+            "accuracy_phase_mean": float(np.mean(acc)),
+            "accuracy_phase_min": float(min(acc)),
+            "accuracy_phase_max": float(max(acc)),
+            "accuracy_per_phase": acc,
+            "phase_offsets_s": list(self.offsets),
+            "median_time_to_localize_s": self.median_time_to_localize(),
+            "paper": published,
+            "pipes": pipes,
+        }
+
+
+@dataclass
+class Evaluation:
+    """The outcome of :func:`evaluate`: every run, plus what was simulated."""
+
+    network: str
+    runs: list[RunResult]
+    scenario: dict[str, Any]
+    phase_span: str
+    warnings: list[str] = field(default_factory=list)
+    results: dict[str, ScenarioResult] = field(default_factory=dict, repr=False)
+    graph: Any = field(default=None, repr=False)
+
+    def to_json(self) -> dict[str, Any]:
+        """The CLI's JSON document (see tests/evaluate_schema.json)."""
+        return {
+            "network": self.network,
+            "scenario": dict(self.scenario),
+            "phase_span": self.phase_span,
+            "warnings": list(self.warnings),
+            "runs": [r.to_json() for r in self.runs],
+        }
+
+
+def evaluate(
+    network: str | os.PathLike[str],
+    runs: Sequence[RunSpec],
+    *,
+    pipes: Sequence[str] | None = None,
+    phases: int = 5,
+    phase_span: str = "capture",
+    scenario: paper.ScenarioConfig = paper.SCENARIO,
+    cache: Any = True,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    progress: bool = True,
+) -> Evaluation:
+    """Run the experiment: simulate (cached), stream, localize and score every run.
+
+    Raises:
+        NetworkError: missing or malformed network, unknown pipe.
+        ConfigError: no runs, bad phases, or a capture interval finer than the simulation's
+            time step.
+        SimulationError: a burst could not be simulated.
+    """
+    from burstloc import network as netmod
+    from burstloc import simulate
+
+    if not runs:
+        raise ConfigError("no runs to evaluate")
+    for spec in runs:
+        phase_offsets(spec, phases, phase_span)  # validates phases and span
+    path = os.fspath(network)
+    if not Path(path).is_file():
+        raise NetworkError(f"network file not found: {path}")
+    wn = netmod.load_network(path)
+    graph = netmod.flow_direction_graph(wn)
+    all_pipes = netmod.pipe_names(wn)
+    chosen = list(all_pipes if pipes is None else pipes)
+    unknown = [p for p in chosen if p not in all_pipes]
+    if unknown:
+        raise NetworkError(f"unknown pipe(s) {unknown} in {path}; pipes: {', '.join(all_pipes)}")
+    if not chosen:
+        raise NetworkError(f"no pipes to burst in {path}")
+    if len(set(chosen)) != len(chosen):
+        raise ConfigError(f"pipes listed more than once: {chosen}")
+
+    warnings: list[str] = []
+    params: dict[str, Any] = scenario.parameters()
+    needed = max(required_duration(s, scenario.burst_start) for s in runs)
+    if params["duration"] is None:
+        params["duration"] = float(math.ceil(needed - 1e-9))
+    elif params["duration"] + 1e-9 < needed:
+        worst = max(runs, key=lambda s: required_duration(s, scenario.burst_start))
+        raise ConfigError(
+            f"the scenario simulates {params['duration']:g} s but the run "
+            f"{worst.detector.kind} at {worst.capture_interval:g} s with localization interval "
+            f"{worst.localization_interval} needs {needed:g} s (2 x interval readings after "
+            f"the burst at {scenario.burst_start:g} s, whatever the phase)"
+        )
+    scenarios = simulate.burst_scenarios(path, chosen, **params)
+    report = simulate.simulate_many(
+        scenarios, cache=cache, workers=workers, scheduler=scheduler, progress=progress
+    )
+    if report.failures:
+        from burstloc.exceptions import SimulationError
+
+        raise SimulationError("; ".join(str(f) for f in report.failures))
+    results = {s.pipe: r for s, r in zip(scenarios, report.results) if r is not None}
+
+    dt = max(r.time_step for r in results.values())
+    for spec in runs:
+        if spec.capture_interval < dt * (1 - 1e-9):
+            raise ConfigError(
+                f"capture interval {spec.capture_interval:g} s is finer than the simulation "
+                f"time step {dt:.4g} s: the scenario cannot provide it"
+            )
+    shortest = min(results.values(), key=lambda r: float(r.time[-1]))
+    for spec in runs:
+        for offset in phase_offsets(spec, phases, phase_span):
+            times, _ = _capture(shortest, spec, offset)
+            n = readings_after(times, float(shortest.metadata["burst_start"]))
+            if n < 2 * spec.localization_interval:
+                raise ConfigError(
+                    f"run {spec.detector.kind} at {spec.capture_interval:g} s gets only {n} "
+                    f"readings after the burst at clock offset {offset:g} s (the simulation "
+                    f"ends at {float(shortest.time[-1]):g} s); it needs "
+                    f"2 x {spec.localization_interval}"
+                )
+
+    truth = {p: r.true_endpoints for p, r in results.items()}
+    out: list[RunResult] = []
+    for spec in runs:
+        offsets = phase_offsets(spec, phases, phase_span)
+        attempts = {
+            p: [locate_burst(results[p], graph, spec, o) for o in offsets] for p in chosen
+        }
+        out.append(RunResult(spec, chosen, truth, offsets, attempts))
+    return Evaluation(path, out, params, phase_span, warnings, results, graph)

@@ -1,0 +1,39 @@
+"""The exceptions burstloc raises.
+
+Every error is a typed subclass of a built-in exception, so callers can catch precisely:
+
+* :class:`ConfigError` (``ValueError``): a detector parameter is invalid; the message names
+  the parameter and its value.
+* :class:`InputError` (``ValueError``): a detector was fed bad input (a NaN or infinite sample,
+  a wrong dtype, shape or channel count); the message names the sample index, channel or
+  argument. The detector's state is left unchanged.
+* :class:`StreamError` (``InputError``): bad or out-of-order readings in a live stream.
+* :class:`NetworkError` (``ValueError``): an unknown node or pipe, or a malformed INP file
+  (with the file and line).
+* :class:`SimulationError` (``RuntimeError``): the transient simulation (TSNet) failed.
+
+``ConfigError`` and ``InputError`` are defined by the native module (so the Rust code raises
+them directly); the others are plain Python.
+"""
+
+from burstloc._core import ConfigError, InputError
+
+__all__ = [
+    "ConfigError",
+    "InputError",
+    "NetworkError",
+    "SimulationError",
+    "StreamError",
+]
+
+
+class StreamError(InputError):
+    """Bad or out-of-order readings fed to a live stream."""
+
+
+class NetworkError(ValueError):
+    """An unknown node or pipe, or a malformed network (INP) file, named with file and line."""
+
+
+class SimulationError(RuntimeError):
+    """The transient simulation (TSNet) failed for a scenario."""

@@ -1,0 +1,363 @@
+"""Water distribution networks: load an INP file, its flow-direction graph, split a pipe.
+
+* :func:`load_network` reads an EPANET INP file into a WNTR ``WaterNetworkModel``; a malformed
+  file raises :class:`~burstloc.exceptions.NetworkError` naming the file and line.
+* :func:`flow_direction_graph` is the paper's directed graph (section IV.B): one edge per link,
+  pointing downstream in the steady state (pressure-driven demand, solved as TSNet's
+  ``Initializer`` solves it: WNTR's EPANET simulator with ``demand_model = "PDD"``).
+* :func:`split_pipe` cuts a pipe into two at a fraction of its length with a new junction
+  between them, where a burst can then be placed (TSNet bursts only at junctions).
+
+This module never imports TSNet: the live path (stream, detectors, localize) uses it. WNTR is
+imported on first use, so that listing a file's pipes (:func:`pipe_names_in_file`) is cheap.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import os
+import re
+import tempfile
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import networkx as nx
+import numpy as np
+
+from burstloc._diagnostics import capture_diagnostics
+from burstloc.exceptions import ConfigError, NetworkError
+
+if TYPE_CHECKING:
+    from wntr.network import WaterNetworkModel
+
+__all__ = [
+    "SplitPipe",
+    "flow_direction_graph",
+    "junction_names",
+    "load_network",
+    "pipe_endpoints",
+    "pipe_names",
+    "pipe_names_in_file",
+    "require_pipe",
+    "split_pipe",
+    "steady_state_flows",
+]
+
+#: Section headers EPANET 2.2 accepts (as WNTR reads them), and ``[END]``.
+_SECTIONS = frozenset(
+    f"[{name}]"
+    for name in (  # noqa: SIM905 (one string reads better than 28 list items)
+        "TITLE JUNCTIONS RESERVOIRS TANKS PIPES PUMPS VALVES EMITTERS CURVES PATTERNS ENERGY "
+        "STATUS CONTROLS RULES DEMANDS QUALITY REACTIONS SOURCES MIXING OPTIONS TIMES REPORT "
+        "COORDINATES VERTICES LABELS BACKDROP TAGS END"
+    ).split()
+)
+#: Per section: the minimum number of fields of a data line and the fields that must be numbers.
+_FIELDS: dict[str, tuple[int, tuple[int, ...]]] = {
+    "[JUNCTIONS]": (2, (1, 2)),
+    "[RESERVOIRS]": (2, (1,)),
+    "[TANKS]": (6, (1, 2, 3, 4, 5, 6)),
+    "[PIPES]": (6, (3, 4, 5, 6)),
+    "[PUMPS]": (4, ()),
+    "[VALVES]": (6, (3,)),
+    "[EMITTERS]": (2, (1,)),
+    "[DEMANDS]": (2, (1,)),
+    "[COORDINATES]": (3, (1, 2)),
+    "[VERTICES]": (3, (1, 2)),
+}
+_NODE_SECTIONS = ("[JUNCTIONS]", "[RESERVOIRS]", "[TANKS]")
+_LINK_SECTIONS = ("[PIPES]", "[PUMPS]", "[VALVES]")
+_PIPE_STATUS = frozenset({"OPEN", "CLOSED", "CV"})
+_WNTR_LINE = re.compile(r"at line (\d+)")
+
+
+@dataclass(frozen=True)
+class _Row:
+    section: str
+    line: int
+    fields: list[str]
+
+
+def _section_name(header: str) -> str:
+    """Map a header to its canonical name, forgiving a missing or extra S as WNTR does."""
+    for candidate in (header, header.replace("]", "S]"), header.replace("S]", "]")):
+        if candidate in _SECTIONS:
+            return candidate
+    return header
+
+
+def _rows(path: Path) -> Iterator[_Row]:
+    """Yield the data lines of an INP file with their section and 1-based line number."""
+    try:
+        text = path.read_text(encoding="utf-8", errors="replace")
+    except FileNotFoundError:
+        raise NetworkError(f"network file not found: {path}") from None
+    except OSError as exc:
+        raise NetworkError(f"cannot read network file {path}: {exc.strerror}") from None
+    section: str | None = None
+    for number, raw in enumerate(text.splitlines(), start=1):
+        line = raw.split(";", 1)[0].strip()
+        if not line:
+            continue
+        if line.startswith("["):
+            header = _section_name(line.split()[0].upper())
+            if header not in _SECTIONS:
+                raise NetworkError(f"{path}:{number}: unknown INP section {header}")
+            if header == "[END]":
+                return
+            section = header
+            continue
+        if section is None:
+            raise NetworkError(f"{path}:{number}: data before any [SECTION] header: {line!r}")
+        yield _Row(section, number, line.split())
+
+
+def _lint(path: Path) -> list[str]:
+    """Check the structure WNTR's reader does not report with a line number; return the pipes."""
+    nodes: dict[str, int] = {}
+    pipes: list[str] = []
+    links: dict[str, int] = {}
+    refs: list[tuple[_Row, str]] = []
+    for row in _rows(path):
+        spec = _FIELDS.get(row.section)
+        if spec is None:
+            continue
+        minimum, numeric = spec
+        where = f"{path}:{row.line}"
+        if len(row.fields) < minimum:
+            raise NetworkError(
+                f"{where}: {row.section} line needs at least {minimum} fields, "
+                f"got {len(row.fields)}: {' '.join(row.fields)!r}"
+            )
+        for i in numeric:
+            if i < len(row.fields):
+                try:
+                    float(row.fields[i])
+                except ValueError:
+                    raise NetworkError(
+                        f"{where}: {row.section} field {i + 1} of {row.fields[0]!r} is not a "
+                        f"number: {row.fields[i]!r}"
+                    ) from None
+        name = row.fields[0]
+        if row.section in _NODE_SECTIONS or row.section in _LINK_SECTIONS:
+            table = nodes if row.section in _NODE_SECTIONS else links
+            if name in table:
+                raise NetworkError(
+                    f"{where}: duplicate ID {name!r} (first defined at line {table[name]})"
+                )
+            table[name] = row.line
+        if row.section in _LINK_SECTIONS:
+            refs.extend((row, node) for node in row.fields[1:3])
+        if row.section == "[PIPES]":
+            pipes.append(name)
+            if len(row.fields) >= 8 and row.fields[7].upper() not in _PIPE_STATUS:
+                raise NetworkError(f"{where}: pipe {name!r} has unknown status {row.fields[7]!r}")
+    for row, node in refs:
+        if node not in nodes:
+            raise NetworkError(
+                f"{path}:{row.line}: link {row.fields[0]!r} refers to unknown node {node!r}"
+            )
+    return pipes
+
+
+def pipe_names_in_file(path: str | os.PathLike[str]) -> list[str]:
+    """Return the pipe IDs of an INP file in file order, without building a network model.
+
+    The file's structure is checked as :func:`load_network` checks it before WNTR reads it
+    (sections, field counts, numbers, IDs, node references), cheaply and without WNTR.
+
+    Raises:
+        NetworkError: the file is missing or malformed (naming file and line).
+    """
+    return _lint(Path(path))
+
+
+def load_network(path: str | os.PathLike[str]) -> WaterNetworkModel:
+    """Load an EPANET INP file into a WNTR ``WaterNetworkModel``.
+
+    Raises:
+        NetworkError: the file is missing or malformed; the message names the file and, when
+            the problem is on one line, the line number (``FILE:LINE: problem``).
+    """
+    import wntr
+
+    file = Path(path)
+    _lint(file)
+    try:
+        return wntr.network.WaterNetworkModel(str(file))
+    except Exception as exc:  # WNTR raises many types for bad input; name file and line
+        detail = str(exc)
+        line = None
+        cause: BaseException | None = exc
+        while cause is not None:
+            match = _WNTR_LINE.search(str(cause))
+            if match:
+                line = match.group(1)
+                detail = str(cause)
+            cause = cause.__cause__
+        where = f"{file}:{line}" if line else f"{file}"
+        raise NetworkError(f"{where}: malformed INP file: {type(exc).__name__}: {detail}") from exc
+
+
+def junction_names(wn: WaterNetworkModel) -> list[str]:
+    """Return the network's junction names in INP order (the meters of a burst scenario)."""
+    return list(wn.junction_name_list)
+
+
+def pipe_names(wn: WaterNetworkModel) -> list[str]:
+    """Return the network's pipe names in INP order."""
+    return list(wn.pipe_name_list)
+
+
+def _source(wn: WaterNetworkModel) -> str:
+    name = getattr(wn, "name", None)
+    return f" in {name}" if name else ""
+
+
+def require_pipe(wn: WaterNetworkModel, pipe: str) -> Any:
+    """Return the WNTR pipe named ``pipe``.
+
+    Raises:
+        NetworkError: no pipe has that name (a valve or pump is not a pipe).
+    """
+    if pipe not in wn.pipe_name_list:
+        kind = "a valve or pump, not a pipe" if pipe in wn.link_name_list else "no such pipe"
+        raise NetworkError(f"unknown pipe {pipe!r}{_source(wn)}: {kind}")
+    return wn.get_link(pipe)
+
+
+def steady_state_flows(wn: WaterNetworkModel, engine: str = "PDD") -> dict[str, float]:
+    """Solve the steady state and return each link's flow in m³/s (sign: INP orientation).
+
+    Solved as TSNet's ``Initializer`` does: WNTR's EPANET simulator with the given demand model
+    (``"PDD"`` pressure-driven, ``"DD"`` demand-driven), first time step. EPANET's scratch files
+    go to a temporary directory; what it warns is kept out of the terminal (recorded in a
+    scenario's metadata when :mod:`burstloc.simulate` calls this). ``wn`` is not modified.
+    """
+    import wntr
+
+    if engine.upper() not in ("PDD", "DD"):
+        raise ConfigError(f"engine must be 'PDD' or 'DD', got {engine!r}")
+    model = copy.deepcopy(wn)
+    model.options.hydraulic.demand_model = engine.upper()
+    with tempfile.TemporaryDirectory(prefix="burstloc-steady-") as tmp, capture_diagnostics():
+        results = wntr.sim.EpanetSimulator(model).run_sim(file_prefix=os.path.join(tmp, "steady"))
+    flows = results.link["flowrate"].iloc[0]
+    return {name: float(flows[name]) for name in model.link_name_list}
+
+
+def flow_direction_graph(
+    wn: WaterNetworkModel, flows: dict[str, float] | None = None, engine: str = "PDD"
+) -> nx.DiGraph:
+    """Return the paper's flow-direction graph (IV.B): every edge points downstream.
+
+    As in the paper, link weights are the signs of the steady-state flows and WNTR's
+    ``to_graph(link_weight=..., modify_direction=True)`` turns the links with negative weight
+    around. Edge attributes: ``pipe`` (the link name, pipes, valves and pumps alike), ``flow``
+    (|steady-state flow| in m³/s) and ``link_type``. A link with zero flow keeps its INP
+    orientation. ``graph.graph["edges_by_pipe"]`` maps each link name to its ``(start, end)``.
+
+    Args:
+        wn: the network.
+        flows: steady-state flows by link (m³/s, INP orientation); solved with ``engine`` when
+            omitted (see :func:`steady_state_flows`).
+        engine: ``"PDD"`` (the paper's) or ``"DD"``.
+
+    Raises:
+        NetworkError: two links join the same two nodes in the same flow direction (a DiGraph
+            holds one edge per ordered node pair).
+    """
+    import pandas as pd
+
+    if flows is None:
+        flows = steady_state_flows(wn, engine)
+    sign = pd.Series({name: float(np.sign(flows[name])) for name in wn.link_name_list})
+    multi = wn.to_graph(link_weight=sign, modify_direction=True)
+    graph = nx.DiGraph()
+    graph.add_nodes_from(multi.nodes(data=True))
+    by_pipe: dict[str, tuple[str, str]] = {}
+    for start, end, name in multi.edges(keys=True):
+        if graph.has_edge(start, end):
+            other = graph.edges[start, end]["pipe"]
+            raise NetworkError(
+                f"links {other!r} and {name!r} both carry flow {start} -> {end}; parallel "
+                "links are not supported by the flow-direction graph"
+            )
+        link = wn.get_link(name)
+        graph.add_edge(
+            start, end, pipe=name, flow=abs(flows[name]), link_type=link.link_type.lower()
+        )
+        by_pipe[name] = (start, end)
+    graph.graph["edges_by_pipe"] = by_pipe
+    graph.graph["engine"] = engine.upper()
+    return graph
+
+
+def pipe_endpoints(graph: nx.DiGraph, pipe: str) -> tuple[str, str]:
+    """Return ``(start, end)`` of a pipe in steady-state flow direction.
+
+    Raises:
+        NetworkError: the graph has no link of that name.
+    """
+    try:
+        return graph.graph["edges_by_pipe"][pipe]
+    except KeyError:
+        raise NetworkError(f"unknown pipe {pipe!r}: not in the flow-direction graph") from None
+
+
+@dataclass(frozen=True)
+class SplitPipe:
+    """A network with one pipe cut in two by a new junction.
+
+    Attributes:
+        network: the new network (a copy; the original is unchanged).
+        pipe: the original pipe's name; it now names the part from its INP start node to
+            ``burst_node``.
+        burst_node: the new junction (zero demand, elevation interpolated).
+        second_pipe: the new pipe from ``burst_node`` to the original end node.
+        fraction: where the junction sits, as a fraction of the length from the INP start node.
+    """
+
+    network: WaterNetworkModel
+    pipe: str
+    burst_node: str
+    second_pipe: str
+    fraction: float
+
+
+def _fresh_name(base: str, taken: set[str], fallback: str) -> str:
+    # EPANET IDs are at most 31 characters.
+    candidate = base if len(base) <= 31 else fallback
+    suffix = 0
+    while candidate in taken:
+        suffix += 1
+        candidate = f"{fallback}{suffix}"
+    return candidate
+
+
+def split_pipe(wn: WaterNetworkModel, pipe: str, fraction: float = 0.5) -> SplitPipe:
+    """Split ``pipe`` at ``fraction`` of its length (from its INP start node) with a junction.
+
+    The original pipe keeps its name, diameter, roughness and status for the first part; a new
+    pipe with the same properties runs from the new junction to the original end node (WNTR's
+    ``split_pipe``). Names: junction ``"<pipe>_B"``, pipe ``"<pipe>_2"`` (or ``BURST``/``SPLIT``
+    with a counter if taken or longer than EPANET's 31 characters).
+
+    Raises:
+        ConfigError: ``fraction`` is not strictly between 0 and 1.
+        NetworkError: ``pipe`` is not a pipe of ``wn``.
+    """
+    import wntr
+
+    if not (isinstance(fraction, (int, float)) and math.isfinite(fraction) and 0 < fraction < 1):
+        raise ConfigError(f"position must be strictly between 0 and 1, got {fraction!r}")
+    require_pipe(wn, pipe)
+    burst_node = _fresh_name(f"{pipe}_B", set(wn.node_name_list), "BURST")
+    second = _fresh_name(f"{pipe}_2", set(wn.link_name_list), "SPLIT")
+    split = wntr.morph.split_pipe(
+        wn, pipe, second, burst_node, add_pipe_at_end=True, split_at_point=float(fraction)
+    )
+    return SplitPipe(split, pipe, burst_node, second, float(fraction))

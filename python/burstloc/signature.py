@@ -1,0 +1,432 @@
+"""The *signature* localizer: match the meters' lasting pressure drop to each pipe's burst signature.
+
+A burst on pipe ``p`` moves the network to a new steady state. Its *signature* ``s_p`` is the vector
+of steady-state head drops at the meters caused by an emitter at the pipe's mid-point, computed
+once per network from the hydraulic model (EPANET steady states through WNTR, pressure-driven
+demand, the engine TSNet initialises from) and cached on disk as a small JSON file. At run time
+the localizer estimates the observed drop ``d = baseline - new level`` per meter from the readings
+(:mod:`burstloc.steady_state_estimators`), fits ``d ~ k * s_p`` with a free scale ``k >= 0`` (the
+burst size is unknown; closed-form least squares) and ranks pipes by the fit's RMS residual:
+``score = -RMS``.
+
+Setup (:func:`compute_signatures`, :func:`cached_signatures`) runs WNTR once; the run-time path
+(:class:`SignatureLocalizer`, :func:`rank_drop`) is numpy only and imports neither WNTR nor the
+transient simulator.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import tempfile
+import warnings
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from burstloc.exceptions import ConfigError, InputError, NetworkError
+from burstloc.ranking import BurstEvidence, RankedPipe, Ranking
+from burstloc.steady_state_estimators import (
+    ESTIMATORS,
+    EstimatorName,
+    baseline_levels,
+    estimate_levels,
+)
+
+__all__ = [
+    "DEFAULT_BURST_COEFF",
+    "SIGNATURE_FORMAT",
+    "DemandModel",
+    "SignatureLocalizer",
+    "SignatureSet",
+    "cached_signatures",
+    "compute_signatures",
+    "fit_signatures",
+    "network_hash",
+    "rank_drop",
+]
+
+SIGNATURE_FORMAT = "burstloc-signatures/1"
+"""Format tag written into every signature file."""
+
+DEFAULT_BURST_COEFF = 0.01
+"""Emitter coefficient (m^3/s per m^0.5, TSNet's burst coefficient unit) of the reference burst.
+
+Only the shape of a signature matters (the fit has a free scale); the reference burst is kept
+moderate so that the drop stays in the near-linear range of the network's response."""
+
+DemandModel = Literal["pdd", "emitter"]
+"""How consumer demands respond to the burst's pressure drop in the steady-state runs: WNTR's
+pressure-driven demand (``"pdd"``, TSNet's initialiser) or TSNet's transient demand law
+``q = c * sqrt(p)`` (``"emitter"``, each demand becomes an emitter fitted at the base state)."""
+
+
+def network_hash(path: str | os.PathLike[str]) -> str:
+    """Fingerprint of a network file: ``"sha256:<hex>"`` of its bytes (line endings normalised)."""
+    p = Path(path)
+    try:
+        data = p.read_bytes()
+    except OSError as exc:
+        raise NetworkError(f"cannot read network file {p}: {exc}") from exc
+    digest = hashlib.sha256(data.replace(b"\r\n", b"\n")).hexdigest()
+    return f"sha256:{digest}"
+
+
+@dataclass(frozen=True)
+class SignatureSet:
+    """Burst signatures of one network: ``matrix[i, j]`` is the steady head drop (m) at
+    ``meters[j]`` for the reference burst at the mid-point of ``pipes[i]``.
+
+    ``endpoints[pipe]`` is ``(start, end)`` in the base steady state's flow direction;
+    ``baseline[j]`` is the base steady head at ``meters[j]``; ``params`` records how the
+    signatures were computed (burst coefficient, position, demand model).
+    """
+
+    network_hash: str
+    meters: tuple[str, ...]
+    pipes: tuple[str, ...]
+    endpoints: Mapping[str, tuple[str, str]]
+    matrix: NDArray[np.float64]
+    baseline: NDArray[np.float64]
+    params: Mapping[str, Any]
+
+    def __post_init__(self) -> None:
+        matrix = np.asarray(self.matrix, dtype=np.float64)
+        baseline = np.asarray(self.baseline, dtype=np.float64)
+        if matrix.shape != (len(self.pipes), len(self.meters)):
+            raise InputError(
+                f"signature matrix must be (pipes, meters) = ({len(self.pipes)}, "
+                f"{len(self.meters)}), got {matrix.shape}"
+            )
+        if baseline.shape != (len(self.meters),):
+            raise InputError(f"baseline must have one head per meter, got {baseline.shape}")
+        if not (np.all(np.isfinite(matrix)) and np.all(np.isfinite(baseline))):
+            raise InputError("signatures must be finite")
+        missing = [p for p in self.pipes if p not in self.endpoints]
+        if missing:
+            raise InputError(f"no end nodes for pipe(s) {missing}")
+        if len(set(self.meters)) != len(self.meters) or len(set(self.pipes)) != len(self.pipes):
+            raise InputError("duplicate meter or pipe in a signature set")
+        matrix.setflags(write=False)
+        baseline.setflags(write=False)
+        object.__setattr__(self, "matrix", matrix)
+        object.__setattr__(self, "baseline", baseline)
+        object.__setattr__(self, "meters", tuple(self.meters))
+        object.__setattr__(self, "pipes", tuple(self.pipes))
+        object.__setattr__(
+            self, "endpoints", {p: (str(a), str(b)) for p, (a, b) in self.endpoints.items()}
+        )
+        object.__setattr__(self, "params", dict(self.params))
+
+    def for_meters(self, meters: Sequence[str]) -> SignatureSet:
+        """The same signatures restricted to (and ordered like) ``meters``."""
+        index = {m: j for j, m in enumerate(self.meters)}
+        unknown = [m for m in meters if m not in index]
+        if unknown:
+            raise InputError(f"no signature for meter(s) {unknown}")
+        cols = [index[m] for m in meters]
+        return SignatureSet(
+            network_hash=self.network_hash,
+            meters=tuple(meters),
+            pipes=self.pipes,
+            endpoints=self.endpoints,
+            matrix=self.matrix[:, cols],
+            baseline=self.baseline[cols],
+            params=self.params,
+        )
+
+    def to_json(self) -> dict[str, Any]:
+        """JSON-ready dictionary (see :data:`SIGNATURE_FORMAT`)."""
+        return {
+            "format": SIGNATURE_FORMAT,
+            "network_hash": self.network_hash,
+            "meters": list(self.meters),
+            "pipes": list(self.pipes),
+            "endpoints": {p: list(self.endpoints[p]) for p in self.pipes},
+            "baseline": self.baseline.tolist(),
+            "matrix": self.matrix.tolist(),
+            "params": dict(self.params),
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> SignatureSet:
+        """Inverse of :meth:`to_json`; a malformed document raises ``InputError``."""
+        if data.get("format") != SIGNATURE_FORMAT:
+            raise InputError(
+                f"not a signature file (format {data.get('format')!r}, want {SIGNATURE_FORMAT!r})"
+            )
+        try:
+            return cls(
+                network_hash=str(data["network_hash"]),
+                meters=tuple(data["meters"]),
+                pipes=tuple(data["pipes"]),
+                endpoints={p: (e[0], e[1]) for p, e in data["endpoints"].items()},
+                matrix=np.asarray(data["matrix"], dtype=np.float64).reshape(
+                    len(data["pipes"]), len(data["meters"])
+                ),
+                baseline=np.asarray(data["baseline"], dtype=np.float64),
+                params=dict(data.get("params", {})),
+            )
+        except (KeyError, TypeError, ValueError, IndexError) as exc:
+            raise InputError(f"malformed signature file: {exc}") from exc
+
+    def save(self, path: str | os.PathLike[str]) -> None:
+        """Write the signatures as JSON (atomically: a temp file renamed into place)."""
+        target = Path(path)
+        target.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=target.name, suffix=".tmp")
+        try:
+            with os.fdopen(fd, "w") as fh:
+                json.dump(self.to_json(), fh)
+            os.replace(tmp, target)
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str]) -> SignatureSet:
+        """Read a file written by :meth:`save`."""
+        try:
+            with open(path) as fh:
+                data = json.load(fh)
+        except (OSError, json.JSONDecodeError) as exc:
+            raise InputError(f"cannot read signature file {path}: {exc}") from exc
+        return cls.from_json(data)
+
+
+def _load_model(network: str | os.PathLike[str]) -> Any:
+    try:
+        from burstloc.network import load_network
+    except ImportError:  # pragma: no cover - before burstloc.network exists
+        import wntr
+
+        return wntr.network.WaterNetworkModel(str(network))
+    return load_network(network)
+
+
+def _split(wn: Any, pipe: str, position: float, junction: str) -> Any:
+    import wntr
+
+    return wntr.morph.split_pipe(
+        wn, pipe, f"{pipe}__burst_b", junction, split_at_point=position, return_copy=True
+    )
+
+
+def _steady_heads(wn: Any, workdir: str) -> tuple[Any, Any]:
+    """Heads (per node) and flows (per link) of the EPANET steady state at t = 0."""
+    import wntr
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # EPANET's "REQUIRED PRESSURE raised to 0.1 m" notice
+        sim = wntr.sim.EpanetSimulator(wn)
+        results = sim.run_sim(file_prefix=os.path.join(workdir, "sig"))
+    return results.node["head"].iloc[0], results.link["flowrate"].iloc[0]
+
+
+def compute_signatures(
+    network: str | os.PathLike[str],
+    meters: Sequence[str] | None = None,
+    *,
+    burst_coeff: float = DEFAULT_BURST_COEFF,
+    position: float = 0.5,
+    demand_model: DemandModel = "pdd",
+) -> SignatureSet:
+    """Burst signatures of every pipe of ``network`` at ``meters`` (default: every junction).
+
+    One EPANET steady-state run for the base state and one per pipe with the pipe split at
+    ``position`` and an emitter of coefficient ``burst_coeff`` at the new junction. Pipe end nodes
+    are oriented in the base state's flow direction (a pipe with negative flow is reversed).
+    """
+    if not (math.isfinite(burst_coeff) and burst_coeff > 0):
+        raise ConfigError(f"burst_coeff must be > 0, got {burst_coeff}")
+    if not 0.0 < position < 1.0:
+        raise ConfigError(f"position must be strictly between 0 and 1, got {position}")
+    if demand_model not in ("pdd", "emitter"):
+        raise ConfigError(f"unknown demand model {demand_model!r}; use 'pdd' or 'emitter'")
+    wn = _load_model(network)
+    junctions = list(wn.junction_name_list)
+    meter_list = list(junctions if meters is None else meters)
+    unknown = [m for m in meter_list if m not in junctions]
+    if unknown:
+        raise NetworkError(f"meter(s) {unknown} are not junctions of {network}")
+    if not meter_list:
+        raise InputError("at least one meter is needed")
+    wn.options.hydraulic.demand_model = "PDD"
+    wn.options.time.duration = 0
+    with tempfile.TemporaryDirectory(prefix="burstloc-sig-") as workdir:
+        if demand_model == "emitter":
+            base_heads, _ = _steady_heads(wn, workdir)
+            for name in junctions:
+                node = wn.get_node(name)
+                q0 = sum(ts.base_value for ts in node.demand_timeseries_list)
+                pressure = float(base_heads[name]) - node.elevation
+                if q0 > 0 and pressure > 0:
+                    node.emitter_coefficient = q0 / math.sqrt(pressure)
+                for ts in node.demand_timeseries_list:
+                    ts.base_value = 0.0
+        base_heads, base_flows = _steady_heads(wn, workdir)
+        pipes = list(wn.pipe_name_list)
+        endpoints: dict[str, tuple[str, str]] = {}
+        rows = []
+        for pipe in pipes:
+            link = wn.get_link(pipe)
+            a, b = link.start_node_name, link.end_node_name
+            endpoints[pipe] = (b, a) if float(base_flows[pipe]) < 0 else (a, b)
+            burst = f"{pipe}__burst"
+            split = _split(wn, pipe, position, burst)
+            split.get_node(burst).emitter_coefficient = burst_coeff
+            heads, _ = _steady_heads(split, workdir)
+            rows.append([float(base_heads[m]) - float(heads[m]) for m in meter_list])
+    return SignatureSet(
+        network_hash=network_hash(network),
+        meters=tuple(meter_list),
+        pipes=tuple(pipes),
+        endpoints=endpoints,
+        matrix=np.array(rows, dtype=np.float64),
+        baseline=np.array([float(base_heads[m]) for m in meter_list]),
+        params={"burst_coeff": burst_coeff, "position": position, "demand_model": demand_model},
+    )
+
+
+def default_cache_dir() -> Path:
+    """Where signature files go: ``$BURSTLOC_CACHE_DIR/signatures`` or the user cache dir."""
+    root = os.environ.get("BURSTLOC_CACHE_DIR")
+    if root:
+        return Path(root) / "signatures"
+    import platformdirs
+
+    return Path(platformdirs.user_cache_dir("burstloc")) / "signatures"
+
+
+def cached_signatures(
+    network: str | os.PathLike[str],
+    meters: Sequence[str] | None = None,
+    *,
+    cache_dir: str | os.PathLike[str] | None = None,
+    burst_coeff: float = DEFAULT_BURST_COEFF,
+    position: float = 0.5,
+    demand_model: DemandModel = "pdd",
+) -> SignatureSet:
+    """:func:`compute_signatures` for every junction, cached on disk, restricted to ``meters``.
+
+    The cache key is the network's hash plus the parameters, so an edited network file is
+    recomputed. Call once at setup; the result is what :class:`SignatureLocalizer` needs.
+    """
+    key = json.dumps(
+        {
+            "hash": network_hash(network),
+            "burst_coeff": burst_coeff,
+            "position": position,
+            "demand_model": demand_model,
+            "format": SIGNATURE_FORMAT,
+        },
+        sort_keys=True,
+    )
+    digest = hashlib.sha256(key.encode()).hexdigest()[:24]
+    folder = Path(cache_dir) if cache_dir is not None else default_cache_dir()
+    path = folder / f"{Path(network).stem}-{digest}.json"
+    full: SignatureSet | None = None
+    if path.exists():
+        try:
+            full = SignatureSet.load(path)
+        except InputError:
+            full = None  # a damaged cache entry is recomputed
+    if full is None:
+        full = compute_signatures(
+            network, burst_coeff=burst_coeff, position=position, demand_model=demand_model
+        )
+        full.save(path)
+    return full if meters is None else full.for_meters(meters)
+
+
+def fit_signatures(
+    drop: NDArray[np.float64], matrix: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Fit ``drop ~ k_i * matrix[i]`` with ``k_i >= 0`` for every row; return ``(k, rms)``.
+
+    Closed form: ``k_i = max(0, <d, s_i> / <s_i, s_i>)``; ``rms_i`` is the root mean square of
+    ``d - k_i s_i`` over the meters. A zero signature fits with ``k = 0``.
+    """
+    d = np.asarray(drop, dtype=np.float64)
+    s = np.asarray(matrix, dtype=np.float64)
+    if d.ndim != 1 or s.ndim != 2 or s.shape[1] != d.size or d.size == 0:
+        raise InputError(f"drop (M,) and signatures (P, M) do not match: {d.shape}, {s.shape}")
+    if not np.all(np.isfinite(d)):
+        raise InputError("the drop vector must be finite")
+    norms = np.einsum("pm,pm->p", s, s)
+    dots = s @ d
+    k = np.where(norms > 0, np.maximum(dots, 0.0) / np.where(norms > 0, norms, 1.0), 0.0)
+    resid = d[None, :] - k[:, None] * s
+    rms = np.sqrt(np.mean(resid**2, axis=1))
+    return k, rms
+
+
+def rank_drop(drop: NDArray[np.float64], signatures: SignatureSet) -> Ranking:
+    """Rank the pipes of ``signatures`` by how well ``drop`` (per meter, m) fits their signature."""
+    _, rms = fit_signatures(drop, signatures.matrix)
+    return Ranking(
+        RankedPipe(p, *signatures.endpoints[p], score=-float(r))
+        for p, r in zip(signatures.pipes, rms, strict=True)
+    )
+
+
+class SignatureLocalizer:
+    """Rank pipes by the fit of the observed lasting drop to their burst signatures.
+
+    ``settle`` seconds after the onset are skipped (the fast transient); the new level of each
+    meter is estimated by ``estimator`` from the readings between ``onset + settle`` and the
+    decision time; the baseline is the mean of the readings before the onset. ``decision_delay``
+    is how long after the onset the localizer wants to answer: the caller hands it the readings up
+    to ``onset + decision_delay``.
+    """
+
+    def __init__(
+        self,
+        signatures: SignatureSet,
+        *,
+        estimator: EstimatorName = "damped-fit",
+        settle: float = 20.0,
+        decision_delay: float = 150.0,
+    ) -> None:
+        if estimator not in ESTIMATORS:
+            raise ConfigError(f"unknown estimator {estimator!r}; use one of {sorted(ESTIMATORS)}")
+        if not (math.isfinite(settle) and settle >= 0):
+            raise ConfigError(f"settle must be >= 0 s, got {settle}")
+        if not (math.isfinite(decision_delay) and decision_delay > settle):
+            raise ConfigError(
+                f"decision_delay must be > settle ({settle} s), got {decision_delay}"
+            )
+        self.signatures = signatures
+        self.estimator: EstimatorName = estimator
+        self.settle = float(settle)
+        self.decision_delay = float(decision_delay)
+
+    def drop(self, evidence: BurstEvidence) -> NDArray[np.float64]:
+        """The observed lasting drop (baseline - new level) per signature meter, in metres."""
+        cols = evidence.columns(self.signatures.meters)
+        values = evidence.readings[:, cols]
+        times = evidence.times
+        pre = times < evidence.onset
+        if evidence.meter_model == "interval-averaged":
+            # a reading averages the interval that ends at its stamp: it must end before onset
+            pre = times <= evidence.onset - 0.0
+        baseline = baseline_levels(values[pre])
+        post = times >= evidence.onset + self.settle
+        level = estimate_levels(
+            times[post],
+            values[post],
+            capture_interval=evidence.capture_interval,
+            meter_model=evidence.meter_model,
+            method=self.estimator,
+        )
+        return baseline - level
+
+    def rank(self, evidence: BurstEvidence) -> Ranking:
+        """Every pipe, best first, scored by minus the RMS residual of the signature fit (m)."""
+        return rank_drop(self.drop(evidence), self.signatures)

@@ -1,0 +1,192 @@
+"""Map a function over items in parallel, with a progress bar and per-item errors.
+
+:func:`sweep` runs ``func(item)`` for every item:
+
+* in this process, one after the other, when ``workers == 1`` (or there is a single item);
+* in local worker processes (``concurrent.futures`` with the ``spawn`` start method) by
+  default, ``workers`` of them (default: the number of CPUs);
+* on a Dask cluster when ``scheduler`` gives its address (``tcp://host:8786``).
+
+A failing item does not stop the others: its exception is reported in
+:attr:`SweepReport.failures` with the item, and every other item completes. ``func`` and the
+items must be picklable for the parallel modes (a module-level function, plain data).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import traceback
+import uuid
+from collections.abc import Callable, Iterable
+from concurrent.futures import Future, ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, field
+from multiprocessing import get_context
+from typing import Generic, TypeVar
+
+from tqdm.auto import tqdm
+
+from burstloc.exceptions import ConfigError
+
+__all__ = ["ItemFailure", "SweepReport", "sweep"]
+
+T = TypeVar("T")
+R = TypeVar("R")
+
+#: Seconds to wait for a Dask scheduler to answer.
+DASK_CONNECT_TIMEOUT = 10.0
+
+
+@dataclass(frozen=True)
+class ItemFailure(Generic[T]):
+    """One item whose function call raised.
+
+    Attributes:
+        index: position of the item in the input.
+        item: the item.
+        label: how the item is named in messages (e.g. ``"pipe 7"``).
+        error_type: the exception's class name.
+        message: the exception's message.
+        traceback: the formatted traceback (from the worker, when there is one).
+    """
+
+    index: int
+    item: T
+    label: str
+    error_type: str
+    message: str
+    traceback: str
+
+    def __str__(self) -> str:
+        return f"{self.label}: {self.error_type}: {self.message}"
+
+    @classmethod
+    def from_exception(cls, index: int, item: T, label: str, exc: BaseException) -> ItemFailure[T]:
+        """Record ``exc`` raised for ``item``."""
+        text = "".join(traceback.format_exception(type(exc), exc, exc.__traceback__))
+        return cls(index, item, label, type(exc).__name__, str(exc), text)
+
+
+@dataclass
+class SweepReport(Generic[T, R]):
+    """What a sweep produced: ``results[i]`` is ``func(items[i])``, or ``None`` if it failed."""
+
+    items: list[T]
+    results: list[R | None]
+    failures: list[ItemFailure[T]] = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        """True when every item succeeded."""
+        return not self.failures
+
+    def succeeded(self) -> list[tuple[T, R]]:
+        """Return ``(item, result)`` for the items that succeeded, in input order."""
+        failed = {f.index for f in self.failures}
+        return [
+            (item, result)
+            for i, (item, result) in enumerate(zip(self.items, self.results, strict=True))
+            if i not in failed and result is not None
+        ]
+
+
+def sweep(
+    func: Callable[[T], R],
+    items: Iterable[T],
+    *,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    progress: bool = True,
+    desc: str = "",
+    label: Callable[[T], str] = repr,
+    on_result: Callable[[int, T, R], None] | None = None,
+) -> SweepReport[T, R]:
+    """Run ``func`` over ``items`` and report results and failures.
+
+    Args:
+        func: called once per item (in a worker process or Dask worker in parallel modes).
+        items: the inputs.
+        workers: local worker processes (default: CPU count); 1 runs in this process.
+            Ignored when ``scheduler`` is given.
+        scheduler: a Dask scheduler address; runs the items as Dask tasks there.
+        progress: show a tqdm progress bar on stderr.
+        desc: the progress bar's label.
+        label: names an item in failure messages.
+        on_result: called in this process as each item succeeds, ``(index, item, result)``
+            (e.g. to store it in a cache as soon as it exists).
+
+    Raises:
+        ConfigError: ``workers`` is not a positive integer, or the scheduler cannot be reached.
+    """
+    todo = list(items)
+    if workers is not None and (not isinstance(workers, int) or workers < 1):
+        raise ConfigError(f"workers must be a positive integer, got {workers!r}")
+    report: SweepReport[T, R] = SweepReport(todo, [None] * len(todo))
+    if not todo:
+        return report
+    bar = tqdm(total=len(todo), desc=desc or None, disable=not progress, file=sys.stderr)
+
+    def done(index: int, result: R | None, exc: BaseException | None) -> None:
+        if exc is not None:
+            report.failures.append(
+                ItemFailure.from_exception(index, todo[index], label(todo[index]), exc)
+            )
+        else:
+            report.results[index] = result
+            if on_result is not None:
+                on_result(index, todo[index], result)  # type: ignore[arg-type]
+        bar.update(1)
+
+    try:
+        if scheduler is not None:
+            _run_dask(func, todo, scheduler, done)
+        elif (workers or os.cpu_count() or 1) == 1 or len(todo) == 1:
+            for index, item in enumerate(todo):
+                try:
+                    result = func(item)
+                except Exception as exc:
+                    done(index, None, exc)
+                else:
+                    done(index, result, None)
+        else:
+            _run_processes(func, todo, min(workers or os.cpu_count() or 1, len(todo)), done)
+    finally:
+        bar.close()
+    report.failures.sort(key=lambda f: f.index)
+    return report
+
+
+_Done = Callable[[int, R | None, BaseException | None], None]
+
+
+def _run_processes(func: Callable[[T], R], todo: list[T], workers: int, done: _Done) -> None:
+    with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn")) as pool:
+        futures: dict[Future[R], int] = {pool.submit(func, item): i for i, item in enumerate(todo)}
+        for future in as_completed(futures):
+            exc = future.exception()
+            done(futures[future], None if exc else future.result(), exc)
+
+
+def _run_dask(func: Callable[[T], R], todo: list[T], scheduler: str, done: _Done) -> None:
+    from dask.distributed import Client
+    from dask.distributed import as_completed as dask_completed
+
+    try:
+        client = Client(scheduler, timeout=DASK_CONNECT_TIMEOUT, set_as_default=False)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise ConfigError(f"cannot reach the Dask scheduler {scheduler!r}: {exc}") from exc
+    try:
+        run = uuid.uuid4().hex[:8]
+        futures = [
+            client.submit(func, item, key=f"burstloc-{run}-{i}", pure=False)
+            for i, item in enumerate(todo)
+        ]
+        index = {future.key: i for i, future in enumerate(futures)}
+        for future in dask_completed(futures, loop=client.loop):
+            if future.status == "error":
+                done(index[future.key], None, future.exception())
+            else:
+                done(index[future.key], future.result(), None)
+            future.release()
+    finally:
+        client.close()

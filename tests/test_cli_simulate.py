@@ -1,0 +1,130 @@
+"""`burstloc simulate`: scenario files, capture intervals, bad input and exit codes."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from burstloc.cli import main
+
+SHORT = ["--burst-start", "0.2", "--duration", "1.5", "--quiet", "--workers", "1"]
+
+
+def _run(*args: str | Path) -> int:
+    return main([str(a) for a in args])
+
+
+def test_all_pipes_one_file_each(tiny_network: Path, tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    assert (
+        _run("simulate", tiny_network, "--all", "--out", out, "--cache-dir", tmp_path / "c", *SHORT)
+        == 0
+    )
+    files = sorted(p.name for p in out.iterdir())
+    assert files == [f"tiny_pipe-{p}.npz" for p in "ABCDE"]
+    with np.load(out / "tiny_pipe-C.npz", allow_pickle=False) as data:
+        time, heads, junctions = data["time"], data["heads"], list(data["junctions"])
+        meta = json.loads(str(data["metadata"]))
+    assert junctions == ["J1", "J2", "J3", "J4"] and heads.shape == (time.size, 4)
+    assert meta["pipe"] == "C" and (meta["true_start"], meta["true_end"]) == ("J1", "J3")
+    assert meta["duration"] == 1.5 and meta["burst_start"] == 0.2
+    np.testing.assert_allclose(np.diff(time), meta["time_step"])
+
+
+def test_chosen_pipes_parameters_and_capture_interval(tiny_network: Path, tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    code = _run(
+        "simulate", tiny_network, "--pipe", "B", "E", "--position", "0.25", "--burst-coeff", "0.02",
+        "--opening-time", "0", "--wave-speed", "1000", "--capture-interval", "0.1",
+        "--capture-phase", "0.05", "--out", out, "--no-cache", *SHORT,
+    )  # fmt: skip
+    assert code == 0
+    assert sorted(p.name for p in out.iterdir()) == ["tiny_pipe-B.npz", "tiny_pipe-E.npz"]
+    with np.load(out / "tiny_pipe-B.npz", allow_pickle=False) as data:
+        meta = json.loads(str(data["metadata"]))
+        np.testing.assert_allclose(np.diff(data["time"]), 0.1)
+        assert data["time"][0] == pytest.approx(0.05)
+    assert meta["position"] == 0.25 and meta["burst_coeff"] == 0.02
+    assert meta["opening_time"] == 0.0 and meta["wave_speed"] == 1000.0
+    assert meta["capture_interval"] == 0.1 and meta["capture_phase"] == 0.05
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        (["--pipe", "B", "Q"], "['Q']"),
+        (
+            ["--pipe", "B", "--position", "1.5"],
+            "position must be strictly between 0 and 1, got 1.5",
+        ),
+        (["--pipe", "B", "--position", "0"], "got 0.0"),
+        (["--pipe", "B", "--burst-start", "2", "--duration", "2"], "duration (2.0 s)"),
+        (["--pipe", "B", "--burst-coeff", "-1"], "burst_coeff must be > 0, got -1.0"),
+        (["--pipe", "B", "--wave-speed", "0"], "wave_speed must be > 0 m/s, got 0.0"),
+        (["--pipe", "B", "--workers", "0"], "workers must be a positive integer, got 0"),
+    ],
+)
+def test_bad_input_exits_2_naming_the_value(
+    tiny_network: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    args: list[str],
+    words: str,
+) -> None:
+    assert (
+        _run("simulate", tiny_network, *args, "--out", tmp_path / "o", "--no-cache", "--quiet") == 2
+    )
+    err = capsys.readouterr().err
+    assert err.startswith("burstloc: error: ") and words in err
+    assert not (tmp_path / "o").exists()
+
+
+def test_missing_and_malformed_networks(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "out"
+    assert _run("simulate", tmp_path / "none.inp", "--all", "--quiet", "--out", out) == 2
+    assert "none.inp" in capsys.readouterr().err
+    bad = tmp_path / "bad.inp"
+    bad.write_text("[PIPES]\n A R1 J1 100\n", encoding="utf-8")
+    assert _run("simulate", bad, "--all", "--quiet", "--out", out) == 2
+    assert f"{bad}:2:" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_a_failing_scenario_exits_1_after_writing_the_others(
+    tiny_network: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # The largest stable time step differs per split pipe: 0.06 s is fine when A (300 m) is
+    # split but too coarse when D (150 m) is.
+    out = tmp_path / "out"
+    code = _run(
+        "simulate", tiny_network, "--pipe", "A", "D", "--time-step", "0.06", "--out", out,
+        "--no-cache", "--burst-start", "0.2", "--duration", "1.5", "--quiet", "--workers", "1",
+    )  # fmt: skip
+    assert code == 1
+    captured = capsys.readouterr()
+    assert sorted(p.name for p in out.iterdir()) == ["tiny_pipe-A.npz"]
+    assert "pipe D" in captured.err and "stability limit" in captured.err
+    assert "wrote 1 scenario file(s)" in captured.out
+
+
+def test_pipe_and_all_are_exclusive_and_one_is_required(tiny_network: Path) -> None:
+    for args in (["--pipe", "A", "--all"], []):
+        with pytest.raises(SystemExit) as info:
+            _run("simulate", tiny_network, *args)
+        assert info.value.code == 2
+
+
+def test_command_line_process(tiny_network: Path, tmp_path: Path) -> None:
+    done = subprocess.run(
+        [sys.executable, "-m", "burstloc.cli", "simulate", str(tiny_network), "--pipe", "Nope"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert done.returncode == 2
+    assert "unknown pipe(s) ['Nope']" in done.stderr and done.stdout == ""
