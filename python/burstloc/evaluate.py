@@ -157,9 +157,7 @@ def paper_runs(
             for mode in modes:
                 spec = RunSpec(cfg, ci, li, Mode(mode))
                 label = spec.paper_run()
-                runs.append(
-                    RunSpec(cfg, ci, li, Mode(mode), label.scenario if label else None)
-                )
+                runs.append(RunSpec(cfg, ci, li, Mode(mode), label.scenario if label else None))
     return runs
 
 
@@ -229,7 +227,7 @@ def _capture(result: ScenarioResult, spec: RunSpec, offset: float) -> tuple[Any,
     and move the window grid ``j`` readings earlier relative to the burst.
     """
     ci = spec.capture_interval
-    j = int(math.floor(offset / ci + 1e-9))
+    j = math.floor(offset / ci + 1e-9)
     phase = min(max(offset - j * ci, 0.0), math.nextafter(ci, 0.0))
     times, values = resample(result.time, result.heads, ci, phase)
     if j:
@@ -438,7 +436,7 @@ def evaluate(
         from burstloc.exceptions import SimulationError
 
         raise SimulationError("; ".join(str(f) for f in report.failures))
-    results = {s.pipe: r for s, r in zip(scenarios, report.results) if r is not None}
+    results = {s.pipe: r for s, r in zip(scenarios, report.results, strict=True) if r is not None}
 
     dt = max(r.time_step for r in results.values())
     for spec in runs:
@@ -464,8 +462,6 @@ def evaluate(
     out: list[RunResult] = []
     for spec in runs:
         offsets = phase_offsets(spec, phases, phase_span)
-        attempts = {
-            p: [locate_burst(results[p], graph, spec, o) for o in offsets] for p in chosen
-        }
+        attempts = {p: [locate_burst(results[p], graph, spec, o) for o in offsets] for p in chosen}
         out.append(RunResult(spec, chosen, truth, offsets, attempts))
     return Evaluation(path, out, params, phase_span, warnings, results, graph)

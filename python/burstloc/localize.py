@@ -297,7 +297,9 @@ class BurstLocator:
             if o.localization is not None:
                 yield o.localization
 
-    async def arun(self, source: AsyncIterable[Item] | Iterable[Item]) -> AsyncIterator[Localization]:
+    async def arun(
+        self, source: AsyncIterable[Item] | Iterable[Item]
+    ) -> AsyncIterator[Localization]:
         """Async twin of :meth:`run`."""
         async for w in self.stream.awindows(source):
             o = self.process(w)

@@ -185,9 +185,9 @@ class ScenarioConfig:
     ``burst_start`` (s), ``opening_time`` (s), ``burst_coeff`` (TSNet's final emitter
     coefficient, m³/s/m^½), ``position`` (fraction of the pipe from its INP start node),
     ``wave_speed`` (m/s, TSNet's default as in the paper) and ``duration`` (s). ``duration=None``
-    lets the evaluation choose the shortest simulation that gives every run ``2 × interval``
+    lets the evaluation choose the shortest simulation that gives every run ``2 x interval``
     readings after the burst whatever the phase (220 s for the paper's experiment: 10 s onset
-    + one 10 s capture interval of phase + 2 × 10 readings at 10 s); an explicit duration too
+    + one 10 s capture interval of phase + 2 x 10 readings at 10 s); an explicit duration too
     short for a run is an error.
     """
 

@@ -65,18 +65,18 @@ def plot_network(ev: Evaluation, r: RunResult, path: str | os.PathLike[str]) -> 
     rows = math.ceil(n / cols)
     fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 2.6 * rows), squeeze=False)
     edges = list(graph.edges(data=True))
-    for ax, pipe in zip(axes.flat, r.pipes):
+    for ax, pipe in zip(axes.flat, r.pipes, strict=False):
         a = r.attempts[pipe][0]
         for u, v, _ in edges:
             (x0, y0), (x1, y1) = pos[u], pos[v]
             ax.plot([x0, x1], [y0, y1], color="0.8", lw=1, zorder=1)
-        xs, ys = zip(*pos.values())
+        xs, ys = zip(*pos.values(), strict=True)
         ax.scatter(xs, ys, s=6, color="0.5", zorder=2)
         t0, t1 = r.truth[pipe]
-        ax.plot(*zip(pos[t0], pos[t1]), color="tab:green", lw=4, zorder=3)
+        ax.plot(*zip(pos[t0], pos[t1], strict=True), color="tab:green", lw=4, zorder=3)
         if a.predicted is not None and not a.correct:
             p0, p1 = a.predicted
-            ax.plot(*zip(pos[p0], pos[p1]), color="tab:red", lw=3, zorder=4)
+            ax.plot(*zip(pos[p0], pos[p1], strict=True), color="tab:red", lw=3, zorder=4)
         if a.localization is None:
             status = "not located"
         else:
@@ -101,9 +101,7 @@ def plot_network(ev: Evaluation, r: RunResult, path: str | os.PathLike[str]) -> 
     return target
 
 
-def plot_traces(
-    ev: Evaluation, r: RunResult, pipe: str, path: str | os.PathLike[str]
-) -> Path:
+def plot_traces(ev: Evaluation, r: RunResult, pipe: str, path: str | os.PathLike[str]) -> Path:
     """The meters' readings around the burst on ``pipe`` (phase 0) with the alarms."""
     plt = _pyplot()
     result = ev.results[pipe]
@@ -119,7 +117,10 @@ def plot_traces(
     for j, meter in enumerate(result.junctions):
         trigger = loc is not None and meter == loc.trigger_node
         (line,) = ax.plot(
-            times[keep], values[keep, j], lw=2.5 if trigger else 0.9, label=meter,
+            times[keep],
+            values[keep, j],
+            lw=2.5 if trigger else 0.9,
+            label=meter,
             drawstyle="steps-post",
         )
         if loc is not None and meter in loc.evidence:

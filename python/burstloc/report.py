@@ -2,7 +2,7 @@
 
 * :func:`format_tables`: per detector and mode, the per-pipe predictions of every run (phase 0)
   beside the paper's Tables III/IV when the run is one of the paper's, then a summary in the
-  shape of Table V (accuracy at phase 0, phase mean with min–max, the paper's figure, median
+  shape of Table V (accuracy at phase 0, phase mean with min-max, the paper's figure, median
   time to localize).
 * :func:`write_json`: the CLI's JSON contract (``tests/evaluate_schema.json``).
 * :func:`write_csv`: one row per run and pipe.
@@ -59,8 +59,9 @@ def _groups(ev: Evaluation) -> list[tuple[str, str, list[RunResult]]]:
     groups: dict[tuple[str, str], list[RunResult]] = {}
     for r in ev.runs:
         groups.setdefault((r.spec.detector.kind, r.spec.mode.value), []).append(r)
-    return [(k, m, sorted(rs, key=lambda r: r.spec.capture_interval)) for (k, m), rs in
-            groups.items()]
+    return [
+        (k, m, sorted(rs, key=lambda r: r.spec.capture_interval)) for (k, m), rs in groups.items()
+    ]
 
 
 def _pipe_order(pipes: Sequence[str]) -> list[str]:
@@ -69,10 +70,10 @@ def _pipe_order(pipes: Sequence[str]) -> list[str]:
 
 
 def _render(rows: list[list[str]], header: list[str]) -> list[str]:
-    widths = [max(len(str(c)) for c in col) for col in zip(header, *rows)]
-    line = "  ".join(h.ljust(w) for h, w in zip(header, widths))
+    widths = [max(len(str(c)) for c in col) for col in zip(header, *rows, strict=True)]
+    line = "  ".join(h.ljust(w) for h, w in zip(header, widths, strict=True))
     out = [line, "-" * len(line)]
-    out += ["  ".join(str(c).ljust(w) for c, w in zip(row, widths)) for row in rows]
+    out += ["  ".join(str(c).ljust(w) for c, w in zip(row, widths, strict=True)) for row in rows]
     return out
 
 
@@ -132,8 +133,16 @@ def format_tables(ev: Evaluation) -> str:
         f"{'capture interval' if ev.phase_span == 'capture' else 'localization window'}; "
         "paper = Table V; time = median time to localize"
     )
-    header = ["detector", "mode", "capture", "params", "phase 0", "phase mean [min-max]",
-              "paper", "median time"]
+    header = [
+        "detector",
+        "mode",
+        "capture",
+        "params",
+        "phase 0",
+        "phase mean [min-max]",
+        "paper",
+        "median time",
+    ]
     rows = []
     for kind, mode, runs in _groups(ev):
         for r in runs:
@@ -144,9 +153,10 @@ def format_tables(ev: Evaluation) -> str:
                 k = paper.CAPTURE_INTERVALS.index(pr.capture_interval)
                 pub = f"{paper.TABLE_V[kind][k]:.0f}%"
             ttl = r.median_time_to_localize()
-            params = ", ".join(
-                f"{k}={v:g}" for k, v in r.spec.detector.params().items()
-            ) + f", L={r.spec.localization_interval}"
+            params = (
+                ", ".join(f"{k}={v:g}" for k, v in r.spec.detector.params().items())
+                + f", L={r.spec.localization_interval}"
+            )
             rows.append(
                 [
                     _TABLE_NAMES[kind][1],

@@ -1,4 +1,4 @@
-"""The *signature* localizer: match the meters' lasting pressure drop to each pipe's burst signature.
+"""The *signature* localizer: match the meters' lasting pressure drop to each pipe's signature.
 
 A burst on pipe ``p`` moves the network to a new steady state. Its *signature* ``s_p`` is the vector
 of steady-state head drops at the meters caused by an emitter at the pipe's mid-point, computed
@@ -16,7 +16,6 @@ transient simulator.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import math
 import os
@@ -30,7 +29,9 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from burstloc.cache import cache_key, default_cache_dir, file_sha256
 from burstloc.exceptions import ConfigError, InputError, NetworkError
+from burstloc.network import load_network, split_pipe
 from burstloc.ranking import BurstEvidence, RankedPipe, Ranking
 from burstloc.steady_state_estimators import (
     ESTIMATORS,
@@ -68,14 +69,11 @@ pressure-driven demand (``"pdd"``, TSNet's initialiser) or TSNet's transient dem
 
 
 def network_hash(path: str | os.PathLike[str]) -> str:
-    """Fingerprint of a network file: ``"sha256:<hex>"`` of its bytes (line endings normalised)."""
-    p = Path(path)
+    """Fingerprint of a network file: ``"sha256:<hex>"`` of its bytes."""
     try:
-        data = p.read_bytes()
+        return f"sha256:{file_sha256(path)}"
     except OSError as exc:
-        raise NetworkError(f"cannot read network file {p}: {exc}") from exc
-    digest = hashlib.sha256(data.replace(b"\r\n", b"\n")).hexdigest()
-    return f"sha256:{digest}"
+        raise NetworkError(f"cannot read network file {path}: {exc}") from exc
 
 
 @dataclass(frozen=True)
@@ -200,24 +198,6 @@ class SignatureSet:
         return cls.from_json(data)
 
 
-def _load_model(network: str | os.PathLike[str]) -> Any:
-    try:
-        from burstloc.network import load_network
-    except ImportError:  # pragma: no cover - before burstloc.network exists
-        import wntr
-
-        return wntr.network.WaterNetworkModel(str(network))
-    return load_network(network)
-
-
-def _split(wn: Any, pipe: str, position: float, junction: str) -> Any:
-    import wntr
-
-    return wntr.morph.split_pipe(
-        wn, pipe, f"{pipe}__burst_b", junction, split_at_point=position, return_copy=True
-    )
-
-
 def _steady_heads(wn: Any, workdir: str) -> tuple[Any, Any]:
     """Heads (per node) and flows (per link) of the EPANET steady state at t = 0."""
     import wntr
@@ -249,7 +229,7 @@ def compute_signatures(
         raise ConfigError(f"position must be strictly between 0 and 1, got {position}")
     if demand_model not in ("pdd", "emitter"):
         raise ConfigError(f"unknown demand model {demand_model!r}; use 'pdd' or 'emitter'")
-    wn = _load_model(network)
+    wn = load_network(network)
     junctions = list(wn.junction_name_list)
     meter_list = list(junctions if meters is None else meters)
     unknown = [m for m in meter_list if m not in junctions]
@@ -278,10 +258,9 @@ def compute_signatures(
             link = wn.get_link(pipe)
             a, b = link.start_node_name, link.end_node_name
             endpoints[pipe] = (b, a) if float(base_flows[pipe]) < 0 else (a, b)
-            burst = f"{pipe}__burst"
-            split = _split(wn, pipe, position, burst)
-            split.get_node(burst).emitter_coefficient = burst_coeff
-            heads, _ = _steady_heads(split, workdir)
+            split = split_pipe(wn, pipe, position)
+            split.network.get_node(split.burst_node).emitter_coefficient = burst_coeff
+            heads, _ = _steady_heads(split.network, workdir)
             rows.append([float(base_heads[m]) - float(heads[m]) for m in meter_list])
     return SignatureSet(
         network_hash=network_hash(network),
@@ -292,16 +271,6 @@ def compute_signatures(
         baseline=np.array([float(base_heads[m]) for m in meter_list]),
         params={"burst_coeff": burst_coeff, "position": position, "demand_model": demand_model},
     )
-
-
-def default_cache_dir() -> Path:
-    """Where signature files go: ``$BURSTLOC_CACHE_DIR/signatures`` or the user cache dir."""
-    root = os.environ.get("BURSTLOC_CACHE_DIR")
-    if root:
-        return Path(root) / "signatures"
-    import platformdirs
-
-    return Path(platformdirs.user_cache_dir("burstloc")) / "signatures"
 
 
 def cached_signatures(
@@ -315,22 +284,18 @@ def cached_signatures(
 ) -> SignatureSet:
     """:func:`compute_signatures` for every junction, cached on disk, restricted to ``meters``.
 
-    The cache key is the network's hash plus the parameters, so an edited network file is
-    recomputed. Call once at setup; the result is what :class:`SignatureLocalizer` needs.
+    The cache key covers the network file's bytes, the parameters and the package versions
+    (:func:`burstloc.cache.cache_key`), so an edited network file is recomputed. The default
+    folder is ``signatures/`` in burstloc's cache directory (``$BURSTLOC_CACHE_DIR``). Call
+    once at setup; the result is what :class:`SignatureLocalizer` needs.
     """
-    key = json.dumps(
-        {
-            "hash": network_hash(network),
-            "burst_coeff": burst_coeff,
-            "position": position,
-            "demand_model": demand_model,
-            "format": SIGNATURE_FORMAT,
-        },
-        sort_keys=True,
+    key = cache_key(
+        SIGNATURE_FORMAT,
+        {"burst_coeff": burst_coeff, "position": position, "demand_model": demand_model},
+        files=[network],
     )
-    digest = hashlib.sha256(key.encode()).hexdigest()[:24]
-    folder = Path(cache_dir) if cache_dir is not None else default_cache_dir()
-    path = folder / f"{Path(network).stem}-{digest}.json"
+    folder = Path(cache_dir) if cache_dir is not None else default_cache_dir() / "signatures"
+    path = folder / f"{Path(network).stem}-{key[:24]}.json"
     full: SignatureSet | None = None
     if path.exists():
         try:
@@ -399,9 +364,7 @@ class SignatureLocalizer:
         if not (math.isfinite(settle) and settle >= 0):
             raise ConfigError(f"settle must be >= 0 s, got {settle}")
         if not (math.isfinite(decision_delay) and decision_delay > settle):
-            raise ConfigError(
-                f"decision_delay must be > settle ({settle} s), got {decision_delay}"
-            )
+            raise ConfigError(f"decision_delay must be > settle ({settle} s), got {decision_delay}")
         self.signatures = signatures
         self.estimator: EstimatorName = estimator
         self.settle = float(settle)

@@ -293,18 +293,19 @@ def simulate_burst(
 
     Raises:
         NetworkError: missing or malformed network file, unknown pipe.
-        ConfigError: ``time_step`` above TSNet's stability limit for this network.
+        ConfigError: ``time_step`` above TSNet's stability limit for this network, or a
+            ``duration`` shorter than TSNet's minimum of 10 time steps.
         SimulationError: TSNet failed, or produced non-finite heads.
     """
     store = _resolve_cache(cache)
-    key = scenario.cache_key() if store is not None else None
-    if store is not None and key is not None:
-        hit = _from_cache(store, key, scenario)
-        if hit is not None:
-            return hit
+    if store is None:
+        return _simulate(scenario)
+    key = scenario.cache_key()
+    hit = _from_cache(store, key, scenario)
+    if hit is not None:
+        return hit
     result = _simulate(scenario)
-    if store is not None and key is not None:
-        store.put(key, result.to_arrays())
+    store.put(key, result.to_arrays())
     return result
 
 
@@ -465,6 +466,8 @@ def simulate_many(
     with ``scheduler`` (a Dask scheduler address), on that cluster; each result is stored in
     the cache as soon as it arrives. A failing scenario is reported in the returned
     :class:`~burstloc.sweep.SweepReport` with its pipe and error; the others complete.
+    Dask workers read the network file at the scenario's path: on a cluster, give a path all
+    workers can read (a shared file system).
     """
     store = _resolve_cache(cache)
     todo = list(scenarios)

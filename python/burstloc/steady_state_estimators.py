@@ -28,7 +28,6 @@ from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.optimize import minimize
 
 from burstloc.exceptions import InputError
 from burstloc.ranking import METER_MODELS, MeterModel
@@ -45,9 +44,13 @@ __all__ = [
 EstimatorName = Literal["mean", "median", "damped-fit"]
 ESTIMATORS: frozenset[str] = frozenset({"mean", "median", "damped-fit"})
 
-_DECAY_GRID = (0.0, 0.005, 0.01, 0.02, 0.04, 0.08)  # 1/s: from undamped to a ~12 s time constant
-_MAX_GRID = 300  # candidate frequencies per decay rate in the grid search
+_DECAY_GRID = (0.0, 0.01, 0.02, 0.04, 0.08)  # 1/s: undamped to a ~12 s time constant
+_MAX_DECAY = 1.0  # 1/s
+_MAX_GRID = 240  # candidate frequencies per decay rate in the grid search
+_ZOOM_ROUNDS = 4  # refinement grids around the best grid point
 _AVERAGING_NODES = 8  # Gauss-Legendre nodes per capture interval for interval-averaged readings
+_DEFAULT_MODES = 2
+_BLOCK = 2.0  # s: dense readings are block-averaged to about this before the fit
 
 
 def baseline_levels(values: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -64,83 +67,120 @@ class DampedFit:
 
     ``levels`` (M,) are the fitted constants; ``omegas`` and ``decays`` (rad/s, 1/s) the shared
     mode parameters; ``amplitudes`` (modes, M) each meter's amplitude of each mode;
-    ``rms`` the residual RMS over all readings (m).
+    ``coefficients`` (2 * modes, M) the cosine and sine coefficients of each mode (their rows
+    span the meters' oscillation shapes); ``rms`` the residual RMS over all readings (m).
     """
 
     levels: NDArray[np.float64]
     omegas: tuple[float, ...]
     decays: tuple[float, ...]
     amplitudes: NDArray[np.float64]
+    coefficients: NDArray[np.float64]
     rms: float
 
 
-def _basis(
-    t: NDArray[np.float64],
-    params: list[tuple[float, float]],
-    capture_interval: float,
-    meter_model: MeterModel,
-) -> NDArray[np.float64]:
-    """Design matrix (n, 1 + 2 modes): constant, then ``exp(-l t) cos(w t)``, ``... sin(w t)``."""
+def _nodes(
+    t: NDArray[np.float64], capture_interval: float, meter_model: MeterModel
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Times at which the model is evaluated per reading (n, q) and their averaging weights (q,).
+
+    An instantaneous reading is the model at its stamp; an interval-averaged one is the model's
+    mean over the capture interval ending at its stamp (Gauss-Legendre quadrature).
+    """
     if meter_model == "interval-averaged":
         nodes, weights = np.polynomial.legendre.leggauss(_AVERAGING_NODES)
-        # a reading at t averages (t - dt, t]: map [-1, 1] onto it
-        offs = (nodes - 1.0) * 0.5 * capture_interval
-        tt = t[:, None] + offs[None, :]
-        w = weights * 0.5
-    else:
-        tt = t[:, None]
-        w = np.ones(1)
-    cols = [np.ones(t.size)]
+        return t[:, None] + ((nodes - 1.0) * 0.5 * capture_interval)[None, :], weights * 0.5
+    return t[:, None], np.ones(1)
+
+
+def _mode_columns(
+    tt: NDArray[np.float64],
+    w: NDArray[np.float64],
+    omegas: NDArray[np.float64],
+    decays: NDArray[np.float64],
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Averaged ``exp(-l t) cos(w t)`` and ``... sin(w t)`` columns for candidate pairs (g, n)."""
+    env = np.exp(-decays[:, None, None] * tt[None])
+    phase = omegas[:, None, None] * tt[None]
+    return (env * np.cos(phase)) @ w, (env * np.sin(phase)) @ w
+
+
+def _basis(
+    tt: NDArray[np.float64], w: NDArray[np.float64], params: list[tuple[float, float]]
+) -> NDArray[np.float64]:
+    """Design matrix (n, 1 + 2 modes): a constant, then each mode's cosine and sine columns."""
+    cols = [np.ones(tt.shape[0])]
     for omega, decay in params:
-        env = np.exp(-decay * tt)
-        cols.append((env * np.cos(omega * tt)) @ w)
-        cols.append((env * np.sin(omega * tt)) @ w)
+        c, s = _mode_columns(tt, w, np.array([omega]), np.array([decay]))
+        cols += [c[0], s[0]]
     return np.column_stack(cols)
 
 
-def _grid_rss(
-    t: NDArray[np.float64],
+def _pair_rss(
+    tt: NDArray[np.float64],
+    w: NDArray[np.float64],
     y: NDArray[np.float64],
     fixed: list[tuple[float, float]],
     omegas: NDArray[np.float64],
-    decay: float,
-    capture_interval: float,
-    meter_model: MeterModel,
+    decays: NDArray[np.float64],
 ) -> NDArray[np.float64]:
-    """Residual sum of squares of the joint fit for each candidate frequency (batched)."""
-    fixed_basis = _basis(t, fixed, capture_interval, meter_model)  # (n, 1 + 2 * fixed)
-    if meter_model == "interval-averaged":
-        nodes, weights = np.polynomial.legendre.leggauss(_AVERAGING_NODES)
-        tt = t[:, None] + ((nodes - 1.0) * 0.5 * capture_interval)[None, :]
-        w = weights * 0.5
-    else:
-        tt = t[:, None]
-        w = np.ones(1)
-    env = np.exp(-decay * tt)  # (n, q)
-    phase = omegas[:, None, None] * tt[None, :, :]  # (g, n, q)
-    cos_col = (env[None] * np.cos(phase)) @ w  # (g, n)
-    sin_col = (env[None] * np.sin(phase)) @ w
+    """Residual sum of squares of the joint fit with the ``fixed`` modes plus one candidate mode
+    ``(omegas[i], decays[i])``, for every candidate at once (``y`` is centred per meter)."""
+    fixed_basis = _basis(tt, w, fixed)
+    cos_col, sin_col = _mode_columns(tt, w, omegas, decays)
     g = omegas.size
     basis = np.concatenate(
         [
             np.broadcast_to(fixed_basis, (g, *fixed_basis.shape)),
-            cos_col[:, :, None],
-            sin_col[:, :, None],
+            cos_col[..., None],
+            sin_col[..., None],
         ],
         axis=2,
-    )  # (g, n, k)
+    )
     gram = np.einsum("gnk,gnl->gkl", basis, basis)
     rhs = np.einsum("gnk,nm->gkm", basis, y)
     k = gram.shape[1]
-    gram = gram + np.eye(k)[None] * (1e-12 * np.trace(gram, axis1=1, axis2=2)[:, None, None])
-    coef = np.linalg.solve(gram, rhs)
-    return float(np.sum(y * y)) - np.einsum("gkm,gkm->g", rhs, coef)
+    ridge = 1e-12 * np.trace(gram, axis1=1, axis2=2)[:, None, None] + 1e-300
+    coef = np.linalg.solve(gram + np.eye(k)[None] * ridge, rhs)
+    return np.asarray(float(np.sum(y * y)) - np.einsum("gkm,gkm->g", rhs, coef))
 
 
-def _rss(basis: NDArray[np.float64], y: NDArray[np.float64]) -> float:
-    coef, *_ = np.linalg.lstsq(basis, y, rcond=None)
-    r = y - basis @ coef
-    return float(np.sum(r * r))
+def _best_mode(
+    tt: NDArray[np.float64],
+    w: NDArray[np.float64],
+    y: NDArray[np.float64],
+    fixed: list[tuple[float, float]],
+    w_min: float,
+    w_max: float,
+    start: tuple[float, float] | None = None,
+) -> tuple[float, float, float]:
+    """Best additional mode ``(rss, omega, decay)``: a coarse grid (unless ``start`` is given),
+    then zooming grids around the best pair."""
+    if start is None:
+        count = int(min(_MAX_GRID, max(40, 4 * tt.shape[0])))
+        om, de = np.meshgrid(np.linspace(w_min, w_max, count), np.array(_DECAY_GRID))
+        om, de = om.ravel(), de.ravel()
+        rss = _pair_rss(tt, w, y, fixed, om, de)
+        i = int(np.argmin(rss))
+        best = (float(rss[i]), float(om[i]), float(de[i]))
+        step_w = (w_max - w_min) / max(count - 1, 1)
+    else:
+        rss0 = _pair_rss(tt, w, y, fixed, np.array([start[0]]), np.array([start[1]]))
+        best = (float(rss0[0]), start[0], start[1])
+        step_w = 0.02 * max(start[0], 0.05)
+    step_d = 0.01
+    for _ in range(_ZOOM_ROUNDS):
+        om, de = np.meshgrid(
+            best[1] + step_w * np.linspace(-2, 2, 9), best[2] + step_d * np.linspace(-2, 2, 9)
+        )
+        ok = (om > 0) & (de >= 0) & (de <= _MAX_DECAY)
+        om, de = om[ok], de[ok]
+        rss = _pair_rss(tt, w, y, fixed, om, de)
+        i = int(np.argmin(rss))
+        if rss[i] < best[0]:
+            best = (float(rss[i]), float(om[i]), float(de[i]))
+        step_w, step_d = step_w / 3, step_d / 3
+    return best
 
 
 def fit_damped_modes(
@@ -149,74 +189,81 @@ def fit_damped_modes(
     *,
     capture_interval: float,
     meter_model: MeterModel = "instantaneous",
-    modes: int = 2,
-    max_frequency: float | None = None,
+    modes: int = _DEFAULT_MODES,
 ) -> DampedFit:
     """Fit ``values[:, m] ~ L_m + sum_k exp(-l_k t) (a_mk cos w_k t + b_mk sin w_k t)``.
 
-    ``w_k`` and ``l_k`` are shared by every meter. Frequencies are searched up to the Nyquist
-    frequency of the capture interval (or ``max_frequency`` Hz if lower); modes are added one at a
-    time and kept only while the BIC of the joint fit improves.
+    ``w_k`` and ``l_k`` are shared by every meter. Frequencies are searched between the
+    slowest one that the window can tell from a drift of the level and the Nyquist frequency of
+    the capture interval (a faster mode aliases onto one of those); modes are added one at a time
+    (grid search, then zooming grids) and kept only while the BIC of the joint fit improves;
+    every kept mode is then refined once with the others fixed.
     """
     t = np.asarray(times, dtype=np.float64)
     y = np.asarray(values, dtype=np.float64)
     n, m = y.shape
+    if modes < 0:
+        raise InputError(f"modes must be >= 0, got {modes}")
     t = t - t[0]
+    # centre each meter (the constant column absorbs it) so the residual sums keep their digits
+    offset = y.mean(axis=0)
+    y = y - offset
+    tt, w = _nodes(t, capture_interval, meter_model)
     span = float(t[-1]) if n > 1 else 0.0
-    nyquist = math.pi / capture_interval
-    w_max = nyquist if max_frequency is None else min(nyquist, 2 * math.pi * max_frequency)
-    # frequencies whose period exceeds twice the window are indistinguishable from a level drift
+    w_max = math.pi / capture_interval
     w_min = math.pi / max(span, capture_interval)
-    base = _basis(t, [], capture_interval, meter_model)
-    rss = _rss(base, y)
-    chosen: list[tuple[float, float]] = []
+    count = n * m
 
     def bic(rss_value: float, k: int) -> float:
-        count = n * m
         params = m * (1 + 2 * k) + 2 * k
         return count * math.log(max(rss_value, 1e-300) / count) + params * math.log(count)
 
-    best_bic = bic(rss, 0)
+    chosen: list[tuple[float, float]] = []
+    best_bic = bic(float(np.sum(y * y)), 0)
     for _ in range(modes):
         # every mode costs 2 readings per meter plus 2 shared parameters
         if n < 1 + 2 * (len(chosen) + 1) + 2 or w_max <= w_min:
             break
-        omegas = np.linspace(w_min, w_max, int(min(_MAX_GRID, max(40, 4 * n))))
-        best_rss, best_omega, best_decay = math.inf, 0.0, 0.0
-        for decay in _DECAY_GRID:
-            rss_grid = _grid_rss(t, y, chosen, omegas, decay, capture_interval, meter_model)
-            i = int(np.argmin(rss_grid))
-            if rss_grid[i] < best_rss:
-                best_rss, best_omega, best_decay = float(rss_grid[i]), float(omegas[i]), decay
-        start = np.array([v for p in chosen for v in p] + [best_omega, best_decay])
-
-        def objective(theta: NDArray[np.float64]) -> float:
-            pars = [(float(theta[2 * i]), float(theta[2 * i + 1])) for i in range(len(theta) // 2)]
-            if any(d < 0 or d > 1.0 or w < 0 for w, d in pars):
-                return math.inf
-            return _rss(_basis(t, pars, capture_interval, meter_model), y)
-
-        res = minimize(
-            objective, start, method="Nelder-Mead", options={"xatol": 1e-4, "fatol": 1e-10}
-        )
-        theta = res.x if res.fun <= best_rss else start
-        cand = [(float(theta[2 * i]), float(theta[2 * i + 1])) for i in range(len(theta) // 2)]
-        cand_rss = min(float(res.fun), best_rss)
-        cand_bic = bic(cand_rss, len(cand))
+        rss, omega, decay = _best_mode(tt, w, y, chosen, w_min, w_max)
+        cand_bic = bic(rss, len(chosen) + 1)
         if cand_bic >= best_bic:
             break
-        chosen, rss, best_bic = cand, cand_rss, cand_bic
-    basis = _basis(t, chosen, capture_interval, meter_model)
+        chosen.append((omega, decay))
+        best_bic = cand_bic
+    for i in range(len(chosen) if len(chosen) > 1 else 0):
+        others = chosen[:i] + chosen[i + 1 :]
+        _, omega, decay = _best_mode(tt, w, y, others, w_min, w_max, start=chosen[i])
+        chosen[i] = (omega, decay)
+    basis = _basis(tt, w, chosen)
     coef, *_ = np.linalg.lstsq(basis, y, rcond=None)
     amps = np.hypot(coef[1::2], coef[2::2]) if chosen else np.zeros((0, m))
     resid = y - basis @ coef
     return DampedFit(
-        levels=coef[0].copy(),
+        levels=coef[0] + offset,
         omegas=tuple(w for w, _ in chosen),
         decays=tuple(d for _, d in chosen),
         amplitudes=np.asarray(amps, dtype=np.float64).reshape(len(chosen), m),
+        coefficients=np.asarray(coef[1:], dtype=np.float64).reshape(2 * len(chosen), m),
         rms=float(np.sqrt(np.mean(resid * resid))),
     )
+
+
+def block_average(
+    times: NDArray[np.float64], values: NDArray[np.float64], capture_interval: float, block: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64], float]:
+    """Average consecutive readings in blocks of about ``block`` seconds.
+
+    Dense instantaneous readings averaged over a block are (up to quadrature) the block's
+    interval average; the fit then needs far fewer rows. Returns the block end stamps, the block
+    means and the block length. Readings that do not fill a last block are dropped.
+    """
+    size = max(1, int(round(block / capture_interval)))
+    usable = (times.size // size) * size
+    if size == 1 or usable == 0:
+        return times, values, capture_interval
+    t = times[:usable].reshape(-1, size)[:, -1]
+    v = values[:usable].reshape(-1, size, values.shape[1]).mean(axis=1)
+    return t, v, size * capture_interval
 
 
 def estimate_levels(
@@ -243,7 +290,11 @@ def estimate_levels(
     if method == "median":
         return np.median(y, axis=0)
     if method == "damped-fit":
-        return fit_damped_modes(
-            t, y, capture_interval=capture_interval, meter_model=meter_model
-        ).levels
+        model = meter_model
+        interval = capture_interval
+        if capture_interval < _BLOCK:
+            t, y, interval = block_average(t, y, capture_interval, _BLOCK)
+            if interval > capture_interval:
+                model = "interval-averaged"
+        return fit_damped_modes(t, y, capture_interval=interval, meter_model=model).levels
     raise InputError(f"unknown estimator {method!r}; use one of {sorted(ESTIMATORS)}")

@@ -43,7 +43,6 @@ import math
 from collections.abc import AsyncIterable, AsyncIterator, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from enum import Enum
-from typing import Union
 
 import numpy as np
 import numpy.typing as npt
@@ -66,7 +65,7 @@ FloatArray = npt.NDArray[np.float64]
 
 @dataclass(frozen=True, slots=True)
 class Reading:
-    """One pressure reading: ``value`` (m) reported by ``meter`` for the step at ``timestamp`` (s)."""
+    """One pressure reading: ``value`` (m) from ``meter`` for the step at ``timestamp`` (s)."""
 
     timestamp: float
     meter: str
@@ -124,7 +123,7 @@ class Window:
     def means(self) -> dict[str, float]:
         """Mean reading of every meter over the concatenated window."""
         means = self.values.mean(axis=0)
-        return {m: float(v) for m, v in zip(self.meters, means)}
+        return {m: float(v) for m, v in zip(self.meters, means, strict=True)}
 
 
 @dataclass(slots=True)
@@ -147,7 +146,7 @@ class MissingPolicy(str, Enum):
     HOLD = "hold"
 
 
-Item = Union[Reading, Step]
+Item = Reading | Step
 
 
 @dataclass(slots=True)
@@ -209,9 +208,7 @@ class ReadingStream:
         try:
             policy = MissingPolicy(missing)
         except ValueError:
-            raise ConfigError(
-                f"missing policy must be 'skip' or 'hold', got {missing!r}"
-            ) from None
+            raise ConfigError(f"missing policy must be 'skip' or 'hold', got {missing!r}") from None
         if period is not None and not (math.isfinite(period) and period > 0):
             raise ConfigError(f"period must be a positive finite number of seconds, got {period}")
         if not math.isfinite(origin):
@@ -451,5 +448,5 @@ def replay(
 def readings_of(steps: Iterable[Step], meters: Sequence[str]) -> Iterator[Reading]:
     """Explode steps into per-meter readings (meter order within a step), e.g. to test a feed."""
     for s in steps:
-        for m, x in zip(meters, s.values):
+        for m, x in zip(meters, s.values, strict=True):
             yield Reading(s.timestamp, m, float(x))

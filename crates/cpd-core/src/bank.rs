@@ -14,7 +14,9 @@ use serde::{Deserialize, Serialize};
 use crate::alarm::{Alarm, ChannelAlarm, Direction};
 use crate::cusum::{CusumConfig, CusumLane};
 use crate::error::{first_non_finite, Error};
-use crate::shewhart::{exact_decision, ShewhartConfig, Sums, EXACT, NONE, REBUILD_MIN, RISE};
+use crate::shewhart::{
+    exact_decision, Derived, ShewhartConfig, Sums, EXACT, NONE, REBUILD_MIN, RISE,
+};
 
 /// Channels processed per block: the alarm flags of a block live on the stack.
 const BLOCK: usize = 256;
@@ -61,6 +63,66 @@ fn check_matrix(matrix: &[f64], channels: usize) -> Result<(), Error> {
         }),
         None => Ok(()),
     }
+}
+
+/// One CUSUM step for a block of channels; returns the OR of the alarm flags written to
+/// `flags`. Separate `&mut` slice arguments tell the compiler they do not alias, so the loop
+/// vectorizes.
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+fn cusum_block(
+    xs: &[f64],
+    x_prev: &mut [f64],
+    gp: &mut [f64],
+    gn: &mut [f64],
+    gp_real: &mut [f64],
+    gn_real: &mut [f64],
+    tap: &mut [u64],
+    tan: &mut [u64],
+    x_tap: &mut [f64],
+    x_tan: &mut [f64],
+    flags: &mut [u8],
+    i: u64,
+    thr: f64,
+    drift: f64,
+) -> u8 {
+    let m = xs.len();
+    let (x_prev, gp, gn) = (&mut x_prev[..m], &mut gp[..m], &mut gn[..m]);
+    let (gp_real, gn_real) = (&mut gp_real[..m], &mut gn_real[..m]);
+    let (tap, tan, x_tap, x_tan) = (
+        &mut tap[..m],
+        &mut tan[..m],
+        &mut x_tap[..m],
+        &mut x_tan[..m],
+    );
+    let flags = &mut flags[..m];
+    let mut any = 0u8;
+    for k in 0..m {
+        let mut lane = CusumLane {
+            x_prev: x_prev[k],
+            gp: gp[k],
+            gn: gn[k],
+            gp_real: gp_real[k],
+            gn_real: gn_real[k],
+            tap: tap[k],
+            tan: tan[k],
+            x_tap: x_tap[k],
+            x_tan: x_tan[k],
+        };
+        let f = lane.step(xs[k], i, thr, drift);
+        x_prev[k] = lane.x_prev;
+        gp[k] = lane.gp;
+        gn[k] = lane.gn;
+        gp_real[k] = lane.gp_real;
+        gn_real[k] = lane.gn_real;
+        tap[k] = lane.tap;
+        tan[k] = lane.tan;
+        x_tap[k] = lane.x_tap;
+        x_tan[k] = lane.x_tan;
+        flags[k] = f;
+        any |= f;
+    }
+    any
 }
 
 /// `N` independent [`crate::Cusum`] detectors with one config, stepped together.
@@ -198,50 +260,29 @@ impl CusumBank {
             return;
         }
         let (thr, drift) = (self.config.threshold(), self.config.drift());
+        let mut flags = [0u8; BLOCK];
         let mut b = 0;
         while b < self.channels {
             let e = (b + BLOCK).min(self.channels);
-            let m = e - b;
-            let xs = &readings[b..e];
-            let x_prev = &mut self.x_prev[b..e];
-            let gp = &mut self.gp[b..e];
-            let gn = &mut self.gn[b..e];
-            let gp_real = &mut self.gp_real[b..e];
-            let gn_real = &mut self.gn_real[b..e];
-            let tap = &mut self.tap[b..e];
-            let tan = &mut self.tan[b..e];
-            let x_tap = &mut self.x_tap[b..e];
-            let x_tan = &mut self.x_tan[b..e];
-            let mut flags = [0u8; BLOCK];
-            let flags = &mut flags[..m];
-            let mut any = 0u8;
-            for k in 0..m {
-                let mut lane = CusumLane {
-                    x_prev: x_prev[k],
-                    gp: gp[k],
-                    gn: gn[k],
-                    gp_real: gp_real[k],
-                    gn_real: gn_real[k],
-                    tap: tap[k],
-                    tan: tan[k],
-                    x_tap: x_tap[k],
-                    x_tan: x_tan[k],
-                };
-                let f = lane.step(xs[k], i, thr, drift);
-                x_prev[k] = lane.x_prev;
-                gp[k] = lane.gp;
-                gn[k] = lane.gn;
-                gp_real[k] = lane.gp_real;
-                gn_real[k] = lane.gn_real;
-                tap[k] = lane.tap;
-                tan[k] = lane.tan;
-                x_tap[k] = lane.x_tap;
-                x_tan[k] = lane.x_tan;
-                flags[k] = f;
-                any |= f;
-            }
+            let flags = &mut flags[..e - b];
+            let any = cusum_block(
+                &readings[b..e],
+                &mut self.x_prev[b..e],
+                &mut self.gp[b..e],
+                &mut self.gn[b..e],
+                &mut self.gp_real[b..e],
+                &mut self.gn_real[b..e],
+                &mut self.tap[b..e],
+                &mut self.tan[b..e],
+                &mut self.x_tap[b..e],
+                &mut self.x_tan[b..e],
+                flags,
+                i,
+                thr,
+                drift,
+            );
             if any != 0 {
-                self.collect(b, flags, xs, i, out);
+                self.collect(b, flags, &readings[b..e], i, out);
             }
             b = e;
         }
@@ -308,6 +349,56 @@ impl CusumBank {
     pub fn config(&self) -> &CusumConfig {
         &self.config
     }
+}
+
+/// One Shewhart step for a block of channels: writes the samples into the ring row, updates the
+/// running sums and (when `screen`) flags the samples that the cheap test cannot prove in
+/// control. Returns the OR of the flags. Branch-free per channel, so the loop vectorizes.
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+fn shewhart_block(
+    xs: &[f64],
+    row: &mut [f64],
+    reference: &[f64],
+    s1: &mut [f64],
+    c1: &mut [f64],
+    s2: &mut [f64],
+    c2: &mut [f64],
+    flags: &mut [u8],
+    full: bool,
+    screen: bool,
+    d: &Derived,
+    thr: f64,
+) -> u8 {
+    let m = xs.len();
+    let (row, reference, flags) = (&mut row[..m], &reference[..m], &mut flags[..m]);
+    let (s1, c1, s2, c2) = (&mut s1[..m], &mut c1[..m], &mut s2[..m], &mut c2[..m]);
+    let mut any = 0u8;
+    for k in 0..m {
+        let x = xs[k];
+        let mut sums = Sums {
+            reference: reference[k],
+            s1: s1[k],
+            c1: c1[k],
+            s2: s2[k],
+            c2: c2[k],
+        };
+        let old = row[k];
+        row[k] = x;
+        if full {
+            sums.slide(x, old);
+        } else {
+            sums.push(x);
+        }
+        s1[k] = sums.s1;
+        c1[k] = sums.c1;
+        s2[k] = sums.s2;
+        c2[k] = sums.c2;
+        let f = (screen && !sums.surely_in_control(x, d, thr)) as u8;
+        flags[k] = f;
+        any |= f;
+    }
+    any
 }
 
 /// `N` independent [`crate::Shewhart`] detectors with one config, stepped together.
@@ -454,54 +545,31 @@ impl ShewhartBank {
         let wrap = self.pos == 0;
         let rebuild_all = wrap && self.since_rebuild >= REBUILD_MIN;
         let decide = self.steps >= w as u64;
+        // One pass: slide the window and (except at wraps) screen the samples in the same loop.
+        let fused = full && !wrap;
         let d = *self.config.derived();
         let thr = self.config.threshold();
-        // One pass: slide the window and (except at wraps) classify in the same loop.
-        let fused = full && decide && !wrap;
+        let mut flags = [0u8; BLOCK];
         let mut b = 0;
         while b < n {
             let e = (b + BLOCK).min(n);
-            let m = e - b;
-            let xs = &readings[b..e];
-            let row = &mut self.ring[slot * n + b..slot * n + e];
-            let reference = &self.reference[b..e];
-            let s1 = &mut self.s1[b..e];
-            let c1 = &mut self.c1[b..e];
-            let s2 = &mut self.s2[b..e];
-            let c2 = &mut self.c2[b..e];
-            let mut flags = [NONE; BLOCK];
-            let flags = &mut flags[..m];
-            let mut any = 0u8;
-            for k in 0..m {
-                let x = xs[k];
-                let mut sums = Sums {
-                    reference: reference[k],
-                    s1: s1[k],
-                    c1: c1[k],
-                    s2: s2[k],
-                    c2: c2[k],
-                };
-                let old = row[k];
-                row[k] = x;
-                if full {
-                    sums.slide(x, old);
-                } else {
-                    sums.push(x);
-                }
-                s1[k] = sums.s1;
-                c1[k] = sums.c1;
-                s2[k] = sums.s2;
-                c2[k] = sums.c2;
-                let f = if fused {
-                    sums.classify(x, &d, thr)
-                } else {
-                    NONE
-                };
-                flags[k] = f;
-                any |= f;
-            }
+            let flags = &mut flags[..e - b];
+            let any = shewhart_block(
+                &readings[b..e],
+                &mut self.ring[slot * n + b..slot * n + e],
+                &self.reference[b..e],
+                &mut self.s1[b..e],
+                &mut self.c1[b..e],
+                &mut self.s2[b..e],
+                &mut self.c2[b..e],
+                flags,
+                full,
+                fused,
+                &d,
+                thr,
+            );
             if any != 0 {
-                self.collect(b, flags, xs, i, out);
+                self.collect(b, flags, &readings[b..e], i, out);
             }
             b = e;
         }
@@ -509,7 +577,7 @@ impl ShewhartBank {
             self.rebuild(rebuild_all);
         }
         if decide && !fused {
-            self.classify_all(readings, i, out);
+            self.screen_all(readings, i, out);
         }
     }
 
@@ -556,17 +624,17 @@ impl ShewhartBank {
         }
     }
 
-    /// Classification pass used on the steps where it cannot be fused with the update.
-    fn classify_all(&self, readings: &[f64], i: u64, out: &mut Vec<ChannelAlarm>) {
+    /// Screening pass for the steps where it cannot be fused with the update.
+    fn screen_all(&self, readings: &[f64], i: u64, out: &mut Vec<ChannelAlarm>) {
         let d = *self.config.derived();
         let thr = self.config.threshold();
         let mut b = 0;
         while b < self.channels {
             let e = (b + BLOCK).min(self.channels);
-            let mut flags = [NONE; BLOCK];
+            let mut flags = [0u8; BLOCK];
             let mut any = 0u8;
             for (k, f) in flags[..e - b].iter_mut().enumerate() {
-                *f = self.sums(b + k).classify(readings[b + k], &d, thr);
+                *f = !self.sums(b + k).surely_in_control(readings[b + k], &d, thr) as u8;
                 any |= *f;
             }
             if any != 0 {
@@ -576,14 +644,21 @@ impl ShewhartBank {
         }
     }
 
+    /// Decides the channels flagged by the screening (rare): fast classification, or the exact
+    /// window scan near a tie.
     #[cold]
     #[inline(never)]
     fn collect(&self, b: usize, flags: &[u8], xs: &[f64], i: u64, out: &mut Vec<ChannelAlarm>) {
-        let inv_w = self.config.derived().inv_w;
+        let d = *self.config.derived();
+        let thr = self.config.threshold();
         for (k, &f) in flags.iter().enumerate() {
+            if f == 0 {
+                continue;
+            }
             let c = b + k;
             let x = xs[k];
-            let decision = match f {
+            let sums = self.sums(c);
+            let decision = match sums.classify(x, &d, thr) {
                 NONE => None,
                 EXACT => exact_decision(x, self.config.window(), self.window_of(c), &self.config),
                 dir => Some((
@@ -592,7 +667,7 @@ impl ShewhartBank {
                     } else {
                         Direction::Drop
                     },
-                    self.sums(c).deviation(x, inv_w),
+                    sums.deviation(x, d.inv_w),
                 )),
             };
             if let Some((direction, amplitude)) = decision {

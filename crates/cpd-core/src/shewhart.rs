@@ -220,6 +220,19 @@ impl Sums {
         (x - self.reference) - (self.s1 + self.c1) * inv_w
     }
 
+    /// Cheap first test, true for most in-control samples: `|x - μ| <= threshold` holds even
+    /// with the worst-case error of the running sums. Uses `sqrt(m2) <= 1 + m2` instead of a
+    /// square root, so it implies the [`Sums::classify`] outcome [`NONE`]; branch-free.
+    #[inline(always)]
+    pub(crate) fn surely_in_control(&self, x: f64, d: &Derived, threshold: f64) -> bool {
+        let y = x - self.reference;
+        let mu_y = (self.s1 + self.c1) * d.inv_w;
+        let m2 = (self.s2 + self.c2) * d.inv_w;
+        let ad = abs(y - mu_y);
+        let ed = MARGIN * (abs(x) + abs(self.reference) + abs(y) + 1.0 + abs(m2) + ad);
+        ad + ed <= threshold
+    }
+
     /// Fast classification of the newest sample `x` of a full window:
     /// [`NONE`], [`RISE`], [`DROP`] or [`EXACT`] (too close to call). Branch-free.
     #[inline(always)]
@@ -268,6 +281,103 @@ pub(crate) fn exact_decision(
     } else {
         None
     }
+}
+
+/// The small, copyable part of a detector's state: kept in registers while stepping.
+#[derive(Clone, Copy)]
+struct Cursor {
+    seen: u64,
+    since_rebuild: u64,
+    pos: usize,
+    sums: Sums,
+}
+
+impl Cursor {
+    /// One sample (finite): ring, sums, periodic rebuild, decision.
+    #[inline(always)]
+    fn step(&mut self, ring: &mut [f64], config: &ShewhartConfig, x: f64) -> Option<Alarm> {
+        let w = config.window;
+        let d = config.derived;
+        let i = self.seen;
+        let mut sums = self.sums;
+        if i == 0 {
+            sums.reference = x;
+        }
+        let pos = self.pos;
+        let old = core::mem::replace(&mut ring[pos], x);
+        if i >= w as u64 {
+            sums.slide(x, old);
+        } else {
+            sums.push(x);
+        }
+        let pos = if pos + 1 == w { 0 } else { pos + 1 };
+        let since = self.since_rebuild + 1;
+        self.pos = pos;
+        self.seen = i + 1;
+        self.since_rebuild = since;
+        // The periodic schedule depends on the sample count only (as in a bank).
+        if pos == 0 && (since >= REBUILD_MIN || sums.off_centre(d.inv_w)) {
+            if since >= REBUILD_MIN {
+                self.since_rebuild = 0;
+            }
+            sums = rebuilt(ring, sums.reference, d.inv_w);
+        }
+        self.sums = sums;
+        if i + 1 < w as u64 || sums.surely_in_control(x, &d, config.threshold) {
+            return None;
+        }
+        let decision = match sums.classify(x, &d, config.threshold) {
+            NONE => None,
+            EXACT => exact_in_ring(ring, pos, x, config),
+            dir => Some((
+                if dir == RISE {
+                    Direction::Rise
+                } else {
+                    Direction::Drop
+                },
+                sums.deviation(x, d.inv_w),
+            )),
+        };
+        decision.map(|(direction, amplitude)| Alarm {
+            index: i,
+            start: i,
+            direction,
+            amplitude,
+        })
+    }
+}
+
+/// The sums rebuilt from the ring (called at a wrap, when the ring is in time order).
+#[cold]
+#[inline(never)]
+fn rebuilt(ring: &[f64], reference: f64, inv_w: f64) -> Sums {
+    let mut sums = Sums {
+        reference,
+        ..Sums::ZERO
+    };
+    sums.rebuild(ring.len(), inv_w, |k| ring[k]);
+    sums
+}
+
+/// The exact decision for the newest sample of a ring whose oldest sample is at `pos`.
+#[cold]
+#[inline(never)]
+fn exact_in_ring(
+    ring: &[f64],
+    pos: usize,
+    x: f64,
+    config: &ShewhartConfig,
+) -> Option<(Direction, f64)> {
+    let (newer, older) = ring.split_at(pos);
+    let n_old = older.len();
+    let get = |k: usize| {
+        if k < n_old {
+            older[k]
+        } else {
+            newer[k - n_old]
+        }
+    };
+    exact_decision(x, ring.len(), get, config)
 }
 
 /// Streaming Shewhart detector over the last `W` samples (the current one included).
@@ -372,85 +482,29 @@ impl Shewhart {
     }
 
     #[inline(always)]
+    fn cursor(&self) -> Cursor {
+        Cursor {
+            seen: self.seen,
+            since_rebuild: self.since_rebuild,
+            pos: self.pos,
+            sums: self.sums,
+        }
+    }
+
+    #[inline(always)]
+    fn set_cursor(&mut self, c: Cursor) {
+        self.seen = c.seen;
+        self.since_rebuild = c.since_rebuild;
+        self.pos = c.pos;
+        self.sums = c.sums;
+    }
+
+    #[inline(always)]
     fn update_unchecked(&mut self, x: f64) -> Option<Alarm> {
-        let w = self.config.window;
-        let i = self.seen;
-        let full = i >= w as u64;
-        if i == 0 {
-            self.sums.reference = x;
-        }
-        let old = core::mem::replace(&mut self.ring[self.pos], x);
-        if full {
-            self.sums.slide(x, old);
-        } else {
-            self.sums.push(x);
-        }
-        self.pos += 1;
-        if self.pos == w {
-            self.pos = 0;
-        }
-        self.seen = i + 1;
-        self.since_rebuild += 1;
-        if self.pos == 0 {
-            // The periodic schedule depends on the sample count only (as in a bank).
-            if self.since_rebuild >= REBUILD_MIN {
-                self.since_rebuild = 0;
-                self.rebuild();
-            } else if self.sums.off_centre(self.config.derived.inv_w) {
-                self.rebuild();
-            }
-        }
-        if self.seen < w as u64 {
-            return None;
-        }
-        let d = self.config.derived;
-        match self.sums.classify(x, &d, self.config.threshold) {
-            NONE => None,
-            EXACT => self.exact(x, i),
-            dir => Some(Alarm {
-                index: i,
-                start: i,
-                direction: if dir == RISE {
-                    Direction::Rise
-                } else {
-                    Direction::Drop
-                },
-                amplitude: self.sums.deviation(x, d.inv_w),
-            }),
-        }
-    }
-
-    #[cold]
-    #[inline(never)]
-    fn rebuild(&mut self) {
-        let ring = &self.ring;
-        self.sums
-            .rebuild(ring.len(), self.config.derived.inv_w, |k| ring[k]);
-    }
-
-    #[cold]
-    #[inline(never)]
-    fn exact(&self, x: f64, i: u64) -> Option<Alarm> {
-        let (older, newer) = self.ring.split_at(self.pos);
-        let n_new = newer.len();
-        exact_decision(
-            x,
-            self.ring.len(),
-            |k| {
-                if k < n_new {
-                    newer[k]
-                } else {
-                    older[k - n_new]
-                }
-            },
-            &self.config,
-        )
-        .map(|(direction, amplitude)| Alarm {
-            index: i,
-            start: i,
-            direction,
-            amplitude,
-        })
+        let mut cur = self.cursor();
+        let alarm = cur.step(&mut self.ring, &self.config, x);
+        self.set_cursor(cur);
+        alarm
     }
 
     /// Feeds a slice of samples, appending the alarms to `out`.
@@ -464,11 +518,14 @@ impl Shewhart {
                 value,
             });
         }
+        // The counters and sums live in locals (registers) for the whole slice.
+        let mut cur = self.cursor();
         for &x in xs {
-            if let Some(a) = self.update_unchecked(x) {
+            if let Some(a) = cur.step(&mut self.ring, &self.config, x) {
                 out.push(a);
             }
         }
+        self.set_cursor(cur);
         Ok(())
     }
 

@@ -265,6 +265,29 @@ proptest! {
     }
 
     #[test]
+    fn update_slice_in_chunks_equals_update_per_sample(
+        (kind, n, seed) in signal_spec(2500), chunk in 1usize..300,
+        (thr, drift) in cusum_params(), (w, sigma, sthr) in shewhart_params()
+    ) {
+        let x = signal(kind, n, &mut Rng::new(seed));
+        let cc = CusumConfig::new(thr, drift).unwrap();
+        let sc = ShewhartConfig::new(w, sigma, sthr).unwrap();
+        let (mut c1, mut s1) = (Cusum::new(cc), Shewhart::new(sc));
+        let want_c: Vec<Alarm> = x.iter().filter_map(|&v| c1.update(v).unwrap()).collect();
+        let want_s = shewhart_alarms(&mut s1, &x);
+        let (mut c2, mut s2) = (Cusum::new(cc), Shewhart::new(sc));
+        let (mut got_c, mut got_s) = (Vec::new(), Vec::new());
+        for part in x.chunks(chunk) {
+            c2.update_slice(part, &mut got_c).unwrap();
+            s2.update_slice(part, &mut got_s).unwrap();
+        }
+        prop_assert_eq!(got_c, want_c);
+        prop_assert_eq!(got_s, want_s);
+        prop_assert_eq!(&c2, &c1);
+        prop_assert_eq!(&s2, &s1);
+    }
+
+    #[test]
     fn snapshot_restore_continues_identically(
         (kind, n, seed) in signal_spec(2500), cut in 0.0f64..1.0,
         (thr, drift) in cusum_params(), (w, sigma, sthr) in shewhart_params()

@@ -3,13 +3,12 @@
 use cpd_core::{Bank, CusumBank, CusumConfig, ShewhartBank};
 use numpy::PyUntypedArrayMethods;
 use pyo3::prelude::*;
-use pyo3::types::{PyBytes, PyTuple, PyType};
 
 use crate::alarm::{float_repr, PyAlarm};
 use crate::arrays;
 use crate::detectors::shewhart_config;
 use crate::errors::{config_err, core_err, input_err};
-use crate::state;
+use crate::state::pymethods_with_snapshots;
 
 const SNAPSHOT_KIND: &str = "DetectorBank";
 
@@ -48,8 +47,7 @@ impl PyDetectorBank {
     }
 }
 
-#[pymethods]
-impl PyDetectorBank {
+pymethods_with_snapshots!(PyDetectorBank, SNAPSHOT_KIND, {
     #[new]
     #[pyo3(signature = (kind, channels, *, threshold, drift = None, window = None, sigma = None))]
     fn new(
@@ -136,37 +134,6 @@ impl PyDetectorBank {
         self.inner.steps_seen()
     }
 
-    /// The configuration and every channel's state as bytes, for `restore()`.
-    fn snapshot<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
-        PyBytes::new(py, &state::encode(SNAPSHOT_KIND, &self.inner))
-    }
-
-    /// A bank in exactly the state captured by `snapshot()` (re-validated while decoding).
-    #[classmethod]
-    fn restore(_cls: &Bound<'_, PyType>, state: &[u8]) -> PyResult<Self> {
-        Ok(Self {
-            inner: state::decode(SNAPSHOT_KIND, state)?,
-        })
-    }
-
-    fn __reduce__<'py>(
-        slf: &Bound<'py, Self>,
-    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
-        let restore = slf.get_type().getattr("restore")?;
-        let snapshot = slf.borrow().snapshot(slf.py());
-        Ok((restore, PyTuple::new(slf.py(), [snapshot])?))
-    }
-
-    fn __copy__(&self) -> Self {
-        Self {
-            inner: self.inner.clone(),
-        }
-    }
-
-    fn __deepcopy__(&self, _memo: &Bound<'_, PyAny>) -> Self {
-        self.__copy__()
-    }
-
     fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
         let config = match &self.inner {
             Bank::Cusum(b) => format!(
@@ -187,4 +154,4 @@ impl PyDetectorBank {
             self.channels()
         ))
     }
-}
+});

@@ -2,20 +2,17 @@
 
 use cpd_core::{Cusum, CusumConfig, Error, Shewhart, ShewhartConfig};
 use pyo3::prelude::*;
-use pyo3::types::{PyBytes, PyTuple, PyType};
 
 use crate::alarm::{float_repr, PyAlarm};
 use crate::arrays;
 use crate::errors::{config_err, core_err};
-use crate::state;
+use crate::state::pymethods_with_snapshots;
 
-/// The methods every single-channel detector class shares: `update`, `update_many`, `reset`,
-/// `samples_seen`, `snapshot`/`restore`, pickle and copy; `$extra` holds the class's own
-/// methods (PyO3 takes one `#[pymethods]` block per class).
+/// The `#[pymethods]` block of a single-channel detector class: `update`, `update_many`,
+/// `reset`, `samples_seen`, the snapshot methods, and `$extra`, the class's own methods.
 macro_rules! detector_methods {
     ($py_type:ident, $kind:literal, { $($extra:tt)* }) => {
-        #[pymethods]
-        impl $py_type {
+        pymethods_with_snapshots!($py_type, $kind, {
             /// Feeds one sample; returns the alarm it raises, if any.
             ///
             /// A NaN or infinite sample raises `InputError` and leaves the state unchanged.
@@ -54,37 +51,8 @@ macro_rules! detector_methods {
                 self.inner.samples_seen()
             }
 
-            /// The configuration and full state as bytes, for `restore()`.
-            fn snapshot<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
-                PyBytes::new(py, &state::encode($kind, &self.inner))
-            }
-
-            /// A detector in exactly the state captured by `snapshot()`.
-            ///
-            /// The core re-validates the configuration and the state's shape while decoding.
-            #[classmethod]
-            fn restore(_cls: &Bound<'_, PyType>, state: &[u8]) -> PyResult<Self> {
-                Ok(Self { inner: state::decode($kind, state)? })
-            }
-
-            fn __reduce__<'py>(
-                slf: &Bound<'py, Self>,
-            ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
-                let restore = slf.get_type().getattr("restore")?;
-                let snapshot = slf.borrow().snapshot(slf.py());
-                Ok((restore, PyTuple::new(slf.py(), [snapshot])?))
-            }
-
-            fn __copy__(&self) -> Self {
-                Self { inner: self.inner.clone() }
-            }
-
-            fn __deepcopy__(&self, _memo: &Bound<'_, PyAny>) -> Self {
-                Self { inner: self.inner.clone() }
-            }
-
             $($extra)*
-        }
+        });
     };
 }
 

@@ -53,3 +53,47 @@ pub(crate) fn decode<T: DeserializeOwned>(kind: &str, bytes: &[u8]) -> PyResult<
     serde_json::from_value(envelope.state)
         .map_err(|e| input_err(format!("not a valid {kind} snapshot: {e}")))
 }
+
+/// A class's `#[pymethods]` block with the snapshot methods every detector class shares:
+/// `snapshot()`, `restore()`, pickle (`__reduce__` to `restore`) and copy. `$extra` holds the
+/// class's own methods (PyO3 takes one `#[pymethods]` block per class). The class must wrap
+/// its core value in a field `inner` that is `Clone + Serialize + Deserialize`.
+macro_rules! pymethods_with_snapshots {
+    ($py_type:ident, $kind:expr, { $($extra:tt)* }) => {
+        #[pymethods]
+        impl $py_type {
+            /// The configuration and full state as bytes, for `restore()`.
+            fn snapshot<'py>(&self, py: Python<'py>) -> Bound<'py, pyo3::types::PyBytes> {
+                pyo3::types::PyBytes::new(py, &$crate::state::encode($kind, &self.inner))
+            }
+
+            /// An object in exactly the state captured by `snapshot()`.
+            ///
+            /// The core re-validates the configuration and the state's shape while decoding.
+            #[classmethod]
+            fn restore(_cls: &Bound<'_, pyo3::types::PyType>, state: &[u8]) -> PyResult<Self> {
+                Ok(Self { inner: $crate::state::decode($kind, state)? })
+            }
+
+            fn __reduce__<'py>(
+                slf: &Bound<'py, Self>,
+            ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, pyo3::types::PyTuple>)> {
+                let restore = slf.get_type().getattr("restore")?;
+                let snapshot = slf.borrow().snapshot(slf.py());
+                Ok((restore, pyo3::types::PyTuple::new(slf.py(), [snapshot])?))
+            }
+
+            fn __copy__(&self) -> Self {
+                Self { inner: self.inner.clone() }
+            }
+
+            fn __deepcopy__(&self, _memo: &Bound<'_, PyAny>) -> Self {
+                Self { inner: self.inner.clone() }
+            }
+
+            $($extra)*
+        }
+    };
+}
+
+pub(crate) use pymethods_with_snapshots;
