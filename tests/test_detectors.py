@@ -10,6 +10,7 @@ from __future__ import annotations
 import copy
 import pickle
 import re
+import struct
 import subprocess
 import sys
 from importlib.metadata import version
@@ -215,13 +216,30 @@ def test_copies_are_independent() -> None:
 
 
 def test_restore_rejects_foreign_or_corrupt_snapshots() -> None:
-    cusum = Cusum(1.0).snapshot()
+    cusum = Cusum(0.1234567).snapshot()
     with pytest.raises(InputError, match="Cusum"):
         Shewhart.restore(cusum)
     with pytest.raises(InputError, match="snapshot"):
         Cusum.restore(b"not a snapshot")
     with pytest.raises(InputError, match="snapshot"):
-        Cusum.restore(cusum.replace(b"1.0", b"-1.0", 1))
+        Cusum.restore(cusum[: len(cusum) // 2])
+    # The core re-validates what it decodes: a negative threshold (a CBOR float64 is 0xfb and
+    # eight big-endian bytes) is refused with the parameter named.
+    threshold = b"\xfb" + struct.pack(">d", 0.1234567)
+    assert cusum.count(threshold) == 1
+    negative = cusum.replace(threshold, b"\xfb" + struct.pack(">d", -0.1234567))
+    with pytest.raises(InputError, match="threshold"):
+        Cusum.restore(negative)
+
+
+def test_snapshots_keep_non_finite_window_sums() -> None:
+    """Finite samples near 1e160 overflow a window's sum of squares; snapshots must keep it."""
+    x = np.array([1e160, -1e160, 3e160, 1.0, 2.0, 5e159, 7e159, -2e160])
+    det = Shewhart(window=5, threshold=1.0)
+    det.update_many(x[:6])
+    restored = pickle.loads(pickle.dumps(det))
+    assert restored.snapshot() == det.snapshot()
+    assert restored.update_many(x[6:]) == det.update_many(x[6:])
 
 
 # --- Bad input ---------------------------------------------------------------------------

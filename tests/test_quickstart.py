@@ -9,7 +9,8 @@ from pathlib import Path
 
 from reference import cusum_online
 
-QUICKSTART = Path(__file__).resolve().parents[1] / "docs" / "quickstart.py"
+ROOT = Path(__file__).resolve().parents[1]
+QUICKSTART = ROOT / "docs" / "quickstart.py"
 
 
 def test_quickstart_prints_the_burst_alarm() -> None:
@@ -30,3 +31,7 @@ def test_quickstart_prints_the_burst_alarm() -> None:
 def test_quickstart_is_ten_lines_of_code() -> None:
     code = [line for line in QUICKSTART.read_text().splitlines() if line.strip()]
     assert len(code) <= 10
+
+
+def test_readme_shows_the_quickstart_verbatim() -> None:
+    assert QUICKSTART.read_text().strip() in (ROOT / "README.md").read_text()

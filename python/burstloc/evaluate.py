@@ -133,6 +133,8 @@ def paper_runs(
             raise ConfigError(f"unknown detector {kind!r}; choose cusum, shewhart or both")
         for ci in intervals:
             ci = float(ci)
+            if not (math.isfinite(ci) and ci > 0):
+                raise ConfigError(f"capture interval must be > 0 s, got {ci:g}")
             base = table.get(ci)
             thr = threshold if threshold is not None else (base.threshold if base else None)
             li = (

@@ -19,6 +19,7 @@ import math
 import os
 import re
 import tempfile
+import warnings
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -79,6 +80,14 @@ class _Row:
     section: str
     line: int
     fields: list[str]
+
+
+def _wntr() -> Any:
+    """Import WNTR without its import-time deprecation noise (pkg_resources)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        import wntr
+    return wntr
 
 
 def _section_name(header: str) -> str:
@@ -182,7 +191,7 @@ def load_network(path: str | os.PathLike[str]) -> WaterNetworkModel:
         NetworkError: the file is missing or malformed; the message names the file and, when
             the problem is on one line, the line number (``FILE:LINE: problem``).
     """
-    import wntr
+    wntr = _wntr()
 
     file = Path(path)
     _lint(file)
@@ -237,7 +246,7 @@ def steady_state_flows(wn: WaterNetworkModel, engine: str = "PDD") -> dict[str, 
     go to a temporary directory; what it warns is kept out of the terminal (recorded in a
     scenario's metadata when :mod:`burstloc.simulate` calls this). ``wn`` is not modified.
     """
-    import wntr
+    wntr = _wntr()
 
     if engine.upper() not in ("PDD", "DD"):
         raise ConfigError(f"engine must be 'PDD' or 'DD', got {engine!r}")
@@ -350,7 +359,7 @@ def split_pipe(wn: WaterNetworkModel, pipe: str, fraction: float = 0.5) -> Split
         ConfigError: ``fraction`` is not strictly between 0 and 1.
         NetworkError: ``pipe`` is not a pipe of ``wn``.
     """
-    import wntr
+    wntr = _wntr()
 
     if not (isinstance(fraction, (int, float)) and math.isfinite(fraction) and 0 < fraction < 1):
         raise ConfigError(f"position must be strictly between 0 and 1, got {fraction!r}")

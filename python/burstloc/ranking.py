@@ -26,6 +26,7 @@ __all__ = [
     "MeterModel",
     "RankedPipe",
     "Ranking",
+    "evidence_from_alarms",
 ]
 
 MeterModel = Literal["instantaneous", "interval-averaged"]
@@ -214,3 +215,60 @@ class BurstEvidence:
         if missing:
             raise InputError(f"evidence has no readings for meter(s) {missing}")
         return np.array([index[m] for m in meters], dtype=np.intp)
+
+
+def evidence_from_alarms(
+    meters: Sequence[str],
+    times: NDArray[np.float64],
+    readings: NDArray[np.float64],
+    alarms: Iterable[object],
+    *,
+    capture_interval: float,
+    meter_model: MeterModel = "instantaneous",
+    decision_time: float | None = None,
+    alarm_window: float | None = None,
+) -> BurstEvidence:
+    """Build the evidence of one burst from a detector bank's alarms.
+
+    ``alarms`` are objects with ``channel`` (meter column), ``index`` (reading that raised the
+    alarm) and ``start`` (reading where the change started) and ``amplitude``, such as the
+    :class:`burstloc.Alarm` items of ``DetectorBank.run``. The earliest alarm is the detection;
+    each meter keeps its first alarm raised within ``alarm_window`` seconds of it (default: up to
+    the decision time); ``onset`` is the earliest start among them. Readings and alarms after
+    ``decision_time`` are ignored (default: all readings).
+    """
+    t = np.asarray(times, dtype=np.float64)
+    values = np.asarray(readings, dtype=np.float64)
+    end = float(t[-1]) if decision_time is None else float(decision_time)
+    usable = []
+    for alarm in alarms:
+        channel = getattr(alarm, "channel", None)
+        index = int(getattr(alarm, "index"))  # noqa: B009 - duck-typed alarm objects
+        start = int(getattr(alarm, "start"))  # noqa: B009
+        if channel is None or not 0 <= int(channel) < len(meters):
+            raise InputError(f"alarm channel {channel!r} is not a meter column")
+        if not (0 <= start <= index < t.size):
+            raise InputError(f"alarm indices start={start}, index={index} outside the readings")
+        if t[index] <= end:
+            usable.append((index, start, int(channel), float(getattr(alarm, "amplitude"))))  # noqa: B009
+    if not usable:
+        raise InputError("no alarm before the decision time: no burst to localize")
+    usable.sort()
+    first = t[usable[0][0]]
+    limit = end if alarm_window is None else min(end, first + alarm_window)
+    per_meter: dict[str, MeterAlarm] = {}
+    for index, start, channel, amplitude in usable:
+        meter = meters[channel]
+        if t[index] <= limit and meter not in per_meter:
+            per_meter[meter] = MeterAlarm(meter, float(t[start]), amplitude)
+    onset = min(a.start for a in per_meter.values())
+    keep = t <= end
+    return BurstEvidence(
+        meters=tuple(meters),
+        times=t[keep],
+        readings=values[keep],
+        onset=onset,
+        capture_interval=capture_interval,
+        meter_model=meter_model,
+        alarms=per_meter,
+    )

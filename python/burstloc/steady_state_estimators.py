@@ -257,7 +257,7 @@ def block_average(
     interval average; the fit then needs far fewer rows. Returns the block end stamps, the block
     means and the block length. Readings that do not fill a last block are dropped.
     """
-    size = max(1, int(round(block / capture_interval)))
+    size = max(1, round(block / capture_interval))
     usable = (times.size // size) * size
     if size == 1 or usable == 0:
         return times, values, capture_interval

@@ -1,4 +1,4 @@
-//! Snapshots: a detector's configuration and state as bytes (JSON of the core's serde form),
+//! Snapshots: a detector's configuration and state as bytes (CBOR of the core's serde form),
 //! used by `snapshot()`/`restore()`, pickle and copy.
 
 use pyo3::PyResult;
@@ -21,22 +21,27 @@ struct Envelope<'a, T> {
 struct OwnedEnvelope {
     format: u32,
     kind: String,
-    state: serde_json::Value,
+    state: ciborium::Value,
 }
 
 /// Serializes `state`, tagged with the detector `kind`.
 pub(crate) fn encode<T: Serialize>(kind: &str, state: &T) -> Vec<u8> {
-    serde_json::to_vec(&Envelope {
-        format: FORMAT,
-        kind,
-        state,
-    })
-    .expect("detector state is plain data and always serializes")
+    let mut bytes = Vec::new();
+    ciborium::into_writer(
+        &Envelope {
+            format: FORMAT,
+            kind,
+            state,
+        },
+        &mut bytes,
+    )
+    .expect("detector state is plain data and always serializes");
+    bytes
 }
 
 /// Deserializes a snapshot made by [`encode`] for the same `kind`; `InputError` otherwise.
 pub(crate) fn decode<T: DeserializeOwned>(kind: &str, bytes: &[u8]) -> PyResult<T> {
-    let envelope: OwnedEnvelope = serde_json::from_slice(bytes)
+    let envelope: OwnedEnvelope = ciborium::from_reader(bytes)
         .map_err(|e| input_err(format!("not a valid {kind} snapshot: {e}")))?;
     if envelope.format != FORMAT {
         return Err(input_err(format!(
@@ -50,7 +55,9 @@ pub(crate) fn decode<T: DeserializeOwned>(kind: &str, bytes: &[u8]) -> PyResult<
             envelope.kind
         )));
     }
-    serde_json::from_value(envelope.state)
+    envelope
+        .state
+        .deserialized()
         .map_err(|e| input_err(format!("not a valid {kind} snapshot: {e}")))
 }
 
