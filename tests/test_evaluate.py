@@ -106,14 +106,21 @@ def test_phase_offsets_and_required_duration() -> None:
     assert required_duration(ten, 10.0) == 220.0  # the paper's coarsest run, whatever the phase
 
 
-def test_capture_offsets_move_the_window_grid_with_steady_readings() -> None:
+def test_capture_offsets_move_the_clock_earlier_with_steady_warm_up() -> None:
     r = synthetic("pB", {"B": (3.0, 0.2)})
     spec = RunSpec(CUSUM, 0.2, 5)
-    t0, _ = _capture(r, spec, 0.0)
-    t1, v1 = _capture(r, spec, 0.45)  # two readings earlier + phase 0.05
-    assert t0[0] == 0.0 and t1[0] == pytest.approx(0.05 - 0.4)
-    np.testing.assert_array_equal(v1[:2], np.tile(r.heads[0], (2, 1)))
+    t0, v0 = _capture(r, spec, 0.0)
+    # 2 x 5 warm-up readings of the steady state, then the simulation from t = 0
+    np.testing.assert_allclose(t0[:11], np.arange(-10, 1) * 0.2, atol=1e-12)
+    np.testing.assert_array_equal(v0[:10], np.tile(r.heads[0], (10, 1)))
+    t1, v1 = _capture(r, spec, 0.45)
+    assert t1[0] == pytest.approx(-0.45 - 2.0)  # the whole grid moved 0.45 s earlier
     np.testing.assert_allclose(np.diff(t1), 0.2)
+    first_simulated = int(np.searchsorted(t1, 0.0))
+    assert t1[first_simulated] == pytest.approx(0.15)
+    np.testing.assert_array_equal(v1[:first_simulated], np.tile(r.heads[0], (13, 1)))
+    burst = int(np.searchsorted(t1, 2.2 - 1e-9))  # sample-and-hold of the drop at 2.2 s
+    assert v1[burst, 1] == r.heads[0, 1] - 3.0 and v1[burst - 1, 1] == r.heads[0, 1]
 
 
 def test_locate_burst_names_the_pipe_and_times_the_decision() -> None:

@@ -231,3 +231,26 @@ def test_burst_locator_streams_detects_and_locates() -> None:
 def test_burst_locator_rejects_meters_outside_the_network() -> None:
     with pytest.raises(StreamError, match="'Z9' is not a junction"):
         BurstLocator(tnet1_like(), ["N2", "Z9"], ThresholdDetector(), interval=1)
+
+
+def test_burst_locator_async_feed_gives_the_same_localizations() -> None:
+    import asyncio
+
+    meters = list(METERS)
+    base = np.array([MEANS[m] for m in meters])
+    drop = np.array([0.0, 0.0, 3.0, 0.0, 1.5])
+    steps = [Step(0.2 * k, base - (drop if k >= 6 else 0.0)) for k in range(12)]
+
+    async def feed():
+        for s in steps:
+            await asyncio.sleep(0)
+            yield s
+
+    async def collect():
+        locator = BurstLocator(tnet1_like(), meters, ThresholdDetector(), 2)
+        return [loc async for loc in locator.arun(feed())]
+
+    got = asyncio.run(collect())
+    want = list(BurstLocator(tnet1_like(), meters, ThresholdDetector(), 2).run(steps))
+    assert [(x.pipe, x.decision_time) for x in got] == [(x.pipe, x.decision_time) for x in want]
+    assert got

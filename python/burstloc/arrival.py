@@ -141,12 +141,13 @@ class ArrivalLocalizer:
         self._dist = np.minimum(
             along + d_start[:, None, :], (length[:, None, None] - along) + d_end[:, None, :]
         )
-        finite = self._dist[np.isfinite(self._dist)]
-        spread = float(finite.max() - finite.min()) / self.wave_speed if finite.size else 0.0
-        self.travel_spread = spread
-        """Largest difference of travel times (s) from any candidate point to the meters."""
-        self.decision_delay = float(decision_delay) if decision_delay is not None else spread
-        """How long after the onset the localizer wants to answer (default: ``travel_spread``)."""
+        self.pipe_travel = float(np.median(length)) / self.wave_speed
+        """Median wave travel time (s) along one candidate pipe."""
+        self.decision_delay = (
+            float(decision_delay) if decision_delay is not None else self.pipe_travel
+        )
+        """How long after the first alarm the localizer wants to answer (default:
+        ``pipe_travel``: by then the wave has reached both ends of the burst pipe)."""
 
     @classmethod
     def from_network(

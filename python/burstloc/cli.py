@@ -181,7 +181,13 @@ def add_evaluate_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     parser.add_argument("--json", default=None, metavar="PATH", help="write the JSON results")
     parser.add_argument("--csv", default=None, metavar="PATH", help="write the CSV results")
-    parser.add_argument("--plot", default=None, metavar="DIR", help="write PNG figures")
+    parser.add_argument(
+        "--plot",
+        default=None,
+        metavar="DIR",
+        help="write PNGs: per run, a map of every burst's true and named pipe, and the meters' "
+        "traces with their alarms for the first pipe of --pipes",
+    )
     parser.add_argument("--workers", type=int, default=None, metavar="N")
     parser.add_argument("--scheduler", default=None, metavar="ADDR", help="Dask scheduler")
     parser.add_argument("--cache-dir", default=None, metavar="DIR")

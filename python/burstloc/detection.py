@@ -50,6 +50,7 @@ from burstloc.stream import Window
 
 __all__ = [
     "DETECTORS",
+    "HISTORY",
     "BatchDetector",
     "DetectorConfig",
     "Mode",

@@ -222,20 +222,28 @@ class Attempt:
 
 
 def _capture(result: ScenarioResult, spec: RunSpec, offset: float) -> tuple[Any, Any]:
-    """The readings of a run at a clock offset: ``offset = j x interval + phase``.
+    """The readings of one run at a clock offset (s).
 
-    The capture clock ticks at ``phase + k x capture_interval``; ``j`` more ticks before the
-    simulation's start carry its initial steady state (TSNet starts from it, so this is exact)
-    and move the window grid ``j`` readings earlier relative to the burst.
+    The capture clock ticks at ``t0 - offset - 2 x interval x capture_interval + k x
+    capture_interval`` (``t0``: the simulation's start): the offset moves the clock, and with
+    it the window grid, ``offset`` seconds earlier relative to the burst. Ticks before ``t0``
+    carry the initial steady state, which is exact (TSNet starts from it and it holds until the
+    burst): ``2 x interval`` of them are a warm-up, so that a streaming detector's reference
+    window is full when the simulated span begins, as it would be for meters that have been
+    reporting long before a burst. Being a whole number of windows, the warm-up does not move
+    the window grid. Ticks from ``t0`` on sample the simulation (sample-and-hold).
     """
     ci = spec.capture_interval
-    j = math.floor(offset / ci + 1e-9)
-    phase = min(max(offset - j * ci, 0.0), math.nextafter(ci, 0.0))
-    times, values = resample(result.time, result.heads, ci, phase)
-    if j:
-        lead = times[0] - ci * np.arange(j, 0, -1, dtype=np.float64)
-        times = np.concatenate([lead, times])
-        values = np.concatenate([np.repeat(result.heads[:1], j, axis=0), values])
+    t0 = float(result.time[0])
+    k = math.ceil(offset / ci - 1e-9)  # ticks in [t0 - offset, t0)
+    phase = k * ci - offset
+    if phase < 1e-9 * ci:
+        phase = 0.0
+    times, values = resample(result.time - t0, result.heads, ci, phase)
+    lead = k + 2 * spec.localization_interval
+    pre = times[0] - ci * np.arange(lead, 0, -1, dtype=np.float64)
+    times = np.concatenate([pre, times]) + t0
+    values = np.concatenate([np.repeat(result.heads[:1], lead, axis=0), values])
     return times, values
 
 
@@ -247,8 +255,8 @@ def locate_burst(
 ) -> Attempt:
     """Stream one simulated burst at a clock offset through the real-time loop.
 
-    The sub-interval part of the offset is the sampling phase; whole capture intervals move
-    the window grid relative to the burst (see ``_capture``).
+    The capture clock, and with it the window grid, starts ``offset`` seconds earlier relative
+    to the burst than at offset 0 (see ``_capture``).
     """
     times, values = _capture(result, spec, offset)
     meters = list(result.junctions)

@@ -78,7 +78,7 @@ class FusedLocalizer:
         tau: float | None = None,
     ) -> None:
         if tau is None:
-            tau = float(np.median([p.length for p in arrival.pipes])) / arrival.wave_speed
+            tau = arrival.pipe_travel
         if not (math.isfinite(tau) and tau > 0):
             raise ConfigError(f"tau must be > 0 s, got {tau}")
         common = {p.pipe for p in arrival.pipes} & set(signature.signatures.pipes)
@@ -104,7 +104,7 @@ class FusedLocalizer:
 
     def _signature_ready(self, evidence: BurstEvidence) -> bool:
         settled = evidence.times >= evidence.onset + self.signature.settle
-        return bool(np.count_nonzero(settled) >= 3 and np.any(evidence.times < evidence.onset))
+        return bool(np.count_nonzero(settled) >= 3 and np.any(evidence.times <= evidence.onset))
 
     def rank(self, evidence: BurstEvidence) -> Ranking:
         """Pipes known to both localizers, best first, scored by the weighted log-likelihoods.

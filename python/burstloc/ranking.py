@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Literal, overload
+from typing import Any, Literal, overload
 
 import numpy as np
 from numpy.typing import NDArray
@@ -135,9 +135,9 @@ class Ranking(Sequence[RankedPipe]):
 class MeterAlarm:
     """The first alarm a meter raised for the burst: when its change started and how big it was.
 
-    ``start`` is the time (s) of the reading where the detector puts the start of the change (the
-    CUSUM's reset point before the alarm, or the Shewhart alarm itself); ``amplitude`` is the
-    signed change in metres (negative for a drop).
+    ``start`` is the time stamp (s) of the last reading before the change, as the detector places
+    it (the CUSUM's reset point before the alarm); ``amplitude`` is the signed change in metres
+    (negative for a drop).
     """
 
     meter: str
@@ -150,11 +150,12 @@ class BurstEvidence:
     """What a localizer sees of one burst: the meters' readings and their first alarms.
 
     ``times`` (T,) are the reading time stamps in seconds, increasing; ``readings`` (T, M) the
-    pressure heads in metres, column ``j`` from ``meters[j]``. Readings before ``onset`` are the
-    burst-free baseline; readings after it, up to the decision time (the last time stamp), show the
-    burst. ``onset`` is the detector's estimate of when the burst started (the earliest alarm
-    start). ``capture_interval`` is the meters' reporting period and ``meter_model`` says whether a
-    reading is an instantaneous sample or the mean over the interval ending at its time stamp.
+    pressure heads in metres, column ``j`` from ``meters[j]``. ``onset`` is the time stamp of the
+    last reading before the burst's change, as the detectors place it (the earliest alarm start):
+    readings at or before it are the burst-free baseline; readings after it, up to the decision
+    time (the last time stamp), show the burst. ``capture_interval`` is the meters' reporting
+    period and ``meter_model`` says whether a reading is an instantaneous sample or the mean over
+    the interval ending at its time stamp.
     """
 
     meters: tuple[str, ...]
@@ -221,7 +222,7 @@ def evidence_from_alarms(
     meters: Sequence[str],
     times: NDArray[np.float64],
     readings: NDArray[np.float64],
-    alarms: Iterable[object],
+    alarms: Iterable[Any],
     *,
     capture_interval: float,
     meter_model: MeterModel = "instantaneous",
@@ -231,8 +232,10 @@ def evidence_from_alarms(
     """Build the evidence of one burst from a detector bank's alarms.
 
     ``alarms`` are objects with ``channel`` (meter column), ``index`` (reading that raised the
-    alarm) and ``start`` (reading where the change started) and ``amplitude``, such as the
-    :class:`burstloc.Alarm` items of ``DetectorBank.run``. The earliest alarm is the detection;
+    alarm), ``start`` (reading where the change started) and ``amplitude``, such as the
+    :class:`burstloc.Alarm` items of ``DetectorBank.run``. A start is taken as the last reading
+    before the change: the CUSUM's reset point is that already; an alarm whose start is its own
+    reading (a Shewhart chart) starts at the reading before. The earliest alarm is the detection;
     each meter keeps its first alarm raised within ``alarm_window`` seconds of it (default: up to
     the decision time); ``onset`` is the earliest start among them. Readings and alarms after
     ``decision_time`` are ignored (default: all readings).
@@ -242,15 +245,16 @@ def evidence_from_alarms(
     end = float(t[-1]) if decision_time is None else float(decision_time)
     usable = []
     for alarm in alarms:
-        channel = getattr(alarm, "channel", None)
-        index = int(getattr(alarm, "index"))  # noqa: B009 - duck-typed alarm objects
-        start = int(getattr(alarm, "start"))  # noqa: B009
+        channel = alarm.channel
+        index, start = int(alarm.index), int(alarm.start)
         if channel is None or not 0 <= int(channel) < len(meters):
             raise InputError(f"alarm channel {channel!r} is not a meter column")
         if not (0 <= start <= index < t.size):
             raise InputError(f"alarm indices start={start}, index={index} outside the readings")
+        if start == index and index > 0:
+            start = index - 1  # a chart that flags the changed reading itself (Shewhart)
         if t[index] <= end:
-            usable.append((index, start, int(channel), float(getattr(alarm, "amplitude"))))  # noqa: B009
+            usable.append((index, start, int(channel), float(alarm.amplitude)))
     if not usable:
         raise InputError("no alarm before the decision time: no burst to localize")
     usable.sort()

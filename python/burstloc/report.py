@@ -167,7 +167,7 @@ def format_tables(ev: Evaluation) -> str:
                     f"{r.spec.capture_interval:g} s",
                     params,
                     f"{r.correct}/{r.total} = {_pct(r.accuracy)}",
-                    f"{_pct(sum(acc) / len(acc))} [{_pct(min(acc))}-{_pct(max(acc))}]",
+                    f"{100 * sum(acc) / len(acc):.1f}% [{_pct(min(acc))}-{_pct(max(acc))}]",
                     pub,
                     "-" if ttl is None else f"{ttl:.2f} s",
                 ]

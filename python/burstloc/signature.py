@@ -62,6 +62,13 @@ DEFAULT_BURST_COEFF = 0.01
 Only the shape of a signature matters (the fit has a free scale); the reference burst is kept
 moderate so that the drop stays in the near-linear range of the network's response."""
 
+DEFAULT_SETTLE = 60.0
+"""Seconds after the onset skipped before estimating the new level: TSNet's slowest network mode
+(about 16 s period on paper15) starts at metres and decays with a ~30 s time constant."""
+
+DEFAULT_DECISION_DELAY = 150.0
+"""Seconds after the onset at which the signature localizer answers (issue 6's budget)."""
+
 DemandModel = Literal["pdd", "emitter"]
 """How consumer demands respond to the burst's pressure drop in the steady-state runs: WNTR's
 pressure-driven demand (``"pdd"``, TSNet's initialiser) or TSNet's transient demand law
@@ -356,8 +363,9 @@ class SignatureLocalizer:
         signatures: SignatureSet,
         *,
         estimator: EstimatorName = "damped-fit",
-        settle: float = 20.0,
-        decision_delay: float = 150.0,
+        settle: float = DEFAULT_SETTLE,
+        decision_delay: float = DEFAULT_DECISION_DELAY,
+        modes: int = 3,
     ) -> None:
         if estimator not in ESTIMATORS:
             raise ConfigError(f"unknown estimator {estimator!r}; use one of {sorted(ESTIMATORS)}")
@@ -369,16 +377,17 @@ class SignatureLocalizer:
         self.estimator: EstimatorName = estimator
         self.settle = float(settle)
         self.decision_delay = float(decision_delay)
+        if modes < 0:
+            raise ConfigError(f"modes must be >= 0, got {modes}")
+        self.modes = int(modes)
 
     def drop(self, evidence: BurstEvidence) -> NDArray[np.float64]:
         """The observed lasting drop (baseline - new level) per signature meter, in metres."""
         cols = evidence.columns(self.signatures.meters)
         values = evidence.readings[:, cols]
         times = evidence.times
-        pre = times < evidence.onset
-        if evidence.meter_model == "interval-averaged":
-            # a reading averages the interval that ends at its stamp: it must end before onset
-            pre = times <= evidence.onset - 0.0
+        # the onset stamp is the detector's start of the change: the last reading before it
+        pre = times <= evidence.onset
         baseline = baseline_levels(values[pre])
         post = times >= evidence.onset + self.settle
         level = estimate_levels(
@@ -387,6 +396,7 @@ class SignatureLocalizer:
             capture_interval=evidence.capture_interval,
             meter_model=evidence.meter_model,
             method=self.estimator,
+            modes=self.modes,
         )
         return baseline - level
 

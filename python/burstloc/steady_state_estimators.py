@@ -49,7 +49,7 @@ _MAX_DECAY = 1.0  # 1/s
 _MAX_GRID = 240  # candidate frequencies per decay rate in the grid search
 _ZOOM_ROUNDS = 4  # refinement grids around the best grid point
 _AVERAGING_NODES = 8  # Gauss-Legendre nodes per capture interval for interval-averaged readings
-_DEFAULT_MODES = 2
+_DEFAULT_MODES = 3
 _BLOCK = 2.0  # s: dense readings are block-averaged to about this before the fit
 
 
@@ -273,8 +273,13 @@ def estimate_levels(
     capture_interval: float,
     meter_model: MeterModel = "instantaneous",
     method: EstimatorName = "damped-fit",
+    modes: int = _DEFAULT_MODES,
 ) -> NDArray[np.float64]:
-    """New steady level per meter from post-burst readings ``values`` (T, M) at ``times`` (T,)."""
+    """New steady level per meter from post-burst readings ``values`` (T, M) at ``times`` (T,).
+
+    ``modes`` is the most damped sinusoids the ``"damped-fit"`` may use. Readings closer than
+    2 s apart are first block-averaged to about 2 s (:func:`block_average`).
+    """
     t = np.asarray(times, dtype=np.float64)
     y = np.asarray(values, dtype=np.float64)
     if y.ndim != 2 or t.shape != (y.shape[0],):
@@ -296,5 +301,7 @@ def estimate_levels(
             t, y, interval = block_average(t, y, capture_interval, _BLOCK)
             if interval > capture_interval:
                 model = "interval-averaged"
-        return fit_damped_modes(t, y, capture_interval=interval, meter_model=model).levels
+        return fit_damped_modes(
+            t, y, capture_interval=interval, meter_model=model, modes=modes
+        ).levels
     raise InputError(f"unknown estimator {method!r}; use one of {sorted(ESTIMATORS)}")

@@ -242,7 +242,7 @@ class ReadingStream:
         """
         steps: list[Step] = []
         while self._pending:
-            steps.extend(self._resolve_head(force=True))
+            steps.extend(self._resolve_head(force=True) or ())
         return self._windows_from(steps)
 
     def windows(self, source: Iterable[Item]) -> Iterator[Window]:
