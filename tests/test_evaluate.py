@@ -15,11 +15,11 @@ from burstloc.detection import DetectorConfig, Mode
 from burstloc.evaluate import (
     RunResult,
     RunSpec,
-    _capture,
     evaluate,
     locate_burst,
     paper_runs,
     phase_offsets,
+    readings_at_offset,
     required_duration,
 )
 from burstloc.exceptions import ConfigError, NetworkError
@@ -109,11 +109,11 @@ def test_phase_offsets_and_required_duration() -> None:
 def test_capture_offsets_move_the_clock_earlier_with_steady_warm_up() -> None:
     r = synthetic("pB", {"B": (3.0, 0.2)})
     spec = RunSpec(CUSUM, 0.2, 5)
-    t0, v0 = _capture(r, spec, 0.0)
+    t0, v0 = readings_at_offset(r, spec, 0.0)
     # 2 x 5 warm-up readings of the steady state, then the simulation from t = 0
     np.testing.assert_allclose(t0[:11], np.arange(-10, 1) * 0.2, atol=1e-12)
     np.testing.assert_array_equal(v0[:10], np.tile(r.heads[0], (10, 1)))
-    t1, v1 = _capture(r, spec, 0.45)
+    t1, v1 = readings_at_offset(r, spec, 0.45)
     assert t1[0] == pytest.approx(-0.45 - 2.0)  # the whole grid moved 0.45 s earlier
     np.testing.assert_allclose(np.diff(t1), 0.2)
     first_simulated = int(np.searchsorted(t1, 0.0))

@@ -1,4 +1,4 @@
-"""The signature localizer: signatures from WNTR steady states, the free-scale fit, the estimators."""
+"""The signature localizer: WNTR steady-state signatures, the free-scale fit, the estimators."""
 
 from __future__ import annotations
 

@@ -6,9 +6,12 @@ network as an undirected graph weighted by pipe length). The burst time is unkno
 candidate point is fitted with a free time offset ``t0``. The meters' alarm starts are only known
 to a capture interval ``dt`` (a start stamp ``tau`` means the change arrived between ``tau`` and
 ``tau + dt``), so the misfit of meter ``m`` is the distance from ``t0 + dist / a`` to the interval
-``[tau_m, tau_m + dt]``; ``t0`` minimises the sum of squared misfits (a convex problem, solved by
-bisection on its derivative). A pipe's candidate points are interior points along it (default
-``0.1, 0.2, ..., 0.9`` of its length); the pipe keeps its best point.
+``[tau_m, tau_m + dt]``. Meters that read but stay silent until the decision time ``T`` add a
+one-sided constraint: their wave must not have arrived before ``T - 2 dt`` (this is what tells a
+pipe from its neighbours when only one end node has a meter). ``t0`` minimises the sum of squared
+misfits (a convex problem, solved by bisection on its derivative). A pipe's candidate points are
+interior points along it (default ``0.1, 0.2, ..., 0.9`` of its length); the pipe keeps its best
+point.
 
 Score (higher is better) = ``-(RMS misfit) / dt + amplitude_weight * A``, where ``A`` in [0, 1]
 is the mean absolute alarm amplitude at the pipe's two end nodes relative to the largest alarm
@@ -112,6 +115,7 @@ class ArrivalLocalizer:
         positions: Iterable[float] = DEFAULT_POSITIONS,
         amplitude_weight: float = 0.05,
         decision_delay: float | None = None,
+        silence: bool = True,
     ) -> None:
         if not (math.isfinite(wave_speed) and wave_speed > 0):
             raise ConfigError(f"wave_speed must be > 0 m/s, got {wave_speed}")
@@ -127,6 +131,7 @@ class ArrivalLocalizer:
         self.wave_speed = float(wave_speed)
         self.positions = pos
         self.amplitude_weight = float(amplitude_weight)
+        self.silence = bool(silence)
         for p in self.pipes:
             for node in (p.start, p.end):
                 if node not in node_distances:
@@ -159,6 +164,7 @@ class ArrivalLocalizer:
         positions: Iterable[float] = DEFAULT_POSITIONS,
         amplitude_weight: float = 0.05,
         decision_delay: float | None = None,
+        silence: bool = True,
     ) -> ArrivalLocalizer:
         """Build from an INP path or a WNTR model; ``meters`` default to every junction."""
         wn = load_network(network) if isinstance(network, (str, os.PathLike)) else network
@@ -188,32 +194,53 @@ class ArrivalLocalizer:
             positions=positions,
             amplitude_weight=amplitude_weight,
             decision_delay=decision_delay,
+            silence=silence,
         )
 
     def misfit(self, evidence: BurstEvidence) -> NDArray[np.float64]:
         """RMS arrival misfit (s) of every pipe's best candidate point, shape (pipes,).
 
-        Meters without an alarm are left out. Needs at least one alarm among the meters.
+        Alarmed meters contribute their distance to ``[tau, tau + dt]``. With ``silence`` on, a
+        meter that reads but has not alarmed by the decision time ``T`` says the wave has not
+        reached it before ``T - 2 dt`` (one interval for the stamp, one for the detector): a
+        candidate whose wave would have arrived earlier pays the difference. Needs at least
+        one alarm among the meters.
         """
         alarmed = [j for j, m in enumerate(self.meters) if m in evidence.alarms]
         if not alarmed:
             raise InputError("no meter of the arrival model has alarmed: nothing to localize")
-        tau = np.array([evidence.alarms[self.meters[j]].start for j in alarmed])
         dt = evidence.capture_interval
-        travel = self._dist[:, :, alarmed] / self.wave_speed  # (P, X, A)
-        lo = tau[None, None, :] - travel  # t0 values that put the arrival at the stamp ...
-        hi = lo + dt  # ... or a capture interval later
+        tau = np.array([evidence.alarms[self.meters[j]].start for j in alarmed])
+        lo_parts = [tau[None, None, :] - self._dist[:, :, alarmed] / self.wave_speed]
+        hi_parts = [lo_parts[0] + dt]
+        if self.silence:
+            reading = set(evidence.meters)
+            silent = [
+                j for j, m in enumerate(self.meters) if m not in evidence.alarms and m in reading
+            ]
+            if silent:
+                bound = evidence.decision_time - 2 * dt
+                lo_parts.append(bound - self._dist[:, :, silent] / self.wave_speed)
+                hi_parts.append(np.full_like(lo_parts[-1], np.inf))
+        lo = np.concatenate(lo_parts, axis=2)  # t0 values that put each arrival in its window
+        hi = np.concatenate(hi_parts, axis=2)
         finite = np.isfinite(lo)
-        lo_f = np.where(finite, lo, 0.0)
-        hi_f = np.where(finite, hi, 0.0)
-        left = np.where(finite, lo, np.inf).min(axis=2) - dt
-        right = np.where(finite, hi, -np.inf).max(axis=2) + dt
+        lo_f = np.where(finite, lo, -np.inf)
+        hi_f = np.where(finite, hi, np.inf)
+        first = np.isfinite(lo[:, :, : len(alarmed)])
+        left = np.where(first, lo[:, :, : len(alarmed)], np.inf).min(axis=2) - dt
+        right = (
+            np.maximum(
+                np.where(first, hi[:, :, : len(alarmed)], -np.inf).max(axis=2),
+                np.where(finite, lo, -np.inf).max(axis=2),
+            )
+            + dt
+        )
         a, b = left.copy(), right.copy()
         for _ in range(64):  # bisection on the (monotone) derivative of the convex misfit
             mid = 0.5 * (a + b)
             grad = np.sum(
-                np.where(finite, np.maximum(mid[..., None] - hi_f, 0.0), 0.0)
-                - np.where(finite, np.maximum(lo_f - mid[..., None], 0.0), 0.0),
+                np.maximum(mid[..., None] - hi_f, 0.0) - np.maximum(lo_f - mid[..., None], 0.0),
                 axis=2,
             )
             up = grad > 0
@@ -222,8 +249,8 @@ class ArrivalLocalizer:
         t0 = 0.5 * (a + b)
         gap = np.maximum(lo_f - t0[..., None], 0.0) + np.maximum(t0[..., None] - hi_f, 0.0)
         count = np.maximum(finite.sum(axis=2), 1)
-        rms = np.sqrt(np.sum(np.where(finite, gap**2, 0.0), axis=2) / count)
-        rms = np.where(finite.any(axis=2), rms, np.inf)
+        rms = np.sqrt(np.sum(gap**2, axis=2) / count)
+        rms = np.where(first.any(axis=2), rms, np.inf)
         return np.asarray(rms.min(axis=1), dtype=np.float64)
 
     def amplitude_term(self, evidence: BurstEvidence) -> NDArray[np.float64]:

@@ -11,13 +11,13 @@ For a network and one or more runs (detector x capture interval x parameters x m
    attempt); no decision means "not located", never a guess;
 3. a prediction is correct when it names the burst pipe; accuracy = correct / pipes (eq. 4).
 
-**Phases.** Phase ``k`` of ``N`` shifts the capture clock by ``k / N`` of one capture interval
-(``phase_span="capture"``, the default) or of one localization window, ``interval x capture
-interval`` (``phase_span="window"``: the window grid then also moves relative to the burst
-onset). Accuracy is reported at phase 0 (the per-pipe tables) and as mean, min and max over the
-phases. The time to localize is the decision time (the timestamp of the newest reading of the
-deciding window) minus the burst start; its median is taken over every located attempt, all
-phases.
+**Phases.** Phase ``k`` of ``N`` starts the capture clock, and with it the window grid, ``k / N``
+of one capture interval (``phase_span="capture"``, the default) or of one localization window,
+``interval x capture interval`` (``phase_span="window"``: every alignment of the windows to the
+burst), earlier relative to the burst (:func:`readings_at_offset`). Accuracy is reported at
+phase 0 (the per-pipe tables) and as mean, min and max over the phases. The time to localize
+is the decision time (the timestamp of the newest reading of the deciding window) minus the
+burst start; its median is taken over every located attempt, all phases.
 """
 
 from __future__ import annotations
@@ -54,6 +54,8 @@ __all__ = [
     "locate_burst",
     "paper_runs",
     "phase_offsets",
+    "readings_after",
+    "readings_at_offset",
     "required_duration",
 ]
 
@@ -221,7 +223,7 @@ class Attempt:
         return None if loc is None else loc.decision_time - self.burst_start
 
 
-def _capture(result: ScenarioResult, spec: RunSpec, offset: float) -> tuple[Any, Any]:
+def readings_at_offset(result: ScenarioResult, spec: RunSpec, offset: float) -> tuple[Any, Any]:
     """The readings of one run at a clock offset (s).
 
     The capture clock ticks at ``t0 - offset - 2 x interval x capture_interval + k x
@@ -256,9 +258,9 @@ def locate_burst(
     """Stream one simulated burst at a clock offset through the real-time loop.
 
     The capture clock, and with it the window grid, starts ``offset`` seconds earlier relative
-    to the burst than at offset 0 (see ``_capture``).
+    to the burst than at offset 0 (see :func:`readings_at_offset`).
     """
-    times, values = _capture(result, spec, offset)
+    times, values = readings_at_offset(result, spec, offset)
     meters = list(result.junctions)
     detector = make_detector(spec.detector, meters, spec.localization_interval, spec.mode)
     locator = BurstLocator(graph, meters, detector, spec.localization_interval)
@@ -458,7 +460,7 @@ def evaluate(
     shortest = min(results.values(), key=lambda r: float(r.time[-1]))
     for spec in runs:
         for offset in phase_offsets(spec, phases, phase_span):
-            times, _ = _capture(shortest, spec, offset)
+            times, _ = readings_at_offset(shortest, spec, offset)
             n = readings_after(times, float(shortest.metadata["burst_start"]))
             if n < 2 * spec.localization_interval:
                 raise ConfigError(
@@ -468,6 +470,10 @@ def evaluate(
                     f"2 x {spec.localization_interval}"
                 )
 
+    for p, r in results.items():
+        negative = r.metadata.get("negative_pressure_nodes") or []
+        if negative:
+            warnings.append(f"burst on pipe {p}: negative pressure at {', '.join(negative)}")
     truth = {p: r.true_endpoints for p, r in results.items()}
     out: list[RunResult] = []
     for spec in runs:

@@ -187,9 +187,9 @@ class ScenarioConfig:
     coefficient, m³/s/m^½), ``position`` (fraction of the pipe from its INP start node),
     ``wave_speed`` (m/s, TSNet's default as in the paper) and ``duration`` (s). ``duration=None``
     lets the evaluation choose the shortest simulation that gives every run ``2 x interval``
-    readings after the burst whatever the phase (220 s for the paper's experiment: 10 s onset
-    + one 10 s capture interval of phase + 2 x 10 readings at 10 s); an explicit duration too
-    short for a run is an error.
+    readings after the burst whatever the phase: onset + (2 x interval + 1) x capture interval,
+    rounded up to a second (221 s for the paper's experiment with :data:`SCENARIO`: 10.12 s
+    onset + 21 x 10 s); an explicit duration too short for a run is an error.
     """
 
     burst_start: float = 10.0
