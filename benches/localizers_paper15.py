@@ -27,7 +27,7 @@ import numpy as np
 from burstloc import _core
 from burstloc.arrival import ArrivalLocalizer
 from burstloc.calibrate import calibrate
-from burstloc.capture import resample
+from burstloc.capture import interval_average, resample
 from burstloc.exceptions import InputError
 from burstloc.fused import FusedLocalizer
 from burstloc.network import load_network, pipe_names
@@ -37,30 +37,6 @@ from burstloc.simulate import BurstScenario, simulate_burst
 
 ROOT = Path(__file__).resolve().parents[1]
 NETWORK = ROOT / "networks" / "paper15.inp"
-
-
-def interval_average(
-    time_s: np.ndarray, heads: np.ndarray, capture_interval: float, phase: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """Interval-averaged readings: at each capture tick of :func:`burstloc.capture.resample`,
-    the mean of the (linearly interpolated) timeline over ``(tick - dt, tick]``.
-
-    Before the simulation starts the network is in its initial steady state, so an interval
-    that reaches back before ``time[0]`` averages the initial heads there (exact, not a guess).
-    """
-    ticks, _ = resample(time_s, heads, capture_interval, phase)
-    steps = np.diff(time_s)[:, None]
-    cum = np.vstack(
-        [np.zeros((1, heads.shape[1])), np.cumsum(0.5 * (heads[1:] + heads[:-1]) * steps, axis=0)]
-    )
-
-    def integral(x: np.ndarray) -> np.ndarray:
-        inside = np.stack([np.interp(x, time_s, cum[:, j]) for j in range(heads.shape[1])], axis=1)
-        before = np.minimum(x - time_s[0], 0.0)[:, None] * heads[0][None, :]
-        return inside + before
-
-    lo = ticks - capture_interval
-    return ticks, (integral(ticks) - integral(lo)) / capture_interval
 
 
 def main(argv: list[str] | None = None) -> int:

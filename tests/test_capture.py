@@ -7,7 +7,7 @@ import pytest
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
-from burstloc.capture import resample, time_step_of
+from burstloc.capture import METER_MODELS, capture, interval_average, resample, time_step_of
 from burstloc.exceptions import ConfigError, InputError
 
 
@@ -105,3 +105,49 @@ def test_every_sample_is_the_latest_value_at_its_tick(
     # No tick inside the span is missed.
     first_missing = phase + interval * (np.floor((time[-1] - phase) / interval) + 1)
     assert first_missing > time[-1] - tol
+
+
+def test_interval_average_of_a_ramp_is_the_midpoint_value() -> None:
+    time = np.arange(101) * 0.1  # 0 .. 10 s
+    heads = np.column_stack([2.0 * time, np.full(time.size, 3.0)])
+    ticks, means = interval_average(time, heads, 2.0, phase=0.5)
+    np.testing.assert_allclose(ticks, [0.5, 2.5, 4.5, 6.5, 8.5])
+    # Before t = 0 the network holds its initial value (0): the first interval (-1.5, 0.5]
+    # averages 0 for 1.5 s and the ramp 0 -> 1 for 0.5 s.
+    np.testing.assert_allclose(means[0, 0], (0.5 * 0.5 * 1.0) / 2.0)
+    np.testing.assert_allclose(means[1:, 0], 2.0 * (ticks[1:] - 1.0))
+    np.testing.assert_allclose(means[:, 1], 3.0)
+
+
+def test_interval_average_smooths_what_sampling_aliases() -> None:
+    # A 2 s oscillation sampled every 2 s aliases to a constant offset; averaging removes it.
+    time = np.arange(0, 60.0001, 0.05)
+    heads = 10.0 + np.sin(2 * np.pi * time / 2.0 + 1.0)
+    _, held = resample(time, heads, 2.0, phase=0.0)
+    ticks, means = interval_average(time, heads, 2.0, phase=0.0)
+    assert means.shape == held.shape == ticks.shape
+    assert abs(float(np.mean(held[1:])) - 10.0) > 0.5
+    np.testing.assert_allclose(means[1:], 10.0, atol=2e-3)
+
+
+def test_interval_average_at_the_time_step_is_the_trapezoid_mean() -> None:
+    time = np.arange(6) * 0.5
+    heads = np.array([0.0, 1.0, 0.0, 4.0, 2.0, 2.0])
+    ticks, means = interval_average(time, heads, 0.5)
+    np.testing.assert_allclose(ticks, time)
+    np.testing.assert_allclose(means, [0.0, 0.5, 0.5, 2.0, 3.0, 2.0])
+
+
+def test_capture_selects_the_meter_model() -> None:
+    time = np.arange(41) * 0.25
+    heads = np.sin(time)
+    for model, func in (("instantaneous", resample), ("interval-averaged", interval_average)):
+        ticks, values = capture(time, heads, 1.0, 0.5, meter_model=model)
+        expected_ticks, expected = func(time, heads, 1.0, 0.5)
+        np.testing.assert_array_equal(ticks, expected_ticks)
+        np.testing.assert_array_equal(values, expected)
+    assert set(METER_MODELS) == {"instantaneous", "interval-averaged"}
+    with pytest.raises(ConfigError, match="meter_model"):
+        capture(time, heads, 1.0, meter_model="peak")
+    with pytest.raises(ConfigError, match="capture_interval"):
+        interval_average(time, heads, 0.1)

@@ -85,6 +85,8 @@ MIN_STEPS = 10
 
 _TSNET_LOCK = threading.Lock()
 _ENGINES = ("PDD", "DD")
+#: TSNet's friction models (``MOCSimulator(friction=...)``); "steady" is TSNet's default.
+FRICTION_MODELS = ("steady", "quasi-steady", "unsteady")
 
 
 def _number(name: str, value: Any) -> float:
@@ -114,6 +116,8 @@ class BurstScenario:
         engine: initial steady state: ``"PDD"`` (pressure-driven) or ``"DD"``.
         time_step: TSNet's requested time step, s; ``None`` = TSNet's largest stable step.
             TSNet adjusts it (wave-speed adjustment), see :attr:`ScenarioResult.time_step`.
+        friction: TSNet's friction model, one of :data:`FRICTION_MODELS` (default ``"steady"``,
+            TSNet's own default and what every scenario used before this field existed).
 
     Raises:
         ConfigError: a parameter is out of range (the message names it and its value).
@@ -129,6 +133,7 @@ class BurstScenario:
     duration: float = DEFAULT_DURATION
     engine: str = "PDD"
     time_step: float | None = None
+    friction: str = "steady"
 
     def __post_init__(self) -> None:
         def put(name: str, value: Any) -> None:
@@ -160,15 +165,23 @@ class BurstScenario:
         if engine not in _ENGINES:
             raise ConfigError(f"engine must be 'PDD' or 'DD', got {self.engine!r}")
         put("engine", engine)
+        if self.friction not in FRICTION_MODELS:
+            raise ConfigError(f"friction must be one of {FRICTION_MODELS}, got {self.friction!r}")
         if self.time_step is not None:
             put("time_step", _number("time_step", self.time_step))
             if self.time_step <= 0:  # type: ignore[operator]
                 raise ConfigError(f"time_step must be > 0 s, got {self.time_step}")
 
     def parameters(self) -> dict[str, Any]:
-        """Every field except the network path (the cache hashes the file's bytes instead)."""
+        """Every field except the network path (the cache hashes the file's bytes instead).
+
+        The default friction model is left out, so scenarios cached before the field existed
+        keep their keys.
+        """
         params = asdict(self)
         del params["network"]
+        if params["friction"] == "steady":
+            del params["friction"]
         return params
 
     def cache_key(self) -> str:
@@ -409,7 +422,7 @@ def _run_tsnet(scenario: BurstScenario, split: network.SplitPipe, inp: str) -> A
             split.burst_node, scenario.burst_start, scenario.opening_time, scenario.burst_coeff
         )
         tm = tsnet.simulation.Initializer(tm, 0.0, scenario.engine)
-        return tsnet.simulation.MOCSimulator(tm, results_obj="no")
+        return tsnet.simulation.MOCSimulator(tm, results_obj="no", friction=scenario.friction)
     except Exception as exc:
         raise SimulationError(f"TSNet failed for {where}: {type(exc).__name__}: {exc}") from exc
 

@@ -181,14 +181,17 @@ impl Sums {
     }
 
     /// Adds `x` and removes `old` (the window is full).
+    ///
+    /// The difference `y - yo` is first split exactly into `d + e` (TwoSum, independent of the
+    /// running sums), so that only one addition per sum sits on the loop-carried chain.
     #[inline(always)]
     pub(crate) fn slide(&mut self, x: f64, old: f64) {
         let y = x - self.reference;
         let yo = old - self.reference;
-        let (s1, c1) = acc(self.s1, self.c1, y);
-        (self.s1, self.c1) = acc(s1, c1, -yo);
-        let (s2, c2) = acc(self.s2, self.c2, y * y);
-        (self.s2, self.c2) = acc(s2, c2, -(yo * yo));
+        let (d1, e1) = acc(y, 0.0, -yo);
+        let (d2, e2) = acc(y * y, 0.0, -(yo * yo));
+        (self.s1, self.c1) = acc(self.s1, self.c1 + e1, d1);
+        (self.s2, self.c2) = acc(self.s2, self.c2 + e2, d2);
     }
 
     /// Recomputes the sums of the `n` window values `get(0..n)` around their mean.
