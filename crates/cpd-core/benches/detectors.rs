@@ -89,16 +89,19 @@ fn single_channel(c: &mut Criterion<CpuTime>) {
     let x = heads(SAMPLES, 1);
     let mut group = c.benchmark_group("update");
     group.throughput(Throughput::Elements(SAMPLES as u64));
-    group.bench_function("cusum", |b| {
-        let mut det = Cusum::new(CusumConfig::new(0.5, 0.01).unwrap());
-        b.iter(|| {
-            let mut alarms = 0u32;
-            for &v in &x {
-                alarms += det.update(black_box(v)).unwrap().is_some() as u32;
-            }
-            alarms
-        })
-    });
+    // drift = 0.01, and drift = 0 (burstloc's default: the drift-free fast path).
+    for (name, drift) in [("cusum", 0.01), ("cusum_nodrift", 0.0)] {
+        group.bench_function(name, |b| {
+            let mut det = Cusum::new(CusumConfig::new(0.5, drift).unwrap());
+            b.iter(|| {
+                let mut alarms = 0u32;
+                for &v in &x {
+                    alarms += det.update(black_box(v)).unwrap().is_some() as u32;
+                }
+                alarms
+            })
+        });
+    }
     for w in [10usize, 100, 10_000] {
         group.bench_with_input(BenchmarkId::new("shewhart", w), &w, |b, &w| {
             let mut det = Shewhart::new(ShewhartConfig::new(w, 3.0, 0.5).unwrap());
@@ -117,14 +120,16 @@ fn single_channel(c: &mut Criterion<CpuTime>) {
     let mut group = c.benchmark_group("update_slice");
     group.throughput(Throughput::Elements(SAMPLES as u64));
     let mut out = Vec::with_capacity(SAMPLES);
-    group.bench_function("cusum", |b| {
-        let mut det = Cusum::new(CusumConfig::new(0.5, 0.01).unwrap());
-        b.iter(|| {
-            out.clear();
-            det.update_slice(black_box(&x), &mut out).unwrap();
-            out.len()
-        })
-    });
+    for (name, drift) in [("cusum", 0.01), ("cusum_nodrift", 0.0)] {
+        group.bench_function(name, |b| {
+            let mut det = Cusum::new(CusumConfig::new(0.5, drift).unwrap());
+            b.iter(|| {
+                out.clear();
+                det.update_slice(black_box(&x), &mut out).unwrap();
+                out.len()
+            })
+        });
+    }
     for w in [10usize, 100, 10_000] {
         group.bench_with_input(BenchmarkId::new("shewhart", w), &w, |b, &w| {
             let mut det = Shewhart::new(ShewhartConfig::new(w, 3.0, 0.5).unwrap());
@@ -153,22 +158,24 @@ fn banks(c: &mut Criterion<CpuTime>) {
     for channels in [16usize, 1024, 65_536] {
         let data = rows(channels);
         group.throughput(Throughput::Elements(channels as u64));
-        group.bench_with_input(
-            BenchmarkId::new("cusum", channels),
-            &channels,
-            |b, &channels| {
-                let mut bank =
-                    CusumBank::new(channels, CusumConfig::new(0.5, 0.01).unwrap()).unwrap();
-                let mut out: Vec<ChannelAlarm> = Vec::with_capacity(channels);
-                let mut t = 0;
-                b.iter(|| {
-                    out.clear();
-                    bank.step(black_box(&data[t % ROWS]), &mut out).unwrap();
-                    t += 1;
-                    out.len()
-                })
-            },
-        );
+        for (name, drift) in [("cusum", 0.01), ("cusum_nodrift", 0.0)] {
+            group.bench_with_input(
+                BenchmarkId::new(name, channels),
+                &channels,
+                |b, &channels| {
+                    let mut bank =
+                        CusumBank::new(channels, CusumConfig::new(0.5, drift).unwrap()).unwrap();
+                    let mut out: Vec<ChannelAlarm> = Vec::with_capacity(channels);
+                    let mut t = 0;
+                    b.iter(|| {
+                        out.clear();
+                        bank.step(black_box(&data[t % ROWS]), &mut out).unwrap();
+                        t += 1;
+                        out.len()
+                    })
+                },
+            );
+        }
         group.bench_with_input(
             BenchmarkId::new("shewhart_w50", channels),
             &channels,
