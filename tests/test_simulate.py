@@ -141,6 +141,21 @@ def test_position_moves_the_burst_junction(tiny_network: Path) -> None:
     assert arrival(far, j2) < arrival(far, j1)
 
 
+def test_friction_model_reaches_tsnet_and_the_cache_key(tiny_network: Path) -> None:
+    steady = BurstScenario(tiny_network, "B", burst_start=0.2, duration=3.0)
+    unsteady = BurstScenario(tiny_network, "B", burst_start=0.2, duration=3.0, friction="unsteady")
+    # The default is left out of the key: scenarios cached before the field keep their keys.
+    assert "friction" not in steady.parameters()
+    assert unsteady.parameters()["friction"] == "unsteady"
+    assert steady.cache_key() != unsteady.cache_key()
+    a = simulate_burst(steady, cache=False)
+    b = simulate_burst(unsteady, cache=False)
+    assert a.heads.shape == b.heads.shape
+    np.testing.assert_array_equal(a.heads[0], b.heads[0])  # same steady state
+    assert float(np.max(np.abs(a.heads - b.heads))) > 1e-3  # different transient damping
+    assert b.metadata["friction"] == "unsteady"
+
+
 def test_resample_keeps_metadata_and_checks_the_interval(pipe7: ScenarioResult) -> None:
     readings = pipe7.resample(0.2)
     assert (
@@ -188,6 +203,7 @@ def test_npz_is_readable_with_plain_numpy(pipe7: ScenarioResult, tmp_path: Path)
         ("engine", "EPANET", "'EPANET'"),
         ("burst_coeff", "big", "'big'"),
         ("burst_coeff", True, "True"),
+        ("friction", "laminar", "'laminar'"),
     ],
 )
 def test_bad_parameters_are_config_errors(

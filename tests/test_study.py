@@ -155,6 +155,47 @@ def test_failed_simulations_leave_the_point_out(tiny_network: Path) -> None:
 
 
 def test_cli_refuses_an_unknown_factor(capsys: pytest.CaptureFixture[str]) -> None:
-    with pytest.raises(SystemExit):
-        main(["x.inp", "--factors", "colour"])
-    assert "unknown factor" in capsys.readouterr().err
+    assert main(["x.inp", "--factors", "colour"]) == 2
+    assert "unknown factor(s) ['colour']" in capsys.readouterr().err
+
+
+def test_cli_study_and_calibrate_commands(
+    tiny_network: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from burstloc.calibrate import Calibration
+    from burstloc.cli import main as cli
+
+    config = tmp_path / "tiny.json"
+    argv = ["calibrate", str(tiny_network), "--out", str(config), "--capture-interval", "2"]
+    assert cli([*argv, "--noise", "0.02", "--false-alarm-rate", "1"]) == 0
+    loaded = Calibration.load(config, network=tiny_network)
+    assert loaded.for_interval(2.0).capture_interval == 2.0
+    assert cli(["calibrate", str(tiny_network), "--out", str(config), "--noise", "-1"]) == 2
+    out = tmp_path / "study"
+    status = cli(
+        [
+            "study",
+            str(tiny_network),
+            "--out",
+            str(out),
+            "--capture-interval",
+            "0.2",
+            "--detector",
+            "shewhart",
+            "--localizer",
+            "arrival",
+            "--phases",
+            "1",
+            "--duration",
+            "90",
+            "--factors",
+            "--pipes",
+            "C",
+            "--workers",
+            "1",
+            "--quiet",
+        ]
+    )
+    assert status == 0
+    assert "## Summary (arrival localizer, shewhart)" in (out / "report.md").read_text()
+    assert "wrote" in capsys.readouterr().out

@@ -9,6 +9,7 @@ Exit status: 0 success, 1 some scenarios failed (reported on stderr), 2 bad inpu
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 from collections.abc import Sequence
 from typing import Any
@@ -16,12 +17,16 @@ from typing import Any
 from burstloc.exceptions import ConfigError, InputError, NetworkError, SimulationError
 
 __all__ = [
+    "add_calibrate_parser",
     "add_evaluate_parser",
     "add_simulate_parser",
+    "add_study_parser",
     "build_parser",
     "main",
+    "run_calibrate",
     "run_evaluate",
     "run_simulate",
+    "run_study",
 ]
 
 
@@ -169,6 +174,26 @@ def add_evaluate_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="detection mode: the paper's per-window call ('window') or the streaming bank "
         "('stream'); default: burstloc.paper.DEFAULT_MODE",
     )
+    parser.add_argument(
+        "--localizer",
+        choices=("paper", "arrival", "signature", "fused"),
+        default="paper",
+        help="the paper's rules (default) or a ranking localizer of issue 6 (uses the calibrated "
+        "detector bank: --config, or a calibration computed for the network)",
+    )
+    parser.add_argument(
+        "--meter-model",
+        choices=("instantaneous", "interval-averaged", "both"),
+        default="instantaneous",
+        help="what a meter reports each capture interval (default: instantaneous, the paper's)",
+    )
+    parser.add_argument(
+        "--config",
+        default=None,
+        metavar="PATH",
+        help="calibration from `burstloc calibrate` (ranking localizers); refused if it was "
+        "made for another network or other meters",
+    )
     parser.add_argument("--pipes", nargs="+", default=None, metavar="ID", help="default: all")
     parser.add_argument(
         "--phases", type=int, default=5, metavar="N", help="clock phases per burst (default 5)"
@@ -215,6 +240,21 @@ def run_evaluate(args: argparse.Namespace) -> int:
         sigma=args.sigma,
         localization_interval=args.localization_interval,
     )
+    meter_models = (
+        ("instantaneous", "interval-averaged")
+        if args.meter_model == "both"
+        else (args.meter_model,)
+    )
+    runs = [
+        dataclasses.replace(spec, localizer=args.localizer, meter_model=model)
+        for spec in runs
+        for model in meter_models
+    ]
+    config = None
+    if args.config:
+        from burstloc.calibrate import Calibration
+
+        config = Calibration.load(args.config)
     cache: DiskCache | bool = False if args.no_cache else DiskCache(args.cache_dir)
     ev = evaluate(
         args.network,
@@ -226,6 +266,7 @@ def run_evaluate(args: argparse.Namespace) -> int:
         workers=args.workers,
         scheduler=args.scheduler,
         progress=not args.quiet,
+        config=config,
     )
     print(report.format_tables(ev), end="")
     if args.json:
@@ -240,6 +281,90 @@ def run_evaluate(args: argparse.Namespace) -> int:
     return 0
 
 
+# --- calibrate -----------------------------------------------------------------------------
+
+
+def add_calibrate_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Register ``burstloc calibrate``."""
+    from burstloc import calibrate
+
+    parser = subparsers.add_parser(
+        "calibrate",
+        help="derive detector thresholds from a burst-free baseline (issue 6)",
+        description="Per meter and capture interval, thresholds that meet a target false-alarm "
+        "rate on the network's steady state plus the sensor noise model; written as a named "
+        "configuration that `evaluate --config` accepts.",
+    )
+    parser.add_argument("network", help="EPANET INP file")
+    parser.add_argument("--out", required=True, help="configuration file to write (JSON)")
+    parser.add_argument(
+        "--capture-interval",
+        type=float,
+        nargs="+",
+        default=list(calibrate.DEFAULT_CAPTURE_INTERVALS),
+        metavar="S",
+    )
+    parser.add_argument(
+        "--noise",
+        type=float,
+        default=calibrate.DEFAULT_NOISE_SIGMA,
+        metavar="SIGMA",
+        help="sensor noise standard deviation, m",
+    )
+    parser.add_argument(
+        "--false-alarm-rate",
+        type=float,
+        default=calibrate.DEFAULT_FALSE_ALARM_RATE,
+        metavar="R",
+        help="target false alarms per meter per hour",
+    )
+    parser.add_argument("--meters", nargs="+", default=None, help="metered junctions (default all)")
+    parser.add_argument("--name", default=None, help="the configuration's name")
+    parser.set_defaults(handler=run_calibrate)
+    return parser
+
+
+def run_calibrate(args: argparse.Namespace) -> int:
+    """Handle ``burstloc calibrate``."""
+    from burstloc.calibrate import calibrate
+
+    config = calibrate(
+        args.network,
+        capture_intervals=args.capture_interval,
+        noise_sigma=args.noise,
+        false_alarm_rate=args.false_alarm_rate,
+        meters=args.meters,
+        name=args.name,
+    )
+    print(f"wrote {config.save(args.out)}")
+    return 0
+
+
+# --- study ---------------------------------------------------------------------------------
+
+
+def add_study_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Register ``burstloc study``."""
+    from burstloc.study import add_study_arguments
+
+    parser = subparsers.add_parser(
+        "study",
+        help="robustness study: accuracy over a one-factor-at-a-time grid (issue 6)",
+        description="Simulate (cached) and score a grid of noise, meter coverage, burst size and "
+        "friction around the defaults; write report.md, results.json and PNG plots.",
+    )
+    add_study_arguments(parser)
+    parser.set_defaults(handler=run_study)
+    return parser
+
+
+def run_study(args: argparse.Namespace) -> int:
+    """Handle ``burstloc study``."""
+    from burstloc.study import run_study_command
+
+    return run_study_command(args)
+
+
 # --- wiring --------------------------------------------------------------------------------
 
 
@@ -251,6 +376,8 @@ def build_parser() -> argparse.ArgumentParser:
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     add_simulate_parser(subparsers)
     add_evaluate_parser(subparsers)
+    add_calibrate_parser(subparsers)
+    add_study_parser(subparsers)
     return parser
 
 

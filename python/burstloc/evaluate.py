@@ -18,6 +18,16 @@ burst), earlier relative to the burst (:func:`readings_at_offset`). Accuracy is 
 phase 0 (the per-pipe tables) and as mean, min and max over the phases. The time to localize
 is the decision time (the timestamp of the newest reading of the deciding window) minus the
 burst start; its median is taken over every located attempt, all phases.
+
+**Localizers** (issue 6). ``RunSpec.localizer`` is ``"paper"`` (the rules above, the default)
+or one of the ranking localizers ``"arrival"``, ``"signature"``, ``"fused"``
+(:mod:`burstloc.arrival`, :mod:`burstloc.signature`, :mod:`burstloc.fused`). These run the Rust
+detector bank with a calibrated configuration (:mod:`burstloc.calibrate`; computed for the
+network when none is given: no hand tuning), build the evidence from its alarms at the
+localizer's decision time (:func:`decision_time`) and rank every pipe; the prediction is the
+best-ranked pipe, and top-1 / top-3 accuracy are reported (for the paper's rules, which name one
+pipe, top-3 equals top-1). ``RunSpec.meter_model`` chooses instantaneous samples (the paper's)
+or interval-averaged readings (:func:`burstloc.capture.capture`).
 """
 
 from __future__ import annotations
@@ -33,25 +43,33 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from burstloc import paper
-from burstloc.capture import resample
+from burstloc.capture import METER_MODELS, capture
 from burstloc.detection import DetectorConfig, Mode, make_detector
 from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.localize import BurstLocator, Localization
+from burstloc.ranking import Ranking
 from burstloc.stream import replay
 
 if TYPE_CHECKING:
     import networkx as nx
 
+    from burstloc.calibrate import Calibration, IntervalCalibration
+    from burstloc.fused import FusedLocalizer
     from burstloc.simulate import ScenarioResult
 
 __all__ = [
+    "LOCALIZERS",
     "PHASE_SPANS",
     "Attempt",
     "Evaluation",
+    "RankingSetup",
     "RunResult",
     "RunSpec",
+    "calibrated_bank",
+    "decision_time",
     "evaluate",
     "locate_burst",
+    "locate_ranked",
     "paper_runs",
     "phase_offsets",
     "readings_after",
@@ -62,12 +80,18 @@ __all__ = [
 #: What the phases of an evaluation are spread over.
 PHASE_SPANS: tuple[str, ...] = ("capture", "window")
 
+#: ``--localizer`` choices: the paper's rules, then the ranking localizers of issue 6.
+LOCALIZERS: tuple[str, ...] = ("paper", "arrival", "signature", "fused")
+
 
 @dataclass(frozen=True)
 class RunSpec:
     """One run of the experiment: a detector configuration at a capture interval.
 
     ``label`` names the paper's scenario (``"S_C1"``...) when the run is one of Tables I/II.
+    ``localizer`` is one of :data:`LOCALIZERS`; ``meter_model`` one of
+    :data:`burstloc.capture.METER_MODELS`. A ranking localizer uses the detector's kind with the
+    calibrated thresholds (the configuration given to :func:`evaluate`), not ``detector``'s.
     """
 
     detector: DetectorConfig
@@ -75,6 +99,8 @@ class RunSpec:
     localization_interval: int
     mode: Mode = Mode.WINDOW
     label: str | None = None
+    localizer: str = "paper"
+    meter_model: str = "instantaneous"
 
     def __post_init__(self) -> None:
         ci = self.capture_interval
@@ -89,6 +115,12 @@ class RunSpec:
             raise ConfigError(f"localization interval must be >= 1, got {li}")
         object.__setattr__(self, "capture_interval", float(ci))
         object.__setattr__(self, "mode", Mode(self.mode))
+        if self.localizer not in LOCALIZERS:
+            raise ConfigError(f"localizer must be one of {LOCALIZERS}, got {self.localizer!r}")
+        if self.meter_model not in METER_MODELS:
+            raise ConfigError(
+                f"meter model must be one of {METER_MODELS}, got {self.meter_model!r}"
+            )
 
     def params(self) -> dict[str, Any]:
         """The run's parameters (JSON ``params``)."""
@@ -99,7 +131,10 @@ class RunSpec:
         }
 
     def paper_run(self) -> paper.PaperRun | None:
-        """The paper's run with the same detector, capture interval, threshold and interval."""
+        """The paper's run with the same detector, capture interval, threshold and interval
+        (``None`` for a ranking localizer: the paper's figures are for its rules)."""
+        if self.localizer != "paper":
+            return None
         for run in paper.PAPER_RUNS:
             if (
                 run.detector == self.detector.kind
@@ -183,7 +218,12 @@ def required_duration(spec: RunSpec, burst_start: float) -> float:
     ``burst_start + (2 x interval + 1) x capture_interval``: one capture interval of margin for
     the clock phase and for TSNet's grid, which ends up to one time step short of the duration.
     """
-    return burst_start + (2 * spec.localization_interval + 1) * spec.capture_interval
+    need = burst_start + (2 * spec.localization_interval + 1) * spec.capture_interval
+    if spec.localizer in ("signature", "fused"):
+        from burstloc.calibrate import SIGNATURE_DECISION_DELAY
+
+        need = max(need, burst_start + SIGNATURE_DECISION_DELAY + 2 * spec.capture_interval)
+    return need
 
 
 def readings_after(times: np.ndarray, burst_start: float) -> int:
@@ -199,26 +239,47 @@ class Attempt:
     offset: float
     burst_start: float
     localization: Localization | None
+    ranking: Ranking | None = None
+    decided_at: float | None = None
 
     @property
     def located(self) -> bool:
-        """Whether the rules named a pipe."""
-        return self.localization is not None
+        """Whether the rules (or a ranking localizer) named a pipe."""
+        return self.predicted_pipe is not None
+
+    @property
+    def predicted_pipe(self) -> str | None:
+        """The named (best-ranked) pipe, or ``None``."""
+        if self.ranking is not None:
+            best = self.ranking.best
+            return None if best is None else best.pipe
+        return None if self.localization is None else self.localization.pipe
 
     @property
     def correct(self) -> bool:
-        """Whether the named pipe is the burst pipe."""
-        return self.localization is not None and self.localization.pipe == self.pipe
+        """Whether the named (best-ranked) pipe is the burst pipe."""
+        return self.predicted_pipe == self.pipe
+
+    def in_top(self, k: int) -> bool:
+        """Whether the burst pipe is among the ``k`` best-ranked (the paper's rules name one)."""
+        if self.ranking is not None:
+            return self.ranking.in_top(self.pipe, k)
+        return self.correct
 
     @property
     def predicted(self) -> tuple[str, str] | None:
         """The named pipe's ``(start, end)`` in flow direction, or ``None``."""
+        if self.ranking is not None:
+            best = self.ranking.best
+            return None if best is None else (best.start, best.end)
         loc = self.localization
         return None if loc is None else (loc.start_node, loc.end_node)
 
     @property
     def time_to_localize(self) -> float | None:
         """Seconds from the burst start to the decision, or ``None``."""
+        if self.ranking is not None:
+            return None if self.decided_at is None else self.decided_at - self.burst_start
         loc = self.localization
         return None if loc is None else loc.decision_time - self.burst_start
 
@@ -241,7 +302,7 @@ def readings_at_offset(result: ScenarioResult, spec: RunSpec, offset: float) -> 
     phase = k * ci - offset
     if phase < 1e-9 * ci:
         phase = 0.0
-    times, values = resample(result.time - t0, result.heads, ci, phase)
+    times, values = capture(result.time - t0, result.heads, ci, phase, spec.meter_model)
     lead = k + 2 * spec.localization_interval
     pre = times[0] - ci * np.arange(lead, 0, -1, dtype=np.float64)
     times = np.concatenate([pre, times]) + t0
@@ -269,6 +330,129 @@ def locate_burst(
     return Attempt(result.pipe, offset, burst_start, outcome.localization if outcome else None)
 
 
+def calibrated_bank(kind: str, channels: int, calibration: IntervalCalibration) -> Any:
+    """A :class:`burstloc.DetectorBank` of ``kind`` with one interval's calibrated settings
+    (:meth:`~burstloc.calibrate.IntervalCalibration.uniform`; Shewhart reference window 2N).
+
+    Raises:
+        ConfigError: unknown detector kind.
+    """
+    from burstloc import _core
+
+    params = calibration.uniform(kind)
+    if kind == "cusum":
+        return _core.DetectorBank(
+            "cusum", channels, threshold=params["threshold"], drift=params["drift"]
+        )
+    return _core.DetectorBank(
+        "shewhart",
+        channels,
+        threshold=params["threshold"],
+        sigma=params["sigma"],
+        window=2 * calibration.localization_interval,
+    )
+
+
+def decision_time(
+    localizer: str,
+    alarms: Sequence[Any],
+    times: np.ndarray,
+    calibration: IntervalCalibration,
+    fused: FusedLocalizer | None = None,
+) -> float:
+    """When a ranking localizer answers, from a detector bank's alarms (no truth used).
+
+    ``arrival`` (and ``fused`` while its arrival weight is at least 0.5): the first alarm's
+    reading time plus ``calibration.arrival_decision_delay``. ``signature`` (and ``fused``
+    otherwise): the onset (the earliest alarm start, the last reading before the change) plus
+    ``calibration.decision_delay``, so the answer comes within that delay of the burst itself.
+    """
+    first = min(float(times[a.index]) for a in alarms)
+    onset = min(float(times[a.start if a.start < a.index else max(a.index - 1, 0)]) for a in alarms)
+    use_arrival = localizer == "arrival" or (
+        localizer == "fused"
+        and fused is not None
+        and fused.weights(calibration.capture_interval)[0] >= 0.5
+    )
+    if use_arrival:
+        return first + calibration.arrival_decision_delay
+    return onset + calibration.decision_delay
+
+
+@dataclass
+class RankingSetup:
+    """What the ranking localizers of one network need, built once per evaluation."""
+
+    meters: list[str]
+    config: Calibration
+    localizers: dict[str, Any]
+
+    @classmethod
+    def build(
+        cls,
+        network: str,
+        meters: Sequence[str],
+        capture_intervals: Sequence[float],
+        config: Calibration | None = None,
+    ) -> RankingSetup:
+        """Localizers for ``meters`` of ``network`` and a calibration covering the intervals.
+
+        Without ``config`` the network is calibrated here (:func:`burstloc.calibrate.calibrate`
+        with its defaults). A ``config`` for another network or other meters is refused by
+        name (:meth:`burstloc.calibrate.Calibration.check`), as is one without an interval.
+        """
+        from burstloc.arrival import ArrivalLocalizer
+        from burstloc.calibrate import calibrate
+        from burstloc.fused import FusedLocalizer
+        from burstloc.signature import SignatureLocalizer, cached_signatures
+
+        if config is None:
+            config = calibrate(network, capture_intervals=capture_intervals, meters=meters)
+        else:
+            config.check(network, meters)
+            for ci in capture_intervals:
+                config.for_interval(ci)
+        arrival = ArrivalLocalizer.from_network(network, meters)
+        signature = SignatureLocalizer(cached_signatures(network, meters))
+        fused = FusedLocalizer(arrival, signature)
+        return cls(
+            list(meters), config, {"arrival": arrival, "signature": signature, "fused": fused}
+        )
+
+
+def locate_ranked(
+    result: ScenarioResult, spec: RunSpec, setup: RankingSetup, offset: float = 0.0
+) -> Attempt:
+    """One burst at a clock offset through the calibrated bank and a ranking localizer."""
+    from burstloc.exceptions import InputError
+    from burstloc.ranking import evidence_from_alarms
+
+    times, values = readings_at_offset(result, spec, offset)
+    burst_start = float(result.metadata["burst_start"])
+    cal = setup.config.for_interval(spec.capture_interval)
+    bank = calibrated_bank(spec.detector.kind, len(setup.meters), cal)
+    alarms = bank.run(np.ascontiguousarray(values))
+    if not alarms:
+        return Attempt(result.pipe, offset, burst_start, None)
+    decided = decision_time(spec.localizer, alarms, times, cal, setup.localizers["fused"])
+    try:
+        evidence = evidence_from_alarms(
+            setup.meters,
+            times,
+            values,
+            alarms,
+            capture_interval=spec.capture_interval,
+            meter_model=spec.meter_model,  # type: ignore[arg-type]
+            decision_time=decided,
+            alarm_window=cal.arrival_decision_delay,
+        )
+        ranking = setup.localizers[spec.localizer].rank(evidence)
+    except InputError:
+        return Attempt(result.pipe, offset, burst_start, None)
+    decided = min(decided, float(times[-1]))
+    return Attempt(result.pipe, offset, burst_start, None, ranking, decided)
+
+
 @dataclass
 class RunResult:
     """All attempts of one run: ``attempts[pipe][k]`` is the burst on ``pipe`` at offset ``k``."""
@@ -279,12 +463,12 @@ class RunResult:
     offsets: list[float]
     attempts: dict[str, list[Attempt]]
 
-    def phase_accuracies(self) -> list[float]:
-        """Accuracy (fraction) at each clock offset."""
+    def phase_accuracies(self, k: int = 1) -> list[float]:
+        """Top-``k`` accuracy (fraction) at each clock offset (``k = 1``: eq. 4)."""
         n = len(self.pipes)
         return [
-            sum(self.attempts[p][k].correct for p in self.pipes) / n
-            for k in range(len(self.offsets))
+            sum(self.attempts[p][i].in_top(k) for p in self.pipes) / n
+            for i in range(len(self.offsets))
         ]
 
     @property
@@ -324,10 +508,11 @@ class RunResult:
                     "pipe": p,
                     "true": list(self.truth[p]),
                     "predicted": list(a.predicted) if a.predicted else None,
-                    "predicted_pipe": loc.pipe if loc else None,
+                    "predicted_pipe": a.predicted_pipe,
                     "correct": a.correct,
+                    "top3": a.in_top(3),
                     "time_to_localize_s": a.time_to_localize,
-                    "rule": loc.rule.value if loc else None,
+                    "rule": loc.rule.value if loc else (self.spec.localizer if a.located else None),
                     "trigger_node": loc.trigger_node if loc else None,
                     "phases_correct": sum(x.correct for x in self.attempts[p]),
                 }
@@ -347,12 +532,16 @@ class RunResult:
             "capture_interval": self.spec.capture_interval,
             "params": self.spec.params(),
             "mode": self.spec.mode.value,
+            "localizer": self.spec.localizer,
+            "meter_model": self.spec.meter_model,
             "correct": self.correct,
             "total": self.total,
             "accuracy": self.accuracy,
             "accuracy_phase_mean": float(np.mean(acc)),
             "accuracy_phase_min": float(min(acc)),
             "accuracy_phase_max": float(max(acc)),
+            "top1": float(np.mean(acc)),
+            "top3": float(np.mean(self.phase_accuracies(3))),
             "accuracy_per_phase": acc,
             "phase_offsets_s": list(self.offsets),
             "median_time_to_localize_s": self.median_time_to_localize(),
@@ -396,8 +585,12 @@ def evaluate(
     workers: int | None = None,
     scheduler: str | None = None,
     progress: bool = True,
+    config: Calibration | None = None,
 ) -> Evaluation:
     """Run the experiment: simulate (cached), stream, localize and score every run.
+
+    ``config`` is the calibration the ranking localizers' detector bank uses (runs with
+    ``localizer != "paper"``); without one the network is calibrated here.
 
     Raises:
         NetworkError: missing or malformed network, unknown pipe.
@@ -475,9 +668,22 @@ def evaluate(
         if negative:
             warnings.append(f"burst on pipe {p}: negative pressure at {', '.join(negative)}")
     truth = {p: r.true_endpoints for p, r in results.items()}
+    ranked = [spec for spec in runs if spec.localizer != "paper"]
+    setup = None
+    if ranked:
+        meters = list(next(iter(results.values())).junctions)
+        intervals = sorted({spec.capture_interval for spec in ranked})
+        setup = RankingSetup.build(path, meters, intervals, config)
     out: list[RunResult] = []
     for spec in runs:
         offsets = phase_offsets(spec, phases, phase_span)
-        attempts = {p: [locate_burst(results[p], graph, spec, o) for o in offsets] for p in chosen}
+        if setup is not None and spec.localizer != "paper":
+            attempts = {
+                p: [locate_ranked(results[p], spec, setup, o) for o in offsets] for p in chosen
+            }
+        else:
+            attempts = {
+                p: [locate_burst(results[p], graph, spec, o) for o in offsets] for p in chosen
+            }
         out.append(RunResult(spec, chosen, truth, offsets, attempts))
     return Evaluation(path, out, params, phase_span, warnings, results, graph)

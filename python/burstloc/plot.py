@@ -77,8 +77,11 @@ def plot_network(ev: Evaluation, r: RunResult, path: str | os.PathLike[str]) -> 
         if a.predicted is not None and not a.correct:
             p0, p1 = a.predicted
             ax.plot(*zip(pos[p0], pos[p1], strict=True), color="tab:red", lw=3, zorder=4)
-        if a.localization is None:
+        if not a.located:
             status = "not located"
+        elif a.localization is None:  # a ranking localizer (issue 6)
+            status = "correct" if a.correct else f"named {a.predicted_pipe}"
+            status += f" ({r.spec.localizer}, rank {a.ranking.rank_of(pipe) if a.ranking else '-'})"
         else:
             status = ("correct" if a.correct else f"named {a.localization.pipe}") + (
                 f" ({a.localization.rule.value})"

@@ -83,6 +83,9 @@ def _render(rows: list[list[str]], header: list[str]) -> list[str]:
 def _run_title(r: RunResult) -> str:
     label = r.spec.paper_run()
     name = label.scenario if label else "run"
+    if r.spec.localizer != "paper":
+        short = "avg" if r.spec.meter_model == "interval-averaged" else "inst"
+        name = f"{r.spec.localizer}/{short}"
     return f"{name} {r.spec.capture_interval:g}s"
 
 
@@ -145,6 +148,8 @@ def format_tables(ev: Evaluation) -> str:
         "phase mean [min-max]",
         "paper",
         "median time",
+        "localizer",
+        "top-1 / top-3",
     ]
     rows = []
     for kind, mode, runs in _groups(ev):
@@ -170,6 +175,8 @@ def format_tables(ev: Evaluation) -> str:
                     f"{100 * sum(acc) / len(acc):.1f}% [{_pct(min(acc))}-{_pct(max(acc))}]",
                     pub,
                     "-" if ttl is None else f"{ttl:.2f} s",
+                    f"{r.spec.localizer} ({r.spec.meter_model})",
+                    f"{_pct(sum(acc) / len(acc))} / {_pct(sum(r.phase_accuracies(3)) / len(acc))}",
                 ]
             )
     out += _render(rows, header)
@@ -205,10 +212,10 @@ def _csv_rows(ev: Evaluation) -> list[dict[str, Any]]:
                     "pipe": p,
                     "true_start": r.truth[p][0],
                     "true_end": r.truth[p][1],
-                    "predicted_start": loc.start_node if loc else "",
-                    "predicted_end": loc.end_node if loc else "",
+                    "predicted_start": a.predicted[0] if a.predicted else "",
+                    "predicted_end": a.predicted[1] if a.predicted else "",
                     "correct": a.correct,
-                    "time_to_localize_s": "" if loc is None else a.time_to_localize,
+                    "time_to_localize_s": "" if not a.located else a.time_to_localize,
                     "rule": loc.rule.value if loc else "",
                     "trigger_node": loc.trigger_node if loc else "",
                     "phases_correct": sum(x.correct for x in r.attempts[p]),

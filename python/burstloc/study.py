@@ -36,6 +36,7 @@ import json
 import math
 import os
 import statistics
+import sys
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
@@ -51,8 +52,10 @@ __all__ = [
     "Factors",
     "StudyPoint",
     "StudySettings",
+    "add_study_arguments",
     "greedy_meters",
     "run_study",
+    "run_study_command",
     "score_point",
     "study_grid",
     "write_report",
@@ -177,9 +180,9 @@ def study_grid(
     """
     if not networks:
         raise ConfigError("the study needs at least one network")
-    levels = DEFAULT_LEVELS if levels is None else levels
+    chosen: dict[str, Sequence[Any]] = dict(DEFAULT_LEVELS if levels is None else levels)
     defaults = Factors()
-    unknown = [f for f in levels if not hasattr(defaults, f)]
+    unknown = [f for f in chosen if not hasattr(defaults, f)]
     if unknown:
         raise ConfigError(f"unknown study factor(s) {unknown}; known: {list(asdict(defaults))}")
     paths = [os.fspath(n) for n in networks]
@@ -188,7 +191,7 @@ def study_grid(
     for path in paths:
         if path not in varied:
             continue
-        for factor, values in levels.items():
+        for factor, values in chosen.items():
             for value in values:
                 if value != getattr(defaults, factor):
                     points.append(StudyPoint(path, factor, replace(defaults, **{factor: value})))
@@ -248,16 +251,15 @@ def _scenarios(point: StudyPoint, settings: StudySettings) -> list[Any]:
     ]
 
 
-def _decision(
-    name: str, alarms: Sequence[Any], ticks: np.ndarray, dt: float, cal: Any, fused: Any
-) -> float:
-    """When a localizer answers: arrivals some delay after the first alarm; signatures a fixed
-    delay after the onset (the last reading before the change)."""
-    first = min(float(ticks[a.index]) for a in alarms)
-    onset = min(float(ticks[a.start if a.start < a.index else max(a.index - 1, 0)]) for a in alarms)
-    if name == "arrival" or (name == "fused" and fused.weights(dt)[0] >= 0.5):
-        return first + cal.arrival_decision_delay
-    return onset + cal.decision_delay
+@dataclass
+class _Tally:
+    """Counts of one localizer at one detector x meter model x interval."""
+
+    top1: int = 0
+    top3: int = 0
+    n: int = 0
+    nodet: int = 0
+    times: list[float] = field(default_factory=list)
 
 
 def _with_history(
@@ -282,10 +284,10 @@ def score_point(task: tuple[StudyPoint, StudySettings]) -> list[dict[str, Any]]:
     ``top3`` (fractions of attempts), ``attempts``, ``not_located``, ``median_time_s`` (burst
     start to decision) and the point's description.
     """
-    from burstloc import _core
     from burstloc.arrival import ArrivalLocalizer
     from burstloc.calibrate import DEFAULT_NOISE_SIGMA, calibrate
     from burstloc.capture import capture
+    from burstloc.evaluate import calibrated_bank, decision_time
     from burstloc.fused import FusedLocalizer
     from burstloc.network import load_network
     from burstloc.ranking import evidence_from_alarms
@@ -305,7 +307,7 @@ def score_point(task: tuple[StudyPoint, StudySettings]) -> list[dict[str, Any]]:
     arrival = ArrivalLocalizer.from_network(wn, meters)
     signature = SignatureLocalizer(all_signatures.for_meters(meters))
     fused = FusedLocalizer(arrival, signature)
-    localizers = {"arrival": arrival, "signature": signature, "fused": fused}
+    localizers: dict[str, Any] = {"arrival": arrival, "signature": signature, "fused": fused}
     config = calibrate(
         point.network,
         capture_intervals=settings.capture_intervals,
@@ -319,31 +321,25 @@ def score_point(task: tuple[StudyPoint, StudySettings]) -> list[dict[str, Any]]:
     for dt in settings.capture_intervals:
         cal = config.for_interval(dt)
         for detector in settings.detectors:
-            params = cal.uniform(detector)
             pad = 2 * cal.localization_interval + 1
-            if detector == "shewhart":
-                params = {**params, "window": 2 * cal.localization_interval}
             for model in settings.meter_models:
-                tally = {
-                    n: {"top1": 0, "top3": 0, "n": 0, "nodet": 0, "times": []}
-                    for n in settings.localizers
-                }
+                tally = {n: _Tally() for n in settings.localizers}
                 for k in range(settings.phases):
                     phase = k * dt / settings.phases
                     for res in results:
                         ticks, readings = capture(res.time, res.heads[:, columns], dt, phase, model)
                         ticks, readings = _with_history(ticks, readings, res.heads[0, columns], pad)
                         _, readings = sensor.apply(meters, readings, key=f"{res.pipe}/{k}/{dt}")
-                        bank = _core.DetectorBank(detector, len(meters), **params)
+                        bank = calibrated_bank(detector, len(meters), cal)
                         alarms = bank.run(np.ascontiguousarray(readings))
                         burst = float(res.metadata["burst_start"])
                         for name in settings.localizers:
                             entry = tally[name]
-                            entry["n"] += 1
+                            entry.n += 1
                             if not alarms:
-                                entry["nodet"] += 1
+                                entry.nodet += 1
                                 continue
-                            decision = _decision(name, alarms, ticks, dt, cal, fused)
+                            decision = decision_time(name, alarms, ticks, cal, fused)
                             try:
                                 evidence = evidence_from_alarms(
                                     meters,
@@ -357,11 +353,11 @@ def score_point(task: tuple[StudyPoint, StudySettings]) -> list[dict[str, Any]]:
                                 )
                                 ranking = localizers[name].rank(evidence)
                             except InputError:
-                                entry["nodet"] += 1
+                                entry.nodet += 1
                                 continue
-                            entry["top1"] += ranking.in_top(res.pipe, 1)
-                            entry["top3"] += ranking.in_top(res.pipe, 3)
-                            entry["times"].append(min(decision, float(ticks[-1])) - burst)
+                            entry.top1 += ranking.in_top(res.pipe, 1)
+                            entry.top3 += ranking.in_top(res.pipe, 3)
+                            entry.times.append(min(decision, float(ticks[-1])) - burst)
                 for name, e in tally.items():
                     rows.append(
                         {
@@ -376,11 +372,11 @@ def score_point(task: tuple[StudyPoint, StudySettings]) -> list[dict[str, Any]]:
                             "localizer": name,
                             "meter_model": model,
                             "capture_interval": dt,
-                            "top1": e["top1"] / e["n"],
-                            "top3": e["top3"] / e["n"],
-                            "attempts": e["n"],
-                            "not_located": e["nodet"],
-                            "median_time_s": statistics.median(e["times"]) if e["times"] else None,
+                            "top1": e.top1 / e.n,
+                            "top3": e.top3 / e.n,
+                            "attempts": e.n,
+                            "not_located": e.nodet,
+                            "median_time_s": statistics.median(e.times) if e.times else None,
                         }
                     )
     return rows
@@ -559,31 +555,40 @@ def write_report(
     return report
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m burstloc.study``: run the study and write its report (see ``--help``)."""
-    import argparse
-
-    parser = argparse.ArgumentParser(prog="burstloc study", description=__doc__.splitlines()[0])
-    parser.add_argument("networks", nargs="*", default=list(DEFAULT_NETWORKS))
-    parser.add_argument("--out", type=Path, default=Path("study"))
-    parser.add_argument("--capture-interval", type=float, nargs="+", default=[0.2, 2.0, 5.0, 10.0])
+def add_study_arguments(parser: Any) -> None:
+    """Add the ``burstloc study`` arguments to an :class:`argparse.ArgumentParser`."""
+    parser.add_argument(
+        "networks", nargs="*", default=list(DEFAULT_NETWORKS), help="INP files (first: varied)"
+    )
+    parser.add_argument("--out", type=Path, default=Path("study"), help="report directory")
+    parser.add_argument(
+        "--capture-interval", type=float, nargs="+", default=[0.2, 2.0, 5.0, 10.0], metavar="S"
+    )
     parser.add_argument("--detector", nargs="+", default=list(DETECTORS), choices=DETECTORS)
     parser.add_argument("--localizer", nargs="+", default=list(LOCALIZERS), choices=LOCALIZERS)
-    parser.add_argument("--phases", type=int, default=5)
-    parser.add_argument("--duration", type=float, default=220.0)
+    parser.add_argument("--phases", type=int, default=5, help="capture-clock phases per burst")
+    parser.add_argument("--duration", type=float, default=220.0, help="simulated seconds")
     parser.add_argument(
         "--factors",
         nargs="*",
         default=list(DEFAULT_LEVELS),
-        help="factors to vary on the first network (default: all)",
+        help=f"factors varied on the first network (default: all of {list(DEFAULT_LEVELS)})",
     )
-    parser.add_argument("--pipes", nargs="+", default=None)
+    parser.add_argument("--pipes", nargs="+", default=None, help="only these pipes")
     parser.add_argument("--workers", type=int, default=None)
-    parser.add_argument("--scheduler", default=None)
-    args = parser.parse_args(argv)
+    parser.add_argument("--scheduler", default=None, help="Dask scheduler address")
+    parser.add_argument("--quiet", action="store_true", help="no progress bars")
+
+
+def run_study_command(args: Any) -> int:
+    """Run the study from parsed ``burstloc study`` arguments; print and write the report.
+
+    Raises:
+        ConfigError: an unknown factor or bad settings.
+    """
     unknown = [f for f in args.factors if f not in DEFAULT_LEVELS]
     if unknown:
-        parser.error(f"unknown factor(s) {unknown}; known: {list(DEFAULT_LEVELS)}")
+        raise ConfigError(f"unknown factor(s) {unknown}; known: {list(DEFAULT_LEVELS)}")
     settings = StudySettings(
         capture_intervals=tuple(args.capture_interval),
         detectors=tuple(args.detector),
@@ -593,11 +598,20 @@ def main(argv: Sequence[str] | None = None) -> int:
         pipes=tuple(args.pipes) if args.pipes else None,
     )
     points = study_grid(args.networks, {f: DEFAULT_LEVELS[f] for f in args.factors})
-    rows, problems = run_study(points, settings, workers=args.workers, scheduler=args.scheduler)
+    rows, problems = run_study(
+        points, settings, workers=args.workers, scheduler=args.scheduler, progress=not args.quiet
+    )
     report = write_report(rows, settings, args.out, problems)
     print(report.read_text())
     print(f"wrote {report}")
-    return 0
+    return 1 if problems else 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m burstloc.study`` (same as ``burstloc study``); return the exit status."""
+    from burstloc.cli import main as cli_main
+
+    return cli_main(["study", *(sys.argv[1:] if argv is None else argv)])
 
 
 if __name__ == "__main__":

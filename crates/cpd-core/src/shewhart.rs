@@ -181,17 +181,14 @@ impl Sums {
     }
 
     /// Adds `x` and removes `old` (the window is full).
-    ///
-    /// The difference `y - yo` is first split exactly into `d + e` (TwoSum, independent of the
-    /// running sums), so that only one addition per sum sits on the loop-carried chain.
     #[inline(always)]
     pub(crate) fn slide(&mut self, x: f64, old: f64) {
         let y = x - self.reference;
         let yo = old - self.reference;
-        let (d1, e1) = acc(y, 0.0, -yo);
-        let (d2, e2) = acc(y * y, 0.0, -(yo * yo));
-        (self.s1, self.c1) = acc(self.s1, self.c1 + e1, d1);
-        (self.s2, self.c2) = acc(self.s2, self.c2 + e2, d2);
+        let (s1, c1) = acc(self.s1, self.c1, y);
+        (self.s1, self.c1) = acc(s1, c1, -yo);
+        let (s2, c2) = acc(self.s2, self.c2, y * y);
+        (self.s2, self.c2) = acc(s2, c2, -(yo * yo));
     }
 
     /// Recomputes the sums of the `n` window values `get(0..n)` around their mean.
@@ -247,10 +244,8 @@ impl Sums {
         let var = m2 - mu_y * mu_y;
         let var = if var > 0.0 { var } else { 0.0 };
         let ad = abs(dev);
-        // Bound on |fast deviation - NumPy deviation| and on |fast var - NumPy var|. The
-        // `sqrt(m2)` term of the bound is replaced by the larger `(1 + m2) / 2` (AM-GM): no
-        // square root per sample, and the margin stays rigorous.
-        let ed = MARGIN * (abs(x) + abs(self.reference) + abs(y) + 0.5 * (1.0 + abs(m2)) + ad);
+        // Bound on |fast deviation - NumPy deviation| and on |fast var - NumPy var|.
+        let ed = MARGIN * (abs(x) + abs(self.reference) + abs(y) + sqrt(abs(m2)) + ad);
         let ev = MARGIN * (2.0 * m2 + var) + 4.0 * ed * ed;
         let lo = ad - ed;
         let hi = ad + ed;
