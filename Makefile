@@ -23,7 +23,12 @@ BUILD_INPUTS := pyproject.toml Cargo.toml $(wildcard Cargo.lock) \
 # `make setup EXT_RUSTFLAGS=` builds a portable extension.
 EXT_RUSTFLAGS ?= -C target-cpu=native
 
-setup: $(EXT)
+setup: $(EXT) networks/todini6.inp
+
+# A byte copy of one of WNTR's example networks, used by `burstloc study`: generated from the
+# installed WNTR rather than shipped (it is a third-party file; see networks/README.md).
+networks/todini6.inp: networks/build_wntr_examples.py $(EXT)
+	$(BIN)/python networks/build_wntr_examples.py > /dev/null
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -45,6 +50,7 @@ lint:
 	cargo clippy --workspace --all-targets -- -D warnings
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
+	$(BIN)/python -m mypy
 	$(BIN)/python -m mypy.stubtest burstloc._core
 
 test-rust:

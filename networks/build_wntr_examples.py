@@ -1,7 +1,8 @@
 """Build the two extra study networks from example INP files that ship with WNTR 1.3.2.
 
 * ``todini6.inp``: WNTR's ``Todini_Fig2_solA_CMH.inp`` (one reservoir, 6 junctions, 8 pipes;
-  Todini's two-loop design example), copied byte for byte: TSNet 0.3.1 simulates it as is.
+  Todini's two-loop design example), copied byte for byte: TSNet 0.3.1 simulates it as is. Being
+  a third-party file it is not committed: ``make setup`` writes it from the installed WNTR.
 * ``awumah11.inp``: WNTR's ``Awumah_layout1.inp`` (one reservoir, 11 junctions, 12 pipes, one
   loop and four branches) is a layout only (zero demands, a reservoir at head 0). We keep its
   topology, pipe lengths (1000 ft), diameters (12 in) and Hazen-Williams C (100) and give it

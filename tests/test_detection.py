@@ -139,7 +139,8 @@ def test_streaming_cusum_is_the_online_cusum_over_the_whole_stream(interval, see
     want = _reference_stream(values, n, online)
     assert [g[:3] for g in got] == [w[:3] for w in want]
     np.testing.assert_allclose([g[3] for g in got], [w[3] for w in want], rtol=1e-12)
-    assert any(g[0] == "a" for g in got)
+    if at < n:  # a burst in the trailing steps that fill no window is never seen
+        assert any(g[0] == "a" for g in got)
 
 
 def test_streaming_shewhart_uses_a_trailing_window_of_two_intervals() -> None:

@@ -199,3 +199,15 @@ def test_cli_study_and_calibrate_commands(
     assert status == 0
     assert "## Summary (arrival localizer, shewhart)" in (out / "report.md").read_text()
     assert "wrote" in capsys.readouterr().out
+
+
+def test_scenarios_carry_the_factors_and_settings(tiny_network: Path) -> None:
+    from burstloc.study import _scenarios
+
+    point = StudyPoint(str(tiny_network), "friction", Factors(friction="unsteady", position=0.3))
+    settings = StudySettings(pipes=("B", "C"), duration=50.0, time_step=0.05)
+    scenarios = _scenarios(point, settings)
+    assert [s.pipe for s in scenarios] == ["B", "C"]
+    assert {(s.friction, s.position, s.duration, s.time_step) for s in scenarios} == {
+        ("unsteady", 0.3, 50.0, 0.05)
+    }

@@ -136,6 +136,8 @@ class StudySettings:
         false_alarm_rate: calibration target, alarms per meter per hour.
         pipes: restrict every network to these pipes (``None`` = all; for tests).
         seed: noise seed.
+        time_step: TSNet's requested time step, s (``None``: TSNet's largest stable step,
+            which may be coarser than the finest capture interval).
     """
 
     capture_intervals: tuple[float, ...] = (0.2, 2.0, 5.0, 10.0)
@@ -147,6 +149,7 @@ class StudySettings:
     false_alarm_rate: float = 0.1
     pipes: tuple[str, ...] | None = None
     seed: int = 0
+    time_step: float | None = None
 
     def __post_init__(self) -> None:
         from burstloc.capture import METER_MODELS
@@ -246,6 +249,7 @@ def _scenarios(point: StudyPoint, settings: StudySettings) -> list[Any]:
             burst_coeff=f.burst_coeff,
             friction=f.friction,
             duration=settings.duration,
+            time_step=settings.time_step,
         )
         for pipe in pipes
     ]
@@ -575,6 +579,9 @@ def add_study_arguments(parser: Any) -> None:
         help=f"factors varied on the first network (default: all of {list(DEFAULT_LEVELS)})",
     )
     parser.add_argument("--pipes", nargs="+", default=None, help="only these pipes")
+    parser.add_argument(
+        "--time-step", type=float, default=None, help="TSNet time step, s (default: TSNet's)"
+    )
     parser.add_argument("--workers", type=int, default=None)
     parser.add_argument("--scheduler", default=None, help="Dask scheduler address")
     parser.add_argument("--quiet", action="store_true", help="no progress bars")
@@ -596,6 +603,7 @@ def run_study_command(args: Any) -> int:
         phases=args.phases,
         duration=args.duration,
         pipes=tuple(args.pipes) if args.pipes else None,
+        time_step=args.time_step,
     )
     points = study_grid(args.networks, {f: DEFAULT_LEVELS[f] for f in args.factors})
     rows, problems = run_study(
