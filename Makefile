@@ -5,7 +5,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 export PYO3_PYTHON := $(abspath $(BIN)/python)
 
-.PHONY: setup paper test test-rust test-python lint bench bench-rust clean
+.PHONY: setup paper study test test-rust test-python lint bench bench-rust clean
 
 ## setup: create .venv, install burstloc (building the Rust extension) with its dev/bench extras
 # `pip install -e` runs maturin's PEP 660 editable build: the extension is compiled in release
@@ -41,6 +41,15 @@ $(EXT): $(BIN)/python $(BUILD_INPUTS)
 ## paper: the main job, the paper's experiment on the shipped network
 paper: setup
 	$(BIN)/burstloc evaluate networks/paper15.inp
+
+## study: the robustness study of docs/beyond-the-paper.md (long: ~20 min once simulated)
+study: setup
+	$(BIN)/burstloc study --out docs/study --phases 3 --workers 2 \
+	    --factors noise_sigma meter_fraction burst_coeff friction
+	$(BIN)/burstloc study networks/paper15.inp --out docs/study-position --phases 3 \
+	    --factors position --pipes P1 P2 P3 P7 5 13
+	$(BIN)/burstloc study networks/todini6.inp --factors --time-step 0.1 \
+	    --out docs/study-todini6 --phases 3
 
 ## test: every test and lint (Rust and Python)
 test: setup lint test-rust test-python
