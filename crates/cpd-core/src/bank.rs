@@ -47,6 +47,39 @@ fn check_readings(readings: &[f64], channels: usize) -> Result<(), Error> {
     }
 }
 
+/// The per-step kernel of a bank: the validated entry points below are shared by every kind.
+trait Kernel {
+    /// Number of channels.
+    fn width(&self) -> usize;
+    /// Advances one step on readings already validated.
+    fn step_unchecked(&mut self, readings: &[f64], out: &mut Vec<ChannelAlarm>);
+}
+
+/// Validates one step's readings, then runs the kernel; on error the bank is unchanged.
+fn checked_step<K: Kernel>(
+    bank: &mut K,
+    readings: &[f64],
+    out: &mut Vec<ChannelAlarm>,
+) -> Result<(), Error> {
+    check_readings(readings, bank.width())?;
+    bank.step_unchecked(readings, out);
+    Ok(())
+}
+
+/// Validates a whole row-major matrix, then runs the kernel row by row.
+fn checked_step_many<K: Kernel>(
+    bank: &mut K,
+    matrix: &[f64],
+    out: &mut Vec<ChannelAlarm>,
+) -> Result<(), Error> {
+    let channels = bank.width();
+    check_matrix(matrix, channels)?;
+    for row in matrix.chunks_exact(channels) {
+        bank.step_unchecked(row, out);
+    }
+    Ok(())
+}
+
 /// Validates a row-major `T x channels` matrix.
 fn check_matrix(matrix: &[f64], channels: usize) -> Result<(), Error> {
     if matrix.len() % channels != 0 {
@@ -210,6 +243,16 @@ impl TryFrom<CusumBankRepr> for CusumBank {
     }
 }
 
+impl Kernel for CusumBank {
+    fn width(&self) -> usize {
+        self.channels
+    }
+    #[inline]
+    fn step_unchecked(&mut self, readings: &[f64], out: &mut Vec<ChannelAlarm>) {
+        self.advance(readings, out);
+    }
+}
+
 impl CusumBank {
     /// A fresh bank of `channels >= 1` detectors.
     pub fn new(channels: usize, config: CusumConfig) -> Result<Self, Error> {
@@ -235,22 +278,16 @@ impl CusumBank {
     /// All readings are validated first ([`Error::ChannelCount`], [`Error::NonFiniteReading`]);
     /// on error the bank is unchanged.
     pub fn step(&mut self, readings: &[f64], out: &mut Vec<ChannelAlarm>) -> Result<(), Error> {
-        check_readings(readings, self.channels)?;
-        self.step_unchecked(readings, out);
-        Ok(())
+        checked_step(self, readings, out)
     }
 
     /// Feeds a row-major `T x channels` matrix (one row per time step), appending the alarms
     /// step by step. The whole matrix is validated first; on error the bank is unchanged.
     pub fn step_many(&mut self, matrix: &[f64], out: &mut Vec<ChannelAlarm>) -> Result<(), Error> {
-        check_matrix(matrix, self.channels)?;
-        for row in matrix.chunks_exact(self.channels) {
-            self.step_unchecked(row, out);
-        }
-        Ok(())
+        checked_step_many(self, matrix, out)
     }
 
-    fn step_unchecked(&mut self, readings: &[f64], out: &mut Vec<ChannelAlarm>) {
+    fn advance(&mut self, readings: &[f64], out: &mut Vec<ChannelAlarm>) {
         let i = self.steps;
         self.steps += 1;
         if i == 0 {
@@ -482,6 +519,16 @@ impl TryFrom<ShewhartBankRepr> for ShewhartBank {
     }
 }
 
+impl Kernel for ShewhartBank {
+    fn width(&self) -> usize {
+        self.channels
+    }
+    #[inline]
+    fn step_unchecked(&mut self, readings: &[f64], out: &mut Vec<ChannelAlarm>) {
+        self.advance(readings, out);
+    }
+}
+
 impl ShewhartBank {
     /// A fresh bank of `channels >= 1` detectors (allocates `W x channels` samples).
     pub fn new(channels: usize, config: ShewhartConfig) -> Result<Self, Error> {
@@ -514,22 +561,16 @@ impl ShewhartBank {
     /// All readings are validated first ([`Error::ChannelCount`], [`Error::NonFiniteReading`]);
     /// on error the bank is unchanged.
     pub fn step(&mut self, readings: &[f64], out: &mut Vec<ChannelAlarm>) -> Result<(), Error> {
-        check_readings(readings, self.channels)?;
-        self.step_unchecked(readings, out);
-        Ok(())
+        checked_step(self, readings, out)
     }
 
     /// Feeds a row-major `T x channels` matrix (one row per time step), appending the alarms
     /// step by step. The whole matrix is validated first; on error the bank is unchanged.
     pub fn step_many(&mut self, matrix: &[f64], out: &mut Vec<ChannelAlarm>) -> Result<(), Error> {
-        check_matrix(matrix, self.channels)?;
-        for row in matrix.chunks_exact(self.channels) {
-            self.step_unchecked(row, out);
-        }
-        Ok(())
+        checked_step_many(self, matrix, out)
     }
 
-    fn step_unchecked(&mut self, readings: &[f64], out: &mut Vec<ChannelAlarm>) {
+    fn advance(&mut self, readings: &[f64], out: &mut Vec<ChannelAlarm>) {
         let w = self.config.window();
         let n = self.channels;
         let i = self.steps;

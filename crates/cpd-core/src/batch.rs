@@ -10,7 +10,7 @@ use alloc::vec::Vec;
 use serde::{Deserialize, Serialize};
 
 use crate::cusum::{CusumConfig, CusumLane, RISE};
-use crate::error::{first_non_finite, positive, Error};
+use crate::error::{check_samples, positive, Error};
 use crate::math::abs;
 use crate::stats::{np_mean_std, out_of_control};
 
@@ -104,12 +104,7 @@ pub fn detect_cusum(
     ending: bool,
 ) -> Result<CusumChanges, Error> {
     let config = CusumConfig::new(threshold, drift)?;
-    if let Some((k, value)) = first_non_finite(x) {
-        return Err(Error::NonFiniteSample {
-            index: k as u64,
-            value,
-        });
-    }
+    check_samples(x, 0)?;
     let (ta, tai) = online_pass(x, &config);
     if tai.is_empty() || !ending {
         return Ok(CusumChanges {
@@ -195,12 +190,7 @@ pub fn detect_cusum(
 pub fn detect_shewhart(x: &[f64], sigma: f64, threshold: f64) -> Result<ShewhartChanges, Error> {
     let sigma = positive("sigma", sigma)?;
     let threshold = positive("threshold", threshold)?;
-    if let Some((k, value)) = first_non_finite(x) {
-        return Err(Error::NonFiniteSample {
-            index: k as u64,
-            value,
-        });
-    }
+    check_samples(x, 0)?;
     let mut out = ShewhartChanges::default();
     if x.is_empty() {
         return Ok(out);

@@ -6,7 +6,7 @@ use alloc::vec::Vec;
 use serde::{Deserialize, Serialize};
 
 use crate::alarm::{Alarm, Direction};
-use crate::error::{first_non_finite, non_negative, positive, Error};
+use crate::error::{check_sample, check_samples, non_negative, positive, Error};
 
 /// Validated CUSUM parameters.
 ///
@@ -252,12 +252,7 @@ impl Cusum {
     /// Errors with [`Error::NonFiniteSample`] (state unchanged) on NaN or ±inf.
     #[inline]
     pub fn update(&mut self, x: f64) -> Result<Option<Alarm>, Error> {
-        if !x.is_finite() {
-            return Err(Error::NonFiniteSample {
-                index: self.seen,
-                value: x,
-            });
-        }
+        check_sample(x, self.seen)?;
         Ok(self.update_unchecked(x))
     }
 
@@ -284,12 +279,7 @@ impl Cusum {
     /// The whole slice is validated first: if any sample is non-finite, nothing is consumed,
     /// the state is unchanged and the error names the first bad sample's stream index.
     pub fn update_slice(&mut self, xs: &[f64], out: &mut Vec<Alarm>) -> Result<(), Error> {
-        if let Some((k, value)) = first_non_finite(xs) {
-            return Err(Error::NonFiniteSample {
-                index: self.seen + k as u64,
-                value,
-            });
-        }
+        check_samples(xs, self.seen)?;
         let Some((&first, rest)) = xs.split_first() else {
             return Ok(());
         };

@@ -148,3 +148,26 @@ pub(crate) fn first_non_finite(xs: &[f64]) -> Option<(usize, f64)> {
         .find(|(_, v)| !v.is_finite())
         .map(|(i, v)| (i, *v))
 }
+
+/// Rejects a non-finite sample with the stream index it would have had.
+#[inline(always)]
+pub(crate) fn check_sample(x: f64, index: u64) -> Result<(), Error> {
+    if x.is_finite() {
+        Ok(())
+    } else {
+        Err(Error::NonFiniteSample { index, value: x })
+    }
+}
+
+/// Rejects a slice holding a non-finite sample, naming the first one by its stream index
+/// (`offset` = the stream index of `xs[0]`).
+#[inline]
+pub(crate) fn check_samples(xs: &[f64], offset: u64) -> Result<(), Error> {
+    match first_non_finite(xs) {
+        Some((k, value)) => Err(Error::NonFiniteSample {
+            index: offset + k as u64,
+            value,
+        }),
+        None => Ok(()),
+    }
+}

@@ -24,7 +24,7 @@ use alloc::vec::Vec;
 use serde::{Deserialize, Serialize};
 
 use crate::alarm::{Alarm, Direction};
-use crate::error::{first_non_finite, positive, Error};
+use crate::error::{check_sample, check_samples, positive, Error};
 use crate::math::{abs, sqrt};
 use crate::stats::{lane_sum, np_mean_std, out_of_control};
 
@@ -472,12 +472,7 @@ impl Shewhart {
     /// Errors with [`Error::NonFiniteSample`] (state unchanged) on NaN or ±inf.
     #[inline]
     pub fn update(&mut self, x: f64) -> Result<Option<Alarm>, Error> {
-        if !x.is_finite() {
-            return Err(Error::NonFiniteSample {
-                index: self.seen,
-                value: x,
-            });
-        }
+        check_sample(x, self.seen)?;
         Ok(self.update_unchecked(x))
     }
 
@@ -512,12 +507,7 @@ impl Shewhart {
     /// The whole slice is validated first: if any sample is non-finite, nothing is consumed,
     /// the state is unchanged and the error names the first bad sample's stream index.
     pub fn update_slice(&mut self, xs: &[f64], out: &mut Vec<Alarm>) -> Result<(), Error> {
-        if let Some((k, value)) = first_non_finite(xs) {
-            return Err(Error::NonFiniteSample {
-                index: self.seen + k as u64,
-                value,
-            });
-        }
+        check_samples(xs, self.seen)?;
         // The counters and sums live in locals (registers) for the whole slice.
         let mut cur = self.cursor();
         for &x in xs {
