@@ -42,14 +42,10 @@ $(EXT): $(BIN)/python $(BUILD_INPUTS)
 paper: setup
 	$(BIN)/burstloc evaluate networks/paper15.inp
 
-## study: the robustness study of docs/beyond-the-paper.md (long: ~20 min once simulated)
+## study: the robustness study of docs/beyond-the-paper.md, report in docs/study/ (~25 min on
+## 2 cores once simulated; the first run simulates ~250 bursts, about 1.5 h on 2 cores)
 study: setup
-	$(BIN)/burstloc study --out docs/study --phases 3 --workers 2 \
-	    --factors noise_sigma meter_fraction burst_coeff friction
-	$(BIN)/burstloc study networks/paper15.inp --out docs/study-position --phases 3 \
-	    --factors position --pipes P1 P2 P3 P7 5 13
-	$(BIN)/burstloc study networks/todini6.inp --factors --time-step 0.1 \
-	    --out docs/study-todini6 --phases 3
+	$(BIN)/burstloc study --out docs/study --workers 2
 
 ## test: every test and lint (Rust and Python)
 test: setup lint test-rust test-python

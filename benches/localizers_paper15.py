@@ -32,7 +32,7 @@ from burstloc.exceptions import InputError
 from burstloc.fused import FusedLocalizer
 from burstloc.network import load_network, pipe_names
 from burstloc.ranking import METER_MODELS, evidence_from_alarms
-from burstloc.signature import SignatureLocalizer, cached_signatures
+from burstloc.signature import SignatureLocalizer, cached_signature_sets
 from burstloc.simulate import BurstScenario, simulate_burst
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -70,7 +70,7 @@ def main(argv: list[str] | None = None) -> int:
     config = calibrate(NETWORK, capture_intervals=args.intervals, meters=meters)
     arrival = ArrivalLocalizer.from_network(wn, meters)
     signature = SignatureLocalizer(
-        cached_signatures(NETWORK, meters),
+        cached_signature_sets(NETWORK, meters),
         **({} if args.settle is None else {"settle": args.settle}),
     )
     fused = FusedLocalizer(arrival, signature)

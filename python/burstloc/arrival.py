@@ -36,7 +36,7 @@ from numpy.typing import NDArray
 
 from burstloc.exceptions import ConfigError, InputError, NetworkError
 from burstloc.network import flow_direction_graph, load_network
-from burstloc.ranking import BurstEvidence, RankedPipe, Ranking
+from burstloc.ranking import CANDIDATE_POSITIONS, BurstEvidence, RankedPipe, Ranking
 
 __all__ = [
     "DEFAULT_WAVE_SPEED",
@@ -49,8 +49,8 @@ __all__ = [
 DEFAULT_WAVE_SPEED = 1200.0
 """Wave speed (m/s): TSNet's default, the paper's setting."""
 
-DEFAULT_POSITIONS = tuple(round(0.1 * i, 1) for i in range(1, 10))
-"""Candidate burst positions along each pipe (fractions of its length from its start node)."""
+DEFAULT_POSITIONS = CANDIDATE_POSITIONS
+"""Candidate burst positions along each pipe (:data:`burstloc.ranking.CANDIDATE_POSITIONS`)."""
 
 
 @dataclass(frozen=True)

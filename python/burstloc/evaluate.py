@@ -24,10 +24,10 @@ or one of the ranking localizers ``"arrival"``, ``"signature"``, ``"fused"``
 (:mod:`burstloc.arrival`, :mod:`burstloc.signature`, :mod:`burstloc.fused`). These run the Rust
 detector bank with a calibrated configuration (:mod:`burstloc.calibrate`; computed for the
 network when none is given: no hand tuning), build the evidence from its alarms at the
-localizer's decision time (:func:`decision_time`) and rank every pipe; the prediction is the
-best-ranked pipe, and top-1 / top-3 accuracy are reported (for the paper's rules, which name one
-pipe, top-3 equals top-1). ``RunSpec.meter_model`` chooses instantaneous samples (the paper's)
-or interval-averaged readings (:func:`burstloc.capture.capture`).
+localizer's decision time (:func:`burstloc.decide.rank_alarms`) and rank every pipe; the
+prediction is the best-ranked pipe, and top-1 / top-3 accuracy are reported (for the paper's
+rules, which name one pipe, top-3 equals top-1). ``RunSpec.meter_model`` chooses instantaneous
+samples (the paper's) or interval-averaged readings (:func:`burstloc.capture.capture`).
 """
 
 from __future__ import annotations
@@ -44,6 +44,7 @@ import numpy as np
 
 from burstloc import paper
 from burstloc.capture import METER_MODELS, capture
+from burstloc.decide import decision_time, rank_alarms
 from burstloc.detection import DetectorConfig, Mode, make_detector
 from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.localize import BurstLocator, Localization
@@ -54,7 +55,6 @@ if TYPE_CHECKING:
     import networkx as nx
 
     from burstloc.calibrate import Calibration, IntervalCalibration
-    from burstloc.fused import FusedLocalizer
     from burstloc.simulate import ScenarioResult
 
 __all__ = [
@@ -353,32 +353,6 @@ def calibrated_bank(kind: str, channels: int, calibration: IntervalCalibration) 
     )
 
 
-def decision_time(
-    localizer: str,
-    alarms: Sequence[Any],
-    times: np.ndarray,
-    calibration: IntervalCalibration,
-    fused: FusedLocalizer | None = None,
-) -> float:
-    """When a ranking localizer answers, from a detector bank's alarms (no truth used).
-
-    ``arrival`` (and ``fused`` while its arrival weight is at least 0.5): the first alarm's
-    reading time plus ``calibration.arrival_decision_delay``. ``signature`` (and ``fused``
-    otherwise): the onset (the earliest alarm start, the last reading before the change) plus
-    ``calibration.decision_delay``, so the answer comes within that delay of the burst itself.
-    """
-    first = min(float(times[a.index]) for a in alarms)
-    onset = min(float(times[a.start if a.start < a.index else max(a.index - 1, 0)]) for a in alarms)
-    use_arrival = localizer == "arrival" or (
-        localizer == "fused"
-        and fused is not None
-        and fused.weights(calibration.capture_interval)[0] >= 0.5
-    )
-    if use_arrival:
-        return first + calibration.arrival_decision_delay
-    return onset + calibration.decision_delay
-
-
 @dataclass
 class RankingSetup:
     """What the ranking localizers of one network need, built once per evaluation."""
@@ -404,7 +378,7 @@ class RankingSetup:
         from burstloc.arrival import ArrivalLocalizer
         from burstloc.calibrate import calibrate
         from burstloc.fused import FusedLocalizer
-        from burstloc.signature import SignatureLocalizer, cached_signatures
+        from burstloc.signature import SignatureLocalizer, cached_signature_sets
 
         if config is None:
             config = calibrate(network, capture_intervals=capture_intervals, meters=meters)
@@ -413,7 +387,7 @@ class RankingSetup:
             for ci in capture_intervals:
                 config.for_interval(ci)
         arrival = ArrivalLocalizer.from_network(network, meters)
-        signature = SignatureLocalizer(cached_signatures(network, meters))
+        signature = SignatureLocalizer(cached_signature_sets(network, meters))
         fused = FusedLocalizer(arrival, signature)
         return cls(
             list(meters), config, {"arrival": arrival, "signature": signature, "fused": fused}
@@ -425,7 +399,6 @@ def locate_ranked(
 ) -> Attempt:
     """One burst at a clock offset through the calibrated bank and a ranking localizer."""
     from burstloc.exceptions import InputError
-    from burstloc.ranking import evidence_from_alarms
 
     times, values = readings_at_offset(result, spec, offset)
     burst_start = float(result.metadata["burst_start"])
@@ -434,23 +407,20 @@ def locate_ranked(
     alarms = bank.run(np.ascontiguousarray(values))
     if not alarms:
         return Attempt(result.pipe, offset, burst_start, None)
-    decided = decision_time(spec.localizer, alarms, times, cal, setup.localizers["fused"])
     try:
-        evidence = evidence_from_alarms(
+        decision = rank_alarms(
+            spec.localizer,
+            setup.localizers,
             setup.meters,
             times,
             values,
             alarms,
-            capture_interval=spec.capture_interval,
-            meter_model=spec.meter_model,  # type: ignore[arg-type]
-            decision_time=decided,
-            alarm_window=cal.arrival_decision_delay,
+            cal,
+            spec.meter_model,  # type: ignore[arg-type]
         )
-        ranking = setup.localizers[spec.localizer].rank(evidence)
     except InputError:
         return Attempt(result.pipe, offset, burst_start, None)
-    decided = min(decided, float(times[-1]))
-    return Attempt(result.pipe, offset, burst_start, None, ranking, decided)
+    return Attempt(result.pipe, offset, burst_start, None, decision.ranking, decision.time)
 
 
 @dataclass

@@ -21,8 +21,12 @@ The fused score is ``w_arrival * L_arrival + w_signature * L_signature``.
 
 When the localizer answers: signatures need ``settle`` seconds of settled readings, so the fused
 localizer answers at the arrival localizer's (short) delay when arrivals carry most of the weight
-(``w_arrival >= 0.5``, then only arrivals are used unless the caller hands it more readings), and
-at the signature localizer's delay otherwise. Numpy only; on the live path.
+(``w_arrival >= 0.5``) and they are *decisive* (:meth:`FusedLocalizer.decisive`: the runner-up is
+at least ``margin`` log-likelihood units behind, by default the quantisation noise of the RMS
+arrival misfit, :func:`quantisation_margin`), and at the signature localizer's delay otherwise,
+with the arrival ranking taken at the early time (:func:`burstloc.decide.rank_alarms`). A burst
+near a junction fits every pipe at that junction about equally well in time; the lasting drop then
+tells them apart. Numpy only; on the live path.
 """
 
 from __future__ import annotations
@@ -37,13 +41,27 @@ from burstloc.exceptions import ConfigError, InputError
 from burstloc.ranking import BurstEvidence, RankedPipe, Ranking
 from burstloc.signature import SignatureLocalizer
 
-__all__ = ["FusedLocalizer", "arrival_loglik", "signature_loglik"]
+__all__ = ["FusedLocalizer", "arrival_loglik", "quantisation_margin", "signature_loglik"]
 
 ARRIVAL_SCALE = 0.5
 """Misfit (capture intervals) worth one unit of arrival log-likelihood."""
 
 SIGNATURE_FLOOR = 0.001
 """Smallest noise level (m) assumed for a drop estimate."""
+
+
+def quantisation_margin(meters: int) -> float:
+    """Default arrival lead that makes an early answer decisive, for ``meters`` meters.
+
+    An alarm start is known to one capture interval: uniform quantisation noise of standard
+    deviation ``1 / sqrt(12)`` intervals per meter, ``1 / sqrt(12 M)`` for an RMS over ``M``
+    meters. A runner-up whose RMS misfit is within that of the best is not told apart by the
+    arrivals; in log-likelihood units (misfit / :data:`ARRIVAL_SCALE`) the margin is
+    ``2 / sqrt(12 M)``, about 0.15 for 15 meters.
+    """
+    if meters < 1:
+        raise ConfigError(f"meters must be >= 1, got {meters}")
+    return 1.0 / (ARRIVAL_SCALE * math.sqrt(12.0 * meters))
 
 
 def arrival_loglik(ranking: Ranking) -> dict[str, float]:
@@ -67,7 +85,8 @@ class FusedLocalizer:
     """Combine an :class:`ArrivalLocalizer` and a :class:`SignatureLocalizer` (module docstring).
 
     ``tau`` (s) defaults to the median wave travel time along one of the arrival localizer's
-    pipes.
+    pipes; ``margin`` is the arrival log-likelihood lead that makes an early answer decisive
+    (default :func:`quantisation_margin` of the arrival localizer's meter count).
     """
 
     def __init__(
@@ -76,11 +95,17 @@ class FusedLocalizer:
         signature: SignatureLocalizer,
         *,
         tau: float | None = None,
+        margin: float | None = None,
     ) -> None:
         if tau is None:
             tau = arrival.pipe_travel
         if not (math.isfinite(tau) and tau > 0):
             raise ConfigError(f"tau must be > 0 s, got {tau}")
+        if margin is None:
+            margin = quantisation_margin(len(arrival.meters))
+        if not (math.isfinite(margin) and margin >= 0):
+            raise ConfigError(f"margin must be >= 0, got {margin}")
+        self.margin = float(margin)
         common = {p.pipe for p in arrival.pipes} & set(signature.signatures.pipes)
         if not common:
             raise ConfigError("the arrival and signature localizers share no pipe")
@@ -102,19 +127,28 @@ class FusedLocalizer:
             return self.arrival.decision_delay
         return self.signature.decision_delay
 
+    def decisive(self, arrival_ranking: Ranking) -> bool:
+        """Whether an arrival ranking's best pipe leads the runner-up by at least ``margin``."""
+        loglik = sorted(arrival_loglik(arrival_ranking).values(), reverse=True)
+        return len(loglik) < 2 or loglik[0] - loglik[1] >= self.margin
+
     def _signature_ready(self, evidence: BurstEvidence) -> bool:
         settled = evidence.times >= evidence.onset + self.signature.settle
         return bool(np.count_nonzero(settled) >= 3 and np.any(evidence.times <= evidence.onset))
 
-    def rank(self, evidence: BurstEvidence) -> Ranking:
+    def rank(self, evidence: BurstEvidence, *, arrival_ranking: Ranking | None = None) -> Ranking:
         """Pipes known to both localizers, best first, scored by the weighted log-likelihoods.
 
-        A localizer that cannot answer (no alarm for arrivals; no settled readings or no
-        baseline for signatures) is left out and the other one decides alone.
+        ``arrival_ranking``, if given, is used instead of ranking ``evidence``'s arrivals (the
+        arrivals as seen at an earlier decision time). A localizer that cannot answer (no alarm
+        for arrivals; no settled readings or no baseline for signatures) is left out and the
+        other one decides alone.
         """
         w_arrival, w_signature = self.weights(evidence.capture_interval)
         parts: list[tuple[float, Mapping[str, float], Ranking]] = []
-        if evidence.alarms and w_arrival > 0:
+        if arrival_ranking is not None and w_arrival > 0:
+            parts.append((w_arrival, arrival_loglik(arrival_ranking), arrival_ranking))
+        elif evidence.alarms and w_arrival > 0:
             ranking = self.arrival.rank(evidence)
             parts.append((w_arrival, arrival_loglik(ranking), ranking))
         if self._signature_ready(evidence) and w_signature > 0:

@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 from burstloc.exceptions import InputError
 
 __all__ = [
+    "CANDIDATE_POSITIONS",
     "METER_MODELS",
     "BurstEvidence",
     "MeterAlarm",
@@ -35,6 +36,10 @@ MeterModel = Literal["instantaneous", "interval-averaged"]
 loggers report)."""
 
 METER_MODELS: tuple[MeterModel, ...] = ("instantaneous", "interval-averaged")
+
+CANDIDATE_POSITIONS: tuple[float, ...] = tuple(round(0.1 * i, 1) for i in range(1, 10))
+"""Candidate burst positions along each pipe (fractions of its length from its INP start node)
+that the arrival and signature localizers try; a pipe keeps its best-fitting position."""
 
 
 @dataclass(frozen=True)

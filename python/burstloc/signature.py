@@ -1,13 +1,16 @@
 """The *signature* localizer: match the meters' lasting pressure drop to each pipe's signature.
 
-A burst on pipe ``p`` moves the network to a new steady state. Its *signature* ``s_p`` is the vector
-of steady-state head drops at the meters caused by an emitter at the pipe's mid-point, computed
-once per network from the hydraulic model (EPANET steady states through WNTR, pressure-driven
-demand, the engine TSNet initialises from) and cached on disk as a small JSON file. At run time
-the localizer estimates the observed drop ``d = baseline - new level`` per meter from the readings
-(:mod:`burstloc.steady_state_estimators`), fits ``d ~ k * s_p`` with a free scale ``k >= 0`` (the
-burst size is unknown; closed-form least squares) and ranks pipes by the fit's RMS residual:
-``score = -RMS``.
+A burst on pipe ``p`` moves the network to a new steady state. Its *signature* ``s_p(x)`` is the
+vector of steady-state head drops at the meters caused by an emitter at position ``x`` along the
+pipe, computed once per network from the hydraulic model (EPANET steady states through WNTR,
+pressure-driven demand, the engine TSNet initialises from) and cached on disk as a small JSON file
+per position (one :class:`SignatureSet` each; by default at the candidate positions 0.1, ..., 0.9
+of :data:`burstloc.ranking.CANDIDATE_POSITIONS`, the arrival localizer's). At run time the
+localizer estimates the observed drop ``d = baseline - new level`` per meter from the readings
+(:mod:`burstloc.steady_state_estimators`), fits ``d ~ k * s_p(x)`` with a free scale ``k >= 0``
+(the burst size is unknown; closed-form least squares) and ranks pipes by the RMS residual of
+their best position: ``score = -min_x RMS``. A burst near a pipe's end looks like a burst at that
+end node, so one mid-point signature per pipe misranks off-centre bursts.
 
 Setup (:func:`compute_signatures`, :func:`cached_signatures`) runs WNTR once; the run-time path
 (:class:`SignatureLocalizer`, :func:`rank_drop`) is numpy only and imports neither WNTR nor the
@@ -32,7 +35,7 @@ from numpy.typing import NDArray
 from burstloc.cache import cache_key, default_cache_dir, file_sha256
 from burstloc.exceptions import ConfigError, InputError, NetworkError
 from burstloc.network import load_network, split_pipe
-from burstloc.ranking import BurstEvidence, RankedPipe, Ranking
+from burstloc.ranking import CANDIDATE_POSITIONS, BurstEvidence, RankedPipe, Ranking
 from burstloc.steady_state_estimators import (
     ESTIMATORS,
     EstimatorName,
@@ -46,6 +49,7 @@ __all__ = [
     "DemandModel",
     "SignatureLocalizer",
     "SignatureSet",
+    "cached_signature_sets",
     "cached_signatures",
     "compute_signatures",
     "fit_signatures",
@@ -317,6 +321,50 @@ def cached_signatures(
     return full if meters is None else full.for_meters(meters)
 
 
+def cached_signature_sets(
+    network: str | os.PathLike[str],
+    meters: Sequence[str] | None = None,
+    *,
+    positions: Sequence[float] = CANDIDATE_POSITIONS,
+    cache_dir: str | os.PathLike[str] | None = None,
+    burst_coeff: float = DEFAULT_BURST_COEFF,
+    demand_model: DemandModel = "pdd",
+) -> tuple[SignatureSet, ...]:
+    """:func:`cached_signatures` at every position of ``positions`` (one set each, same order).
+
+    Raises:
+        ConfigError: no position, or a position outside (0, 1).
+    """
+    if not positions:
+        raise ConfigError("at least one signature position is needed")
+    return tuple(
+        cached_signatures(
+            network,
+            meters,
+            cache_dir=cache_dir,
+            burst_coeff=burst_coeff,
+            position=float(x),
+            demand_model=demand_model,
+        )
+        for x in positions
+    )
+
+
+def _as_sets(signatures: SignatureSet | Sequence[SignatureSet]) -> tuple[SignatureSet, ...]:
+    """One or several signature sets of the same meters and pipes, as a non-empty tuple."""
+    sets = (signatures,) if isinstance(signatures, SignatureSet) else tuple(signatures)
+    if not sets:
+        raise ConfigError("at least one signature set is needed")
+    first = sets[0]
+    for other in sets[1:]:
+        if other.meters != first.meters or other.pipes != first.pipes:
+            raise ConfigError(
+                "signature sets disagree on meters or pipes: "
+                f"position {other.params.get('position')} vs {first.params.get('position')}"
+            )
+    return sets
+
+
 def fit_signatures(
     drop: NDArray[np.float64], matrix: NDArray[np.float64]
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -339,17 +387,28 @@ def fit_signatures(
     return k, rms
 
 
-def rank_drop(drop: NDArray[np.float64], signatures: SignatureSet) -> Ranking:
-    """Rank the pipes of ``signatures`` by how well ``drop`` (per meter, m) fits their signature."""
-    _, rms = fit_signatures(drop, signatures.matrix)
+def rank_drop(
+    drop: NDArray[np.float64], signatures: SignatureSet | Sequence[SignatureSet]
+) -> Ranking:
+    """Rank pipes by how well ``drop`` (per meter, m) fits their signature.
+
+    With several sets (positions along each pipe), a pipe scores its best position's fit.
+    """
+    sets = _as_sets(signatures)
+    rms = np.min(np.stack([fit_signatures(drop, s.matrix)[1] for s in sets]), axis=0)
+    first = sets[0]
     return Ranking(
-        RankedPipe(p, *signatures.endpoints[p], score=-float(r))
-        for p, r in zip(signatures.pipes, rms, strict=True)
+        RankedPipe(p, *first.endpoints[p], score=-float(r))
+        for p, r in zip(first.pipes, rms, strict=True)
     )
 
 
 class SignatureLocalizer:
     """Rank pipes by the fit of the observed lasting drop to their burst signatures.
+
+    ``signatures`` is one :class:`SignatureSet` or several (positions along each pipe, e.g.
+    :func:`cached_signature_sets`) of the same meters and pipes; :attr:`signatures` is the first,
+    :attr:`signature_sets` all of them.
 
     ``settle`` seconds after the onset are skipped (the fast transient); the new level of each
     meter is estimated by ``estimator`` from the readings between ``onset + settle`` and the
@@ -360,7 +419,7 @@ class SignatureLocalizer:
 
     def __init__(
         self,
-        signatures: SignatureSet,
+        signatures: SignatureSet | Sequence[SignatureSet],
         *,
         estimator: EstimatorName = "damped-fit",
         settle: float = DEFAULT_SETTLE,
@@ -373,7 +432,8 @@ class SignatureLocalizer:
             raise ConfigError(f"settle must be >= 0 s, got {settle}")
         if not (math.isfinite(decision_delay) and decision_delay > settle):
             raise ConfigError(f"decision_delay must be > settle ({settle} s), got {decision_delay}")
-        self.signatures = signatures
+        self.signature_sets = _as_sets(signatures)
+        self.signatures = self.signature_sets[0]
         self.estimator: EstimatorName = estimator
         self.settle = float(settle)
         self.decision_delay = float(decision_delay)
@@ -402,4 +462,4 @@ class SignatureLocalizer:
 
     def rank(self, evidence: BurstEvidence) -> Ranking:
         """Every pipe, best first, scored by minus the RMS residual of the signature fit (m)."""
-        return rank_drop(self.drop(evidence), self.signatures)
+        return rank_drop(self.drop(evidence), self.signature_sets)

@@ -66,6 +66,7 @@ __all__ = [
     "BurstScenario",
     "ScenarioResult",
     "burst_scenarios",
+    "expected_time_step",
     "output_path",
     "simulate_burst",
     "simulate_many",
@@ -381,6 +382,31 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
         "schema": SCHEMA,
     }
     return ScenarioResult(steps, heads, meters, dt, meta)
+
+
+def expected_time_step(scenario: BurstScenario) -> float:
+    """The time step (s) TSNet will use for ``scenario``, without running TSNet.
+
+    TSNet's discretisation is arithmetic on the pipe lengths of the split network: each pipe
+    gets ``N = floor(L / (a dt))`` reaches for the requested step ``dt`` (default: the Courant
+    limit ``min L / (2 a)``), and the step becomes ``sum(phi^2) / sum(phi)`` with
+    ``phi = L / (a N)`` (its wave-speed adjustment). This reproduces it, so a caller can choose
+    ``time_step`` before simulating (e.g. finer than a capture interval).
+
+    Raises:
+        NetworkError: the network or pipe cannot be read.
+    """
+    wn = network.load_network(scenario.network)
+    link = network.require_pipe(wn, scenario.pipe)
+    lengths = [float(wn.get_link(p).length) for p in network.pipe_names(wn) if p != scenario.pipe]
+    lengths += [scenario.position * link.length, (1.0 - scenario.position) * link.length]
+    travel = np.array(lengths) / scenario.wave_speed
+    dt = float(travel.min() / 2.0) if scenario.time_step is None else float(scenario.time_step)
+    reaches = np.floor(travel / dt)
+    if np.any(reaches < 1):
+        return dt  # TSNet refuses such a step; _run_tsnet reports it
+    phi = travel / reaches
+    return float(np.sum(phi**2) / np.sum(phi))
 
 
 def _run_tsnet(scenario: BurstScenario, split: network.SplitPipe, inp: str) -> Any:

@@ -13,9 +13,9 @@ Estimators (``method``), each returning one level per meter:
   ``modes`` damped sinusoids whose frequency and decay rate are shared by all meters
   (each meter gets its own amplitude and phase), by variable projection: the shared nonlinear
   parameters are searched on a grid then refined, the per-meter linear ones solved in closed form.
-  For interval-averaged readings the model is averaged over each capture interval, so the fit sees
-  exactly what the meter reports. A mode is kept only if it lowers a BIC-style criterion, so a
-  quiet window falls back to the mean. The level is the fitted constant.
+  For interval-averaged readings the model is averaged (in closed form) over each capture
+  interval, so the fit sees exactly what the meter reports. A mode is kept only if it lowers a
+  BIC-style criterion, so a quiet window falls back to the mean. The level is the fitted constant.
 
 Pure numpy (plus scipy's optimiser): on the live path.
 """
@@ -48,7 +48,6 @@ _DECAY_GRID = (0.0, 0.01, 0.02, 0.04, 0.08)  # 1/s: undamped to a ~12 s time con
 _MAX_DECAY = 1.0  # 1/s
 _MAX_GRID = 240  # candidate frequencies per decay rate in the grid search
 _ZOOM_ROUNDS = 4  # refinement grids around the best grid point
-_AVERAGING_NODES = 8  # Gauss-Legendre nodes per capture interval for interval-averaged readings
 _DEFAULT_MODES = 3
 _BLOCK = 2.0  # s: dense readings are block-averaged to about this before the fit
 
@@ -79,46 +78,46 @@ class DampedFit:
     rms: float
 
 
-def _nodes(
-    t: NDArray[np.float64], capture_interval: float, meter_model: MeterModel
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Times at which the model is evaluated per reading (n, q) and their averaging weights (q,).
-
-    An instantaneous reading is the model at its stamp; an interval-averaged one is the model's
-    mean over the capture interval ending at its stamp (Gauss-Legendre quadrature).
-    """
-    if meter_model == "interval-averaged":
-        nodes, weights = np.polynomial.legendre.leggauss(_AVERAGING_NODES)
-        return t[:, None] + ((nodes - 1.0) * 0.5 * capture_interval)[None, :], weights * 0.5
-    return t[:, None], np.ones(1)
+def _averaging(capture_interval: float, meter_model: MeterModel) -> float:
+    """Length (s) of the interval each reading averages the signal over: 0 = instantaneous."""
+    return capture_interval if meter_model == "interval-averaged" else 0.0
 
 
 def _mode_columns(
-    tt: NDArray[np.float64],
-    w: NDArray[np.float64],
+    t: NDArray[np.float64],
+    span: float,
     omegas: NDArray[np.float64],
     decays: NDArray[np.float64],
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Averaged ``exp(-l t) cos(w t)`` and ``... sin(w t)`` columns for candidate pairs (g, n)."""
-    env = np.exp(-decays[:, None, None] * tt[None])
-    phase = omegas[:, None, None] * tt[None]
-    return (env * np.cos(phase)) @ w, (env * np.sin(phase)) @ w
+    """``exp(-l t) cos(w t)`` and ``... sin(w t)`` columns for candidate pairs (g, n).
+
+    With ``span > 0`` each reading is the mode's exact mean over ``[t - span, t]``: with
+    ``z = -l + i w`` that mean is ``exp(z t) (1 - exp(-z span)) / (z span)``.
+    """
+    z = -decays + 1j * omegas
+    cols = np.exp(z[:, None] * t[None, :])
+    if span > 0:
+        zs = z * span
+        small = np.abs(zs) < 1e-8
+        factor = np.where(small, 1.0 + 0j, (1.0 - np.exp(-zs)) / np.where(small, 1.0, zs))
+        cols = cols * factor[:, None]
+    return cols.real, cols.imag
 
 
 def _basis(
-    tt: NDArray[np.float64], w: NDArray[np.float64], params: list[tuple[float, float]]
+    t: NDArray[np.float64], span: float, params: list[tuple[float, float]]
 ) -> NDArray[np.float64]:
     """Design matrix (n, 1 + 2 modes): a constant, then each mode's cosine and sine columns."""
-    cols = [np.ones(tt.shape[0])]
+    cols = [np.ones(t.shape[0])]
     for omega, decay in params:
-        c, s = _mode_columns(tt, w, np.array([omega]), np.array([decay]))
+        c, s = _mode_columns(t, span, np.array([omega]), np.array([decay]))
         cols += [c[0], s[0]]
     return np.column_stack(cols)
 
 
 def _pair_rss(
-    tt: NDArray[np.float64],
-    w: NDArray[np.float64],
+    t: NDArray[np.float64],
+    span: float,
     y: NDArray[np.float64],
     fixed: list[tuple[float, float]],
     omegas: NDArray[np.float64],
@@ -126,28 +125,30 @@ def _pair_rss(
 ) -> NDArray[np.float64]:
     """Residual sum of squares of the joint fit with the ``fixed`` modes plus one candidate mode
     ``(omegas[i], decays[i])``, for every candidate at once (``y`` is centred per meter)."""
-    fixed_basis = _basis(tt, w, fixed)
-    cos_col, sin_col = _mode_columns(tt, w, omegas, decays)
-    g = omegas.size
-    basis = np.concatenate(
-        [
-            np.broadcast_to(fixed_basis, (g, *fixed_basis.shape)),
-            cos_col[..., None],
-            sin_col[..., None],
-        ],
-        axis=2,
-    )
-    gram = np.einsum("gnk,gnl->gkl", basis, basis)
-    rhs = np.einsum("gnk,nm->gkm", basis, y)
-    k = gram.shape[1]
-    ridge = 1e-12 * np.trace(gram, axis1=1, axis2=2)[:, None, None] + 1e-300
-    coef = np.linalg.solve(gram + np.eye(k)[None] * ridge, rhs)
-    return np.asarray(float(np.sum(y * y)) - np.einsum("gkm,gkm->g", rhs, coef))
+    # Variable projection with the fixed modes projected out once: every candidate then needs
+    # only a 2 x 2 solve (closed form), not a (1 + 2 modes)-square one.
+    q, _ = np.linalg.qr(_basis(t, span, fixed))
+    yp = y - q @ (q.T @ y)
+    cos_col, sin_col = _mode_columns(t, span, omegas, decays)
+    c = cos_col - (cos_col @ q) @ q.T
+    s = sin_col - (sin_col @ q) @ q.T
+    cc = np.einsum("gn,gn->g", c, c)
+    ss = np.einsum("gn,gn->g", s, s)
+    cs = np.einsum("gn,gn->g", c, s)
+    rc = c @ yp  # (g, m)
+    rs = s @ yp
+    ridge = 1e-12 * (cc + ss) + 1e-300
+    cc, ss = cc + ridge, ss + ridge
+    det = cc * ss - cs * cs
+    explained = (ss[:, None] * rc * rc - 2 * cs[:, None] * rc * rs + cc[:, None] * rs * rs) / det[
+        :, None
+    ]
+    return np.asarray(float(np.sum(yp * yp)) - explained.sum(axis=1))
 
 
 def _best_mode(
-    tt: NDArray[np.float64],
-    w: NDArray[np.float64],
+    t: NDArray[np.float64],
+    span: float,
     y: NDArray[np.float64],
     fixed: list[tuple[float, float]],
     w_min: float,
@@ -157,15 +158,15 @@ def _best_mode(
     """Best additional mode ``(rss, omega, decay)``: a coarse grid (unless ``start`` is given),
     then zooming grids around the best pair."""
     if start is None:
-        count = int(min(_MAX_GRID, max(40, 4 * tt.shape[0])))
+        count = int(min(_MAX_GRID, max(40, 4 * t.shape[0])))
         om, de = np.meshgrid(np.linspace(w_min, w_max, count), np.array(_DECAY_GRID))
         om, de = om.ravel(), de.ravel()
-        rss = _pair_rss(tt, w, y, fixed, om, de)
+        rss = _pair_rss(t, span, y, fixed, om, de)
         i = int(np.argmin(rss))
         best = (float(rss[i]), float(om[i]), float(de[i]))
         step_w = (w_max - w_min) / max(count - 1, 1)
     else:
-        rss0 = _pair_rss(tt, w, y, fixed, np.array([start[0]]), np.array([start[1]]))
+        rss0 = _pair_rss(t, span, y, fixed, np.array([start[0]]), np.array([start[1]]))
         best = (float(rss0[0]), start[0], start[1])
         step_w = 0.02 * max(start[0], 0.05)
     step_d = 0.01
@@ -175,7 +176,7 @@ def _best_mode(
         )
         ok = (om > 0) & (de >= 0) & (de <= _MAX_DECAY)
         om, de = om[ok], de[ok]
-        rss = _pair_rss(tt, w, y, fixed, om, de)
+        rss = _pair_rss(t, span, y, fixed, om, de)
         i = int(np.argmin(rss))
         if rss[i] < best[0]:
             best = (float(rss[i]), float(om[i]), float(de[i]))
@@ -208,7 +209,7 @@ def fit_damped_modes(
     # centre each meter (the constant column absorbs it) so the residual sums keep their digits
     offset = y.mean(axis=0)
     y = y - offset
-    tt, w = _nodes(t, capture_interval, meter_model)
+    averaging = _averaging(capture_interval, meter_model)
     span = float(t[-1]) if n > 1 else 0.0
     w_max = math.pi / capture_interval
     w_min = math.pi / max(span, capture_interval)
@@ -224,7 +225,7 @@ def fit_damped_modes(
         # every mode costs 2 readings per meter plus 2 shared parameters
         if n < 1 + 2 * (len(chosen) + 1) + 2 or w_max <= w_min:
             break
-        rss, omega, decay = _best_mode(tt, w, y, chosen, w_min, w_max)
+        rss, omega, decay = _best_mode(t, averaging, y, chosen, w_min, w_max)
         cand_bic = bic(rss, len(chosen) + 1)
         if cand_bic >= best_bic:
             break
@@ -232,9 +233,9 @@ def fit_damped_modes(
         best_bic = cand_bic
     for i in range(len(chosen) if len(chosen) > 1 else 0):
         others = chosen[:i] + chosen[i + 1 :]
-        _, omega, decay = _best_mode(tt, w, y, others, w_min, w_max, start=chosen[i])
+        _, omega, decay = _best_mode(t, averaging, y, others, w_min, w_max, start=chosen[i])
         chosen[i] = (omega, decay)
-    basis = _basis(tt, w, chosen)
+    basis = _basis(t, averaging, chosen)
     coef, *_ = np.linalg.lstsq(basis, y, rcond=None)
     amps = np.hypot(coef[1::2], coef[2::2]) if chosen else np.zeros((0, m))
     resid = y - basis @ coef

@@ -44,7 +44,7 @@ from typing import Any
 
 import numpy as np
 
-from burstloc.exceptions import ConfigError, InputError
+from burstloc.exceptions import ConfigError, InputError, NetworkError
 
 __all__ = [
     "DEFAULT_LEVELS",
@@ -58,6 +58,7 @@ __all__ = [
     "run_study_command",
     "score_point",
     "study_grid",
+    "study_time_step",
     "write_report",
 ]
 
@@ -71,7 +72,7 @@ DEFAULT_LEVELS: dict[str, tuple[Any, ...]] = {
     "meter_fraction": (1.0, 0.5, 0.25),
     "position": (0.1, 0.5, 0.9),
     "burst_coeff": (0.003, 0.01, 0.03),
-    "friction": ("steady", "unsteady"),
+    "friction": ("steady", "quasi-steady", "unsteady"),
 }
 
 LOCALIZERS = ("arrival", "signature", "fused")
@@ -136,8 +137,9 @@ class StudySettings:
         false_alarm_rate: calibration target, alarms per meter per hour.
         pipes: restrict every network to these pipes (``None`` = all; for tests).
         seed: noise seed.
-        time_step: TSNet's requested time step, s (``None``: TSNet's largest stable step,
-            which may be coarser than the finest capture interval).
+        time_step: TSNet's requested time step, s (``None``: the rule of
+            :func:`study_time_step`, TSNet's own step unless it is coarser than the finest
+            capture interval).
     """
 
     capture_intervals: tuple[float, ...] = (0.2, 2.0, 5.0, 10.0)
@@ -236,12 +238,13 @@ def greedy_meters(signatures: Any, count: int) -> tuple[str, ...]:
 
 
 def _scenarios(point: StudyPoint, settings: StudySettings) -> list[Any]:
+    """The point's bursts, one per pipe, with the time step rule of :func:`study_time_step`."""
     from burstloc.network import load_network, pipe_names
     from burstloc.simulate import BurstScenario
 
     pipes = settings.pipes or tuple(pipe_names(load_network(point.network)))
     f = point.factors
-    return [
+    scenarios = [
         BurstScenario(
             point.network,
             pipe,
@@ -253,6 +256,26 @@ def _scenarios(point: StudyPoint, settings: StudySettings) -> list[Any]:
         )
         for pipe in pipes
     ]
+    return [replace(s, time_step=study_time_step(s, settings)) for s in scenarios]
+
+
+def study_time_step(scenario: Any, settings: StudySettings) -> float | None:
+    """TSNet time step for a study burst: ``settings.time_step`` if given; else TSNet's own
+    (``None``) when it is no coarser than the finest capture interval, and half that interval
+    otherwise (a capture needs simulated samples at least as fine as its interval; half of it
+    keeps TSNet's wave-speed adjustment, which can lengthen a requested step by up to 50 %,
+    below the interval).
+    """
+    from burstloc.simulate import expected_time_step
+
+    if settings.time_step is not None:
+        return settings.time_step
+    finest = min(settings.capture_intervals)
+    try:
+        expected = expected_time_step(replace(scenario, time_step=None))
+    except NetworkError:
+        return None  # an unknown pipe: its simulation fails and names it
+    return None if expected <= finest else finest / 2
 
 
 @dataclass
@@ -291,12 +314,16 @@ def score_point(task: tuple[StudyPoint, StudySettings]) -> list[dict[str, Any]]:
     from burstloc.arrival import ArrivalLocalizer
     from burstloc.calibrate import DEFAULT_NOISE_SIGMA, calibrate
     from burstloc.capture import capture
-    from burstloc.evaluate import calibrated_bank, decision_time
+    from burstloc.decide import rank_alarms
+    from burstloc.evaluate import calibrated_bank
     from burstloc.fused import FusedLocalizer
     from burstloc.network import load_network
-    from burstloc.ranking import evidence_from_alarms
     from burstloc.sensors import SensorModel
-    from burstloc.signature import SignatureLocalizer, cached_signatures
+    from burstloc.signature import (
+        SignatureLocalizer,
+        cached_signature_sets,
+        cached_signatures,
+    )
     from burstloc.simulate import simulate_burst
 
     point, settings = task
@@ -304,12 +331,13 @@ def score_point(task: tuple[StudyPoint, StudySettings]) -> list[dict[str, Any]]:
     results = [simulate_burst(s) for s in _scenarios(point, settings)]
     junctions = list(results[0].junctions)
     all_signatures = cached_signatures(point.network, junctions)
+    signature_sets = cached_signature_sets(point.network, junctions)
     count = max(1, round(f.meter_fraction * len(junctions)))
     meters = list(greedy_meters(all_signatures, count)) if count < len(junctions) else junctions
     columns = [junctions.index(m) for m in meters]
     wn = load_network(point.network)
     arrival = ArrivalLocalizer.from_network(wn, meters)
-    signature = SignatureLocalizer(all_signatures.for_meters(meters))
+    signature = SignatureLocalizer([s.for_meters(meters) for s in signature_sets])
     fused = FusedLocalizer(arrival, signature)
     localizers: dict[str, Any] = {"arrival": arrival, "signature": signature, "fused": fused}
     config = calibrate(
@@ -340,28 +368,16 @@ def score_point(task: tuple[StudyPoint, StudySettings]) -> list[dict[str, Any]]:
                         for name in settings.localizers:
                             entry = tally[name]
                             entry.n += 1
-                            if not alarms:
-                                entry.nodet += 1
-                                continue
-                            decision = decision_time(name, alarms, ticks, cal, fused)
                             try:
-                                evidence = evidence_from_alarms(
-                                    meters,
-                                    ticks,
-                                    readings,
-                                    alarms,
-                                    capture_interval=dt,
-                                    meter_model=model,  # type: ignore[arg-type]
-                                    decision_time=decision,
-                                    alarm_window=cal.arrival_decision_delay,
+                                decision = rank_alarms(
+                                    name, localizers, meters, ticks, readings, alarms, cal, model
                                 )
-                                ranking = localizers[name].rank(evidence)
                             except InputError:
                                 entry.nodet += 1
                                 continue
-                            entry.top1 += ranking.in_top(res.pipe, 1)
-                            entry.top3 += ranking.in_top(res.pipe, 3)
-                            entry.times.append(min(decision, float(ticks[-1])) - burst)
+                            entry.top1 += decision.ranking.in_top(res.pipe, 1)
+                            entry.top3 += decision.ranking.in_top(res.pipe, 3)
+                            entry.times.append(decision.time - burst)
                 for name, e in tally.items():
                     rows.append(
                         {
@@ -580,7 +596,10 @@ def add_study_arguments(parser: Any) -> None:
     )
     parser.add_argument("--pipes", nargs="+", default=None, help="only these pipes")
     parser.add_argument(
-        "--time-step", type=float, default=None, help="TSNet time step, s (default: TSNet's)"
+        "--time-step",
+        type=float,
+        default=None,
+        help="TSNet time step, s (default: TSNet's, or half the finest capture if coarser)",
     )
     parser.add_argument("--workers", type=int, default=None)
     parser.add_argument("--scheduler", default=None, help="Dask scheduler address")

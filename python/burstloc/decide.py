@@ -1,0 +1,131 @@
+"""When a ranking localizer answers, and its answer, from a detector bank's alarms.
+
+One place for the decision rule shared by ``burstloc evaluate`` and ``burstloc study`` (and any
+live caller holding the readings so far):
+
+* ``arrival``: at the first alarm's reading time plus the calibrated
+  ``arrival_decision_delay`` (about one wave travel time along a pipe);
+* ``signature``: at the onset (the earliest alarm start, the last reading before the change) plus
+  the calibrated ``decision_delay`` (150 s: the lasting drop needs settled readings);
+* ``fused``: where arrivals carry most of the weight (``w_arrival >= 0.5``, short capture
+  intervals) it first ranks at the arrival time. If that ranking is *decisive* (the runner-up's
+  log-likelihood is at least :attr:`burstloc.fused.FusedLocalizer.margin` below the best) that is
+  the answer; otherwise (a burst near a junction fits several of the junction's pipes almost
+  equally well in time) it waits for the signature's decision time and answers with both. At
+  coarse intervals it answers at the signature's time.
+
+Numpy only; on the live path.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from burstloc.exceptions import InputError
+from burstloc.ranking import BurstEvidence, MeterModel, Ranking, evidence_from_alarms
+
+if TYPE_CHECKING:
+    from burstloc.calibrate import IntervalCalibration
+    from burstloc.fused import FusedLocalizer
+
+__all__ = ["Decision", "decision_time", "rank_alarms"]
+
+
+@dataclass(frozen=True)
+class Decision:
+    """A ranking localizer's answer: the ranking, the reading time it was given at, and whether
+    the fused localizer waited for the signature (its arrivals were not decisive)."""
+
+    ranking: Ranking
+    time: float
+    waited: bool = False
+
+
+def _first_and_onset(alarms: Sequence[Any], times: np.ndarray) -> tuple[float, float]:
+    first = min(float(times[a.index]) for a in alarms)
+    onset = min(float(times[a.start if a.start < a.index else max(a.index - 1, 0)]) for a in alarms)
+    return first, onset
+
+
+def _arrival_first(localizer: str, calibration: IntervalCalibration, fused: Any) -> bool:
+    return localizer == "arrival" or (
+        localizer == "fused"
+        and fused is not None
+        and fused.weights(calibration.capture_interval)[0] >= 0.5
+    )
+
+
+def decision_time(
+    localizer: str,
+    alarms: Sequence[Any],
+    times: np.ndarray,
+    calibration: IntervalCalibration,
+    fused: FusedLocalizer | None = None,
+) -> float:
+    """When a ranking localizer first looks at the evidence (no truth used).
+
+    ``arrival`` (and ``fused`` while its arrival weight is at least 0.5): the first alarm's
+    reading time plus ``calibration.arrival_decision_delay``. ``signature`` (and ``fused``
+    otherwise): the onset plus ``calibration.decision_delay``, so the answer comes within that
+    delay of the burst itself. (:func:`rank_alarms` may defer a fused answer; see the module.)
+
+    Raises:
+        InputError: no alarm.
+    """
+    if not alarms:
+        raise InputError("no alarm: nothing to decide")
+    first, onset = _first_and_onset(alarms, times)
+    if _arrival_first(localizer, calibration, fused):
+        return first + calibration.arrival_decision_delay
+    return onset + calibration.decision_delay
+
+
+def rank_alarms(
+    localizer: str,
+    localizers: Mapping[str, Any],
+    meters: Sequence[str],
+    times: np.ndarray,
+    readings: np.ndarray,
+    alarms: Sequence[Any],
+    calibration: IntervalCalibration,
+    meter_model: MeterModel,
+) -> Decision:
+    """Rank the pipes with ``localizers[localizer]`` at its decision time (module docstring).
+
+    ``times`` / ``readings`` (T,) / (T, M) are the captured readings of ``meters``; ``alarms`` the
+    calibrated bank's alarms on them. The decision time is capped at the last reading.
+
+    Raises:
+        InputError: no alarm, or the localizer cannot answer from this evidence.
+    """
+    fused = localizers.get("fused")
+    chosen = localizers[localizer]
+    last = float(times[-1])
+
+    def evidence(decided: float) -> BurstEvidence:
+        return evidence_from_alarms(
+            meters,
+            times,
+            readings,
+            alarms,
+            capture_interval=calibration.capture_interval,
+            meter_model=meter_model,
+            decision_time=decided,
+            alarm_window=calibration.arrival_decision_delay,
+        )
+
+    decided = decision_time(localizer, alarms, times, calibration, fused)
+    early = evidence(decided)
+    if localizer != "fused" or not _arrival_first(localizer, calibration, fused):
+        return Decision(chosen.rank(early), min(decided, last))
+    arrivals = fused.arrival.rank(early)
+    _, onset = _first_and_onset(alarms, times)
+    later = onset + calibration.decision_delay
+    if fused.decisive(arrivals) or later <= decided:
+        return Decision(fused.rank(early, arrival_ranking=arrivals), min(decided, last))
+    ranking = fused.rank(evidence(later), arrival_ranking=arrivals)
+    return Decision(ranking, min(later, last), waited=True)
