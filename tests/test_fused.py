@@ -7,36 +7,10 @@ import math
 import numpy as np
 import pytest
 
-from burstloc.arrival import ArrivalLocalizer, PipeGeometry
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.fused import FusedLocalizer, arrival_loglik, signature_loglik
 from burstloc.ranking import BurstEvidence, MeterAlarm, RankedPipe, Ranking
-from burstloc.signature import SignatureLocalizer, SignatureSet
-
-# A line of meters m0 - m1 - m2 - m3, 600 m apart; pipes p01, p12, p23 join them.
-METERS = ("m0", "m1", "m2", "m3")
-PIPES = ("p01", "p12", "p23")
-WAVE = 1200.0
-
-
-def _arrival() -> ArrivalLocalizer:
-    pos = {m: 600.0 * i for i, m in enumerate(METERS)}
-    distances = {n: np.array([abs(pos[n] - pos[m]) for m in METERS]) for n in METERS}
-    pipes = [PipeGeometry(f"p{i}{i + 1}", f"m{i}", f"m{i + 1}", 600.0) for i in range(3)]
-    return ArrivalLocalizer(pipes, METERS, distances, wave_speed=WAVE)
-
-
-def _signature(matrix: np.ndarray) -> SignatureLocalizer:
-    sig = SignatureSet(
-        network_hash="sha256:test",
-        meters=METERS,
-        pipes=PIPES,
-        endpoints={f"p{i}{i + 1}": (f"m{i}", f"m{i + 1}") for i in range(3)},
-        matrix=matrix,
-        baseline=np.full(4, 50.0),
-        params={},
-    )
-    return SignatureLocalizer(sig, settle=20.0, decision_delay=60.0, estimator="mean")
+from line_network import METERS, WAVE, line_arrival, line_signature
 
 
 def _evidence(dt: float, burst_pipe: int, drop: np.ndarray, until: float) -> BurstEvidence:
@@ -57,7 +31,7 @@ def _evidence(dt: float, burst_pipe: int, drop: np.ndarray, until: float) -> Bur
 
 
 def test_weights_follow_the_capture_interval() -> None:
-    fused = FusedLocalizer(_arrival(), _signature(np.eye(3, 4) + 0.1))
+    fused = FusedLocalizer(line_arrival(), line_signature(np.eye(3, 4) + 0.1))
     assert fused.tau == pytest.approx(0.5)
     w_fine, w_coarse = fused.weights(0.2)[0], fused.weights(2.0)[0]
     assert w_fine == pytest.approx(math.exp(-0.4))
@@ -68,14 +42,14 @@ def test_weights_follow_the_capture_interval() -> None:
     with pytest.raises(InputError):
         fused.weights(0.0)
     with pytest.raises(ConfigError):
-        FusedLocalizer(_arrival(), _signature(np.eye(3, 4)), tau=-1.0)
+        FusedLocalizer(line_arrival(), line_signature(np.eye(3, 4)), tau=-1.0)
 
 
 def test_arrivals_decide_at_fine_intervals_signatures_at_coarse() -> None:
     # signatures barely separate p12 from p01 (nearly equal columns) and favour p01 slightly;
     # arrivals point at p12 clearly when the capture interval resolves them
     matrix = np.array([[1.0, 1.0, 0.5, 0.2], [1.0, 1.02, 0.55, 0.2], [0.1, 0.3, 1.0, 1.0]])
-    fused = FusedLocalizer(_arrival(), _signature(matrix))
+    fused = FusedLocalizer(line_arrival(), line_signature(matrix))
     drop = 0.5 * matrix[0]
     fine = fused.rank(_evidence(0.05, burst_pipe=1, drop=drop, until=80.0))
     assert fine.best is not None and fine.best.pipe == "p12"
@@ -87,7 +61,7 @@ def test_arrivals_decide_at_fine_intervals_signatures_at_coarse() -> None:
 
 
 def test_early_decision_uses_arrivals_alone() -> None:
-    fused = FusedLocalizer(_arrival(), _signature(np.eye(3, 4) + 0.1))
+    fused = FusedLocalizer(line_arrival(), line_signature(np.eye(3, 4) + 0.1))
     evidence = _evidence(0.05, burst_pipe=2, drop=np.zeros(4), until=11.0)
     ranking = fused.rank(evidence)
     arrival = fused.arrival.rank(evidence)
@@ -96,7 +70,7 @@ def test_early_decision_uses_arrivals_alone() -> None:
 
 
 def test_nothing_to_go_on_is_an_error() -> None:
-    fused = FusedLocalizer(_arrival(), _signature(np.eye(3, 4) + 0.1))
+    fused = FusedLocalizer(line_arrival(), line_signature(np.eye(3, 4) + 0.1))
     t = np.arange(0.0, 5.0, 1.0)
     evidence = BurstEvidence(
         meters=METERS, times=t, readings=np.zeros((5, 4)), onset=2.0, capture_interval=1.0

@@ -18,6 +18,7 @@ from burstloc.ranking import BurstEvidence
 from burstloc.signature import (
     SignatureLocalizer,
     SignatureSet,
+    cached_signature_sets,
     cached_signatures,
     compute_signatures,
     fit_signatures,
@@ -160,6 +161,63 @@ def test_cached_signatures_are_computed_once(
     other.write_text(tiny_network.read_text().replace("R1   60", "R1   61"))
     with pytest.raises(AssertionError, match="recomputed"):
         cached_signatures(other, cache_dir=tmp_path)
+
+
+def test_positions_along_the_pipe_match_an_off_centre_burst(
+    tiny_network: Path, tmp_path: Path
+) -> None:
+    from burstloc.signature import DEFAULT_BURST_COEFF
+
+    sets = cached_signature_sets(tiny_network, cache_dir=tmp_path)
+    assert [s.params["position"] for s in sets] == [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9]
+    assert len(list(tmp_path.glob("*.json"))) == len(sets)
+    middle = sets[4]
+    for pipe in middle.pipes:
+        for fraction in (0.1, 0.9):
+            after = _heads_with_burst(tiny_network, pipe, fraction, DEFAULT_BURST_COEFF)
+            drop = middle.baseline - np.array([after[m] for m in middle.meters])
+            ranking = rank_drop(drop, sets)
+            # the reference burst at a candidate position is matched (to EPANET's precision)
+            assert ranking.best is not None and ranking.best.pipe == pipe
+            assert -ranking.best.score < 1e-3
+            # the mid-point signature alone fits it worse
+            mid_only = {p.pipe: p.score for p in rank_drop(drop, middle)}
+            assert mid_only[pipe] < ranking.best.score
+            # each pipe scores its best position
+            singles = [{p.pipe: p.score for p in rank_drop(drop, s)} for s in sets]
+            for ranked in ranking:
+                assert ranked.score == max(single[ranked.pipe] for single in singles)
+
+
+def test_signature_sets_must_agree() -> None:
+    one, other = _synthetic(meters=6), _synthetic(meters=5)
+    drop = one.matrix[1]
+    assert [p.pipe for p in rank_drop(drop, [one])] == [p.pipe for p in rank_drop(drop, one)]
+    with pytest.raises(ConfigError, match="disagree"):
+        rank_drop(drop, [one, other])
+    with pytest.raises(ConfigError, match="at least one"):
+        SignatureLocalizer([])
+    with pytest.raises(ConfigError, match="at least one"):
+        cached_signature_sets("x.inp", positions=())
+    loc = SignatureLocalizer([one, _synthetic(meters=6, seed=2)])
+    assert loc.signatures is loc.signature_sets[0] and len(loc.signature_sets) == 2
+
+
+def test_projected_mode_search_matches_a_direct_least_squares() -> None:
+    from burstloc.steady_state_estimators import _basis, _pair_rss
+
+    rng = np.random.default_rng(3)
+    t = np.arange(0.0, 90.0, 2.0)
+    y = rng.normal(size=(t.size, 5))
+    y -= y.mean(axis=0)
+    fixed = [(0.4, 0.03)]
+    omegas, decays = np.array([0.2, 0.9, 1.4]), np.array([0.0, 0.02, 0.05])
+    for span in (0.0, 2.0):
+        fast = _pair_rss(t, span, y, fixed, omegas, decays)
+        for g in range(omegas.size):
+            basis = _basis(t, span, [*fixed, (float(omegas[g]), float(decays[g]))])
+            coef, *_ = np.linalg.lstsq(basis, y, rcond=None)
+            assert fast[g] == pytest.approx(float(np.sum((y - basis @ coef) ** 2)), rel=1e-9)
 
 
 def _ringing(

@@ -21,6 +21,7 @@ from burstloc.simulate import (
     BurstScenario,
     ScenarioResult,
     burst_scenarios,
+    expected_time_step,
     output_path,
     simulate_burst,
     simulate_many,
@@ -154,6 +155,24 @@ def test_friction_model_reaches_tsnet_and_the_cache_key(tiny_network: Path) -> N
     np.testing.assert_array_equal(a.heads[0], b.heads[0])  # same steady state
     assert float(np.max(np.abs(a.heads - b.heads))) > 1e-3  # different transient damping
     assert b.metadata["friction"] == "unsteady"
+
+
+@pytest.mark.parametrize(
+    ("pipe", "position", "time_step"), [("B", 0.5, None), ("E", 0.1, None), ("C", 0.7, 0.004)]
+)
+def test_expected_time_step_is_tsnets(
+    tiny_network: Path, pipe: str, position: float, time_step: float | None
+) -> None:
+    scenario = BurstScenario(
+        tiny_network, pipe, position=position, burst_start=0.2, duration=1.5, time_step=time_step
+    )
+    result = simulate_burst(scenario, cache=False)
+    assert expected_time_step(scenario) == pytest.approx(result.time_step, rel=1e-12)
+
+
+def test_expected_time_step_names_an_unknown_pipe(tiny_network: Path) -> None:
+    with pytest.raises(NetworkError, match="ZZ"):
+        expected_time_step(BurstScenario(tiny_network, "ZZ"))
 
 
 def test_resample_keeps_metadata_and_checks_the_interval(pipe7: ScenarioResult) -> None:

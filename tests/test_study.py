@@ -15,6 +15,7 @@ from burstloc.study import (
     Factors,
     StudyPoint,
     StudySettings,
+    _scenarios,
     _with_history,
     greedy_meters,
     main,
@@ -202,8 +203,6 @@ def test_cli_study_and_calibrate_commands(
 
 
 def test_scenarios_carry_the_factors_and_settings(tiny_network: Path) -> None:
-    from burstloc.study import _scenarios
-
     point = StudyPoint(str(tiny_network), "friction", Factors(friction="unsteady", position=0.3))
     settings = StudySettings(pipes=("B", "C"), duration=50.0, time_step=0.05)
     scenarios = _scenarios(point, settings)
@@ -211,3 +210,21 @@ def test_scenarios_carry_the_factors_and_settings(tiny_network: Path) -> None:
     assert {(s.friction, s.position, s.duration, s.time_step) for s in scenarios} == {
         ("unsteady", 0.3, 50.0, 0.05)
     }
+
+
+def test_time_step_rule_keeps_tsnets_step_unless_coarser_than_the_finest_capture(
+    tiny_network: Path,
+) -> None:
+    from burstloc.simulate import BurstScenario, expected_time_step
+    from burstloc.study import study_time_step
+
+    scenario = BurstScenario(str(tiny_network), "B")
+    tsnet_step = expected_time_step(scenario)
+    coarse = StudySettings(capture_intervals=(2 * tsnet_step, 10.0))
+    fine = StudySettings(capture_intervals=(0.5 * tsnet_step, 10.0))
+    assert study_time_step(scenario, coarse) is None
+    assert study_time_step(scenario, fine) == pytest.approx(0.25 * tsnet_step)
+    given = StudySettings(capture_intervals=(0.5 * tsnet_step,), time_step=0.001)
+    assert study_time_step(scenario, given) == 0.001
+    point = StudyPoint(str(tiny_network), "default")
+    assert {s.time_step for s in _scenarios(point, fine)} == {0.25 * tsnet_step}

@@ -51,7 +51,9 @@ def _first_and_onset(alarms: Sequence[Any], times: np.ndarray) -> tuple[float, f
     return first, onset
 
 
-def _arrival_first(localizer: str, calibration: IntervalCalibration, fused: Any) -> bool:
+def _arrival_first(
+    localizer: str, calibration: IntervalCalibration, fused: FusedLocalizer | None
+) -> bool:
     return localizer == "arrival" or (
         localizer == "fused"
         and fused is not None
@@ -102,7 +104,7 @@ def rank_alarms(
     Raises:
         InputError: no alarm, or the localizer cannot answer from this evidence.
     """
-    fused = localizers.get("fused")
+    fused: FusedLocalizer | None = localizers.get("fused")
     chosen = localizers[localizer]
     last = float(times[-1])
 
@@ -120,7 +122,7 @@ def rank_alarms(
 
     decided = decision_time(localizer, alarms, times, calibration, fused)
     early = evidence(decided)
-    if localizer != "fused" or not _arrival_first(localizer, calibration, fused):
+    if fused is None or localizer != "fused" or not _arrival_first(localizer, calibration, fused):
         return Decision(chosen.rank(early), min(decided, last))
     arrivals = fused.arrival.rank(early)
     _, onset = _first_and_onset(alarms, times)

@@ -40,11 +40,14 @@ import sys
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from burstloc.exceptions import ConfigError, InputError, NetworkError
+
+if TYPE_CHECKING:
+    from burstloc.ranking import MeterModel
 
 __all__ = [
     "DEFAULT_LEVELS",
@@ -145,7 +148,7 @@ class StudySettings:
     capture_intervals: tuple[float, ...] = (0.2, 2.0, 5.0, 10.0)
     detectors: tuple[str, ...] = DETECTORS
     localizers: tuple[str, ...] = LOCALIZERS
-    meter_models: tuple[str, ...] = ("instantaneous", "interval-averaged")
+    meter_models: tuple[MeterModel, ...] = ("instantaneous", "interval-averaged")
     phases: int = 5
     duration: float = 220.0
     false_alarm_rate: float = 0.1

@@ -1,0 +1,33 @@
+"""A line of four meters 600 m apart (m0 - m1 - m2 - m3; pipes p01, p12, p23) and localizers on it,
+shared by the fused-localizer and decision tests."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from burstloc.arrival import ArrivalLocalizer, PipeGeometry
+from burstloc.signature import SignatureLocalizer, SignatureSet
+
+METERS = ("m0", "m1", "m2", "m3")
+PIPES = ("p01", "p12", "p23")
+WAVE = 1200.0
+
+
+def line_arrival() -> ArrivalLocalizer:
+    pos = {m: 600.0 * i for i, m in enumerate(METERS)}
+    distances = {n: np.array([abs(pos[n] - pos[m]) for m in METERS]) for n in METERS}
+    pipes = [PipeGeometry(f"p{i}{i + 1}", f"m{i}", f"m{i + 1}", 600.0) for i in range(3)]
+    return ArrivalLocalizer(pipes, METERS, distances, wave_speed=WAVE)
+
+
+def line_signature(matrix: np.ndarray) -> SignatureLocalizer:
+    sig = SignatureSet(
+        network_hash="sha256:test",
+        meters=METERS,
+        pipes=PIPES,
+        endpoints={f"p{i}{i + 1}": (f"m{i}", f"m{i + 1}") for i in range(3)},
+        matrix=matrix,
+        baseline=np.full(4, 50.0),
+        params={},
+    )
+    return SignatureLocalizer(sig, settle=20.0, decision_delay=60.0, estimator="mean")
