@@ -9,7 +9,10 @@ from pathlib import Path
 import jsonschema
 import pytest
 
-from burstloc.cli import main
+from burstloc.capture import METER_MODELS
+from burstloc.cli import build_parser, main
+from burstloc.evaluate import DEFAULT_LOCALIZER, RANKING_LOCALIZATION_INTERVAL, ranking_runs
+from burstloc.exceptions import ConfigError
 from burstloc.report import CSV_FIELDS
 from conftest import PAPER15
 
@@ -22,6 +25,8 @@ def test_evaluate_writes_tables_json_csv_and_plots(tmp_path: Path, capsys) -> No
         [
             "evaluate",
             str(PAPER15),
+            "--localizer",
+            "paper",
             "--pipes",
             "P2",
             "P4",
@@ -100,8 +105,44 @@ def test_evaluate_writes_tables_json_csv_and_plots(tmp_path: Path, capsys) -> No
     ],
 )
 def test_evaluate_bad_input_exits_2_with_a_clear_message(args, message, capsys) -> None:
-    assert main(["evaluate", str(PAPER15), "--quiet", *args]) == 2
+    assert main(["evaluate", str(PAPER15), "--quiet", "--localizer", "paper", *args]) == 2
     assert message in capsys.readouterr().err
+
+
+def test_the_default_localizer_is_fused_and_paper_options_need_the_paper_localizer(
+    capsys,
+) -> None:
+    args = build_parser().parse_args(["evaluate", str(PAPER15)])
+    assert args.localizer == [DEFAULT_LOCALIZER] == ["fused"]
+    for option, value in [
+        ("--threshold", "0.3"),
+        ("--drift", "0.1"),
+        ("--sigma", "2"),
+        ("--localization-interval", "5"),
+        ("--mode", "stream"),
+    ]:
+        assert main(["evaluate", str(PAPER15), "--quiet", option, value]) == 2
+        err = capsys.readouterr().err
+        assert f"{option} apply to the paper's rules only" in err and "--config" in err
+
+
+def test_ranking_runs_take_any_capture_interval_and_keep_the_paper_record() -> None:
+    runs = ranking_runs(["cusum"], [0.2, 3.0], ["arrival", "fused"], METER_MODELS)
+    assert [(r.capture_interval, r.localizer, r.meter_model) for r in runs] == [
+        (ci, name, model)
+        for ci in (0.2, 3.0)
+        for name in ("arrival", "fused")
+        for model in METER_MODELS
+    ]
+    assert {r.capture_interval: r.detector.threshold for r in runs} == {0.2: 0.3, 3.0: 1.0}
+    assert {r.capture_interval: r.localization_interval for r in runs} == {
+        0.2: 5,
+        3.0: RANKING_LOCALIZATION_INTERVAL,
+    }
+    with pytest.raises(ConfigError, match="paper_runs"):
+        ranking_runs(["cusum"], None, ["paper"])
+    with pytest.raises(ConfigError, match="capture interval must be > 0"):
+        ranking_runs(["cusum"], [0.0], ["fused"])
 
 
 def test_evaluate_unknown_detector_is_an_argparse_error(capsys) -> None:

@@ -58,8 +58,10 @@ if TYPE_CHECKING:
     from burstloc.simulate import ScenarioResult
 
 __all__ = [
+    "DEFAULT_LOCALIZER",
     "LOCALIZERS",
     "PHASE_SPANS",
+    "RANKING_LOCALIZATION_INTERVAL",
     "Attempt",
     "Evaluation",
     "RankingSetup",
@@ -72,6 +74,7 @@ __all__ = [
     "locate_ranked",
     "paper_runs",
     "phase_offsets",
+    "ranking_runs",
     "readings_after",
     "readings_at_offset",
     "required_duration",
@@ -82,6 +85,10 @@ PHASE_SPANS: tuple[str, ...] = ("capture", "window")
 
 #: ``--localizer`` choices: the paper's rules, then the ranking localizers of issue 6.
 LOCALIZERS: tuple[str, ...] = ("paper", "arrival", "signature", "fused")
+
+#: ``burstloc evaluate``'s localizer: the fused one, ahead of the paper's rules at every capture
+#: interval in ``burstloc study`` (docs/study/report.md).
+DEFAULT_LOCALIZER = "fused"
 
 
 @dataclass(frozen=True)
@@ -197,6 +204,50 @@ def paper_runs(
                 spec = RunSpec(cfg, ci, li, Mode(mode))
                 label = spec.paper_run()
                 runs.append(RunSpec(cfg, ci, li, Mode(mode), label.scenario if label else None))
+    return runs
+
+
+#: Localization interval of a ranking run at a capture interval the paper did not use (the
+#: paper's value at every coarse interval): it only sets the warm-up history and the simulated
+#: span; the calibrated bank and the localizer's decision delay do the rest.
+RANKING_LOCALIZATION_INTERVAL = 10
+
+
+def ranking_runs(
+    detectors: Sequence[str],
+    capture_intervals: Sequence[float] | None,
+    localizers: Sequence[str],
+    meter_models: Sequence[str] = ("instantaneous",),
+) -> list[RunSpec]:
+    """Runs of ranking localizers (not ``"paper"``) for detectors x intervals x meter models.
+
+    A ranking run detects with the calibrated bank of its detector kind, so only the kind
+    matters; its ``detector`` carries the paper's Tables I/II threshold where the paper used
+    the interval (for the JSON record) and 1 m otherwise, and its localization interval the
+    paper's, else :data:`RANKING_LOCALIZATION_INTERVAL`. Any capture interval > 0 is accepted.
+
+    Raises:
+        ConfigError: an unknown detector or localizer, ``"paper"`` among ``localizers``, or a
+            capture interval that is not > 0.
+    """
+    if "paper" in localizers:
+        raise ConfigError("ranking_runs builds ranking localizers only; use paper_runs for 'paper'")
+    intervals = list(paper.CAPTURE_INTERVALS if capture_intervals is None else capture_intervals)
+    runs: list[RunSpec] = []
+    for kind in detectors:
+        table = {r.capture_interval: r for r in paper.PAPER_RUNS if r.detector == kind}
+        for ci in intervals:
+            ci = float(ci)
+            if not (math.isfinite(ci) and ci > 0):
+                raise ConfigError(f"capture interval must be > 0 s, got {ci:g}")
+            base = table.get(ci)
+            cfg = DetectorConfig(kind, base.threshold if base else 1.0)
+            li = base.localization_interval if base else RANKING_LOCALIZATION_INTERVAL
+            runs += [
+                RunSpec(cfg, ci, li, Mode.WINDOW, localizer=name, meter_model=model)
+                for name in localizers
+                for model in meter_models
+            ]
     return runs
 
 

@@ -64,7 +64,7 @@ TABLE_II: tuple[PaperRun, ...] = (
     PaperRun("S_S4", "shewhart", 10.0, 3.0, 10),
 )
 
-#: Both tables: the default ``burstloc evaluate`` experiment.
+#: Both tables: the ``burstloc evaluate --localizer paper`` experiment.
 PAPER_RUNS: tuple[PaperRun, ...] = TABLE_I + TABLE_II
 
 #: The capture intervals of the paper (s), in table column order.

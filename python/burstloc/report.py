@@ -162,7 +162,9 @@ def format_tables(ev: Evaluation) -> str:
                 pub = f"{paper.TABLE_V[kind][k]:.0f}%"
             ttl = r.median_time_to_localize()
             params = (
-                ", ".join(f"{k}={v:g}" for k, v in r.spec.detector.params().items())
+                "calibrated"
+                if r.spec.localizer != "paper"
+                else ", ".join(f"{k}={v:g}" for k, v in r.spec.detector.params().items())
                 + f", L={r.spec.localization_interval}"
             )
             rows.append(
