@@ -68,6 +68,7 @@ __all__ = [
     "Calibration",
     "IntervalCalibration",
     "calibrate",
+    "calibrated_bank",
     "check_baseline",
     "cusum_threshold",
     "localization_interval",
@@ -432,6 +433,29 @@ class Calibration:
         if network is not None:
             config.check(network, meters)
         return config
+
+
+def calibrated_bank(
+    kind: str, channels: int, calibration: IntervalCalibration
+) -> _core.DetectorBank:
+    """A :class:`burstloc.DetectorBank` of ``kind`` with one interval's calibrated settings
+    (:meth:`~burstloc.calibrate.IntervalCalibration.uniform`; Shewhart reference window 2N).
+
+    Raises:
+        ConfigError: unknown detector kind.
+    """
+    params = calibration.uniform(kind)
+    if kind == "cusum":
+        return _core.DetectorBank(
+            "cusum", channels, threshold=params["threshold"], drift=params["drift"]
+        )
+    return _core.DetectorBank(
+        "shewhart",
+        channels,
+        threshold=params["threshold"],
+        sigma=params["sigma"],
+        window=2 * calibration.localization_interval,
+    )
 
 
 def calibrate(

@@ -19,12 +19,14 @@ from burstloc.exceptions import ConfigError, InputError, NetworkError, Simulatio
 __all__ = [
     "add_calibrate_parser",
     "add_evaluate_parser",
+    "add_monitor_parser",
     "add_simulate_parser",
     "add_study_parser",
     "build_parser",
     "main",
     "run_calibrate",
     "run_evaluate",
+    "run_monitor",
     "run_simulate",
     "run_study",
 ]
@@ -361,6 +363,83 @@ def run_calibrate(args: argparse.Namespace) -> int:
     return 0
 
 
+# --- monitor -------------------------------------------------------------------------------
+
+
+def add_monitor_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Register ``burstloc monitor``."""
+    parser = subparsers.add_parser(
+        "monitor",
+        help="the live loop: readings in (CSV), one JSON line per located burst out",
+        description=(
+            "Read pressure readings 'timestamp,meter,value' (a file, or - for stdin) in "
+            "arrival order, assemble complete time steps, run the calibrated detector bank of "
+            "--config and a ranking localizer, and print one JSON line per located burst: the "
+            "decision time, the first alarm and the three best pipes."
+        ),
+    )
+    parser.add_argument("network", metavar="NETWORK.inp", help="EPANET INP file")
+    parser.add_argument(
+        "--config", required=True, metavar="PATH", help="`burstloc calibrate` output"
+    )
+    parser.add_argument(
+        "--capture-interval",
+        type=float,
+        required=True,
+        metavar="S",
+        help="seconds between readings",
+    )
+    parser.add_argument("--readings", default="-", metavar="FILE", help="CSV file (default: stdin)")
+    parser.add_argument("--detector", choices=("cusum", "shewhart"), default="cusum")
+    parser.add_argument("--localizer", choices=("arrival", "signature", "fused"), default="fused")
+    parser.add_argument(
+        "--meter-model", choices=("instantaneous", "interval-averaged"), default="instantaneous"
+    )
+    parser.add_argument(
+        "--timeout", type=int, default=3, metavar="N", help="steps to wait for a late reading"
+    )
+    parser.add_argument(
+        "--missing", choices=("skip", "hold"), default="hold", help="policy for incomplete steps"
+    )
+    parser.set_defaults(handler=run_monitor)
+    return parser
+
+
+def run_monitor(args: argparse.Namespace) -> int:
+    """Handle ``burstloc monitor``."""
+    import json
+
+    from burstloc.calibrate import Calibration
+    from burstloc.monitor import BurstMonitor, monitor_readings, parse_readings
+
+    config = Calibration.load(args.config)
+    monitor = BurstMonitor(
+        args.network,
+        config,
+        capture_interval=args.capture_interval,
+        detector=args.detector,
+        localizer=args.localizer,
+        meter_model=args.meter_model,
+    )
+    try:
+        source = sys.stdin if args.readings == "-" else open(args.readings)  # noqa: SIM115
+    except OSError as exc:
+        raise InputError(f"cannot read readings {args.readings!r}: {exc.strerror}") from exc
+    try:
+        readings = parse_readings(source)
+        options = {
+            "period": args.capture_interval,
+            "timeout": args.timeout,
+            "missing": args.missing,
+        }
+        for decided in monitor_readings(monitor, readings, **options):
+            print(json.dumps(decided.to_json()), flush=True)
+    finally:
+        if source is not sys.stdin:
+            source.close()
+    return 0
+
+
 # --- study ---------------------------------------------------------------------------------
 
 
@@ -398,6 +477,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_simulate_parser(subparsers)
     add_evaluate_parser(subparsers)
     add_calibrate_parser(subparsers)
+    add_monitor_parser(subparsers)
     add_study_parser(subparsers)
     return parser
 

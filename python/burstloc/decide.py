@@ -19,6 +19,7 @@ Numpy only; on the live path.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -32,7 +33,7 @@ if TYPE_CHECKING:
     from burstloc.calibrate import IntervalCalibration
     from burstloc.fused import FusedLocalizer
 
-__all__ = ["Decision", "decision_time", "rank_alarms"]
+__all__ = ["Decision", "decision_time", "rank_alarms", "ranking_localizers"]
 
 
 @dataclass(frozen=True)
@@ -43,6 +44,23 @@ class Decision:
     ranking: Ranking
     time: float
     waited: bool = False
+
+
+def ranking_localizers(network: str | os.PathLike[str], meters: Sequence[str]) -> dict[str, Any]:
+    """The ranking localizers of ``meters`` on ``network``, by name (``arrival``, ``signature``,
+    ``fused``): the shortest-path graph and the cached steady-state signature sets (one WNTR
+    run per pipe and candidate position the first time; see :mod:`burstloc.signature`).
+
+    Raises:
+        NetworkError: missing or malformed network, or a meter that is not one of its junctions.
+    """
+    from burstloc.arrival import ArrivalLocalizer
+    from burstloc.fused import FusedLocalizer
+    from burstloc.signature import SignatureLocalizer, cached_signature_sets
+
+    arrival = ArrivalLocalizer.from_network(network, meters)
+    signature = SignatureLocalizer(cached_signature_sets(network, meters))
+    return {"arrival": arrival, "signature": signature, "fused": FusedLocalizer(arrival, signature)}
 
 
 def _first_and_onset(alarms: Sequence[Any], times: np.ndarray) -> tuple[float, float]:

@@ -43,8 +43,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from burstloc import paper
+from burstloc.calibrate import calibrated_bank
 from burstloc.capture import METER_MODELS, capture
-from burstloc.decide import decision_time, rank_alarms
+from burstloc.decide import decision_time, rank_alarms, ranking_localizers
 from burstloc.detection import DetectorConfig, Mode, make_detector
 from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.localize import BurstLocator, Localization
@@ -54,7 +55,7 @@ from burstloc.stream import replay
 if TYPE_CHECKING:
     import networkx as nx
 
-    from burstloc.calibrate import Calibration, IntervalCalibration
+    from burstloc.calibrate import Calibration
     from burstloc.simulate import ScenarioResult
 
 __all__ = [
@@ -381,29 +382,6 @@ def locate_burst(
     return Attempt(result.pipe, offset, burst_start, outcome.localization if outcome else None)
 
 
-def calibrated_bank(kind: str, channels: int, calibration: IntervalCalibration) -> Any:
-    """A :class:`burstloc.DetectorBank` of ``kind`` with one interval's calibrated settings
-    (:meth:`~burstloc.calibrate.IntervalCalibration.uniform`; Shewhart reference window 2N).
-
-    Raises:
-        ConfigError: unknown detector kind.
-    """
-    from burstloc import _core
-
-    params = calibration.uniform(kind)
-    if kind == "cusum":
-        return _core.DetectorBank(
-            "cusum", channels, threshold=params["threshold"], drift=params["drift"]
-        )
-    return _core.DetectorBank(
-        "shewhart",
-        channels,
-        threshold=params["threshold"],
-        sigma=params["sigma"],
-        window=2 * calibration.localization_interval,
-    )
-
-
 @dataclass
 class RankingSetup:
     """What the ranking localizers of one network need, built once per evaluation."""
@@ -426,10 +404,7 @@ class RankingSetup:
         with its defaults). A ``config`` for another network or other meters is refused by
         name (:meth:`burstloc.calibrate.Calibration.check`), as is one without an interval.
         """
-        from burstloc.arrival import ArrivalLocalizer
         from burstloc.calibrate import calibrate
-        from burstloc.fused import FusedLocalizer
-        from burstloc.signature import SignatureLocalizer, cached_signature_sets
 
         if config is None:
             config = calibrate(network, capture_intervals=capture_intervals, meters=meters)
@@ -437,12 +412,7 @@ class RankingSetup:
             config.check(network, meters)
             for ci in capture_intervals:
                 config.for_interval(ci)
-        arrival = ArrivalLocalizer.from_network(network, meters)
-        signature = SignatureLocalizer(cached_signature_sets(network, meters))
-        fused = FusedLocalizer(arrival, signature)
-        return cls(
-            list(meters), config, {"arrival": arrival, "signature": signature, "fused": fused}
-        )
+        return cls(list(meters), config, ranking_localizers(network, meters))
 
 
 def locate_ranked(
