@@ -96,6 +96,12 @@ def paper15() -> Path:
     return PAPER15
 
 
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The tiny network, written once per test module."""
+    return write_tiny(tmp_path_factory.mktemp("tiny") / "tiny.inp")
+
+
 @pytest.fixture
 def tiny_network(tmp_path: Path) -> Path:
     """The tiny five-pipe network, written to a temporary file."""

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 import pytest
@@ -12,19 +11,12 @@ from burstloc.calibrate import IntervalCalibration
 from burstloc.decide import decision_time, rank_alarms
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.fused import FusedLocalizer, quantisation_margin
+from burstloc.ranking import IndexedAlarm
 from line_network import METERS, WAVE, line_arrival, line_signature
 
 # signature rows: p01 and p12 differ only at m0 / m2, p23 is far from both
 MATRIX = np.array([[1.0, 1.0, 0.4, 0.2], [0.6, 1.0, 0.9, 0.4], [0.1, 0.3, 1.0, 1.0]])
 BURST = 10.0
-
-
-@dataclass(frozen=True)
-class _Alarm:
-    channel: int
-    index: int
-    start: int
-    amplitude: float
 
 
 def _burst(x: float, drop: np.ndarray, dt: float = 0.05, until: float = 80.0) -> tuple:
@@ -37,7 +29,7 @@ def _burst(x: float, drop: np.ndarray, dt: float = 0.05, until: float = 80.0) ->
     alarms = []
     for channel, a in enumerate(arrive):
         index = int(np.searchsorted(t, a))
-        alarms.append(_Alarm(channel, index, index - 1, -float(drop[channel])))
+        alarms.append(IndexedAlarm(channel, index, index - 1, -float(drop[channel])))
     return t, readings, alarms
 
 

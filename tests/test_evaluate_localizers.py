@@ -23,11 +23,6 @@ SHORT = paper.ScenarioConfig(burst_start=2.0)
 
 
 @pytest.fixture(scope="module")
-def tiny(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    return write_tiny(tmp_path_factory.mktemp("tiny") / "tiny.inp")
-
-
-@pytest.fixture(scope="module")
 def tiny_config(tiny: Path) -> Calibration:
     return calibrate(tiny, capture_intervals=(0.2,), noise_sigma=0.01)
 

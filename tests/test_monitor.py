@@ -25,11 +25,6 @@ SHORT = paper.ScenarioConfig(burst_start=2.0)
 
 
 @pytest.fixture(scope="module")
-def tiny(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    return write_tiny(tmp_path_factory.mktemp("tiny-monitor") / "tiny.inp")
-
-
-@pytest.fixture(scope="module")
 def config(tiny: Path) -> Calibration:
     return calibrate(tiny, capture_intervals=(0.2, 2.0), noise_sigma=0.01)
 

@@ -37,7 +37,7 @@ import numpy as np
 from burstloc.calibrate import Calibration, calibrated_bank
 from burstloc.decide import Decision, decision_time, rank_alarms, ranking_localizers
 from burstloc.exceptions import ConfigError, InputError
-from burstloc.ranking import METER_MODELS, MeterModel
+from burstloc.ranking import METER_MODELS, IndexedAlarm, MeterModel
 from burstloc.stream import Item, Reading, ReadingStream, Step
 
 __all__ = [
@@ -79,16 +79,6 @@ class LiveDecision:
                 for r in self.decision.ranking.top(top)
             ],
         }
-
-
-@dataclass(frozen=True)
-class _Alarm:
-    """A bank alarm re-indexed into the history buffer."""
-
-    channel: int
-    index: int
-    start: int
-    amplitude: float
 
 
 class BurstMonitor:
@@ -228,11 +218,11 @@ class BurstMonitor:
     def _history(self) -> tuple[np.ndarray, np.ndarray]:
         return np.fromiter(self._times, dtype=np.float64), np.array(self._values)
 
-    def _shifted(self, size: int) -> list[_Alarm]:
+    def _shifted(self, size: int) -> list[IndexedAlarm]:
         """The bank's alarms with indices into the history (starts clipped to its oldest)."""
         first = self._seen - size  # bank index of the oldest step kept (< 0 after a reset)
         return [
-            _Alarm(a.channel, a.index - first, max(a.start - first, 0), a.amplitude)
+            IndexedAlarm(a.channel, a.index - first, max(a.start - first, 0), a.amplitude)
             for a in self._alarms
             if a.index >= first
         ]

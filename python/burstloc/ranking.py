@@ -23,6 +23,7 @@ __all__ = [
     "CANDIDATE_POSITIONS",
     "METER_MODELS",
     "BurstEvidence",
+    "IndexedAlarm",
     "MeterAlarm",
     "MeterModel",
     "RankedPipe",
@@ -221,6 +222,18 @@ class BurstEvidence:
         if missing:
             raise InputError(f"evidence has no readings for meter(s) {missing}")
         return np.array([index[m] for m in meters], dtype=np.intp)
+
+
+@dataclass(frozen=True)
+class IndexedAlarm:
+    """An alarm by reading index, shaped like :class:`burstloc.Alarm` for
+    :func:`evidence_from_alarms`: meter column ``channel``, the reading that raised it
+    (``index``), the last reading before the change (``start``) and ``amplitude`` (m)."""
+
+    channel: int
+    index: int
+    start: int
+    amplitude: float
 
 
 def evidence_from_alarms(
