@@ -43,8 +43,8 @@ $(EXT): $(BIN)/python $(BUILD_INPUTS)
 paper: setup
 	$(BIN)/burstloc evaluate networks/paper15.inp --localizer paper fused
 
-## study: the robustness study of docs/beyond-the-paper.md, report in docs/study/ (~25 min on
-## 2 cores once simulated; the first run simulates ~250 bursts, about 1.5 h on 2 cores)
+## study: the robustness study of docs/beyond-the-paper.md, report in docs/study/ (~19 min on
+## 2 cores once simulated; the first run simulates 196 bursts, about an hour more)
 study: setup
 	$(BIN)/burstloc study --out docs/study --workers 2
 
