@@ -11,7 +11,7 @@ from burstloc.calibrate import IntervalCalibration
 from burstloc.decide import decision_time, rank_alarms
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.fused import FusedLocalizer, quantisation_margin
-from burstloc.ranking import IndexedAlarm
+from burstloc.ranking import IndexedAlarm, RankedPipe, Ranking
 from line_network import METERS, WAVE, line_arrival, line_signature
 
 # signature rows: p01 and p12 differ only at m0 / m2, p23 is far from both
@@ -128,3 +128,32 @@ def test_quantisation_margin() -> None:
     assert _localizers()["fused"].margin == pytest.approx(quantisation_margin(len(METERS)))
     with pytest.raises(ConfigError):
         _localizers(margin=-1.0)
+
+
+@pytest.mark.parametrize(("x", "row", "dt"), [(605.0, 1, 0.2), (1500.0, 2, 2.0)])
+def test_fused_reuses_the_signature_ranking_of_the_same_readings(
+    x: float, row: int, dt: float
+) -> None:
+    # waiting near a junction at 0.2 s, and answering at the signature's time at 2 s: in both
+    # the fused localizer looks at the signatures when the signature localizer does
+    localizers = _localizers()
+    t, readings, alarms = _burst(x, 0.5 * MATRIX[row], dt)
+    cal = _calibration(dt)
+
+    def decide(name: str, **shared: object) -> object:
+        return rank_alarms(
+            name, localizers, METERS, t, readings, alarms, cal, "instantaneous", **shared
+        )
+
+    signature = decide("signature")
+    alone = decide("fused")
+    shared = decide("fused", signature_ranking=signature.ranking)
+    assert list(shared.ranking) == list(alone.ranking)
+    assert (shared.time, shared.waited) == (alone.time, alone.waited)
+    assert alone.time == pytest.approx(signature.time)
+    # the ranking passed in is the one used (a reversed one changes the answer)
+    reversed_ranking = Ranking(
+        RankedPipe(p.pipe, p.start, p.end, score=-p.score) for p in signature.ranking
+    )
+    swapped = decide("fused", signature_ranking=reversed_ranking)
+    assert swapped.ranking.best != alone.ranking.best

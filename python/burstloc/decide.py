@@ -113,11 +113,16 @@ def rank_alarms(
     alarms: Sequence[Any],
     calibration: IntervalCalibration,
     meter_model: MeterModel,
+    *,
+    signature_ranking: Ranking | None = None,
 ) -> Decision:
     """Rank the pipes with ``localizers[localizer]`` at its decision time (module docstring).
 
     ``times`` / ``readings`` (T,) / (T, M) are the captured readings of ``meters``; ``alarms`` the
     calibrated bank's alarms on them. The decision time is capped at the last reading.
+    ``signature_ranking``: for ``fused``, the ranking of the ``signature`` decision on these same
+    readings and alarms, if the caller has it (the fused localizer looks at the signatures at
+    that same time, so it need not fit them again); ignored otherwise.
 
     Raises:
         InputError: no alarm, or the localizer cannot answer from this evidence.
@@ -140,12 +145,17 @@ def rank_alarms(
 
     decided = decision_time(localizer, alarms, times, calibration, fused)
     early = evidence(decided)
-    if fused is None or localizer != "fused" or not _arrival_first(localizer, calibration, fused):
+    if fused is None or localizer != "fused":
         return Decision(chosen.rank(early), min(decided, last))
+    if not _arrival_first(localizer, calibration, fused):
+        # at the signature's own decision time
+        return Decision(fused.rank(early, signature_ranking=signature_ranking), min(decided, last))
     arrivals = fused.arrival.rank(early)
     _, onset = _first_and_onset(alarms, times)
     later = onset + calibration.decision_delay
     if fused.decisive(arrivals) or later <= decided:
         return Decision(fused.rank(early, arrival_ranking=arrivals), min(decided, last))
-    ranking = fused.rank(evidence(later), arrival_ranking=arrivals)
+    ranking = fused.rank(
+        evidence(later), arrival_ranking=arrivals, signature_ranking=signature_ranking
+    )
     return Decision(ranking, min(later, last), waited=True)

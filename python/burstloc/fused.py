@@ -136,13 +136,21 @@ class FusedLocalizer:
         settled = evidence.times >= evidence.onset + self.signature.settle
         return bool(np.count_nonzero(settled) >= 3 and np.any(evidence.times <= evidence.onset))
 
-    def rank(self, evidence: BurstEvidence, *, arrival_ranking: Ranking | None = None) -> Ranking:
+    def rank(
+        self,
+        evidence: BurstEvidence,
+        *,
+        arrival_ranking: Ranking | None = None,
+        signature_ranking: Ranking | None = None,
+    ) -> Ranking:
         """Pipes known to both localizers, best first, scored by the weighted log-likelihoods.
 
         ``arrival_ranking``, if given, is used instead of ranking ``evidence``'s arrivals (the
-        arrivals as seen at an earlier decision time). A localizer that cannot answer (no alarm
-        for arrivals; no settled readings or no baseline for signatures) is left out and the
-        other one decides alone.
+        arrivals as seen at an earlier decision time). ``signature_ranking``, if given, must be
+        the signature localizer's ranking of this same ``evidence`` (computed already, e.g. by a
+        caller scoring both localizers); it saves fitting the readings twice. A localizer that
+        cannot answer (no alarm for arrivals; no settled readings or no baseline for signatures)
+        is left out and the other one decides alone.
         """
         w_arrival, w_signature = self.weights(evidence.capture_interval)
         parts: list[tuple[float, Mapping[str, float], Ranking]] = []
@@ -152,7 +160,9 @@ class FusedLocalizer:
             ranking = self.arrival.rank(evidence)
             parts.append((w_arrival, arrival_loglik(ranking), ranking))
         if self._signature_ready(evidence) and w_signature > 0:
-            ranking = self.signature.rank(evidence)
+            ranking = (
+                self.signature.rank(evidence) if signature_ranking is None else signature_ranking
+            )
             parts.append((w_signature, signature_loglik(ranking), ranking))
         if not parts:
             raise InputError(

@@ -307,6 +307,11 @@ def _with_history(
     return np.concatenate([before, ticks]), np.vstack([history, readings])
 
 
+def _signature_first(names: Sequence[str]) -> list[str]:
+    """``names`` with ``signature`` ahead of ``fused`` (whose decision can reuse its ranking)."""
+    return sorted(names, key=lambda name: name != "signature")
+
+
 def score_point(task: tuple[StudyPoint, StudySettings]) -> list[dict[str, Any]]:
     """Score one grid point (simulations must be cached or are simulated here).
 
@@ -368,16 +373,27 @@ def score_point(task: tuple[StudyPoint, StudySettings]) -> list[dict[str, Any]]:
                         bank = calibrated_bank(detector, len(meters), cal)
                         alarms = bank.run(np.ascontiguousarray(readings))
                         burst = float(res.metadata["burst_start"])
-                        for name in settings.localizers:
+                        signature_ranking = None  # shared with fused (same evidence, same time)
+                        for name in _signature_first(settings.localizers):
                             entry = tally[name]
                             entry.n += 1
                             try:
                                 decision = rank_alarms(
-                                    name, localizers, meters, ticks, readings, alarms, cal, model
+                                    name,
+                                    localizers,
+                                    meters,
+                                    ticks,
+                                    readings,
+                                    alarms,
+                                    cal,
+                                    model,
+                                    signature_ranking=signature_ranking,
                                 )
                             except InputError:
                                 entry.nodet += 1
                                 continue
+                            if name == "signature":
+                                signature_ranking = decision.ranking
                             entry.top1 += decision.ranking.in_top(res.pipe, 1)
                             entry.top3 += decision.ranking.in_top(res.pipe, 3)
                             entry.times.append(decision.time - burst)
