@@ -43,7 +43,7 @@ $(EXT): $(BIN)/python $(BUILD_INPUTS)
 paper: setup
 	$(BIN)/burstloc evaluate networks/paper15.inp --localizer paper fused
 
-## study: the robustness study of docs/beyond-the-paper.md, report in docs/study/ (~19 min on
+## study: the robustness study of docs/beyond-the-paper.md, report in docs/study/ (~8 min on
 ## 2 cores once simulated; the first run simulates 196 bursts, about an hour more)
 study: setup
 	$(BIN)/burstloc study --out docs/study --workers 2
