@@ -139,6 +139,8 @@ def test_ranking_runs_take_any_capture_interval_and_keep_the_paper_record() -> N
         0.2: 5,
         3.0: RANKING_LOCALIZATION_INTERVAL,
     }
+    # the calibrated bank is fed once per reading and never reset: a streaming run
+    assert {r.params()["mode"] for r in runs} == {"stream"}
     with pytest.raises(ConfigError, match="paper_runs"):
         ranking_runs(["cusum"], None, ["paper"])
     with pytest.raises(ConfigError, match="capture interval must be > 0"):

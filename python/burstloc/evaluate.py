@@ -226,6 +226,7 @@ def ranking_runs(
     matters; its ``detector`` carries the paper's Tables I/II threshold where the paper used
     the interval (for the JSON record) and 1 m otherwise, and its localization interval the
     paper's, else :data:`RANKING_LOCALIZATION_INTERVAL`. Any capture interval > 0 is accepted.
+    Its mode is ``stream``: the bank is fed once per reading and never reset.
 
     Raises:
         ConfigError: an unknown detector or localizer, ``"paper"`` among ``localizers``, or a
@@ -245,7 +246,7 @@ def ranking_runs(
             cfg = DetectorConfig(kind, base.threshold if base else 1.0)
             li = base.localization_interval if base else RANKING_LOCALIZATION_INTERVAL
             runs += [
-                RunSpec(cfg, ci, li, Mode.WINDOW, localizer=name, meter_model=model)
+                RunSpec(cfg, ci, li, Mode.STREAM, localizer=name, meter_model=model)
                 for name in localizers
                 for model in meter_models
             ]
