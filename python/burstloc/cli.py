@@ -368,6 +368,9 @@ def run_calibrate(args: argparse.Namespace) -> int:
 
 def add_monitor_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Register ``burstloc monitor``."""
+    from burstloc.decide import RANKING_LOCALIZERS
+    from burstloc.ranking import METER_MODELS
+
     parser = subparsers.add_parser(
         "monitor",
         help="the live loop: readings in (CSV), one JSON line per located burst out",
@@ -391,10 +394,8 @@ def add_monitor_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     parser.add_argument("--readings", default="-", metavar="FILE", help="CSV file (default: stdin)")
     parser.add_argument("--detector", choices=("cusum", "shewhart"), default="cusum")
-    parser.add_argument("--localizer", choices=("arrival", "signature", "fused"), default="fused")
-    parser.add_argument(
-        "--meter-model", choices=("instantaneous", "interval-averaged"), default="instantaneous"
-    )
+    parser.add_argument("--localizer", choices=RANKING_LOCALIZERS, default="fused")
+    parser.add_argument("--meter-model", choices=METER_MODELS, default="instantaneous")
     parser.add_argument(
         "--timeout", type=int, default=3, metavar="N", help="steps to wait for a late reading"
     )

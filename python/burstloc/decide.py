@@ -33,7 +33,10 @@ if TYPE_CHECKING:
     from burstloc.calibrate import IntervalCalibration
     from burstloc.fused import FusedLocalizer
 
-__all__ = ["Decision", "decision_time", "rank_alarms", "ranking_localizers"]
+__all__ = ["RANKING_LOCALIZERS", "Decision", "decision_time", "rank_alarms", "ranking_localizers"]
+
+#: The ranking localizers by name, as :func:`ranking_localizers` builds them.
+RANKING_LOCALIZERS: tuple[str, ...] = ("arrival", "signature", "fused")
 
 
 @dataclass(frozen=True)

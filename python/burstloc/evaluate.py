@@ -45,7 +45,7 @@ import numpy as np
 from burstloc import paper
 from burstloc.calibrate import calibrated_bank
 from burstloc.capture import METER_MODELS, capture
-from burstloc.decide import decision_time, rank_alarms, ranking_localizers
+from burstloc.decide import RANKING_LOCALIZERS, decision_time, rank_alarms, ranking_localizers
 from burstloc.detection import DetectorConfig, Mode, make_detector
 from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.localize import BurstLocator, Localization
@@ -85,7 +85,7 @@ __all__ = [
 PHASE_SPANS: tuple[str, ...] = ("capture", "window")
 
 #: ``--localizer`` choices: the paper's rules, then the ranking localizers of issue 6.
-LOCALIZERS: tuple[str, ...] = ("paper", "arrival", "signature", "fused")
+LOCALIZERS: tuple[str, ...] = ("paper", *RANKING_LOCALIZERS)
 
 #: ``burstloc evaluate``'s localizer: the fused one, ahead of the paper's rules at every capture
 #: interval in ``burstloc study`` (docs/study/report.md).

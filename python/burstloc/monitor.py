@@ -35,7 +35,13 @@ from typing import Any
 import numpy as np
 
 from burstloc.calibrate import Calibration, calibrated_bank
-from burstloc.decide import Decision, decision_time, rank_alarms, ranking_localizers
+from burstloc.decide import (
+    RANKING_LOCALIZERS,
+    Decision,
+    decision_time,
+    rank_alarms,
+    ranking_localizers,
+)
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.ranking import METER_MODELS, IndexedAlarm, MeterModel
 from burstloc.stream import Item, Reading, ReadingStream, Step
@@ -50,8 +56,6 @@ __all__ = [
 
 #: Seconds of readings kept before a burst's onset (the baseline of the signature localizer).
 HISTORY_BEFORE_ONSET = 60.0
-
-_LOCALIZERS = ("arrival", "signature", "fused")
 
 
 @dataclass(frozen=True)
@@ -122,8 +126,8 @@ class BurstMonitor:
         localizers: Mapping[str, Any] | None = None,
         holdoff: float | None = None,
     ) -> None:
-        if localizer not in _LOCALIZERS:
-            raise ConfigError(f"localizer must be one of {_LOCALIZERS}, got {localizer!r}")
+        if localizer not in RANKING_LOCALIZERS:
+            raise ConfigError(f"localizer must be one of {RANKING_LOCALIZERS}, got {localizer!r}")
         if meter_model not in METER_MODELS:
             raise ConfigError(f"meter model must be one of {METER_MODELS}, got {meter_model!r}")
         config.check(network)

@@ -44,7 +44,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from burstloc.decide import RANKING_LOCALIZERS
 from burstloc.exceptions import ConfigError, InputError, NetworkError
+from burstloc.ranking import METER_MODELS
 
 if TYPE_CHECKING:
     from burstloc.ranking import MeterModel
@@ -78,7 +80,7 @@ DEFAULT_LEVELS: dict[str, tuple[Any, ...]] = {
     "friction": ("steady", "quasi-steady", "unsteady"),
 }
 
-LOCALIZERS = ("arrival", "signature", "fused")
+LOCALIZERS = RANKING_LOCALIZERS
 DETECTORS = ("cusum", "shewhart")
 
 
@@ -148,7 +150,7 @@ class StudySettings:
     capture_intervals: tuple[float, ...] = (0.2, 2.0, 5.0, 10.0)
     detectors: tuple[str, ...] = DETECTORS
     localizers: tuple[str, ...] = LOCALIZERS
-    meter_models: tuple[MeterModel, ...] = ("instantaneous", "interval-averaged")
+    meter_models: tuple[MeterModel, ...] = METER_MODELS
     phases: int = 5
     duration: float = 220.0
     false_alarm_rate: float = 0.1
@@ -157,8 +159,6 @@ class StudySettings:
     time_step: float | None = None
 
     def __post_init__(self) -> None:
-        from burstloc.capture import METER_MODELS
-
         for name, values, allowed in (
             ("detectors", self.detectors, DETECTORS),
             ("localizers", self.localizers, LOCALIZERS),
