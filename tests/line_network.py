@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from burstloc.arrival import ArrivalLocalizer, PipeGeometry
-from burstloc.signature import SignatureLocalizer, SignatureSet
+from burstloc.localize.arrival import ArrivalLocalizer, PipeGeometry
+from burstloc.localize.signature import SignatureLocalizer, SignatureSet
 
 METERS = ("m0", "m1", "m2", "m3")
 PIPES = ("p01", "p12", "p23")

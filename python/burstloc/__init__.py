@@ -12,7 +12,7 @@ The detectors are implemented in Rust (``cpd-core``) and exposed here:
   input, respectively.
 
 Importing ``burstloc`` loads only the native module: the simulation stack (TSNet, WNTR) is
-imported by ``burstloc.simulate`` when needed.
+imported by ``burstloc.sim.tsnet`` when needed.
 """
 
 from burstloc._core import (

@@ -244,7 +244,7 @@ def steady_state_flows(wn: WaterNetworkModel, engine: str = "PDD") -> dict[str, 
     Solved as TSNet's ``Initializer`` does: WNTR's EPANET simulator with the given demand model
     (``"PDD"`` pressure-driven, ``"DD"`` demand-driven), first time step. EPANET's scratch files
     go to a temporary directory; what it warns is kept out of the terminal (recorded in a
-    scenario's metadata when :mod:`burstloc.simulate` calls this). ``wn`` is not modified.
+    scenario's metadata when :mod:`burstloc.sim.tsnet` calls this). ``wn`` is not modified.
     """
     wntr = _wntr()
 

@@ -1,0 +1,5 @@
+"""``python -m burstloc``: the same as the ``burstloc`` command."""
+
+from burstloc.cli import main
+
+raise SystemExit(main())

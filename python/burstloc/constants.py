@@ -1,0 +1,63 @@
+"""The constants every layer shares: one home for each (imported by all, importing nothing).
+
+* :data:`CAPTURE_INTERVALS`: the meters' reporting periods the paper evaluates (s).
+* :data:`WAVE_SPEED`: the pressure-wave speed TSNet and the paper use (m/s).
+* :data:`SCENARIO_DURATION`: how long a burst scenario is simulated (s).
+* :data:`DETECTORS`, :data:`RANKING_LOCALIZERS`, :data:`LOCALIZERS`: names accepted everywhere.
+* :data:`METER_MODELS` / :data:`MeterModel`: what a meter's reading is.
+* :data:`CANDIDATE_POSITIONS`: burst positions along a pipe that the localizers try.
+* :data:`SIGNATURE_DECISION_DELAY`: when the steady-state signature is read after a burst (s).
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+__all__ = [
+    "CANDIDATE_POSITIONS",
+    "CAPTURE_INTERVALS",
+    "DETECTORS",
+    "LOCALIZERS",
+    "METER_MODELS",
+    "RANKING_LOCALIZERS",
+    "SCENARIO_DURATION",
+    "SIGNATURE_DECISION_DELAY",
+    "WAVE_SPEED",
+    "Detector",
+    "MeterModel",
+]
+
+CAPTURE_INTERVALS: tuple[float, ...] = (0.2, 2.0, 5.0, 10.0)
+"""Capture intervals (s) of the paper's experiment, and the defaults of every command."""
+
+WAVE_SPEED = 1200.0
+"""Pressure-wave speed (m/s): TSNet's default, the paper's setting."""
+
+SCENARIO_DURATION = 220.0
+"""Simulated seconds of a burst scenario: the burst at 10 s plus the signature's decision delay
+(150 s) and the settling readings after it."""
+
+Detector = Literal["cusum", "shewhart"]
+"""A change-point detector: the two-sided CUSUM or the Shewhart chart."""
+
+DETECTORS: tuple[Detector, ...] = ("cusum", "shewhart")
+
+MeterModel = Literal["instantaneous", "interval-averaged"]
+"""How a meter turns pressure into a reading: an instantaneous sample at the reading's time stamp
+(the paper's model), or the mean over the capture interval that ends at the time stamp (what most
+loggers report)."""
+
+METER_MODELS: tuple[MeterModel, ...] = ("instantaneous", "interval-averaged")
+
+RANKING_LOCALIZERS: tuple[str, ...] = ("arrival", "signature", "fused")
+"""The localizers that rank every pipe (behind :class:`burstloc.localize.Localizer`)."""
+
+LOCALIZERS: tuple[str, ...] = ("paper", *RANKING_LOCALIZERS)
+"""Every localizer: the paper's rules, then the ranking localizers."""
+
+CANDIDATE_POSITIONS: tuple[float, ...] = tuple(round(0.1 * i, 1) for i in range(1, 10))
+"""Candidate burst positions along each pipe (fractions of its length from its INP start node)
+that the arrival and signature localizers try; a pipe keeps its best-fitting position."""
+
+SIGNATURE_DECISION_DELAY = 150.0
+"""Seconds after a burst's onset at which the signature localizer reads the lasting drop."""

@@ -1,0 +1,11 @@
+"""Experiments on simulated bursts: calibration search, the paper's experiment, evaluation,
+the robustness study, and their reports and plots. Built on every layer below; nothing in the
+library imports it but :mod:`burstloc.cli`.
+
+* :mod:`~burstloc.experiments.calibrate`: thresholds and localization settings from a baseline;
+* :mod:`~burstloc.experiments.paper`: the paper's tables and scenario;
+* :mod:`~burstloc.experiments.evaluate`: burst every pipe, replay, localize, score;
+* :mod:`~burstloc.experiments.study`: the one-factor-at-a-time robustness grid;
+* :mod:`~burstloc.experiments.report`, :mod:`~burstloc.experiments.plot`: tables, JSON, CSV,
+  figures.
+"""

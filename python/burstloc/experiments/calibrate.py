@@ -1,0 +1,551 @@
+"""Automatic calibration: detector thresholds and localization settings from a burst-free baseline.
+
+No hand tuning: for each capture interval, the detector thresholds are the smallest that keep the
+false-alarm rate of every meter at or below a target (alarms per meter per hour) on burst-free
+readings, and the localization settings follow from the network's geometry.
+
+**Noise model.** A burst-free meter reads its steady level plus independent Gaussian noise of
+standard deviation ``sigma`` per reading (the sensor model). ``sigma`` comes either from the
+caller (``noise_sigma``: the meters' specification) or from recorded normal readings (a robust
+estimate per meter: the median absolute first difference / (0.6745 * sqrt(2))). Both detectors
+only see changes (CUSUM: successive differences; Shewhart: deviations from a trailing mean), so
+the steady level itself does not matter.
+
+**Thresholds.** A seeded noise stream (``numpy.random.default_rng(seed)``) is run through the
+real Rust detectors (:class:`burstloc.Cusum`, :class:`burstloc.Shewhart`) and the threshold is
+found by bisection on the number of false alarms per simulated hour. When the target is too rare
+to be counted on a stream of ``max_samples`` readings, the tail is extrapolated: alarm rates
+fall exponentially with the threshold, so the thresholds that give 100 and 10 alarms per stream
+fix the slope. Floors keep a noise-free model usable: the CUSUM drift is ``max(sigma,
+resolution)`` and every threshold at least ``10 * resolution`` (``resolution`` = 1 mm, a
+meter's display step). The Shewhart multiplier ``s`` is 3 (the classic control limits) and its
+reference window is ``2 * localization_interval`` readings, as in the streaming detector.
+
+**Localization interval** (readings per half-window): enough readings for the wave to reach
+every meter within one half-window, ``ceil(travel_spread / dt)``, at least 10 and at most 50.
+The floor comes from the Shewhart chart: with a trailing reference window of ``W = 2 * N``
+readings that includes the current one, ``|x - mean| / std`` can never exceed ``sqrt(W - 1)``,
+so a multiplier of 3 needs ``W >= 11``; with ``N = 10`` a step's first reading scores 4.4.
+``travel_spread`` is the longest wave travel time between two meters. The signature localizer
+decides ``decision_delay`` = 150 s after the onset (the issue's budget); the arrival localizer
+``max(median pipe length / wave speed, 2 * dt)`` after the first alarm: by then the wave has
+reached both end nodes of the burst pipe, the meters that matter most.
+
+**Configuration file.** :meth:`Calibration.save` writes a named JSON document with the network's
+SHA-256 and the meter list; :meth:`Calibration.check` refuses, by name, a configuration for
+another network or other meters.
+
+**Bad baselines.** A baseline shorter than ``MIN_BASELINE_READINGS`` readings or
+``MIN_BASELINE_SECONDS`` is refused, and so is one that contains a burst: a lasting step (the
+largest two-sample shift statistic of any meter above ``STEP_Z`` noise units and above 10 mm) or
+a transient excursion (a reading more than ``SPIKE_Z`` noise units and 50 mm from the meter's
+median).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from burstloc import _core
+from burstloc._atomic import write_json
+from burstloc.constants import CAPTURE_INTERVALS, SIGNATURE_DECISION_DELAY, WAVE_SPEED
+from burstloc.exceptions import ConfigError, InputError
+from burstloc.localize.signature import network_hash
+
+__all__ = [
+    "CALIBRATION_FORMAT",
+    "Baseline",
+    "BaselineError",
+    "Calibration",
+    "IntervalCalibration",
+    "calibrate",
+    "calibrated_bank",
+    "check_baseline",
+    "cusum_threshold",
+    "localization_interval",
+    "shewhart_threshold",
+]
+
+CALIBRATION_FORMAT = "burstloc-calibration/1"
+"""Format tag of a configuration file."""
+
+DEFAULT_FALSE_ALARM_RATE = 0.1
+"""Default target: false alarms per meter per hour (one per meter every 10 hours)."""
+DEFAULT_NOISE_SIGMA = 0.01
+"""Default sensor noise (m) when neither a sigma nor recorded readings are given."""
+RESOLUTION = 0.001
+"""Display step of a meter (m): the floor of the CUSUM drift; thresholds are at least 10x it."""
+SHEWHART_SIGMA = 3.0
+"""Shewhart control-limit multiplier ``s``."""
+SIGNATURE_SETTLE = 20.0
+MIN_BASELINE_READINGS = 100
+MIN_BASELINE_SECONDS = 60.0
+STEP_Z = 12.0
+SPIKE_Z = 12.0
+_MAX_SAMPLES = 2_000_000
+
+
+class BaselineError(InputError):
+    """A calibration baseline is unusable: too short, or it contains a burst."""
+
+
+@dataclass(frozen=True)
+class Baseline:
+    """Recorded burst-free readings: ``times`` (T,), ``readings`` (T, M) of ``meters``."""
+
+    meters: tuple[str, ...]
+    times: NDArray[np.float64]
+    readings: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        t = np.asarray(self.times, dtype=np.float64)
+        r = np.asarray(self.readings, dtype=np.float64)
+        if t.ndim != 1 or r.shape != (t.size, len(self.meters)):
+            raise InputError(
+                f"baseline needs times (T,) and readings (T, {len(self.meters)}), got "
+                f"{t.shape} and {r.shape}"
+            )
+        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(r))):
+            raise InputError("baseline readings and times must be finite")
+        if t.size > 1 and np.any(np.diff(t) <= 0):
+            raise InputError("baseline time stamps must increase")
+        object.__setattr__(self, "meters", tuple(self.meters))
+        object.__setattr__(self, "times", t)
+        object.__setattr__(self, "readings", r)
+
+
+def robust_sigma(readings: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Per-meter noise estimate from first differences (robust to a slow drift of the level)."""
+    diffs = np.diff(np.asarray(readings, dtype=np.float64), axis=0)
+    mad = np.median(np.abs(diffs - np.median(diffs, axis=0)), axis=0)
+    return np.asarray(mad / (0.6745 * math.sqrt(2.0)))
+
+
+def check_baseline(baseline: Baseline) -> NDArray[np.float64]:
+    """Refuse a baseline that is too short or contains a burst; return its noise per meter."""
+    n = baseline.times.size
+    span = float(baseline.times[-1] - baseline.times[0]) if n > 1 else 0.0
+    if n < MIN_BASELINE_READINGS or span < MIN_BASELINE_SECONDS:
+        raise BaselineError(
+            f"baseline too short: {n} readings over {span:g} s; calibration needs at least "
+            f"{MIN_BASELINE_READINGS} readings and {MIN_BASELINE_SECONDS:g} s of burst-free data"
+        )
+    r = baseline.readings
+    sigma = robust_sigma(r)
+    floor = np.maximum(sigma, RESOLUTION)
+    # lasting step: the largest two-sample shift statistic along the record, per meter
+    csum = np.cumsum(r - r.mean(axis=0), axis=0)[:-1]
+    k = np.arange(1, n)[:, None]
+    shift = np.abs(csum) * np.sqrt(n / (k * (n - k)))  # = |mean_left - mean_right| * sqrt(...)
+    z = shift.max(axis=0) / floor
+    left_n = np.argmax(shift, axis=0) + 1
+    size = np.array(
+        [abs(r[: left_n[j], j].mean() - r[left_n[j] :, j].mean()) for j in range(r.shape[1])]
+    )
+    for j in np.argsort(-z):
+        if z[j] > STEP_Z and size[j] > 0.01:
+            raise BaselineError(
+                f"baseline contains a burst: meter {baseline.meters[j]!r} shifts by "
+                f"{size[j]:.3f} m at t = {baseline.times[left_n[j]]:g} s "
+                f"({z[j]:.0f} noise units); calibrate on burst-free readings"
+            )
+    dev = np.abs(r - np.median(r, axis=0))
+    spike = dev.max(axis=0)
+    for j in np.argsort(-spike):
+        if spike[j] > max(SPIKE_Z * floor[j], 0.05):
+            i = int(np.argmax(dev[:, j]))
+            raise BaselineError(
+                f"baseline contains a burst: meter {baseline.meters[j]!r} departs "
+                f"{spike[j]:.3f} m from its level at t = {baseline.times[i]:g} s; calibrate "
+                "on burst-free readings"
+            )
+    return sigma
+
+
+def _alarms_per_hour(make: Any, noise: NDArray[np.float64], dt: float) -> float:
+    return len(make().update_many(noise)) / (noise.size * dt / 3600.0)
+
+
+def _bisect_threshold(
+    rate_at: Any, lo: float, hi: float, target: float, iterations: int = 40
+) -> float:
+    """Smallest threshold in [lo, hi] with ``rate_at(threshold) <= target`` (rate decreasing)."""
+    if rate_at(lo) <= target:
+        return lo
+    while rate_at(hi) > target:
+        lo, hi = hi, hi * 2
+    for _ in range(iterations):
+        mid = 0.5 * (lo + hi)
+        if rate_at(mid) <= target:
+            hi = mid
+        else:
+            lo = mid
+        if hi - lo < 1e-5:
+            break
+    return hi
+
+
+def _threshold(
+    make: Any, sigma: float, dt: float, rate: float, seed: int, max_samples: int, floor: float
+) -> float:
+    """Threshold meeting ``rate`` alarms/hour for detectors built by ``make(threshold)``."""
+    if sigma <= 0:
+        return floor
+    samples = int(min(max_samples, max(10_000, math.ceil(50 * 3600.0 / (rate * dt)))))
+    noise = np.random.default_rng(seed).normal(0.0, sigma, samples)
+    hours = samples * dt / 3600.0
+
+    def rate_at(thr: float) -> float:
+        return _alarms_per_hour(lambda: make(thr), noise, dt)
+
+    countable = 10.0 / hours  # the smallest rate with ten alarms in the stream
+    if rate >= countable:
+        return max(floor, _bisect_threshold(rate_at, floor, 10 * sigma, rate))
+    # extrapolate the exponential tail from the thresholds giving 100 and 10 alarms
+    r1, r2 = 100.0 / hours, countable
+    h1 = _bisect_threshold(rate_at, floor, 10 * sigma, r1)
+    h2 = _bisect_threshold(rate_at, floor, 10 * sigma, r2)
+    slope = (h2 - h1) / math.log(r1 / r2) if h2 > h1 else sigma
+    return max(floor, h2 + slope * math.log(r2 / rate))
+
+
+def cusum_threshold(
+    sigma: float,
+    capture_interval: float,
+    false_alarm_rate: float = DEFAULT_FALSE_ALARM_RATE,
+    *,
+    seed: int = 0,
+    max_samples: int = _MAX_SAMPLES,
+) -> tuple[float, float]:
+    """``(threshold, drift)`` of a CUSUM meeting ``false_alarm_rate`` (alarms per hour) on
+    Gaussian noise of standard deviation ``sigma`` (m) read every ``capture_interval`` s."""
+    drift = max(sigma, RESOLUTION)
+    threshold = _threshold(
+        lambda thr: _core.Cusum(thr, drift),
+        sigma,
+        capture_interval,
+        false_alarm_rate,
+        seed,
+        max_samples,
+        10 * RESOLUTION,
+    )
+    return threshold, drift
+
+
+def shewhart_threshold(
+    sigma: float,
+    capture_interval: float,
+    window: int,
+    false_alarm_rate: float = DEFAULT_FALSE_ALARM_RATE,
+    *,
+    seed: int = 0,
+    max_samples: int = _MAX_SAMPLES,
+) -> float:
+    """Absolute threshold of a Shewhart chart (multiplier 3, ``window`` readings) meeting the
+    false-alarm rate on noise ``sigma``."""
+    return _threshold(
+        lambda thr: _core.Shewhart(window, thr, SHEWHART_SIGMA),
+        sigma,
+        capture_interval,
+        false_alarm_rate,
+        seed,
+        max_samples,
+        10 * RESOLUTION,
+    )
+
+
+def localization_interval(capture_interval: float, travel_spread: float) -> int:
+    """Readings per half-window: the wave crosses the network within one half-window; at
+    least 10 (see the module docstring), at most 50."""
+    return int(min(50, max(10, math.ceil(travel_spread / capture_interval - 1e-9))))
+
+
+@dataclass(frozen=True)
+class IntervalCalibration:
+    """Settings for one capture interval (thresholds per meter, in metres)."""
+
+    capture_interval: float
+    localization_interval: int
+    cusum_threshold: Mapping[str, float]
+    cusum_drift: Mapping[str, float]
+    shewhart_threshold: Mapping[str, float]
+    shewhart_sigma: float
+    decision_delay: float
+    arrival_decision_delay: float
+
+    def uniform(self, detector: str) -> dict[str, float]:
+        """One parameter set for a whole detector bank (the largest per-meter thresholds)."""
+        if detector == "cusum":
+            return {
+                "threshold": max(self.cusum_threshold.values()),
+                "drift": max(self.cusum_drift.values()),
+            }
+        if detector == "shewhart":
+            return {
+                "threshold": max(self.shewhart_threshold.values()),
+                "sigma": self.shewhart_sigma,
+            }
+        raise ConfigError(f"unknown detector {detector!r}; use 'cusum' or 'shewhart'")
+
+    def to_json(self) -> dict[str, Any]:
+        """JSON-ready dictionary."""
+        return {
+            "capture_interval": self.capture_interval,
+            "localization_interval": self.localization_interval,
+            "cusum": {"threshold": dict(self.cusum_threshold), "drift": dict(self.cusum_drift)},
+            "shewhart": {"threshold": dict(self.shewhart_threshold), "sigma": self.shewhart_sigma},
+            "decision_delay_s": self.decision_delay,
+            "arrival_decision_delay_s": self.arrival_decision_delay,
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> IntervalCalibration:
+        """Inverse of :meth:`to_json`."""
+        return cls(
+            capture_interval=float(data["capture_interval"]),
+            localization_interval=int(data["localization_interval"]),
+            cusum_threshold={k: float(v) for k, v in data["cusum"]["threshold"].items()},
+            cusum_drift={k: float(v) for k, v in data["cusum"]["drift"].items()},
+            shewhart_threshold={k: float(v) for k, v in data["shewhart"]["threshold"].items()},
+            shewhart_sigma=float(data["shewhart"]["sigma"]),
+            decision_delay=float(data["decision_delay_s"]),
+            arrival_decision_delay=float(data["arrival_decision_delay_s"]),
+        )
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """A named configuration: per capture interval settings for one network and meter set."""
+
+    name: str
+    network: str
+    network_hash: str
+    meters: tuple[str, ...]
+    noise_sigma: Mapping[str, float]
+    false_alarm_rate: float
+    intervals: tuple[IntervalCalibration, ...]
+    provenance: Mapping[str, Any] = field(default_factory=dict)
+
+    def for_interval(self, capture_interval: float) -> IntervalCalibration:
+        """The settings calibrated for ``capture_interval`` (ConfigError if there are none)."""
+        for item in self.intervals:
+            if math.isclose(item.capture_interval, capture_interval, rel_tol=1e-9):
+                return item
+        have = ", ".join(f"{i.capture_interval:g}" for i in self.intervals)
+        raise ConfigError(
+            f"configuration {self.name!r} has no calibration for a {capture_interval:g} s "
+            f"capture interval (it has {have} s); run `burstloc calibrate` for it"
+        )
+
+    def check(self, network: str | os.PathLike[str], meters: Sequence[str] | None = None) -> None:
+        """Refuse (ConfigError) to be used with another network or another set of meters."""
+        digest = network_hash(network)
+        if digest != self.network_hash:
+            raise ConfigError(
+                f"configuration {self.name!r} was calibrated for network {self.network!r} "
+                f"({self.network_hash}), not for {os.fspath(network)!r} ({digest})"
+            )
+        if meters is not None and tuple(meters) != self.meters:
+            missing = sorted(set(self.meters) - set(meters))
+            extra = sorted(set(meters) - set(self.meters))
+            detail = f"missing {missing}, extra {extra}" if missing or extra else "other order"
+            raise ConfigError(
+                f"configuration {self.name!r} was calibrated for other meters ({detail})"
+            )
+
+    def to_json(self) -> dict[str, Any]:
+        """JSON-ready dictionary (see :data:`CALIBRATION_FORMAT`)."""
+        return {
+            "format": CALIBRATION_FORMAT,
+            "name": self.name,
+            "network": self.network,
+            "network_hash": self.network_hash,
+            "meters": list(self.meters),
+            "noise_sigma": dict(self.noise_sigma),
+            "false_alarm_rate_per_hour": self.false_alarm_rate,
+            "intervals": [i.to_json() for i in self.intervals],
+            "provenance": dict(self.provenance),
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> Calibration:
+        """Inverse of :meth:`to_json`; a malformed document raises ConfigError."""
+        if data.get("format") != CALIBRATION_FORMAT:
+            raise ConfigError(
+                f"not a burstloc configuration (format {data.get('format')!r}, "
+                f"want {CALIBRATION_FORMAT!r})"
+            )
+        try:
+            return cls(
+                name=str(data["name"]),
+                network=str(data["network"]),
+                network_hash=str(data["network_hash"]),
+                meters=tuple(data["meters"]),
+                noise_sigma={k: float(v) for k, v in data["noise_sigma"].items()},
+                false_alarm_rate=float(data["false_alarm_rate_per_hour"]),
+                intervals=tuple(IntervalCalibration.from_json(i) for i in data["intervals"]),
+                provenance=dict(data.get("provenance", {})),
+            )
+        except (KeyError, TypeError, ValueError, AttributeError) as exc:
+            raise ConfigError(f"malformed configuration: {exc!r}") from exc
+
+    def save(self, path: str | os.PathLike[str]) -> Path:
+        """Write the configuration as JSON (atomically); returns the path."""
+        return write_json(path, self.to_json())
+
+    @classmethod
+    def load(
+        cls,
+        path: str | os.PathLike[str],
+        *,
+        network: str | os.PathLike[str] | None = None,
+        meters: Sequence[str] | None = None,
+    ) -> Calibration:
+        """Read a configuration; with ``network`` (and ``meters``) it is also :meth:`check` ed."""
+        try:
+            with open(path) as fh:
+                data = json.load(fh)
+        except (OSError, json.JSONDecodeError) as exc:
+            raise ConfigError(f"cannot read configuration {os.fspath(path)!r}: {exc}") from exc
+        config = cls.from_json(data)
+        if network is not None:
+            config.check(network, meters)
+        return config
+
+
+def calibrated_bank(
+    kind: str, channels: int, calibration: IntervalCalibration
+) -> _core.DetectorBank:
+    """A :class:`burstloc.DetectorBank` of ``kind`` with one interval's calibrated settings
+    (:meth:`~burstloc.experiments.calibrate.IntervalCalibration.uniform`; Shewhart reference window
+    2N).
+
+    Raises:
+        ConfigError: unknown detector kind.
+    """
+    params = calibration.uniform(kind)
+    if kind == "cusum":
+        return _core.DetectorBank(
+            "cusum", channels, threshold=params["threshold"], drift=params["drift"]
+        )
+    return _core.DetectorBank(
+        "shewhart",
+        channels,
+        threshold=params["threshold"],
+        sigma=params["sigma"],
+        window=2 * calibration.localization_interval,
+    )
+
+
+def calibrate(
+    network: str | os.PathLike[str],
+    *,
+    capture_intervals: Sequence[float] = CAPTURE_INTERVALS,
+    noise_sigma: float | None = None,
+    baseline: Baseline | None = None,
+    false_alarm_rate: float = DEFAULT_FALSE_ALARM_RATE,
+    meters: Sequence[str] | None = None,
+    name: str | None = None,
+    wave_speed: float = WAVE_SPEED,
+    seed: int = 0,
+    max_samples: int = _MAX_SAMPLES,
+) -> Calibration:
+    """Calibrate every capture interval for ``network`` (see the module docstring).
+
+    The noise comes from ``baseline`` (recorded burst-free readings, checked by
+    :func:`check_baseline`; their meters are the meters) or from ``noise_sigma`` (default
+    :data:`DEFAULT_NOISE_SIGMA`); ``meters`` default to every junction.
+    """
+    from burstloc.localize.arrival import length_graph, travel_time_spread
+    from burstloc.network import junction_names, load_network
+
+    if not (math.isfinite(false_alarm_rate) and false_alarm_rate > 0):
+        raise ConfigError(f"false_alarm_rate must be > 0 per hour, got {false_alarm_rate}")
+    intervals = [float(c) for c in capture_intervals]
+    if not intervals or any(not (math.isfinite(c) and c > 0) for c in intervals):
+        raise ConfigError(f"capture intervals must be > 0 s, got {list(capture_intervals)}")
+    if baseline is not None and noise_sigma is not None:
+        raise ConfigError("give either a recorded baseline or noise_sigma, not both")
+    wn = load_network(network)
+    junctions = junction_names(wn)
+    if baseline is not None:
+        meter_list = list(baseline.meters)
+        if meters is not None and tuple(meters) != baseline.meters:
+            raise ConfigError("meters differ from the baseline's meters")
+    else:
+        meter_list = list(junctions if meters is None else meters)
+    unknown = [m for m in meter_list if m not in junctions]
+    if unknown:
+        raise ConfigError(f"meter(s) {unknown} are not junctions of {os.fspath(network)}")
+    if baseline is not None:
+        sigmas = check_baseline(baseline)
+        kind = "recorded"
+        extra: dict[str, Any] = {
+            "baseline_readings": int(baseline.times.size),
+            "baseline_seconds": float(baseline.times[-1] - baseline.times[0]),
+        }
+    else:
+        sigma = DEFAULT_NOISE_SIGMA if noise_sigma is None else float(noise_sigma)
+        if not (math.isfinite(sigma) and sigma >= 0):
+            raise ConfigError(f"noise_sigma must be >= 0 m, got {noise_sigma}")
+        sigmas = np.full(len(meter_list), sigma)
+        kind = "noise-model"
+        extra = {}
+    spread = travel_time_spread(length_graph(wn), meter_list, wave_speed)
+    pipe_travel = float(np.median([wn.get_link(p).length for p in wn.pipe_name_list])) / wave_speed
+    items = []
+    for dt in intervals:
+        n = localization_interval(dt, spread)
+        cache: dict[float, tuple[float, float, float]] = {}
+        cus: dict[str, float] = {}
+        drift: dict[str, float] = {}
+        she: dict[str, float] = {}
+        for meter, s in zip(meter_list, sigmas, strict=True):
+            key = round(float(s), 6)
+            if key not in cache:
+                c_thr, c_drift = cusum_threshold(
+                    key, dt, false_alarm_rate, seed=seed, max_samples=max_samples
+                )
+                s_thr = shewhart_threshold(
+                    key, dt, 2 * n, false_alarm_rate, seed=seed, max_samples=max_samples
+                )
+                cache[key] = (c_thr, c_drift, s_thr)
+            cus[meter], drift[meter], she[meter] = cache[key]
+        items.append(
+            IntervalCalibration(
+                capture_interval=dt,
+                localization_interval=n,
+                cusum_threshold=cus,
+                cusum_drift=drift,
+                shewhart_threshold=she,
+                shewhart_sigma=SHEWHART_SIGMA,
+                decision_delay=SIGNATURE_DECISION_DELAY,
+                arrival_decision_delay=max(pipe_travel, 2 * dt),
+            )
+        )
+    return Calibration(
+        name=name or f"{Path(network).stem}-calibrated",
+        network=os.fspath(network),
+        network_hash=network_hash(network),
+        meters=tuple(meter_list),
+        noise_sigma={m: float(s) for m, s in zip(meter_list, sigmas, strict=True)},
+        false_alarm_rate=float(false_alarm_rate),
+        intervals=tuple(items),
+        provenance={
+            "baseline": kind,
+            "seed": seed,
+            "wave_speed": wave_speed,
+            "travel_spread_s": spread,
+            "resolution_m": RESOLUTION,
+            **extra,
+        },
+    )

@@ -1,0 +1,240 @@
+"""Print and write an :class:`~burstloc.experiments.evaluate.Evaluation`: the paper's tables, JSON,
+CSV.
+
+* :func:`format_tables`: per detector and mode, the per-pipe predictions of every run (phase 0)
+  beside the paper's Tables III/IV when the run is one of the paper's, then a summary in the
+  shape of Table V (accuracy at phase 0, phase mean with min-max, the paper's figure, median
+  time to localize).
+* :func:`write_json`: the CLI's JSON contract (``tests/evaluate_schema.json``).
+* :func:`write_csv`: one row per run and pipe.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from burstloc.constants import CAPTURE_INTERVALS
+from burstloc.experiments import paper
+from burstloc.experiments.evaluate import Evaluation, RunResult
+
+__all__ = ["CSV_FIELDS", "format_tables", "write_csv", "write_json"]
+
+#: Columns of :func:`write_csv`.
+CSV_FIELDS: tuple[str, ...] = (
+    "detector",
+    "mode",
+    "capture_interval",
+    "threshold",
+    "drift",
+    "sigma",
+    "localization_interval",
+    "pipe",
+    "true_start",
+    "true_end",
+    "predicted_start",
+    "predicted_end",
+    "correct",
+    "time_to_localize_s",
+    "rule",
+    "trigger_node",
+    "phases_correct",
+    "phases",
+)
+
+_TABLE_NAMES = {"cusum": ("III", "CUSUM"), "shewhart": ("IV", "Shewhart")}
+
+
+def _pair(p: Sequence[str] | None) -> str:
+    return "not located" if p is None else f"{p[0]} - {p[1]}"
+
+
+def _pct(x: float) -> str:
+    return f"{100 * x:.0f}%"
+
+
+def _groups(ev: Evaluation) -> list[tuple[str, str, list[RunResult]]]:
+    groups: dict[tuple[str, str], list[RunResult]] = {}
+    for r in ev.runs:
+        groups.setdefault((r.spec.detector.kind, r.spec.mode.value), []).append(r)
+    return [
+        (k, m, sorted(rs, key=lambda r: r.spec.capture_interval)) for (k, m), rs in groups.items()
+    ]
+
+
+def _pipe_order(pipes: Sequence[str]) -> list[str]:
+    known = [p for p in paper.PAPER_PIPES if p in pipes]
+    return known + [p for p in pipes if p not in paper.PAPER_PIPES]
+
+
+def _render(rows: list[list[str]], header: list[str]) -> list[str]:
+    widths = [max(len(str(c)) for c in col) for col in zip(header, *rows, strict=True)]
+    line = "  ".join(h.ljust(w) for h, w in zip(header, widths, strict=True)).rstrip()
+    out = [line, "-" * len(line)]
+    out += [
+        "  ".join(str(c).ljust(w) for c, w in zip(row, widths, strict=True)).rstrip()
+        for row in rows
+    ]
+    return out
+
+
+def _run_title(r: RunResult) -> str:
+    label = r.spec.paper_run()
+    name = label.scenario if label else "run"
+    if r.spec.localizer != "paper":
+        short = "avg" if r.spec.meter_model == "interval-averaged" else "inst"
+        name = f"{r.spec.localizer}/{short}"
+    return f"{name} {r.spec.capture_interval:g}s"
+
+
+def format_tables(ev: Evaluation) -> str:
+    """The per-pipe tables and the Table V summary as text (``*`` marks a correct pipe)."""
+    out: list[str] = []
+    for kind, mode, runs in _groups(ev):
+        number, name = _TABLE_NAMES[kind]
+        pipes = _pipe_order(runs[0].pipes)
+        out.append("")
+        out.append(
+            f"Table {number} ({name}, detection mode '{mode}'): burst pipe named at phase 0, "
+            "'*' = correct; 'paper' = the paper's Table " + number
+        )
+        header = ["pipe", "true"]
+        for r in runs:
+            header.append(_run_title(r))
+            if r.spec.paper_run() is not None:
+                header.append("paper")
+        rows: list[list[str]] = []
+        for p in pipes:
+            row = [p, _pair(runs[0].truth[p])]
+            for r in runs:
+                a = r.attempts[p][0]
+                row.append(_pair(a.predicted) + (" *" if a.correct else ""))
+                pr = r.spec.paper_run()
+                if pr is not None:
+                    if p in paper.TRUE_PIPES:
+                        pub = paper.published_prediction(kind, p, pr.capture_interval)
+                        row.append(pub + (" *" if pub == paper.TRUE_PIPES[p] else ""))
+                    else:
+                        row.append("-")
+            rows.append(row)
+        total = ["correct", ""]
+        for r in runs:
+            total.append(f"{r.correct}/{r.total}")
+            pr = r.spec.paper_run()
+            if pr is not None:
+                k = CAPTURE_INTERVALS.index(pr.capture_interval)
+                total.append(
+                    f"{paper.published_correct(kind)[k]}/25 "
+                    f"(printed {paper.PRINTED_TOTALS[kind][k]})"
+                )
+        rows.append(total)
+        out += _render(rows, header)
+
+    out.append("")
+    out.append(
+        f"Table V: accuracy (eq. 4) at phase 0, and mean [min-max] over "
+        f"{len(ev.runs[0].offsets)} phase(s) spread over one "
+        f"{'capture interval' if ev.phase_span == 'capture' else 'localization window'}; "
+        "paper = Table V; time = median time to localize"
+    )
+    header = [
+        "detector",
+        "mode",
+        "capture",
+        "params",
+        "phase 0",
+        "phase mean [min-max]",
+        "paper",
+        "median time",
+        "localizer",
+        "top-1 / top-3",
+    ]
+    rows = []
+    for kind, mode, runs in _groups(ev):
+        for r in runs:
+            acc = r.phase_accuracies()
+            pr = r.spec.paper_run()
+            pub = "-"
+            if pr is not None:
+                k = CAPTURE_INTERVALS.index(pr.capture_interval)
+                pub = f"{paper.TABLE_V[kind][k]:.0f}%"
+            ttl = r.median_time_to_localize()
+            params = (
+                "calibrated"
+                if r.spec.localizer != "paper"
+                else ", ".join(f"{k}={v:g}" for k, v in r.spec.detector.params().items())
+                + f", L={r.spec.localization_interval}"
+            )
+            rows.append(
+                [
+                    _TABLE_NAMES[kind][1],
+                    mode,
+                    f"{r.spec.capture_interval:g} s",
+                    params,
+                    f"{r.correct}/{r.total} = {_pct(r.accuracy)}",
+                    f"{100 * sum(acc) / len(acc):.1f}% [{_pct(min(acc))}-{_pct(max(acc))}]",
+                    pub,
+                    "-" if ttl is None else f"{ttl:.2f} s",
+                    f"{r.spec.localizer} ({r.spec.meter_model})",
+                    f"{_pct(sum(acc) / len(acc))} / {_pct(sum(r.phase_accuracies(3)) / len(acc))}",
+                ]
+            )
+    out += _render(rows, header)
+    for w in ev.warnings:
+        out.append(f"warning: {w}")
+    return "\n".join(out).lstrip("\n") + "\n"
+
+
+def write_json(ev: Evaluation, path: str | os.PathLike[str]) -> Path:
+    """Write the evaluation as the CLI's JSON document."""
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    target.write_text(json.dumps(ev.to_json(), indent=2, allow_nan=False) + "\n", "utf-8")
+    return target
+
+
+def _csv_rows(ev: Evaluation) -> list[dict[str, Any]]:
+    rows = []
+    for r in ev.runs:
+        params = r.spec.detector.params()
+        for p in r.pipes:
+            a = r.attempts[p][0]
+            loc = a.localization
+            rows.append(
+                {
+                    "detector": r.spec.detector.kind,
+                    "mode": r.spec.mode.value,
+                    "capture_interval": r.spec.capture_interval,
+                    "threshold": params["threshold"],
+                    "drift": params.get("drift", ""),
+                    "sigma": params.get("sigma", ""),
+                    "localization_interval": r.spec.localization_interval,
+                    "pipe": p,
+                    "true_start": r.truth[p][0],
+                    "true_end": r.truth[p][1],
+                    "predicted_start": a.predicted[0] if a.predicted else "",
+                    "predicted_end": a.predicted[1] if a.predicted else "",
+                    "correct": a.correct,
+                    "time_to_localize_s": "" if not a.located else a.time_to_localize,
+                    "rule": loc.rule.value if loc else "",
+                    "trigger_node": loc.trigger_node if loc else "",
+                    "phases_correct": sum(x.correct for x in r.attempts[p]),
+                    "phases": len(r.offsets),
+                }
+            )
+    return rows
+
+
+def write_csv(ev: Evaluation, path: str | os.PathLike[str]) -> Path:
+    """Write one CSV row per run and pipe (phase 0, with the count of correct phases)."""
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    with target.open("w", newline="", encoding="utf-8") as f:
+        writer = csv.DictWriter(f, fieldnames=list(CSV_FIELDS))
+        writer.writeheader()
+        writer.writerows(_csv_rows(ev))
+    return target

@@ -1,0 +1,274 @@
+"""The *arrival* localizer: which pipe explains when each meter saw the burst's pressure wave.
+
+A burst sends a pressure wave through the network at the wave speed ``a``; it reaches meter ``m``
+after ``dist(point, m) / a``, where ``dist`` is the shortest path length along the pipes (the
+network as an undirected graph weighted by pipe length). The burst time is unknown, so each
+candidate point is fitted with a free time offset ``t0``. The meters' alarm starts are only known
+to a capture interval ``dt`` (a start stamp ``tau`` means the change arrived between ``tau`` and
+``tau + dt``), so the misfit of meter ``m`` is the distance from ``t0 + dist / a`` to the interval
+``[tau_m, tau_m + dt]``. Meters that read but stay silent until the decision time ``T`` add a
+one-sided constraint: their wave must not have arrived before ``T - 2 dt`` (this is what tells a
+pipe from its neighbours when only one end node has a meter). ``t0`` minimises the sum of squared
+misfits (a convex problem, solved by bisection on its derivative). A pipe's candidate points are
+interior points along it (default ``0.1, 0.2, ..., 0.9`` of its length); the pipe keeps its best
+point.
+
+Score (higher is better) = ``-(RMS misfit) / dt + amplitude_weight * A``, where ``A`` in [0, 1]
+is the mean absolute alarm amplitude at the pipe's two end nodes relative to the largest alarm
+amplitude: amplitudes only break (near) ties, e.g. at coarse capture intervals where many pipes
+fit the arrival pattern equally well.
+
+The distance table is built once at setup (:meth:`ArrivalLocalizer.from_network`); ranking is numpy
+only and on the live path.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import networkx as nx
+import numpy as np
+from numpy.typing import NDArray
+
+from burstloc.constants import CANDIDATE_POSITIONS, WAVE_SPEED
+from burstloc.exceptions import ConfigError, InputError, NetworkError
+from burstloc.localize.evidence import BurstEvidence, RankedPipe, Ranking
+from burstloc.network import flow_direction_graph, load_network
+
+__all__ = [
+    "ArrivalLocalizer",
+    "PipeGeometry",
+    "length_graph",
+    "travel_time_spread",
+]
+
+DEFAULT_POSITIONS = CANDIDATE_POSITIONS
+"""Candidate burst positions along each pipe
+(:data:`burstloc.localize.evidence.CANDIDATE_POSITIONS`)."""
+
+
+@dataclass(frozen=True)
+class PipeGeometry:
+    """A candidate pipe: its end nodes (``start``, ``end``, flow direction) and length (m)."""
+
+    pipe: str
+    start: str
+    end: str
+    length: float
+
+
+def length_graph(wn: Any) -> nx.Graph:
+    """Undirected graph of a WNTR model weighted by link length (m).
+
+    Pipes weigh their length; valves and pumps, which have none, weigh 0 (the wave passes them).
+    Parallel links keep the shortest.
+    """
+    graph = nx.Graph()
+    graph.add_nodes_from(wn.node_name_list)
+    for name in wn.link_name_list:
+        link = wn.get_link(name)
+        length = float(getattr(link, "length", 0.0) or 0.0)
+        u, v = link.start_node_name, link.end_node_name
+        if graph.has_edge(u, v) and graph[u][v]["length"] <= length:
+            continue
+        graph.add_edge(u, v, length=length, link=name)
+    return graph
+
+
+def _flow_endpoints(wn: Any) -> dict[str, tuple[str, str]]:
+    """Pipe -> (start, end) in the steady-state flow direction (paper IV.B)."""
+    by_pipe = flow_direction_graph(wn).graph["edges_by_pipe"]
+    return {p: (str(by_pipe[p][0]), str(by_pipe[p][1])) for p in wn.pipe_name_list}
+
+
+def travel_time_spread(
+    graph: nx.Graph, meters: Sequence[str], wave_speed: float = WAVE_SPEED
+) -> float:
+    """Largest wave travel time (s) between two meters: how long arrivals keep coming in."""
+    best = 0.0
+    for m in meters:
+        lengths = nx.single_source_dijkstra_path_length(graph, m, weight="length")
+        best = max(best, max(float(lengths.get(o, 0.0)) for o in meters))
+    return best / wave_speed
+
+
+class ArrivalLocalizer:
+    """Rank pipes by how well wave travel from a point on them explains the meters' alarm starts.
+
+    ``distances[i, j]`` is the shortest path length (m) from ``nodes[i]`` to ``meters[j]``;
+    ``pipes`` the candidates. Build it with :meth:`from_network`.
+    """
+
+    def __init__(
+        self,
+        pipes: Sequence[PipeGeometry],
+        meters: Sequence[str],
+        node_distances: Mapping[str, NDArray[np.float64]],
+        *,
+        wave_speed: float = WAVE_SPEED,
+        positions: Iterable[float] = DEFAULT_POSITIONS,
+        amplitude_weight: float = 0.05,
+        decision_delay: float | None = None,
+        silence: bool = True,
+    ) -> None:
+        if not (math.isfinite(wave_speed) and wave_speed > 0):
+            raise ConfigError(f"wave_speed must be > 0 m/s, got {wave_speed}")
+        pos = np.array(sorted(set(float(x) for x in positions)), dtype=np.float64)
+        if pos.size == 0 or np.any(pos < 0) or np.any(pos > 1):
+            raise ConfigError("positions must be fractions in [0, 1] (at least one)")
+        if not (math.isfinite(amplitude_weight) and amplitude_weight >= 0):
+            raise ConfigError(f"amplitude_weight must be >= 0, got {amplitude_weight}")
+        if not pipes:
+            raise ConfigError("no candidate pipes")
+        self.meters = tuple(meters)
+        self.pipes = tuple(pipes)
+        self.wave_speed = float(wave_speed)
+        self.positions = pos
+        self.amplitude_weight = float(amplitude_weight)
+        self.silence = bool(silence)
+        for p in self.pipes:
+            for node in (p.start, p.end):
+                if node not in node_distances:
+                    raise ConfigError(f"no distances from node {node!r} (pipe {p.pipe!r})")
+                if np.shape(node_distances[node]) != (len(self.meters),):
+                    raise ConfigError(f"distances from {node!r} must have one value per meter")
+        # (pipes, positions, meters): path length from each candidate point to each meter
+        d_start = np.array([node_distances[p.start] for p in self.pipes], dtype=np.float64)
+        d_end = np.array([node_distances[p.end] for p in self.pipes], dtype=np.float64)
+        length = np.array([p.length for p in self.pipes], dtype=np.float64)
+        along = pos[None, :, None] * length[:, None, None]
+        self._dist = np.minimum(
+            along + d_start[:, None, :], (length[:, None, None] - along) + d_end[:, None, :]
+        )
+        self.pipe_travel = float(np.median(length)) / self.wave_speed
+        """Median wave travel time (s) along one candidate pipe."""
+        self.decision_delay = (
+            float(decision_delay) if decision_delay is not None else self.pipe_travel
+        )
+        """How long after the first alarm the localizer wants to answer (default:
+        ``pipe_travel``: by then the wave has reached both ends of the burst pipe)."""
+
+    @classmethod
+    def from_network(
+        cls,
+        network: str | os.PathLike[str] | Any,
+        meters: Sequence[str] | None = None,
+        *,
+        wave_speed: float = WAVE_SPEED,
+        positions: Iterable[float] = DEFAULT_POSITIONS,
+        amplitude_weight: float = 0.05,
+        decision_delay: float | None = None,
+        silence: bool = True,
+    ) -> ArrivalLocalizer:
+        """Build from an INP path or a WNTR model; ``meters`` default to every junction."""
+        wn = load_network(network) if isinstance(network, (str, os.PathLike)) else network
+        junctions = set(wn.junction_name_list)
+        meter_list = list(wn.junction_name_list if meters is None else meters)
+        unknown = [m for m in meter_list if m not in junctions]
+        if unknown:
+            raise NetworkError(f"meter(s) {unknown} are not junctions of the network")
+        graph = length_graph(wn)
+        endpoints = _flow_endpoints(wn)
+        pipes = [
+            PipeGeometry(p, *endpoints[p], length=float(wn.get_link(p).length))
+            for p in wn.pipe_name_list
+        ]
+        per_meter = {
+            m: nx.single_source_dijkstra_path_length(graph, m, weight="length") for m in meter_list
+        }
+        nodes = {n for p in pipes for n in (p.start, p.end)}
+        node_distances = {
+            n: np.array([float(per_meter[m].get(n, math.inf)) for m in meter_list]) for n in nodes
+        }
+        return cls(
+            pipes,
+            meter_list,
+            node_distances,
+            wave_speed=wave_speed,
+            positions=positions,
+            amplitude_weight=amplitude_weight,
+            decision_delay=decision_delay,
+            silence=silence,
+        )
+
+    def misfit(self, evidence: BurstEvidence) -> NDArray[np.float64]:
+        """RMS arrival misfit (s) of every pipe's best candidate point, shape (pipes,).
+
+        Alarmed meters contribute their distance to ``[tau, tau + dt]``. With ``silence`` on, a
+        meter that reads but has not alarmed by the decision time ``T`` says the wave has not
+        reached it before ``T - 2 dt`` (one interval for the stamp, one for the detector): a
+        candidate whose wave would have arrived earlier pays the difference. Needs at least
+        one alarm among the meters.
+        """
+        alarmed = [j for j, m in enumerate(self.meters) if m in evidence.alarms]
+        if not alarmed:
+            raise InputError("no meter of the arrival model has alarmed: nothing to localize")
+        dt = evidence.capture_interval
+        tau = np.array([evidence.alarms[self.meters[j]].start for j in alarmed])
+        lo_parts = [tau[None, None, :] - self._dist[:, :, alarmed] / self.wave_speed]
+        hi_parts = [lo_parts[0] + dt]
+        if self.silence:
+            reading = set(evidence.meters)
+            silent = [
+                j for j, m in enumerate(self.meters) if m not in evidence.alarms and m in reading
+            ]
+            if silent:
+                bound = evidence.decision_time - 2 * dt
+                lo_parts.append(bound - self._dist[:, :, silent] / self.wave_speed)
+                hi_parts.append(np.full_like(lo_parts[-1], np.inf))
+        lo = np.concatenate(lo_parts, axis=2)  # t0 values that put each arrival in its window
+        hi = np.concatenate(hi_parts, axis=2)
+        finite = np.isfinite(lo)
+        lo_f = np.where(finite, lo, -np.inf)
+        hi_f = np.where(finite, hi, np.inf)
+        first = np.isfinite(lo[:, :, : len(alarmed)])
+        left = np.where(first, lo[:, :, : len(alarmed)], np.inf).min(axis=2) - dt
+        right = (
+            np.maximum(
+                np.where(first, hi[:, :, : len(alarmed)], -np.inf).max(axis=2),
+                np.where(finite, lo, -np.inf).max(axis=2),
+            )
+            + dt
+        )
+        a, b = left.copy(), right.copy()
+        for _ in range(64):  # bisection on the (monotone) derivative of the convex misfit
+            mid = 0.5 * (a + b)
+            grad = np.sum(
+                np.maximum(mid[..., None] - hi_f, 0.0) - np.maximum(lo_f - mid[..., None], 0.0),
+                axis=2,
+            )
+            up = grad > 0
+            b = np.where(up, mid, b)
+            a = np.where(up, a, mid)
+        t0 = 0.5 * (a + b)
+        gap = np.maximum(lo_f - t0[..., None], 0.0) + np.maximum(t0[..., None] - hi_f, 0.0)
+        count = np.maximum(finite.sum(axis=2), 1)
+        rms = np.sqrt(np.sum(gap**2, axis=2) / count)
+        rms = np.where(first.any(axis=2), rms, np.inf)
+        return np.asarray(rms.min(axis=1), dtype=np.float64)
+
+    def amplitude_term(self, evidence: BurstEvidence) -> NDArray[np.float64]:
+        """Per pipe, the mean absolute alarm amplitude at its end nodes over the largest one."""
+        amps = {m: abs(a.amplitude) for m, a in evidence.alarms.items()}
+        top = max(amps.values(), default=0.0)
+        if top <= 0:
+            return np.zeros(len(self.pipes))
+        return np.array(
+            [(amps.get(p.start, 0.0) + amps.get(p.end, 0.0)) / (2 * top) for p in self.pipes]
+        )
+
+    def rank(self, evidence: BurstEvidence) -> Ranking:
+        """Every pipe, best first; see the module docstring for the score."""
+        rms = self.misfit(evidence)
+        score = -rms / evidence.capture_interval + self.amplitude_weight * self.amplitude_term(
+            evidence
+        )
+        score = np.where(np.isfinite(score), score, -1e12)
+        return Ranking(
+            RankedPipe(p.pipe, p.start, p.end, float(s))
+            for p, s in zip(self.pipes, score, strict=True)
+        )

@@ -1,0 +1,458 @@
+"""The *signature* localizer: match the meters' lasting pressure drop to each pipe's signature.
+
+A burst on pipe ``p`` moves the network to a new steady state. Its *signature* ``s_p(x)`` is the
+vector of steady-state head drops at the meters caused by an emitter at position ``x`` along the
+pipe, computed once per network from the hydraulic model (EPANET steady states through WNTR,
+pressure-driven demand, the engine TSNet initialises from) and cached on disk as a small JSON file
+per position (one :class:`SignatureSet` each; by default at the candidate positions 0.1, ..., 0.9
+of :data:`burstloc.localize.evidence.CANDIDATE_POSITIONS`, the arrival localizer's). At run time the
+localizer estimates the observed drop ``d = baseline - new level`` per meter from the readings
+(:mod:`burstloc.localize.steady_level`), fits ``d ~ k * s_p(x)`` with a free scale ``k >= 0``
+(the burst size is unknown; closed-form least squares) and ranks pipes by the RMS residual of
+their best position: ``score = -min_x RMS``. A burst near a pipe's end looks like a burst at that
+end node, so one mid-point signature per pipe misranks off-centre bursts.
+
+Setup (:func:`compute_signatures`, :func:`cached_signatures`) runs WNTR once; the run-time path
+(:class:`SignatureLocalizer`, :func:`rank_drop`) is numpy only and imports neither WNTR nor the
+transient simulator.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+import warnings
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from burstloc._atomic import write_json
+from burstloc.constants import CANDIDATE_POSITIONS
+from burstloc.exceptions import ConfigError, InputError, NetworkError
+from burstloc.localize.evidence import BurstEvidence, RankedPipe, Ranking
+from burstloc.localize.steady_level import (
+    ESTIMATORS,
+    EstimatorName,
+    baseline_levels,
+    estimate_levels,
+)
+from burstloc.network import load_network, split_pipe
+from burstloc.sim.cache import cache_key, default_cache_dir, file_sha256
+
+__all__ = [
+    "DEFAULT_BURST_COEFF",
+    "SIGNATURE_FORMAT",
+    "DemandModel",
+    "SignatureLocalizer",
+    "SignatureSet",
+    "cached_signature_sets",
+    "cached_signatures",
+    "compute_signatures",
+    "fit_signatures",
+    "network_hash",
+    "rank_drop",
+]
+
+SIGNATURE_FORMAT = "burstloc-signatures/1"
+"""Format tag written into every signature file."""
+
+DEFAULT_BURST_COEFF = 0.01
+"""Emitter coefficient (m^3/s per m^0.5, TSNet's burst coefficient unit) of the reference burst.
+
+Only the shape of a signature matters (the fit has a free scale); the reference burst is kept
+moderate so that the drop stays in the near-linear range of the network's response."""
+
+DEFAULT_SETTLE = 60.0
+"""Seconds after the onset skipped before estimating the new level: TSNet's slowest network mode
+(about 16 s period on paper15) starts at metres and decays with a ~30 s time constant."""
+
+DEFAULT_DECISION_DELAY = 150.0
+"""Seconds after the onset at which the signature localizer answers (issue 6's budget)."""
+
+DemandModel = Literal["pdd", "emitter"]
+"""How consumer demands respond to the burst's pressure drop in the steady-state runs: WNTR's
+pressure-driven demand (``"pdd"``, TSNet's initialiser) or TSNet's transient demand law
+``q = c * sqrt(p)`` (``"emitter"``, each demand becomes an emitter fitted at the base state)."""
+
+
+def network_hash(path: str | os.PathLike[str]) -> str:
+    """Fingerprint of a network file: ``"sha256:<hex>"`` of its bytes."""
+    try:
+        return f"sha256:{file_sha256(path)}"
+    except OSError as exc:
+        raise NetworkError(f"cannot read network file {path}: {exc}") from exc
+
+
+@dataclass(frozen=True)
+class SignatureSet:
+    """Burst signatures of one network: ``matrix[i, j]`` is the steady head drop (m) at
+    ``meters[j]`` for the reference burst at the mid-point of ``pipes[i]``.
+
+    ``endpoints[pipe]`` is ``(start, end)`` in the base steady state's flow direction;
+    ``baseline[j]`` is the base steady head at ``meters[j]``; ``params`` records how the
+    signatures were computed (burst coefficient, position, demand model).
+    """
+
+    network_hash: str
+    meters: tuple[str, ...]
+    pipes: tuple[str, ...]
+    endpoints: Mapping[str, tuple[str, str]]
+    matrix: NDArray[np.float64]
+    baseline: NDArray[np.float64]
+    params: Mapping[str, Any]
+
+    def __post_init__(self) -> None:
+        matrix = np.asarray(self.matrix, dtype=np.float64)
+        baseline = np.asarray(self.baseline, dtype=np.float64)
+        if matrix.shape != (len(self.pipes), len(self.meters)):
+            raise InputError(
+                f"signature matrix must be (pipes, meters) = ({len(self.pipes)}, "
+                f"{len(self.meters)}), got {matrix.shape}"
+            )
+        if baseline.shape != (len(self.meters),):
+            raise InputError(f"baseline must have one head per meter, got {baseline.shape}")
+        if not (np.all(np.isfinite(matrix)) and np.all(np.isfinite(baseline))):
+            raise InputError("signatures must be finite")
+        missing = [p for p in self.pipes if p not in self.endpoints]
+        if missing:
+            raise InputError(f"no end nodes for pipe(s) {missing}")
+        if len(set(self.meters)) != len(self.meters) or len(set(self.pipes)) != len(self.pipes):
+            raise InputError("duplicate meter or pipe in a signature set")
+        matrix.setflags(write=False)
+        baseline.setflags(write=False)
+        object.__setattr__(self, "matrix", matrix)
+        object.__setattr__(self, "baseline", baseline)
+        object.__setattr__(self, "meters", tuple(self.meters))
+        object.__setattr__(self, "pipes", tuple(self.pipes))
+        object.__setattr__(
+            self, "endpoints", {p: (str(a), str(b)) for p, (a, b) in self.endpoints.items()}
+        )
+        object.__setattr__(self, "params", dict(self.params))
+
+    def for_meters(self, meters: Sequence[str]) -> SignatureSet:
+        """The same signatures restricted to (and ordered like) ``meters``."""
+        index = {m: j for j, m in enumerate(self.meters)}
+        unknown = [m for m in meters if m not in index]
+        if unknown:
+            raise InputError(f"no signature for meter(s) {unknown}")
+        cols = [index[m] for m in meters]
+        return SignatureSet(
+            network_hash=self.network_hash,
+            meters=tuple(meters),
+            pipes=self.pipes,
+            endpoints=self.endpoints,
+            matrix=self.matrix[:, cols],
+            baseline=self.baseline[cols],
+            params=self.params,
+        )
+
+    def to_json(self) -> dict[str, Any]:
+        """JSON-ready dictionary (see :data:`SIGNATURE_FORMAT`)."""
+        return {
+            "format": SIGNATURE_FORMAT,
+            "network_hash": self.network_hash,
+            "meters": list(self.meters),
+            "pipes": list(self.pipes),
+            "endpoints": {p: list(self.endpoints[p]) for p in self.pipes},
+            "baseline": self.baseline.tolist(),
+            "matrix": self.matrix.tolist(),
+            "params": dict(self.params),
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> SignatureSet:
+        """Inverse of :meth:`to_json`; a malformed document raises ``InputError``."""
+        if data.get("format") != SIGNATURE_FORMAT:
+            raise InputError(
+                f"not a signature file (format {data.get('format')!r}, want {SIGNATURE_FORMAT!r})"
+            )
+        try:
+            return cls(
+                network_hash=str(data["network_hash"]),
+                meters=tuple(data["meters"]),
+                pipes=tuple(data["pipes"]),
+                endpoints={p: (e[0], e[1]) for p, e in data["endpoints"].items()},
+                matrix=np.asarray(data["matrix"], dtype=np.float64).reshape(
+                    len(data["pipes"]), len(data["meters"])
+                ),
+                baseline=np.asarray(data["baseline"], dtype=np.float64),
+                params=dict(data.get("params", {})),
+            )
+        except (KeyError, TypeError, ValueError, IndexError) as exc:
+            raise InputError(f"malformed signature file: {exc}") from exc
+
+    def save(self, path: str | os.PathLike[str]) -> None:
+        """Write the signatures as JSON (atomically: a temp file renamed into place)."""
+        write_json(path, self.to_json(), indent=None)
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str]) -> SignatureSet:
+        """Read a file written by :meth:`save`."""
+        try:
+            with open(path) as fh:
+                data = json.load(fh)
+        except (OSError, json.JSONDecodeError) as exc:
+            raise InputError(f"cannot read signature file {path}: {exc}") from exc
+        return cls.from_json(data)
+
+
+def _steady_heads(wn: Any, workdir: str) -> tuple[Any, Any]:
+    """Heads (per node) and flows (per link) of the EPANET steady state at t = 0."""
+    import wntr
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # EPANET's "REQUIRED PRESSURE raised to 0.1 m" notice
+        sim = wntr.sim.EpanetSimulator(wn)
+        results = sim.run_sim(file_prefix=os.path.join(workdir, "sig"))
+    return results.node["head"].iloc[0], results.link["flowrate"].iloc[0]
+
+
+def compute_signatures(
+    network: str | os.PathLike[str],
+    meters: Sequence[str] | None = None,
+    *,
+    burst_coeff: float = DEFAULT_BURST_COEFF,
+    position: float = 0.5,
+    demand_model: DemandModel = "pdd",
+) -> SignatureSet:
+    """Burst signatures of every pipe of ``network`` at ``meters`` (default: every junction).
+
+    One EPANET steady-state run for the base state and one per pipe with the pipe split at
+    ``position`` and an emitter of coefficient ``burst_coeff`` at the new junction. Pipe end nodes
+    are oriented in the base state's flow direction (a pipe with negative flow is reversed).
+    """
+    if not (math.isfinite(burst_coeff) and burst_coeff > 0):
+        raise ConfigError(f"burst_coeff must be > 0, got {burst_coeff}")
+    if not 0.0 < position < 1.0:
+        raise ConfigError(f"position must be strictly between 0 and 1, got {position}")
+    if demand_model not in ("pdd", "emitter"):
+        raise ConfigError(f"unknown demand model {demand_model!r}; use 'pdd' or 'emitter'")
+    wn = load_network(network)
+    junctions = list(wn.junction_name_list)
+    meter_list = list(junctions if meters is None else meters)
+    unknown = [m for m in meter_list if m not in junctions]
+    if unknown:
+        raise NetworkError(f"meter(s) {unknown} are not junctions of {network}")
+    if not meter_list:
+        raise InputError("at least one meter is needed")
+    wn.options.hydraulic.demand_model = "PDD"
+    wn.options.time.duration = 0
+    with tempfile.TemporaryDirectory(prefix="burstloc-sig-") as workdir:
+        if demand_model == "emitter":
+            base_heads, _ = _steady_heads(wn, workdir)
+            for name in junctions:
+                node = wn.get_node(name)
+                q0 = sum(ts.base_value for ts in node.demand_timeseries_list)
+                pressure = float(base_heads[name]) - node.elevation
+                if q0 > 0 and pressure > 0:
+                    node.emitter_coefficient = q0 / math.sqrt(pressure)
+                for ts in node.demand_timeseries_list:
+                    ts.base_value = 0.0
+        base_heads, base_flows = _steady_heads(wn, workdir)
+        pipes = list(wn.pipe_name_list)
+        endpoints: dict[str, tuple[str, str]] = {}
+        rows = []
+        for pipe in pipes:
+            link = wn.get_link(pipe)
+            a, b = link.start_node_name, link.end_node_name
+            endpoints[pipe] = (b, a) if float(base_flows[pipe]) < 0 else (a, b)
+            split = split_pipe(wn, pipe, position)
+            split.network.get_node(split.burst_node).emitter_coefficient = burst_coeff
+            heads, _ = _steady_heads(split.network, workdir)
+            rows.append([float(base_heads[m]) - float(heads[m]) for m in meter_list])
+    return SignatureSet(
+        network_hash=network_hash(network),
+        meters=tuple(meter_list),
+        pipes=tuple(pipes),
+        endpoints=endpoints,
+        matrix=np.array(rows, dtype=np.float64),
+        baseline=np.array([float(base_heads[m]) for m in meter_list]),
+        params={"burst_coeff": burst_coeff, "position": position, "demand_model": demand_model},
+    )
+
+
+def cached_signatures(
+    network: str | os.PathLike[str],
+    meters: Sequence[str] | None = None,
+    *,
+    cache_dir: str | os.PathLike[str] | None = None,
+    burst_coeff: float = DEFAULT_BURST_COEFF,
+    position: float = 0.5,
+    demand_model: DemandModel = "pdd",
+) -> SignatureSet:
+    """:func:`compute_signatures` for every junction, cached on disk, restricted to ``meters``.
+
+    The cache key covers the network file's bytes, the parameters and the package versions
+    (:func:`burstloc.sim.cache.cache_key`), so an edited network file is recomputed. The default
+    folder is ``signatures/`` in burstloc's cache directory (``$BURSTLOC_CACHE_DIR``). Call
+    once at setup; the result is what :class:`SignatureLocalizer` needs.
+    """
+    key = cache_key(
+        SIGNATURE_FORMAT,
+        {"burst_coeff": burst_coeff, "position": position, "demand_model": demand_model},
+        files=[network],
+    )
+    folder = Path(cache_dir) if cache_dir is not None else default_cache_dir() / "signatures"
+    path = folder / f"{Path(network).stem}-{key[:24]}.json"
+    full: SignatureSet | None = None
+    if path.exists():
+        try:
+            full = SignatureSet.load(path)
+        except InputError:
+            full = None  # a damaged cache entry is recomputed
+    if full is None:
+        full = compute_signatures(
+            network, burst_coeff=burst_coeff, position=position, demand_model=demand_model
+        )
+        full.save(path)
+    return full if meters is None else full.for_meters(meters)
+
+
+def cached_signature_sets(
+    network: str | os.PathLike[str],
+    meters: Sequence[str] | None = None,
+    *,
+    positions: Sequence[float] = CANDIDATE_POSITIONS,
+    cache_dir: str | os.PathLike[str] | None = None,
+    burst_coeff: float = DEFAULT_BURST_COEFF,
+    demand_model: DemandModel = "pdd",
+) -> tuple[SignatureSet, ...]:
+    """:func:`cached_signatures` at every position of ``positions`` (one set each, same order).
+
+    Raises:
+        ConfigError: no position, or a position outside (0, 1).
+    """
+    if not positions:
+        raise ConfigError("at least one signature position is needed")
+    return tuple(
+        cached_signatures(
+            network,
+            meters,
+            cache_dir=cache_dir,
+            burst_coeff=burst_coeff,
+            position=float(x),
+            demand_model=demand_model,
+        )
+        for x in positions
+    )
+
+
+def _as_sets(signatures: SignatureSet | Sequence[SignatureSet]) -> tuple[SignatureSet, ...]:
+    """One or several signature sets of the same meters and pipes, as a non-empty tuple."""
+    sets = (signatures,) if isinstance(signatures, SignatureSet) else tuple(signatures)
+    if not sets:
+        raise ConfigError("at least one signature set is needed")
+    first = sets[0]
+    for other in sets[1:]:
+        if other.meters != first.meters or other.pipes != first.pipes:
+            raise ConfigError(
+                "signature sets disagree on meters or pipes: "
+                f"position {other.params.get('position')} vs {first.params.get('position')}"
+            )
+    return sets
+
+
+def fit_signatures(
+    drop: NDArray[np.float64], matrix: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Fit ``drop ~ k_i * matrix[i]`` with ``k_i >= 0`` for every row; return ``(k, rms)``.
+
+    Closed form: ``k_i = max(0, <d, s_i> / <s_i, s_i>)``; ``rms_i`` is the root mean square of
+    ``d - k_i s_i`` over the meters. A zero signature fits with ``k = 0``.
+    """
+    d = np.asarray(drop, dtype=np.float64)
+    s = np.asarray(matrix, dtype=np.float64)
+    if d.ndim != 1 or s.ndim != 2 or s.shape[1] != d.size or d.size == 0:
+        raise InputError(f"drop (M,) and signatures (P, M) do not match: {d.shape}, {s.shape}")
+    if not np.all(np.isfinite(d)):
+        raise InputError("the drop vector must be finite")
+    norms = np.einsum("pm,pm->p", s, s)
+    dots = s @ d
+    k = np.where(norms > 0, np.maximum(dots, 0.0) / np.where(norms > 0, norms, 1.0), 0.0)
+    resid = d[None, :] - k[:, None] * s
+    rms = np.sqrt(np.mean(resid**2, axis=1))
+    return k, rms
+
+
+def rank_drop(
+    drop: NDArray[np.float64], signatures: SignatureSet | Sequence[SignatureSet]
+) -> Ranking:
+    """Rank pipes by how well ``drop`` (per meter, m) fits their signature.
+
+    With several sets (positions along each pipe), a pipe scores its best position's fit.
+    """
+    sets = _as_sets(signatures)
+    rms = np.min(np.stack([fit_signatures(drop, s.matrix)[1] for s in sets]), axis=0)
+    first = sets[0]
+    return Ranking(
+        RankedPipe(p, *first.endpoints[p], score=-float(r))
+        for p, r in zip(first.pipes, rms, strict=True)
+    )
+
+
+class SignatureLocalizer:
+    """Rank pipes by the fit of the observed lasting drop to their burst signatures.
+
+    ``signatures`` is one :class:`SignatureSet` or several (positions along each pipe, e.g.
+    :func:`cached_signature_sets`) of the same meters and pipes; :attr:`signatures` is the first,
+    :attr:`signature_sets` all of them.
+
+    ``settle`` seconds after the onset are skipped (the fast transient); the new level of each
+    meter is estimated by ``estimator`` from the readings between ``onset + settle`` and the
+    decision time; the baseline is the mean of the readings before the onset. ``decision_delay``
+    is how long after the onset the localizer wants to answer: the caller hands it the readings up
+    to ``onset + decision_delay``.
+    """
+
+    def __init__(
+        self,
+        signatures: SignatureSet | Sequence[SignatureSet],
+        *,
+        estimator: EstimatorName = "damped-fit",
+        settle: float = DEFAULT_SETTLE,
+        decision_delay: float = DEFAULT_DECISION_DELAY,
+        modes: int = 3,
+    ) -> None:
+        if estimator not in ESTIMATORS:
+            raise ConfigError(f"unknown estimator {estimator!r}; use one of {sorted(ESTIMATORS)}")
+        if not (math.isfinite(settle) and settle >= 0):
+            raise ConfigError(f"settle must be >= 0 s, got {settle}")
+        if not (math.isfinite(decision_delay) and decision_delay > settle):
+            raise ConfigError(f"decision_delay must be > settle ({settle} s), got {decision_delay}")
+        self.signature_sets = _as_sets(signatures)
+        self.signatures = self.signature_sets[0]
+        self.estimator: EstimatorName = estimator
+        self.settle = float(settle)
+        self.decision_delay = float(decision_delay)
+        if modes < 0:
+            raise ConfigError(f"modes must be >= 0, got {modes}")
+        self.modes = int(modes)
+
+    def drop(self, evidence: BurstEvidence) -> NDArray[np.float64]:
+        """The observed lasting drop (baseline - new level) per signature meter, in metres."""
+        cols = evidence.columns(self.signatures.meters)
+        values = evidence.readings[:, cols]
+        times = evidence.times
+        # the onset stamp is the detector's start of the change: the last reading before it
+        pre = times <= evidence.onset
+        baseline = baseline_levels(values[pre])
+        post = times >= evidence.onset + self.settle
+        level = estimate_levels(
+            times[post],
+            values[post],
+            capture_interval=evidence.capture_interval,
+            meter_model=evidence.meter_model,
+            method=self.estimator,
+            modes=self.modes,
+        )
+        return baseline - level
+
+    def rank(self, evidence: BurstEvidence) -> Ranking:
+        """Every pipe, best first, scored by minus the RMS residual of the signature fit (m)."""
+        return rank_drop(self.drop(evidence), self.signature_sets)

@@ -1,0 +1,10 @@
+"""The offline side: simulate bursts and sample them as meters would.
+
+Nothing on the live path imports this package (it pulls in TSNet and WNTR).
+
+* :mod:`~burstloc.sim.tsnet`: burst scenarios and the TSNet transient driver;
+* :mod:`~burstloc.sim.capture`: meter sampling (instantaneous or interval-averaged readings);
+* :mod:`~burstloc.sim.sensors`: sensor noise models;
+* :mod:`~burstloc.sim.cache`: the content-addressed cache of simulations on disk;
+* :mod:`~burstloc.sim.sweep`: many scenarios on local processes or a Dask cluster.
+"""

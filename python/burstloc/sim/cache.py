@@ -1,0 +1,138 @@
+"""A content-addressed cache of NumPy arrays on disk.
+
+An entry's key is the SHA-256 of everything that determines it: a namespace, the parameters,
+the bytes of the input files and the versions of burstloc, TSNet, WNTR and NumPy
+(:func:`cache_key`). Entries are ``.npz`` files written atomically (a temporary file in the
+same directory, then ``os.replace``): a killed run never leaves a partial entry, and readers
+never see one. An unreadable entry counts as a miss and is rewritten.
+
+Location: the ``directory`` argument, else ``$BURSTLOC_CACHE_DIR``, else the user's cache
+directory (``platformdirs.user_cache_dir("burstloc")``, e.g. ``~/.cache/burstloc`` on Linux).
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import json
+import os
+import zipfile
+from collections.abc import Iterable, Mapping
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import platformdirs
+
+from burstloc._atomic import write_npz
+
+__all__ = [
+    "ENV_VAR",
+    "DiskCache",
+    "cache_key",
+    "default_cache_dir",
+    "file_sha256",
+    "package_versions",
+]
+
+#: Environment variable that overrides the default cache directory.
+ENV_VAR = "BURSTLOC_CACHE_DIR"
+#: Packages whose versions are part of every key.
+KEY_PACKAGES = ("burstloc", "tsnet", "wntr", "numpy")
+
+
+def default_cache_dir() -> Path:
+    """Return ``$BURSTLOC_CACHE_DIR`` if set, else the user's cache directory for burstloc."""
+    env = os.environ.get(ENV_VAR)
+    return Path(env).expanduser() if env else Path(platformdirs.user_cache_dir("burstloc"))
+
+
+@functools.lru_cache(maxsize=1)
+def package_versions() -> dict[str, str]:
+    """Return the installed versions of burstloc, tsnet, wntr and numpy (without importing)."""
+    versions = {}
+    for name in KEY_PACKAGES:
+        try:
+            versions[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            versions[name] = "not-installed"
+    return versions
+
+
+@functools.lru_cache(maxsize=64)
+def _sha256_cached(path: str, mtime_ns: int, size: int) -> str:
+    digest = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            digest.update(chunk)
+    return digest.hexdigest()
+
+
+def file_sha256(path: str | os.PathLike[str]) -> str:
+    """Return the SHA-256 of a file's bytes (memoised while its size and mtime are unchanged)."""
+    resolved = Path(path).resolve()
+    stat = resolved.stat()
+    return _sha256_cached(str(resolved), stat.st_mtime_ns, stat.st_size)
+
+
+def cache_key(
+    namespace: str,
+    parameters: Mapping[str, Any],
+    files: Iterable[str | os.PathLike[str]] = (),
+) -> str:
+    """Return the hex SHA-256 key of an entry.
+
+    Args:
+        namespace: what kind of entry (with a schema version), e.g. ``"burst-scenario/1"``.
+        parameters: every parameter that changes the entry; JSON-serialisable.
+        files: input files, hashed by content (not by name).
+    """
+    document = {
+        "namespace": namespace,
+        "parameters": dict(parameters),
+        "files": [file_sha256(f) for f in files],
+        "versions": package_versions(),
+    }
+    text = json.dumps(document, sort_keys=True, separators=(",", ":"), allow_nan=False)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+class DiskCache:
+    """Arrays stored under content-addressed keys in a directory.
+
+    Args:
+        directory: where entries live; default :func:`default_cache_dir`.
+    """
+
+    #: Bumped when the on-disk layout changes.
+    LAYOUT = "v1"
+
+    def __init__(self, directory: str | os.PathLike[str] | None = None) -> None:
+        base = Path(directory).expanduser() if directory is not None else default_cache_dir()
+        self.directory: Path = base
+
+    def __repr__(self) -> str:
+        return f"DiskCache({str(self.directory)!r})"
+
+    def path_for(self, key: str) -> Path:
+        """Return the file an entry with this key lives in."""
+        return self.directory / self.LAYOUT / key[:2] / f"{key}.npz"
+
+    def get(self, key: str) -> dict[str, np.ndarray] | None:
+        """Return the entry's arrays, or ``None`` if absent or unreadable."""
+        path = self.path_for(key)
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                return {name: data[name] for name in data.files}
+        except FileNotFoundError:
+            return None
+        except (OSError, ValueError, EOFError, zipfile.BadZipFile):
+            return None
+
+    def put(self, key: str, arrays: Mapping[str, np.ndarray]) -> Path:
+        """Store an entry atomically and return its path."""
+        return write_npz(self.path_for(key), arrays)
+
+    def __contains__(self, key: object) -> bool:
+        return isinstance(key, str) and self.path_for(key).is_file()

@@ -1,0 +1,286 @@
+"""Burst scenarios and their results: what to simulate, and every junction's head over time.
+
+A :class:`BurstScenario` names a network file, a pipe and where along it the burst opens, when
+it starts, how long it takes to open fully and how large it ends (TSNet's emitter
+coefficient). A :class:`ScenarioResult` holds the pressure head of every *original* junction
+(the meters; the burst junction is left out) on the simulator's time grid, with the scenario's
+metadata; it saves to and loads from NPZ files. :mod:`burstloc.sim.tsnet` simulates them.
+The defaults (see ``networks/README.md`` for the reasoning):
+
+========================  =========  ==================================================
+``burst_start``           10 s       a steady stretch before the burst at every capture
+                                     interval of the paper (0.2 to 10 s)
+``opening_time``          1 s        TSNet's documented burst example (``tc = 1``)
+``burst_coeff``           0.01       TSNet's documented burst example, m³/s/m^½
+``wave_speed``            1200 m/s   TSNet's default, as in the paper
+``duration``              220 s      2 x 10 readings after the burst at a 10 s capture
+                                     interval (the paper's coarsest, with localization
+                                     interval 10), whatever the capture phase
+``time_step``             None       TSNet's largest stable step, as in the paper
+``engine``                "PDD"      the paper's pressure-driven initial steady state
+========================  =========  ==================================================
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from burstloc import network
+from burstloc._atomic import write_npz
+from burstloc.constants import SCENARIO_DURATION, WAVE_SPEED
+from burstloc.exceptions import ConfigError, NetworkError
+from burstloc.sim import capture
+from burstloc.sim.cache import cache_key
+
+__all__ = [
+    "DEFAULT_BURST_COEFF",
+    "DEFAULT_BURST_START",
+    "DEFAULT_OPENING_TIME",
+    "FRICTION_MODELS",
+    "BurstScenario",
+    "ScenarioResult",
+    "burst_scenarios",
+    "output_path",
+]
+
+
+DEFAULT_BURST_START = 10.0
+
+
+DEFAULT_OPENING_TIME = 1.0
+
+
+DEFAULT_BURST_COEFF = 0.01
+
+
+#: Cache namespace; bump when a change to this module changes what a scenario simulates.
+SCHEMA = "burst-scenario/1"
+
+
+_ENGINES = ("PDD", "DD")
+
+
+#: TSNet's friction models (``MOCSimulator(friction=...)``); "steady" is TSNet's default.
+FRICTION_MODELS = ("steady", "quasi-steady", "unsteady")
+
+
+def _number(name: str, value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
+        raise ConfigError(f"{name} must be a number, got {value!r}")
+    number = float(value)
+    if not math.isfinite(number):
+        raise ConfigError(f"{name} must be finite, got {value!r}")
+    return number
+
+
+@dataclass(frozen=True)
+class BurstScenario:
+    """One burst: where, when, how large, and how to simulate it.
+
+    Attributes:
+        network: path of the EPANET INP file.
+        pipe: the pipe that bursts.
+        position: where along the pipe, as a fraction of its length from its INP start node,
+            strictly between 0 and 1.
+        burst_start: when the burst begins to open, s (>= 0).
+        opening_time: how long it takes to open fully, s (>= 0; 0 = instantly).
+        burst_coeff: the burst's final emitter coefficient, m³/s per m^½ of pressure head
+            (TSNet's ``final_burst_coeff``), > 0.
+        wave_speed: pressure wave speed in every pipe, m/s, > 0.
+        duration: simulated time, s, > ``burst_start``.
+        engine: initial steady state: ``"PDD"`` (pressure-driven) or ``"DD"``.
+        time_step: TSNet's requested time step, s; ``None`` = TSNet's largest stable step.
+            TSNet adjusts it (wave-speed adjustment), see :attr:`ScenarioResult.time_step`.
+        friction: TSNet's friction model, one of :data:`FRICTION_MODELS` (default ``"steady"``,
+            TSNet's own default and what every scenario used before this field existed).
+
+    Raises:
+        ConfigError: a parameter is out of range (the message names it and its value).
+    """
+
+    network: str
+    pipe: str
+    position: float = 0.5
+    burst_start: float = DEFAULT_BURST_START
+    opening_time: float = DEFAULT_OPENING_TIME
+    burst_coeff: float = DEFAULT_BURST_COEFF
+    wave_speed: float = WAVE_SPEED
+    duration: float = SCENARIO_DURATION
+    engine: str = "PDD"
+    time_step: float | None = None
+    friction: str = "steady"
+
+    def __post_init__(self) -> None:
+        def put(name: str, value: Any) -> None:
+            object.__setattr__(self, name, value)
+
+        put("network", os.fspath(self.network))
+        if not isinstance(self.pipe, str) or not self.pipe:
+            raise ConfigError(f"pipe must be a non-empty string, got {self.pipe!r}")
+        for name in ("position", "burst_start", "opening_time", "burst_coeff"):
+            put(name, _number(name, getattr(self, name)))
+        put("wave_speed", _number("wave_speed", self.wave_speed))
+        put("duration", _number("duration", self.duration))
+        if not 0 < self.position < 1:
+            raise ConfigError(f"position must be strictly between 0 and 1, got {self.position}")
+        if self.burst_start < 0:
+            raise ConfigError(f"burst_start must be >= 0 s, got {self.burst_start}")
+        if self.opening_time < 0:
+            raise ConfigError(f"opening_time must be >= 0 s, got {self.opening_time}")
+        if self.burst_coeff <= 0:
+            raise ConfigError(f"burst_coeff must be > 0, got {self.burst_coeff}")
+        if self.wave_speed <= 0:
+            raise ConfigError(f"wave_speed must be > 0 m/s, got {self.wave_speed}")
+        if self.duration <= self.burst_start:
+            raise ConfigError(
+                f"duration ({self.duration} s) must be longer than burst_start "
+                f"({self.burst_start} s)"
+            )
+        engine = str(self.engine).upper()
+        if engine not in _ENGINES:
+            raise ConfigError(f"engine must be 'PDD' or 'DD', got {self.engine!r}")
+        put("engine", engine)
+        if self.friction not in FRICTION_MODELS:
+            raise ConfigError(f"friction must be one of {FRICTION_MODELS}, got {self.friction!r}")
+        if self.time_step is not None:
+            put("time_step", _number("time_step", self.time_step))
+            if self.time_step <= 0:  # type: ignore[operator]
+                raise ConfigError(f"time_step must be > 0 s, got {self.time_step}")
+
+    def parameters(self) -> dict[str, Any]:
+        """Every field except the network path (the cache hashes the file's bytes instead).
+
+        The default friction model is left out, so scenarios cached before the field existed
+        keep their keys.
+        """
+        params = asdict(self)
+        del params["network"]
+        if params["friction"] == "steady":
+            del params["friction"]
+        return params
+
+    def cache_key(self) -> str:
+        """The scenario's content-addressed cache key.
+
+        Raises:
+            NetworkError: the network file does not exist.
+        """
+        try:
+            return cache_key(SCHEMA, self.parameters(), [self.network])
+        except FileNotFoundError:
+            raise NetworkError(f"network file not found: {self.network}") from None
+
+
+@dataclass(frozen=True, eq=False)
+class ScenarioResult:
+    """A simulated burst: pressure heads of the meters over time, and what produced them.
+
+    Attributes:
+        time: times, s, shape ``(T,)`` (TSNet's grid, or capture ticks after :meth:`resample`).
+        heads: pressure head (hydraulic head minus elevation), m, shape ``(T, M)``.
+        junctions: the ``M`` meter junctions (the network's original junctions, INP order).
+        time_step: TSNet's time step, s.
+        metadata: the scenario's parameters, ``pipe``, ``true_start``/``true_end`` (the pipe's
+            ends in steady-state flow direction), ``burst_node``, ``time_step``, captured
+            ``warnings``/``tsnet_messages``/``negative_pressure_nodes``, ``versions``,
+            ``capture_interval``/``capture_phase`` (``None`` on the simulation grid), ...
+    """
+
+    time: NDArray[np.float64]
+    heads: NDArray[np.float64]
+    junctions: list[str]
+    time_step: float
+    metadata: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def pipe(self) -> str:
+        """The burst pipe."""
+        return str(self.metadata["pipe"])
+
+    @property
+    def true_endpoints(self) -> tuple[str, str]:
+        """The burst pipe's ``(start, end)`` in steady-state flow direction."""
+        return str(self.metadata["true_start"]), str(self.metadata["true_end"])
+
+    def resample(self, capture_interval: float, phase: float = 0.0) -> ScenarioResult:
+        """Return the readings meters would transmit every ``capture_interval`` seconds.
+
+        See :func:`burstloc.sim.capture.resample` (sample-and-hold; an error if the interval is
+        finer than the time step).
+        """
+        ticks, samples = capture.resample(self.time, self.heads, capture_interval, phase)
+        meta = {**self.metadata, "capture_interval": float(capture_interval)}
+        meta["capture_phase"] = float(phase)
+        return replace(self, time=ticks, heads=samples, metadata=meta)
+
+    def to_arrays(self) -> dict[str, np.ndarray]:
+        """The NPZ layout: ``time``, ``heads``, ``junctions`` (str), ``metadata`` (JSON str)."""
+        meta = {**self.metadata, "time_step": self.time_step}
+        return {
+            "time": np.asarray(self.time, dtype=np.float64),
+            "heads": np.asarray(self.heads, dtype=np.float64),
+            "junctions": np.asarray(self.junctions, dtype=np.str_),
+            "metadata": np.asarray(json.dumps(meta, sort_keys=True)),
+        }
+
+    @classmethod
+    def from_arrays(cls, arrays: dict[str, np.ndarray]) -> ScenarioResult:
+        """Inverse of :meth:`to_arrays`."""
+        meta = json.loads(str(arrays["metadata"][()]))
+        return cls(
+            time=np.asarray(arrays["time"], dtype=np.float64),
+            heads=np.asarray(arrays["heads"], dtype=np.float64),
+            junctions=[str(j) for j in arrays["junctions"]],
+            time_step=float(meta["time_step"]),
+            metadata=meta,
+        )
+
+    def save(self, path: str | os.PathLike[str]) -> Path:
+        """Write the result as an NPZ file (atomically); readable with plain NumPy."""
+        return write_npz(path, self.to_arrays())
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str]) -> ScenarioResult:
+        """Read a result written by :meth:`save`."""
+        with np.load(path, allow_pickle=False) as data:
+            return cls.from_arrays({name: data[name] for name in data.files})
+
+
+def burst_scenarios(
+    network_path: str | os.PathLike[str], pipes: Sequence[str] | None = None, **parameters: Any
+) -> list[BurstScenario]:
+    """Return one scenario per pipe (all pipes of the file when ``pipes`` is ``None``).
+
+    ``parameters`` are :class:`BurstScenario` fields (``position``, ``duration``, ...).
+
+    Raises:
+        NetworkError: missing or malformed file, or a pipe the file does not have.
+        ConfigError: a bad parameter.
+    """
+    known = network.pipe_names_in_file(network_path)
+    chosen = list(known if pipes is None else pipes)
+    unknown = [p for p in chosen if p not in known]
+    if unknown:
+        raise NetworkError(f"unknown pipe(s) {unknown} in {os.fspath(network_path)}")
+    if not chosen:
+        raise NetworkError(f"no pipes to burst in {os.fspath(network_path)}")
+    return [BurstScenario(os.fspath(network_path), pipe, **parameters) for pipe in chosen]
+
+
+_UNSAFE = re.compile(r"[^A-Za-z0-9._-]")
+
+
+def output_path(directory: str | os.PathLike[str], result: ScenarioResult) -> Path:
+    """Where the CLI writes a scenario: ``DIR/<network stem>_pipe-<pipe>.npz``."""
+    stem = Path(str(result.metadata["network"])).stem
+    return Path(directory) / f"{_UNSAFE.sub('_', stem)}_pipe-{_UNSAFE.sub('_', result.pipe)}.npz"

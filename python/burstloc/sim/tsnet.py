@@ -1,0 +1,291 @@
+"""The TSNet driver: simulate a :class:`~burstloc.sim.scenario.BurstScenario`.
+
+:func:`simulate_burst` splits the pipe with a new junction (:func:`burstloc.network.split_pipe`),
+places TSNet's burst there, solves the initial steady state (pressure-driven demand, as the
+paper does) and runs TSNet's MOC transient simulation. Results are cached on disk by content
+(:mod:`burstloc.sim.cache`); :func:`simulate_many` sweeps scenarios over local processes or a
+Dask cluster (:mod:`burstloc.sim.sweep`).
+TSNet prints progress, warns on every time step and writes EPANET scratch files into the
+working directory. Here its output is captured into the metadata (``warnings``,
+``tsnet_messages``, ``negative_pressure_nodes``) and it runs inside a temporary directory: the
+working directory is changed for the duration of a simulation, under a process-wide lock, so
+simulations in one process run one at a time (TSNet is pure Python, threads would not help).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import tempfile
+import threading
+import time
+from collections.abc import Iterator, Sequence
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from burstloc import network
+from burstloc._diagnostics import capture_diagnostics
+from burstloc.exceptions import ConfigError, NetworkError, SimulationError
+from burstloc.sim.cache import DiskCache, file_sha256, package_versions
+from burstloc.sim.scenario import SCHEMA, BurstScenario, ScenarioResult
+from burstloc.sim.sweep import SweepReport, sweep
+
+__all__ = [
+    "expected_time_step",
+    "simulate_burst",
+    "simulate_many",
+]
+
+
+#: TSNet fails on fewer time steps than this.
+MIN_STEPS = 10
+
+
+_TSNET_LOCK = threading.Lock()
+
+
+def _resolve_cache(cache: DiskCache | bool | None) -> DiskCache | None:
+    if cache is True:
+        return DiskCache()
+    if cache is False or cache is None:
+        return None
+    if isinstance(cache, DiskCache):
+        return cache
+    raise ConfigError(f"cache must be a DiskCache, True or False, got {cache!r}")
+
+
+def _from_cache(store: DiskCache, key: str, scenario: BurstScenario) -> ScenarioResult | None:
+    arrays = store.get(key)
+    if arrays is None:
+        return None
+    try:
+        result = ScenarioResult.from_arrays(arrays)
+    except (KeyError, ValueError):
+        return None
+    result.metadata["network"] = scenario.network
+    result.metadata["cache"] = "hit"
+    return result
+
+
+def simulate_burst(
+    scenario: BurstScenario, cache: DiskCache | bool | None = True
+) -> ScenarioResult:
+    """Simulate one burst (or load it from the cache).
+
+    Args:
+        scenario: what to simulate.
+        cache: ``True`` = the default :class:`~burstloc.sim.cache.DiskCache`; a ``DiskCache``;
+            ``False``/``None`` = always simulate, store nothing.
+
+    Raises:
+        NetworkError: missing or malformed network file, unknown pipe.
+        ConfigError: ``time_step`` above TSNet's stability limit for this network, or a
+            ``duration`` shorter than TSNet's minimum of 10 time steps.
+        SimulationError: TSNet failed, or produced non-finite heads.
+    """
+    store = _resolve_cache(cache)
+    if store is None:
+        return _simulate(scenario)
+    key = scenario.cache_key()
+    hit = _from_cache(store, key, scenario)
+    if hit is not None:
+        return hit
+    result = _simulate(scenario)
+    store.put(key, result.to_arrays())
+    return result
+
+
+@contextlib.contextmanager
+def _isolated_run() -> Iterator[str]:
+    """Hold the TSNet lock and work in a fresh temporary directory (TSNet writes into cwd)."""
+    with _TSNET_LOCK, tempfile.TemporaryDirectory(prefix="burstloc-tsnet-") as tmp:
+        previous = os.getcwd()
+        os.chdir(tmp)
+        try:
+            yield tmp
+        finally:
+            os.chdir(previous)
+
+
+def _simulate(scenario: BurstScenario) -> ScenarioResult:
+    started = time.perf_counter()
+    source = os.path.abspath(scenario.network)  # before _isolated_run changes directory
+    with _isolated_run() as tmp, capture_diagnostics() as diag:
+        wn = network.load_network(source)
+        network.require_pipe(wn, scenario.pipe)
+        flows = network.steady_state_flows(wn, scenario.engine)
+        graph = network.flow_direction_graph(wn, flows)
+        true_start, true_end = network.pipe_endpoints(graph, scenario.pipe)
+        split = network.split_pipe(wn, scenario.pipe, scenario.position)
+        meters = network.junction_names(wn)
+        elevation = np.array([wn.get_node(j).elevation for j in meters], dtype=np.float64)
+        tm = _run_tsnet(scenario, split, os.path.join(tmp, "scenario.inp"))
+        steps = np.asarray(tm.simulation_timestamps, dtype=np.float64)
+        heads = np.column_stack([np.asarray(tm.get_node(j).head, np.float64) for j in meters])
+        dt = float(tm.time_step)
+    elapsed = time.perf_counter() - started
+
+    heads = heads - elevation
+    if heads.shape[0] != steps.size or not np.all(np.isfinite(heads)):
+        raise SimulationError(
+            f"TSNet produced non-finite or misshapen heads for pipe {scenario.pipe!r} of "
+            f"{scenario.network}"
+        )
+    meta: dict[str, Any] = {
+        "network": scenario.network,
+        "network_sha256": file_sha256(scenario.network),
+        **scenario.parameters(),
+        "true_start": true_start,
+        "true_end": true_end,
+        "steady_flow_m3s": abs(flows[scenario.pipe]),
+        "burst_node": split.burst_node,
+        "split_pipes": [split.pipe, split.second_pipe],
+        "time_step": dt,
+        "samples": int(steps.size),
+        "head": "pressure head, m (hydraulic head - elevation)",
+        "warnings": diag.warnings,
+        "negative_pressure_nodes": diag.negative_pressure_nodes(),
+        "tsnet_messages": diag.messages,
+        "versions": package_versions(),
+        "simulation_seconds": round(elapsed, 3),
+        "capture_interval": None,
+        "capture_phase": None,
+        "cache": "miss",
+        "schema": SCHEMA,
+    }
+    return ScenarioResult(steps, heads, meters, dt, meta)
+
+
+def expected_time_step(scenario: BurstScenario) -> float:
+    """The time step (s) TSNet will use for ``scenario``, without running TSNet.
+
+    TSNet's discretisation is arithmetic on the pipe lengths of the split network: each pipe
+    gets ``N = floor(L / (a dt))`` reaches for the requested step ``dt`` (default: the Courant
+    limit ``min L / (2 a)``), and the step becomes ``sum(phi^2) / sum(phi)`` with
+    ``phi = L / (a N)`` (its wave-speed adjustment). This reproduces it, so a caller can choose
+    ``time_step`` before simulating (e.g. finer than a capture interval).
+
+    Raises:
+        NetworkError: the network or pipe cannot be read.
+    """
+    wn = network.load_network(scenario.network)
+    link = network.require_pipe(wn, scenario.pipe)
+    lengths = [float(wn.get_link(p).length) for p in network.pipe_names(wn) if p != scenario.pipe]
+    lengths += [scenario.position * link.length, (1.0 - scenario.position) * link.length]
+    travel = np.array(lengths) / scenario.wave_speed
+    dt = float(travel.min() / 2.0) if scenario.time_step is None else float(scenario.time_step)
+    reaches = np.floor(travel / dt)
+    if np.any(reaches < 1):
+        return dt  # TSNet refuses such a step; _run_tsnet reports it
+    phi = travel / reaches
+    return float(np.sum(phi**2) / np.sum(phi))
+
+
+def _run_tsnet(scenario: BurstScenario, split: network.SplitPipe, inp: str) -> Any:
+    import tsnet
+    import wntr
+    from tsnet.network.discretize import max_time_step
+
+    # TSNet's Initializer sets this too; setting it first writes the INP's pressure-driven
+    # demand options (required pressure, ...) into the split file instead of WNTR's defaults.
+    split.network.options.hydraulic.demand_model = scenario.engine
+    wntr.network.write_inpfile(
+        split.network, inp, units=split.network.options.hydraulic.inpfile_units
+    )
+    where = f"pipe {scenario.pipe!r} of {scenario.network}"
+    try:
+        tm = tsnet.network.TransientModel(inp)
+        tm.set_wavespeed(scenario.wave_speed)
+    except Exception as exc:
+        raise SimulationError(f"TSNet could not load {where}: {exc}") from exc
+    if scenario.time_step is not None:
+        limit = float(max_time_step(tm))
+        if scenario.time_step > limit:
+            raise ConfigError(
+                f"time_step {scenario.time_step:g} s exceeds TSNet's stability limit "
+                f"{limit:.5g} s for {where} split at {scenario.position:g}"
+            )
+    try:
+        tm.set_time(scenario.duration, scenario.time_step)
+    except Exception as exc:
+        raise SimulationError(f"TSNet could not discretize {where}: {exc}") from exc
+    steps = int(scenario.duration / tm.time_step)
+    if steps < MIN_STEPS:  # TSNet's progress report divides by steps // 10
+        raise ConfigError(
+            f"duration {scenario.duration:g} s is only {steps} time steps of "
+            f"{tm.time_step:.5g} s; TSNet needs at least {MIN_STEPS}"
+        )
+    try:
+        tm.add_burst(
+            split.burst_node, scenario.burst_start, scenario.opening_time, scenario.burst_coeff
+        )
+        tm = tsnet.simulation.Initializer(tm, 0.0, scenario.engine)
+        return tsnet.simulation.MOCSimulator(tm, results_obj="no", friction=scenario.friction)
+    except Exception as exc:
+        raise SimulationError(f"TSNet failed for {where}: {type(exc).__name__}: {exc}") from exc
+
+
+def _simulate_uncached(scenario: BurstScenario) -> ScenarioResult:
+    """Worker task: simulate without touching the cache (the parent process stores)."""
+    return simulate_burst(scenario, cache=False)
+
+
+def _key_or_none(scenario: BurstScenario) -> str | None:
+    """The cache key, or None when it cannot be made (a missing file fails in the sweep)."""
+    try:
+        return scenario.cache_key()
+    except NetworkError:
+        return None
+
+
+def simulate_many(
+    scenarios: Sequence[BurstScenario],
+    *,
+    cache: DiskCache | bool | None = True,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    progress: bool = True,
+) -> SweepReport[BurstScenario, ScenarioResult]:
+    """Simulate many scenarios: cached ones load here, the rest run in parallel.
+
+    Uncached scenarios run in local worker processes (``workers``, default the CPU count) or,
+    with ``scheduler`` (a Dask scheduler address), on that cluster; each result is stored in
+    the cache as soon as it arrives. A failing scenario is reported in the returned
+    :class:`~burstloc.sim.sweep.SweepReport` with its pipe and error; the others complete.
+    Dask workers read the network file at the scenario's path: on a cluster, give a path all
+    workers can read (a shared file system).
+    """
+    store = _resolve_cache(cache)
+    todo = list(scenarios)
+    keys = [_key_or_none(s) if store is not None else None for s in todo]
+    results: list[ScenarioResult | None] = [
+        _from_cache(store, key, s) if store is not None and key is not None else None
+        for s, key in zip(todo, keys, strict=True)
+    ]
+    missing = [i for i, result in enumerate(results) if result is None]
+
+    def store_result(sub: int, scenario: BurstScenario, result: ScenarioResult) -> None:
+        index = missing[sub]
+        results[index] = result
+        key = keys[index]
+        if store is not None and key is not None:
+            store.put(key, result.to_arrays())
+
+    report = sweep(
+        _simulate_uncached,
+        [todo[i] for i in missing],
+        workers=workers,
+        scheduler=scheduler,
+        progress=progress,
+        desc="simulating bursts",
+        label=_label,
+        on_result=store_result,
+    )
+    failures = [replace(f, index=missing[f.index]) for f in report.failures]
+    return SweepReport(todo, results, failures)
+
+
+def _label(scenario: BurstScenario) -> str:
+    return f"pipe {scenario.pipe} of {scenario.network}"

@@ -1,0 +1,222 @@
+"""Scoring bursts: runs, phases, attempts, aggregates, and a short real simulated sweep."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import jsonschema
+import networkx as nx
+import numpy as np
+import pytest
+
+from burstloc.exceptions import ConfigError, NetworkError
+from burstloc.experiments import paper
+from burstloc.experiments.evaluate import (
+    RunResult,
+    RunSpec,
+    evaluate,
+    locate_burst,
+    paper_runs,
+    phase_offsets,
+    readings_at_offset,
+    required_duration,
+)
+from burstloc.localize.detection import DetectorConfig, Mode
+from burstloc.sim.scenario import ScenarioResult
+from conftest import PAPER15
+
+SCHEMA = json.loads((Path(__file__).parents[1] / "evaluate_schema.json").read_text())
+CUSUM = DetectorConfig("cusum", 0.3)
+
+
+def small_graph() -> nx.DiGraph:
+    g = nx.DiGraph()
+    for pipe, u, v in [("pA", "R1", "A"), ("pB", "A", "B"), ("pC", "A", "C"), ("pD", "B", "C")]:
+        g.add_edge(u, v, pipe=pipe)
+    return g
+
+
+def synthetic(pipe: str, drops: dict[str, tuple[float, float]], burst_start: float = 2.0):
+    """A 'simulation' on a 0.05 s grid: meter -> (drop in m, arrival delay in s)."""
+    time = np.arange(0, 8.0 + 1e-9, 0.05)
+    meters = ["A", "B", "C"]
+    heads = np.tile([100.0, 98.0, 97.0], (time.size, 1))
+    for j, m in enumerate(meters):
+        drop, delay = drops.get(m, (0.0, 0.0))
+        heads[time >= burst_start + delay, j] -= drop
+    meta = {"pipe": pipe, "burst_start": burst_start, "true_start": "A", "true_end": "B"}
+    return ScenarioResult(time, heads, meters, 0.05, meta)
+
+
+def test_run_spec_validation_and_params() -> None:
+    spec = RunSpec(CUSUM, 0.2, 5)
+    assert spec.params() == {
+        "threshold": 0.3,
+        "drift": 0.0,
+        "localization_interval": 5,
+        "mode": "window",
+    }
+    assert spec.paper_run() == paper.TABLE_I[0]
+    assert RunSpec(CUSUM, 0.2, 6).paper_run() is None
+    with pytest.raises(ConfigError, match="capture interval must be > 0"):
+        RunSpec(CUSUM, 0.0, 5)
+    with pytest.raises(ConfigError, match="localization interval must be >= 1"):
+        RunSpec(CUSUM, 0.2, 0)
+    with pytest.raises(ValueError):
+        RunSpec(CUSUM, 0.2, 5, mode="guess")  # type: ignore[arg-type]
+
+
+def test_paper_runs_follow_tables_i_and_ii() -> None:
+    runs = paper_runs()
+    assert [
+        (r.detector.kind, r.capture_interval, r.detector.threshold, r.localization_interval)
+        for r in runs
+    ] == [
+        (p.detector, p.capture_interval, p.threshold, p.localization_interval)
+        for p in paper.PAPER_RUNS
+    ]
+    assert [r.label for r in runs] == [p.scenario for p in paper.PAPER_RUNS]
+    assert all(r.mode is Mode(paper.DEFAULT_MODE) for r in runs)
+    both = paper_runs(["shewhart"], [0.2], ["window", "stream"], sigma=3.0)
+    assert [(r.mode, r.detector.effective_sigma) for r in both] == [
+        (Mode.WINDOW, 3.0),
+        (Mode.STREAM, 3.0),
+    ]
+    with pytest.raises(ConfigError, match="unknown detector"):
+        paper_runs(["ewma"])
+    with pytest.raises(ConfigError, match="not one of the paper's"):
+        paper_runs(["cusum"], [1.0])
+    assert paper_runs(["cusum"], [1.0], threshold=1.0, localization_interval=3)[0].label is None
+    with pytest.raises(ConfigError, match="Shewhart chart only"):
+        paper_runs(["cusum"], sigma=2.0)
+    with pytest.raises(ConfigError, match="CUSUM only"):
+        paper_runs(["shewhart"], drift=0.1)
+
+
+def test_phase_offsets_and_required_duration() -> None:
+    spec = RunSpec(CUSUM, 0.2, 5)
+    assert phase_offsets(spec, 5) == pytest.approx([0.0, 0.04, 0.08, 0.12, 0.16])
+    assert phase_offsets(spec, 2, "window") == pytest.approx([0.0, 0.5])
+    with pytest.raises(ConfigError, match="phases"):
+        phase_offsets(spec, 0)
+    with pytest.raises(ConfigError, match="phase span"):
+        phase_offsets(spec, 2, "day")
+    ten = RunSpec(CUSUM, 10.0, 10)
+    assert required_duration(ten, 10.0) == 220.0  # the paper's coarsest run, whatever the phase
+
+
+def test_capture_offsets_move_the_clock_earlier_with_steady_warm_up() -> None:
+    r = synthetic("pB", {"B": (3.0, 0.2)})
+    spec = RunSpec(CUSUM, 0.2, 5)
+    t0, v0 = readings_at_offset(r, spec, 0.0)
+    # 2 x 5 warm-up readings of the steady state, then the simulation from t = 0
+    np.testing.assert_allclose(t0[:11], np.arange(-10, 1) * 0.2, atol=1e-12)
+    np.testing.assert_array_equal(v0[:10], np.tile(r.heads[0], (10, 1)))
+    t1, v1 = readings_at_offset(r, spec, 0.45)
+    assert t1[0] == pytest.approx(-0.45 - 2.0)  # the whole grid moved 0.45 s earlier
+    np.testing.assert_allclose(np.diff(t1), 0.2)
+    first_simulated = int(np.searchsorted(t1, 0.0))
+    assert t1[first_simulated] == pytest.approx(0.15)
+    np.testing.assert_array_equal(v1[:first_simulated], np.tile(r.heads[0], (13, 1)))
+    burst = int(np.searchsorted(t1, 2.2 - 1e-9))  # sample-and-hold of the drop at 2.2 s
+    assert v1[burst, 1] == r.heads[0, 1] - 3.0 and v1[burst - 1, 1] == r.heads[0, 1]
+
+
+def test_locate_burst_names_the_pipe_and_times_the_decision() -> None:
+    r = synthetic("pB", {"B": (3.0, 0.2), "A": (1.0, 0.2)})
+    a = locate_burst(r, small_graph(), RunSpec(CUSUM, 0.2, 5))
+    assert a.located and a.correct and a.predicted == ("A", "B")
+    assert a.localization is not None and a.localization.trigger_node == "B"
+    # ticks 0, 0.2, ...; the drop is seen at 2.2; windows end at 0.8, 1.8, 2.8
+    assert a.time_to_localize == pytest.approx(0.8)
+    wrong = locate_burst(
+        synthetic("pC", {"B": (3.0, 0.2), "A": (1.0, 0.2)}), small_graph(), RunSpec(CUSUM, 0.2, 5)
+    )
+    assert wrong.located and not wrong.correct
+
+
+def test_nothing_detected_is_not_located() -> None:
+    a = locate_burst(synthetic("pB", {}), small_graph(), RunSpec(CUSUM, 0.2, 5, Mode.STREAM))
+    assert not a.located and not a.correct
+    assert a.predicted is None and a.time_to_localize is None
+
+
+def test_run_result_aggregates() -> None:
+    g = small_graph()
+    spec = RunSpec(CUSUM, 0.2, 5)
+    hit = synthetic("pB", {"B": (3.0, 0.2), "A": (1.0, 0.2)})
+    miss = synthetic("pC", {})
+    offsets = [0.0, 0.1]
+    attempts = {
+        "pB": [locate_burst(hit, g, spec, o) for o in offsets],
+        "pC": [locate_burst(miss, g, spec, o) for o in offsets],
+    }
+    rr = RunResult(spec, ["pB", "pC"], {"pB": ("A", "B"), "pC": ("A", "C")}, offsets, attempts)
+    assert (rr.correct, rr.total, rr.accuracy) == (1, 2, 0.5)
+    assert rr.phase_accuracies() == [0.5, 0.5]
+    ttl = [a.time_to_localize for a in attempts["pB"]]
+    assert rr.median_time_to_localize() == pytest.approx(float(np.median(ttl)))
+    doc = rr.to_json()
+    assert doc["pipes"][1]["predicted"] is None and doc["pipes"][1]["rule"] is None
+    assert doc["paper"]["scenario"] == "S_C1" and doc["paper"]["correct_in_table"] == 22
+
+
+@pytest.fixture(scope="module")
+def short_evaluation():
+    """Two real bursts on the paper's network, simulated briefly (cached for the session)."""
+    runs = [
+        RunSpec(DetectorConfig("cusum", 0.3), 0.2, 5, Mode.WINDOW, "S_C1"),
+        RunSpec(DetectorConfig("shewhart", 1.5), 0.2, 5, Mode.STREAM, "S_S1"),
+    ]
+    scenario = paper.ScenarioConfig(burst_start=2.0)
+    return evaluate(
+        PAPER15, runs, pipes=["P4", "12"], phases=2, scenario=scenario, workers=1, progress=False
+    )
+
+
+def test_evaluate_short_real_sweep(short_evaluation) -> None:
+    ev = short_evaluation
+    assert ev.scenario["duration"] == 5.0  # 2 s onset + (2 x 5 + 1) x 0.2 s, rounded up
+    doc = ev.to_json()
+    jsonschema.validate(doc, SCHEMA)
+    for run in doc["runs"]:
+        assert run["total"] == 2
+        assert [p["pipe"] for p in run["pipes"]] == ["P4", "12"]
+        for p in run["pipes"]:
+            assert " - ".join(p["true"]) == paper.TRUE_PIPES[p["pipe"]]
+            if p["predicted"] is not None:
+                assert p["correct"] == (p["predicted_pipe"] == p["pipe"])
+                assert 0 < p["time_to_localize_s"] < 2 * 5 * 0.2 + 0.2
+        assert run["accuracy_phase_min"] <= run["accuracy_phase_mean"]
+        assert run["accuracy_phase_mean"] <= run["accuracy_phase_max"]
+        assert run["correct"] == sum(p["correct"] for p in run["pipes"])
+
+
+def test_evaluate_rejects_bad_input_clearly(short_evaluation) -> None:
+    runs = [RunSpec(CUSUM, 0.2, 5)]
+    scenario = paper.ScenarioConfig(burst_start=2.0)
+    with pytest.raises(NetworkError, match="unknown pipe"):
+        evaluate(PAPER15, runs, pipes=["P99"], scenario=scenario, progress=False)
+    with pytest.raises(NetworkError, match="not found"):
+        evaluate("nowhere.inp", runs, scenario=scenario, progress=False)
+    with pytest.raises(ConfigError, match="no runs"):
+        evaluate(PAPER15, [], scenario=scenario, progress=False)
+    with pytest.raises(ConfigError, match="needs"):
+        evaluate(
+            PAPER15,
+            [RunSpec(CUSUM, 2.0, 10)],
+            pipes=["P4"],
+            scenario=paper.ScenarioConfig(burst_start=2.0, duration=5.0),
+            progress=False,
+        )
+    # the simulation (already cached) cannot provide readings every 0.01 s
+    fine = [RunSpec(CUSUM, 0.01, 100)]
+    with pytest.raises(ConfigError, match="finer than the simulation time step"):
+        evaluate(
+            PAPER15,
+            fine,
+            pipes=["P4"],
+            scenario=paper.ScenarioConfig(burst_start=2.0, duration=5.0),
+            progress=False,
+        )

@@ -1,0 +1,232 @@
+"""burstloc.experiments.study: the one-factor-at-a-time grid, meter placement and a tiny end-to-end
+study."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from burstloc.cli import main
+from burstloc.exceptions import ConfigError
+from burstloc.experiments.study import (
+    DEFAULT_LEVELS,
+    Factors,
+    StudyPoint,
+    StudySettings,
+    _scenarios,
+    _with_history,
+    greedy_meters,
+    run_study,
+    study_grid,
+    write_report,
+)
+from burstloc.localize.signature import SignatureSet
+
+
+def test_grid_varies_one_factor_at_a_time_on_the_first_network() -> None:
+    points = study_grid(["a.inp", "b.inp", "c.inp"])
+    defaults = [p for p in points if p.factor == "default"]
+    assert [p.network for p in defaults] == ["a.inp", "b.inp", "c.inp"]
+    assert all(p.factors == Factors() for p in defaults)
+    varied = [p for p in points if p.factor != "default"]
+    assert {p.network for p in varied} == {"a.inp"}
+    expected = sum(len(v) - 1 for v in DEFAULT_LEVELS.values())
+    assert len(varied) == expected
+    for p in varied:
+        changed = {k for k, v in vars(p.factors).items() if v != getattr(Factors(), k)}
+        assert changed == {p.factor}
+    assert StudyPoint("x/paper15.inp", "noise_sigma", Factors(noise_sigma=0.05)).label == (
+        "paper15: noise_sigma=0.05"
+    )
+
+
+def test_grid_refuses_unknown_factors_and_no_network() -> None:
+    with pytest.raises(ConfigError, match="unknown study factor"):
+        study_grid(["a.inp"], {"colour": (1, 2)})
+    with pytest.raises(ConfigError, match="at least one network"):
+        study_grid([])
+
+
+def test_bad_settings_and_factors_are_refused() -> None:
+    with pytest.raises(ConfigError, match="detectors"):
+        StudySettings(detectors=("ewma",))
+    with pytest.raises(ConfigError, match="meter_models"):
+        StudySettings(meter_models=("peak",))
+    with pytest.raises(ConfigError, match="phases"):
+        StudySettings(phases=0)
+    with pytest.raises(ConfigError, match="meter_fraction"):
+        Factors(meter_fraction=0.0)
+    with pytest.raises(ConfigError, match="noise_sigma"):
+        Factors(noise_sigma=-0.1)
+
+
+def _signatures(matrix: list[list[float]]) -> SignatureSet:
+    pipes = tuple(f"P{i}" for i in range(len(matrix)))
+    meters = tuple(f"M{j}" for j in range(len(matrix[0])))
+    return SignatureSet(
+        network_hash="x",
+        meters=meters,
+        pipes=pipes,
+        endpoints={p: ("a", "b") for p in pipes},
+        matrix=np.array(matrix),
+        baseline=np.zeros(len(meters)),
+        params={},
+    )
+
+
+def test_greedy_meters_pick_the_meters_that_tell_pipes_apart() -> None:
+    # M0 sees every burst alike (large but useless alone); M1 and M2 separate the pipes.
+    sig = _signatures([[5.0, 1.0, 0.0], [5.0, 0.0, 1.0], [5.0, 1.0, 1.0]])
+    assert greedy_meters(sig, 1) == ("M0",)  # one meter separates nothing: the strongest
+    two = greedy_meters(sig, 2)
+    assert "M0" in two and len(two) == 2
+    assert greedy_meters(sig, 3) == ("M0", "M1", "M2")
+    # With a meter that alone tells P0 from P1, it comes first.
+    sig2 = _signatures([[1.0, 0.0], [0.0, 1.0]])
+    assert greedy_meters(sig2, 2) == ("M0", "M1")
+    with pytest.raises(ConfigError, match="count"):
+        greedy_meters(sig, 4)
+
+
+def test_greedy_meters_prefer_separation_over_signal_strength() -> None:
+    # M1 carries the largest drops but M2 alone tells P0 from P1; then M0 separates them more
+    # (unit-vector gap 0.32) than M1 would (0.20).
+    sig = _signatures([[3.0, 5.0, 0.0], [3.0, 5.0, 1.0]])
+    assert greedy_meters(sig, 1) == ("M2",)
+    assert greedy_meters(sig, 2) == ("M0", "M2")
+
+
+def test_history_prepends_the_steady_state_at_the_capture_interval() -> None:
+    ticks = np.array([0.5, 2.5, 4.5])
+    readings = np.array([[1.0, 2.0], [0.5, 1.5], [0.4, 1.4]])
+    t, r = _with_history(ticks, readings, np.array([1.0, 2.0]), 3)
+    np.testing.assert_allclose(t, [-5.5, -3.5, -1.5, 0.5, 2.5, 4.5])
+    np.testing.assert_allclose(r[:3], [[1.0, 2.0]] * 3)
+    np.testing.assert_allclose(r[3:], readings)
+
+
+def test_tiny_study_end_to_end(tiny_network: Path, tmp_path: Path) -> None:
+    # Arrivals only: the signature localizer's fits cost seconds per burst (tested in
+    # test_signature.py); the pipeline around them is the same.
+    settings = StudySettings(
+        capture_intervals=(0.2,),
+        detectors=("cusum",),
+        localizers=("arrival",),
+        phases=1,
+        duration=90.0,
+        pipes=("B", "C"),
+    )
+    points = study_grid([tiny_network], {"meter_fraction": (1.0, 0.5)})
+    assert len(points) == 2
+    rows, problems = run_study(points, settings, workers=1, progress=False)
+    assert problems == []
+    # 2 points x 1 detector x 1 localizer x 2 meter models x 1 interval
+    assert len(rows) == 2 * 2
+    for row in rows:
+        assert 0.0 <= row["top1"] <= row["top3"] <= 1.0
+        assert row["attempts"] == 2
+    by = {(r["point"], r["meter_model"]): r for r in rows}
+    name = tiny_network.stem
+    # Noise-free, every meter, 0.2 s: the burst pipe is among the arrival localizer's best
+    # three (of five) within a second or two of the burst.
+    arrival = by[(f"{name}: default", "instantaneous")]
+    assert arrival["top3"] == 1.0 and arrival["not_located"] == 0
+    assert arrival["median_time_s"] is not None and 0.0 < arrival["median_time_s"] < 2.0
+    assert arrival["meters"] == 4
+    assert by[(f"{name}: meter_fraction=0.5", "instantaneous")]["meters"] == 2
+    report = write_report(rows, settings, tmp_path / "out", problems)
+    text = report.read_text()
+    assert "| point | meters | meter_model | 0.2 s |" in text
+    assert f"{name}: meter_fraction=0.5" in text
+    assert (tmp_path / "out" / f"{name}_defaults.png").stat().st_size > 0
+    assert (tmp_path / "out" / "factor_meter_fraction.png").stat().st_size > 0
+    saved = json.loads((tmp_path / "out" / "results.json").read_text())
+    assert len(saved["rows"]) == len(rows)
+
+
+def test_failed_simulations_leave_the_point_out(tiny_network: Path) -> None:
+    settings = StudySettings(capture_intervals=(0.2,), phases=1, duration=90.0, pipes=("ZZ",))
+    rows, problems = run_study(
+        [StudyPoint(str(tiny_network), "default")], settings, workers=1, progress=False
+    )
+    assert rows == []
+    assert len(problems) == 1 and "left out" in problems[0] and "ZZ" in problems[0]
+
+
+def test_cli_refuses_an_unknown_factor(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["study", "x.inp", "--factors", "colour"]) == 2
+    assert "unknown factor(s) ['colour']" in capsys.readouterr().err
+
+
+def test_cli_study_and_calibrate_commands(
+    tiny_network: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from burstloc.cli import main as cli
+    from burstloc.experiments.calibrate import Calibration
+
+    config = tmp_path / "tiny.json"
+    argv = ["calibrate", str(tiny_network), "--out", str(config), "--capture-interval", "2"]
+    assert cli([*argv, "--noise", "0.02", "--false-alarm-rate", "1"]) == 0
+    loaded = Calibration.load(config, network=tiny_network)
+    assert loaded.for_interval(2.0).capture_interval == 2.0
+    assert cli(["calibrate", str(tiny_network), "--out", str(config), "--noise", "-1"]) == 2
+    out = tmp_path / "study"
+    status = cli(
+        [
+            "study",
+            str(tiny_network),
+            "--out",
+            str(out),
+            "--capture-interval",
+            "0.2",
+            "--detector",
+            "shewhart",
+            "--localizer",
+            "arrival",
+            "--phases",
+            "1",
+            "--duration",
+            "90",
+            "--factors",
+            "--pipes",
+            "C",
+            "--workers",
+            "1",
+            "--quiet",
+        ]
+    )
+    assert status == 0
+    assert "## Summary (arrival localizer, shewhart)" in (out / "report.md").read_text()
+    assert "wrote" in capsys.readouterr().out
+
+
+def test_scenarios_carry_the_factors_and_settings(tiny_network: Path) -> None:
+    point = StudyPoint(str(tiny_network), "friction", Factors(friction="unsteady", position=0.3))
+    settings = StudySettings(pipes=("B", "C"), duration=50.0, time_step=0.05)
+    scenarios = _scenarios(point, settings)
+    assert [s.pipe for s in scenarios] == ["B", "C"]
+    assert {(s.friction, s.position, s.duration, s.time_step) for s in scenarios} == {
+        ("unsteady", 0.3, 50.0, 0.05)
+    }
+
+
+def test_time_step_rule_keeps_tsnets_step_unless_coarser_than_the_finest_capture(
+    tiny_network: Path,
+) -> None:
+    from burstloc.experiments.study import study_time_step
+    from burstloc.sim.scenario import BurstScenario
+    from burstloc.sim.tsnet import expected_time_step
+
+    scenario = BurstScenario(str(tiny_network), "B")
+    tsnet_step = expected_time_step(scenario)
+    coarse = StudySettings(capture_intervals=(2 * tsnet_step, 10.0))
+    fine = StudySettings(capture_intervals=(0.5 * tsnet_step, 10.0))
+    assert study_time_step(scenario, coarse) is None
+    assert study_time_step(scenario, fine) == pytest.approx(0.25 * tsnet_step)
+    given = StudySettings(capture_intervals=(0.5 * tsnet_step,), time_step=0.001)
+    assert study_time_step(scenario, given) == 0.001
+    point = StudyPoint(str(tiny_network), "default")
+    assert {s.time_step for s in _scenarios(point, fine)} == {0.25 * tsnet_step}

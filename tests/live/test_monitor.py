@@ -1,0 +1,211 @@
+"""burstloc.live.monitor: the live loop of the ranking localizers (calibrated bank, bounded
+history)."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from burstloc.cli import main
+from burstloc.exceptions import ConfigError, InputError
+from burstloc.experiments import paper
+from burstloc.experiments.calibrate import Calibration, calibrate
+from burstloc.experiments.evaluate import RunSpec, evaluate, readings_at_offset
+from burstloc.live.monitor import BurstMonitor, monitor_readings
+from burstloc.live.stream import Step, readings_of
+from burstloc.localize.detection import DetectorConfig
+from conftest import write_tiny
+
+SHORT = paper.ScenarioConfig(burst_start=2.0)
+
+
+@pytest.fixture(scope="module")
+def config(tiny: Path) -> Calibration:
+    return calibrate(tiny, capture_intervals=(0.2, 2.0), noise_sigma=0.01)
+
+
+@pytest.fixture(scope="module")
+def batch(tiny: Path, config: Calibration):
+    """``evaluate``'s answers (the batch reference) for bursts on two pipes."""
+    runs = [
+        RunSpec(DetectorConfig("cusum", 0.3), ci, 5, localizer=name)
+        for ci in (0.2, 2.0)
+        for name in ("arrival", "fused")
+    ]
+    return evaluate(
+        tiny,
+        runs,
+        pipes=["B", "C"],
+        phases=1,
+        scenario=SHORT,
+        config=config,
+        workers=1,
+        progress=False,
+    )
+
+
+def _steps(result, spec: RunSpec) -> list[Step]:
+    times, values = readings_at_offset(result, spec, 0.0)
+    return [Step(float(t), v) for t, v in zip(times, values, strict=True)]
+
+
+def test_the_live_loop_decides_what_evaluate_decides(tiny: Path, config: Calibration, batch):
+    for run in batch.runs:
+        spec = run.spec
+        for pipe in run.pipes:
+            expected = run.attempts[pipe][0]
+            assert expected.ranking is not None
+            monitor = BurstMonitor(
+                tiny, config, capture_interval=spec.capture_interval, localizer=spec.localizer
+            )
+            decisions = list(monitor.run(_steps(batch.results[pipe], spec)))
+            assert decisions, (spec, pipe)
+            live = decisions[0]
+            assert live.pipe == expected.predicted_pipe
+            assert [r.pipe for r in live.decision.ranking] == [r.pipe for r in expected.ranking]
+            assert math.isclose(live.decision.time, expected.decided_at, abs_tol=1e-9)
+            assert live.first_alarm <= live.decision.time
+            doc = live.to_json()
+            assert [p["pipe"] for p in doc["pipes"]] == [r.pipe for r in expected.ranking.top(3)]
+
+
+def test_raw_readings_go_through_the_reading_stream(tiny: Path, config: Calibration, batch):
+    run = batch.runs[0]  # arrival at 0.2 s
+    steps = _steps(batch.results["C"], run.spec)
+    reference = BurstMonitor(tiny, config, capture_interval=0.2, localizer="arrival")
+    expected = next(reference.run(steps))
+    monitor = BurstMonitor(tiny, config, capture_interval=0.2, localizer="arrival")
+    readings = list(readings_of(steps, monitor.meters))
+    readings[0], readings[1] = readings[1], readings[0]  # out of order within a step is fine
+    decided = list(monitor_readings(monitor, readings, period=0.2, origin=steps[0].timestamp))
+    assert decided and decided[0].pipe == expected.pipe
+    assert decided[0].decision.time == pytest.approx(expected.decision.time)
+
+
+def test_one_decision_per_burst_thanks_to_the_holdoff(tiny: Path, config: Calibration, batch):
+    steps = _steps(batch.results["B"], batch.runs[0].spec)
+    monitor = BurstMonitor(tiny, config, capture_interval=0.2, localizer="arrival")
+    decisions, holding = [], []
+    for step in steps:
+        decided = monitor.push(step)
+        if decided is not None:
+            decisions.append(decided)
+        holding.append(monitor.holding_off)
+    assert len(decisions) == 1 and decisions[0].decision.time < SHORT.burst_start + 1.0
+    decided_at = decisions[0].decision.time
+    assert [h for s, h in zip(steps, holding, strict=True) if s.timestamp < decided_at] == [
+        False
+    ] * sum(s.timestamp < decided_at for s in steps)
+    assert all(
+        h == (s.timestamp < decided_at + monitor.holdoff - 1e-9)
+        for s, h in zip(steps, holding, strict=True)
+        if s.timestamp >= decided_at
+    )
+    # Without a hold-off the ringing network is "located" again and again.
+    eager = BurstMonitor(tiny, config, capture_interval=0.2, localizer="arrival", holdoff=0.0)
+    assert len(list(eager.run(steps))) > 1
+    with pytest.raises(ConfigError, match="holdoff"):
+        BurstMonitor(tiny, config, capture_interval=0.2, holdoff=-1.0)
+
+
+def test_a_quiet_feed_decides_nothing_and_history_is_bounded(tiny: Path, config: Calibration):
+    monitor = BurstMonitor(tiny, config, capture_interval=2.0, localizer="signature")
+    level = np.linspace(50.0, 60.0, len(monitor.meters))
+    steps = [Step(2.0 * k, level) for k in range(2_000)]
+    assert list(monitor.run(steps)) == [] and not monitor.pending
+    cal = config.for_interval(2.0)
+    assert len(monitor._times) < (60 + cal.decision_delay) / 2.0 + 2 * cal.localization_interval + 5
+
+
+def test_bad_steps_are_refused_by_name_and_leave_the_monitor_as_it_was(
+    tiny: Path, config: Calibration, batch
+) -> None:
+    steps = _steps(batch.results["B"], batch.runs[0].spec)
+    split = next(k for k, s in enumerate(steps) if s.timestamp > SHORT.burst_start) + 2
+    clean = BurstMonitor(tiny, config, capture_interval=0.2, localizer="arrival")
+    fed = BurstMonitor(tiny, config, capture_interval=0.2, localizer="arrival")
+    for s in steps[:split]:
+        clean.push(s)
+        fed.push(s)
+    m = len(fed.meters)
+    nan = steps[split].values.copy()
+    nan[1] = np.nan
+    bad = [
+        (Step(steps[split].timestamp, nan), f"non-finite reading nan from meter {fed.meters[1]!r}"),
+        (Step(steps[split].timestamp, np.ones(m + 1)), f"values for {m} meters"),
+        (Step(steps[split - 1].timestamp, steps[split].values), "is not after the previous"),
+        (Step(math.inf, steps[split].values), "not finite"),
+    ]
+    for step, message in bad:
+        with pytest.raises(InputError, match=message):
+            fed.push(step)
+    rest_clean = list(clean.run(steps[split:]))
+    rest_fed = list(fed.run(steps[split:]))
+    assert [d.to_json() for d in rest_fed] == [d.to_json() for d in rest_clean]
+    assert rest_fed
+
+
+def test_configuration_checks(tiny: Path, config: Calibration, tmp_path: Path) -> None:
+    other = write_tiny(tmp_path / "other.inp", head=70.0)
+    with pytest.raises(ConfigError, match=r"calibrated for network .*tiny\.inp"):
+        BurstMonitor(other, config, capture_interval=0.2)
+    with pytest.raises(ConfigError, match="no calibration for a 5 s capture interval"):
+        BurstMonitor(tiny, config, capture_interval=5.0)
+    with pytest.raises(ConfigError, match="localizer must be one of"):
+        BurstMonitor(tiny, config, capture_interval=0.2, localizer="paper")
+    with pytest.raises(ConfigError, match="meter model must be one of"):
+        BurstMonitor(tiny, config, capture_interval=0.2, meter_model="peak")  # type: ignore[arg-type]
+    with pytest.raises(ConfigError, match="unknown detector"):
+        BurstMonitor(tiny, config, capture_interval=0.2, detector="ewma")
+
+
+def _write_csv(path: Path, steps: list[Step], meters: tuple[str, ...]) -> Path:
+    lines = ["timestamp,meter,value"]
+    lines += [f"{r.timestamp!r},{r.meter},{r.value!r}" for r in readings_of(steps, meters)]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_cli_monitor_prints_one_json_line_per_burst(
+    tiny: Path, config: Calibration, batch, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    steps = _steps(batch.results["C"], batch.runs[0].spec)
+    expected = batch.runs[0].attempts["C"][0]
+    cfg = config.save(tmp_path / "tiny.json")
+    csv = _write_csv(tmp_path / "feed.csv", steps, config.meters)
+    argv = ["monitor", str(tiny), "--config", str(cfg), "--capture-interval", "0.2"]
+    assert main([*argv, "--localizer", "arrival", "--readings", str(csv)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert len(lines) == 1
+    doc = json.loads(lines[0])
+    assert doc["pipes"][0]["pipe"] == expected.predicted_pipe
+    assert doc["time"] == pytest.approx(expected.decided_at)
+
+    bad = tmp_path / "bad.csv"
+    bad.write_text("timestamp,meter,value\n0.0,J1,50.0\n0.0,J2\n")
+    assert main([*argv, "--readings", str(bad)]) == 2
+    assert "line 3: want 'timestamp,meter,value'" in capsys.readouterr().err
+    bad.write_text("0.0,nowhere,50.0\n")
+    assert main([*argv, "--readings", str(bad)]) == 2
+    assert "nowhere" in capsys.readouterr().err
+    assert main([*argv, "--readings", str(tmp_path / "missing.csv")]) == 2
+    assert "cannot read readings" in capsys.readouterr().err
+
+
+def test_the_live_loop_does_not_import_the_simulator() -> None:
+    code = (
+        "import sys; import burstloc.live.monitor, burstloc.localize.decide; "
+        "bad = sorted(m for m in sys.modules if m.split('.')[0] == 'tsnet' "
+        "or m == 'burstloc.sim.tsnet' "
+        "or m in ('burstloc.experiments.evaluate', 'burstloc.experiments.study')); "
+        "assert not bad, bad; print('ok')"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "ok"

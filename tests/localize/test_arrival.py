@@ -1,0 +1,177 @@
+"""The arrival localizer: wave travel from a point on a pipe explains the meters' alarm starts."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import networkx as nx
+import numpy as np
+import pytest
+
+from burstloc import _core
+from burstloc.exceptions import ConfigError, InputError, NetworkError
+from burstloc.localize.arrival import (
+    ArrivalLocalizer,
+    PipeGeometry,
+    length_graph,
+    travel_time_spread,
+)
+from burstloc.localize.evidence import (
+    BurstEvidence,
+    MeterAlarm,
+    RankedPipe,
+    Ranking,
+    evidence_from_alarms,
+)
+from burstloc.network import load_network
+
+A = 1000.0  # wave speed used by these tests, m/s
+
+
+def _evidence(
+    arrivals: dict[str, float], dt: float, amplitudes: dict[str, float] | None = None
+) -> BurstEvidence:
+    """Alarm starts as a detector reports them: the last capture tick before the wave."""
+    meters = tuple(sorted(arrivals))
+    alarms = {
+        m: MeterAlarm(
+            m,
+            math.floor(arrivals[m] / dt - 1e-9) * dt,
+            (amplitudes or {}).get(m, -1.0),
+        )
+        for m in meters
+    }
+    t = np.arange(0.0, 5.0, dt)
+    return BurstEvidence(
+        meters=meters,
+        times=t,
+        readings=np.zeros((t.size, len(meters))),
+        onset=min(a.start for a in alarms.values()),
+        capture_interval=dt,
+        alarms=alarms,
+    )
+
+
+def _true_arrivals(
+    loc: ArrivalLocalizer, network: Path, pipe: str, fraction: float, t0: float
+) -> dict[str, float]:
+    """Arrival time at every meter of a burst at ``fraction`` along ``pipe`` (INP direction)."""
+    wn = load_network(network)
+    graph = length_graph(wn)
+    link = wn.get_link(pipe)
+    u, v, length = link.start_node_name, link.end_node_name, link.length
+    du = nx.single_source_dijkstra_path_length(graph, u, weight="length")
+    dv = nx.single_source_dijkstra_path_length(graph, v, weight="length")
+    return {
+        m: t0 + min(fraction * length + du[m], (1 - fraction) * length + dv[m]) / A
+        for m in loc.meters
+    }
+
+
+@pytest.mark.parametrize(("pipe", "fraction"), [("B", 0.5), ("C", 0.3), ("D", 0.6), ("E", 0.7)])
+def test_true_pipe_ranks_first_at_a_fine_capture_interval(
+    tiny_network: Path, pipe: str, fraction: float
+) -> None:
+    loc = ArrivalLocalizer.from_network(tiny_network, wave_speed=A)
+    arrivals = _true_arrivals(loc, tiny_network, pipe, fraction, t0=1.0037)
+    ranking = loc.rank(_evidence(arrivals, dt=0.01))
+    assert ranking.best is not None and ranking.best.pipe == pipe
+    assert len(ranking) == 5
+
+
+def test_exact_arrivals_fit_with_zero_misfit(tiny_network: Path) -> None:
+    loc = ArrivalLocalizer.from_network(tiny_network, wave_speed=A, positions=[0.5])
+    arrivals = _true_arrivals(loc, tiny_network, "D", 0.5, t0=2.0)
+    misfit = loc.misfit(_evidence(arrivals, dt=0.001))
+    d = [p.pipe for p in loc.pipes].index("D")
+    assert misfit[d] < 0.001
+    assert np.all(np.delete(misfit, d) > 0.005)
+
+
+def test_amplitudes_break_ties_at_coarse_intervals(tiny_network: Path) -> None:
+    loc = ArrivalLocalizer.from_network(tiny_network, wave_speed=A)
+    arrivals = _true_arrivals(loc, tiny_network, "E", 0.5, t0=1.0)
+    # at a 10 s capture interval every alarm lands in one tick: timing cannot tell pipes apart
+    amps = {"J1": -0.5, "J2": -0.6, "J3": -1.5, "J4": -2.0}
+    ranking = loc.rank(_evidence(arrivals, dt=10.0, amplitudes=amps))
+    assert ranking.best is not None and ranking.best.pipe == "E"  # J3 and J4: the largest drops
+    scores = ranking.scores()
+    assert scores["E"] > scores["C"] > scores["A"]
+
+
+def test_pipes_follow_the_flow_direction(tiny_network: Path) -> None:
+    loc = ArrivalLocalizer.from_network(tiny_network)
+    ends = {p.pipe: (p.start, p.end) for p in loc.pipes}
+    assert ends["A"] == ("R1", "J1")
+    assert ends["E"] == ("J3", "J4")
+    assert loc.pipe_travel == pytest.approx(200.0 / 1200.0)
+
+
+def test_meters_subset_and_missing_alarms(tiny_network: Path) -> None:
+    loc = ArrivalLocalizer.from_network(tiny_network, ["J2", "J4"], wave_speed=A)
+    arrivals = _true_arrivals(loc, tiny_network, "E", 0.5, t0=0.5)
+    ranking = loc.rank(_evidence({"J4": arrivals["J4"]}, dt=0.01, amplitudes={"J4": -1}))
+    assert ranking.best is not None
+    assert ranking.rank_of("E") is not None
+    with pytest.raises(InputError, match="no meter"):
+        loc.rank(_evidence({"J1": 1.0}, dt=0.01))
+
+
+def test_travel_time_spread(tiny_network: Path) -> None:
+    graph = length_graph(load_network(tiny_network))
+    # J2 -> J4: via J3 (150 + 180) m
+    assert travel_time_spread(graph, ["J2", "J4"], A) == pytest.approx(0.33)
+
+
+def test_bad_configuration_is_refused(tiny_network: Path) -> None:
+    with pytest.raises(ConfigError):
+        ArrivalLocalizer.from_network(tiny_network, wave_speed=0.0)
+    with pytest.raises(ConfigError):
+        ArrivalLocalizer.from_network(tiny_network, positions=[1.5])
+    with pytest.raises(NetworkError, match="R1"):
+        ArrivalLocalizer.from_network(tiny_network, ["R1"])
+    with pytest.raises(ConfigError, match="no distances"):
+        ArrivalLocalizer([PipeGeometry("x", "a", "b", 10.0)], ["m"], {"a": np.zeros(1)})
+
+
+def test_evidence_from_a_real_detector_bank() -> None:
+    # three meters see a 1 m drop at readings 12, 14 and 17 (0.1 s apart), one stays flat
+    t = np.arange(40) * 0.1
+    x = np.full((40, 4), 50.0)
+    for j, k in enumerate((12, 14, 17)):
+        x[k:, j] -= 1.0
+    alarms = _core.DetectorBank("cusum", 4, threshold=0.5, drift=0.001).run(x)
+    meters = ["a", "b", "c", "d"]
+    ev = evidence_from_alarms(meters, t, x, alarms, capture_interval=0.1, decision_time=2.0)
+    assert set(ev.alarms) == {"a", "b", "c"}
+    assert ev.alarms["a"].start == pytest.approx(1.1)  # the last flat reading
+    assert ev.alarms["c"].start == pytest.approx(1.6)
+    assert ev.alarms["b"].amplitude == pytest.approx(-1.0)
+    assert ev.onset == pytest.approx(1.1)
+    assert ev.decision_time == pytest.approx(2.0)
+    shew = _core.DetectorBank("shewhart", 4, window=10, threshold=0.5, sigma=2.0).run(x)
+    ev2 = evidence_from_alarms(meters, t, x, shew, capture_interval=0.1)
+    assert ev2.alarms["a"].start == pytest.approx(1.1)  # flagged reading 12 -> change after 11
+    with pytest.raises(InputError, match="no alarm"):
+        evidence_from_alarms(meters, t, x, alarms, capture_interval=0.1, decision_time=1.0)
+
+
+def test_ranking_orders_and_validates() -> None:
+    r = Ranking(
+        [
+            RankedPipe("b", "1", "2", -1.0),
+            RankedPipe("a", "2", "3", -1.0),
+            RankedPipe("c", "", "", 0),
+        ]
+    )
+    assert [p.pipe for p in r] == ["c", "a", "b"]  # ties by name
+    assert r.rank_of("b") == 3 and r.rank_of("z") is None
+    assert r.in_top("a", 2) and not r.in_top("b", 2)
+    assert r.to_records(1) == [{"pipe": "c", "start": "", "end": "", "score": 0, "rank": 1}]
+    with pytest.raises(InputError):
+        r.top(0)
+    with pytest.raises(InputError, match="NaN"):
+        Ranking([RankedPipe("a", "1", "2", float("nan"))])
+    with pytest.raises(InputError, match="twice"):
+        Ranking([RankedPipe("a", "1", "2", 0.0), RankedPipe("a", "1", "2", 1.0)])

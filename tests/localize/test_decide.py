@@ -1,0 +1,159 @@
+"""When and what the ranking localizers answer (burstloc.localize.decide), on the line network."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from burstloc.exceptions import ConfigError, InputError
+from burstloc.experiments.calibrate import IntervalCalibration
+from burstloc.localize.decide import decision_time, rank_alarms
+from burstloc.localize.evidence import IndexedAlarm, RankedPipe, Ranking
+from burstloc.localize.fused import FusedLocalizer, quantisation_margin
+from line_network import METERS, WAVE, line_arrival, line_signature
+
+# signature rows: p01 and p12 differ only at m0 / m2, p23 is far from both
+MATRIX = np.array([[1.0, 1.0, 0.4, 0.2], [0.6, 1.0, 0.9, 0.4], [0.1, 0.3, 1.0, 1.0]])
+BURST = 10.0
+
+
+def _burst(x: float, drop: np.ndarray, dt: float = 0.05, until: float = 80.0) -> tuple:
+    """Readings and alarms of a burst at ``x`` metres along the line (a step at wave arrival)."""
+    t = np.arange(0.0, until + 1e-9, dt)
+    arrive = [BURST + abs(x - 600.0 * i) / WAVE for i in range(len(METERS))]
+    readings = np.stack(
+        [np.where(t < a, 50.0, 50.0 - d) for a, d in zip(arrive, drop, strict=True)], axis=1
+    )
+    alarms = []
+    for channel, a in enumerate(arrive):
+        index = int(np.searchsorted(t, a))
+        alarms.append(IndexedAlarm(channel, index, index - 1, -float(drop[channel])))
+    return t, readings, alarms
+
+
+def _calibration(dt: float = 0.05) -> IntervalCalibration:
+    return IntervalCalibration(
+        capture_interval=dt,
+        localization_interval=10,
+        cusum_threshold={},
+        cusum_drift={},
+        shewhart_threshold={},
+        shewhart_sigma=3.0,
+        decision_delay=60.0,
+        arrival_decision_delay=1.0,
+    )
+
+
+def _localizers(**fused_options: float) -> dict:
+    arrival, signature = line_arrival(), line_signature(MATRIX)
+    fused = FusedLocalizer(arrival, signature, **fused_options)
+    return {"arrival": arrival, "signature": signature, "fused": fused}
+
+
+def _decide(
+    name: str, x: float, drop: np.ndarray, localizers: dict | None = None, dt: float = 0.05
+) -> tuple:
+    t, readings, alarms = _burst(x, drop, dt)
+    decision = rank_alarms(
+        name,
+        localizers or _localizers(),
+        METERS,
+        t,
+        readings,
+        alarms,
+        _calibration(dt),
+        "instantaneous",
+    )
+    return decision, t, alarms
+
+
+def test_fused_answers_early_when_arrivals_are_decisive() -> None:
+    # a burst mid-way along p12 whose drop looks like p01's: arrivals must decide, early
+    decision, t, alarms = _decide("fused", 900.0, 0.5 * MATRIX[0])
+    first = min(float(t[a.index]) for a in alarms)
+    assert not decision.waited
+    assert decision.time == pytest.approx(first + 1.0)
+    assert decision.ranking.best is not None and decision.ranking.best.pipe == "p12"
+
+
+def test_fused_waits_for_the_signature_near_a_junction() -> None:
+    # 5 m from m1 on p12, readings every 0.2 s: p01 and p12 explain the arrivals equally well
+    # (their candidate points nearest m1 are 60 m from it); the drop is p12's
+    decision, t, alarms = _decide("fused", 605.0, 0.5 * MATRIX[1], dt=0.2)
+    onset = min(float(t[a.start]) for a in alarms)
+    assert decision.waited
+    assert decision.time == pytest.approx(onset + 60.0)
+    assert decision.ranking.best is not None and decision.ranking.best.pipe == "p12"
+    # the same burst 5 m on the other side of m1 is p01's
+    other, _, _ = _decide("fused", 595.0, 0.5 * MATRIX[0], dt=0.2)
+    assert other.waited and other.ranking.best is not None and other.ranking.best.pipe == "p01"
+
+
+def test_a_zero_margin_never_waits() -> None:
+    decision, t, alarms = _decide("fused", 605.0, 0.5 * MATRIX[1], _localizers(margin=0.0), 0.2)
+    assert not decision.waited
+    assert decision.time == pytest.approx(min(float(t[a.index]) for a in alarms) + 1.0)
+
+
+def test_arrival_and_signature_answer_at_their_own_delays() -> None:
+    drop = 0.5 * MATRIX[2]
+    arrival, t, alarms = _decide("arrival", 1500.0, drop)
+    assert arrival.time == pytest.approx(min(float(t[a.index]) for a in alarms) + 1.0)
+    signature, _, _ = _decide("signature", 1500.0, drop)
+    assert signature.time == pytest.approx(min(float(t[a.start]) for a in alarms) + 60.0)
+    for d in (arrival, signature):
+        assert not d.waited and d.ranking.best is not None and d.ranking.best.pipe == "p23"
+
+
+def test_the_decision_is_capped_at_the_last_reading() -> None:
+    t, readings, alarms = _burst(900.0, 0.5 * MATRIX[1], until=40.0)
+    decision = rank_alarms(
+        "signature", _localizers(), METERS, t, readings, alarms, _calibration(), "instantaneous"
+    )
+    assert decision.time == pytest.approx(float(t[-1]))
+
+
+def test_no_alarm_is_an_input_error() -> None:
+    with pytest.raises(InputError, match="no alarm"):
+        decision_time("fused", [], np.arange(3.0), _calibration())
+
+
+def test_quantisation_margin() -> None:
+    assert quantisation_margin(15) == pytest.approx(2 / math.sqrt(12 * 15))
+    assert quantisation_margin(1) > quantisation_margin(4)
+    with pytest.raises(ConfigError):
+        quantisation_margin(0)
+    assert _localizers()["fused"].margin == pytest.approx(quantisation_margin(len(METERS)))
+    with pytest.raises(ConfigError):
+        _localizers(margin=-1.0)
+
+
+@pytest.mark.parametrize(("x", "row", "dt"), [(605.0, 1, 0.2), (1500.0, 2, 2.0)])
+def test_fused_reuses_the_signature_ranking_of_the_same_readings(
+    x: float, row: int, dt: float
+) -> None:
+    # waiting near a junction at 0.2 s, and answering at the signature's time at 2 s: in both
+    # the fused localizer looks at the signatures when the signature localizer does
+    localizers = _localizers()
+    t, readings, alarms = _burst(x, 0.5 * MATRIX[row], dt)
+    cal = _calibration(dt)
+
+    def decide(name: str, **shared: object) -> object:
+        return rank_alarms(
+            name, localizers, METERS, t, readings, alarms, cal, "instantaneous", **shared
+        )
+
+    signature = decide("signature")
+    alone = decide("fused")
+    shared = decide("fused", signature_ranking=signature.ranking)
+    assert list(shared.ranking) == list(alone.ranking)
+    assert (shared.time, shared.waited) == (alone.time, alone.waited)
+    assert alone.time == pytest.approx(signature.time)
+    # the ranking passed in is the one used (a reversed one changes the answer)
+    reversed_ranking = Ranking(
+        RankedPipe(p.pipe, p.start, p.end, score=-p.score) for p in signature.ranking
+    )
+    swapped = decide("fused", signature_ranking=reversed_ranking)
+    assert swapped.ranking.best != alone.ranking.best

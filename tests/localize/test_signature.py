@@ -1,0 +1,321 @@
+"""The signature localizer: WNTR steady-state signatures, the free-scale fit, the estimators."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from burstloc.exceptions import ConfigError, InputError, NetworkError
+from burstloc.localize.evidence import BurstEvidence
+from burstloc.localize.signature import (
+    SignatureLocalizer,
+    SignatureSet,
+    cached_signature_sets,
+    cached_signatures,
+    compute_signatures,
+    fit_signatures,
+    network_hash,
+    rank_drop,
+)
+from burstloc.localize.steady_level import (
+    baseline_levels,
+    block_average,
+    estimate_levels,
+    fit_damped_modes,
+)
+from burstloc.network import load_network, split_pipe
+
+
+def _synthetic(pipes: int = 4, meters: int = 6, seed: int = 1) -> SignatureSet:
+    rng = np.random.default_rng(seed)
+    return SignatureSet(
+        network_hash="sha256:test",
+        meters=tuple(f"m{j}" for j in range(meters)),
+        pipes=tuple(f"p{i}" for i in range(pipes)),
+        endpoints={f"p{i}": (f"a{i}", f"b{i}") for i in range(pipes)},
+        matrix=rng.uniform(0.05, 1.0, size=(pipes, meters)),
+        baseline=np.full(meters, 50.0),
+        params={},
+    )
+
+
+def _heads_with_burst(network: Path, pipe: str, fraction: float, coeff: float) -> dict[str, float]:
+    """Steady heads with an emitter ``coeff`` at ``fraction`` along ``pipe`` (an 'observation')."""
+    import wntr
+
+    wn = load_network(network)
+    wn.options.hydraulic.demand_model = "PDD"
+    split = split_pipe(wn, pipe, fraction)
+    split.network.get_node(split.burst_node).emitter_coefficient = coeff
+    with tempfile.TemporaryDirectory() as tmp, warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = wntr.sim.EpanetSimulator(split.network).run_sim(file_prefix=os.path.join(tmp, "x"))
+    heads = res.node["head"].iloc[0]
+    return {n: float(heads[n]) for n in wn.junction_name_list}
+
+
+def test_fit_recovers_scale_and_pipe() -> None:
+    sig = _synthetic()
+    drop = 2.5 * sig.matrix[2]
+    k, rms = fit_signatures(drop, sig.matrix)
+    assert k[2] == pytest.approx(2.5)
+    assert rms[2] == pytest.approx(0.0, abs=1e-12)
+    assert np.all(rms[[0, 1, 3]] > 1e-3)
+    ranking = rank_drop(drop, sig)
+    assert ranking.best is not None and ranking.best.pipe == "p2"
+    assert ranking.best.score == pytest.approx(0.0, abs=1e-12)
+    assert (ranking.best.start, ranking.best.end) == ("a2", "b2")
+
+
+def test_fit_scale_is_never_negative() -> None:
+    sig = _synthetic()
+    drop = -sig.matrix[1]  # a rise: no burst size explains it
+    k, rms = fit_signatures(drop, sig.matrix)
+    assert np.all(k == 0.0)
+    assert rms == pytest.approx(np.full(4, math.sqrt(np.mean(drop**2))))
+
+
+def test_fit_rejects_mismatched_shapes() -> None:
+    with pytest.raises(InputError):
+        fit_signatures(np.ones(3), np.ones((2, 4)))
+    with pytest.raises(InputError):
+        fit_signatures(np.array([1.0, np.nan]), np.ones((2, 2)))
+
+
+def test_signature_set_json_round_trip_and_subset(tmp_path: Path) -> None:
+    sig = _synthetic()
+    path = tmp_path / "sig.json"
+    sig.save(path)
+    back = SignatureSet.load(path)
+    assert back.pipes == sig.pipes and back.meters == sig.meters
+    np.testing.assert_array_equal(back.matrix, sig.matrix)
+    sub = back.for_meters(["m3", "m0"])
+    np.testing.assert_array_equal(sub.matrix, sig.matrix[:, [3, 0]])
+    with pytest.raises(InputError, match="m9"):
+        back.for_meters(["m9"])
+    path.write_text(json.dumps({"format": "other"}))
+    with pytest.raises(InputError, match="not a signature file"):
+        SignatureSet.load(path)
+
+
+def test_computed_signatures_on_tiny_network(tiny_network: Path) -> None:
+    sig = compute_signatures(tiny_network)
+    assert set(sig.pipes) == {"A", "B", "C", "D", "E"}
+    assert sig.meters == ("J1", "J2", "J3", "J4")
+    # every burst lowers every head; a burst on the supply pipe A lowers them all about equally
+    assert np.all(sig.matrix > 0)
+    a = sig.matrix[sig.pipes.index("A")]
+    assert np.ptp(a) < 0.2 * a.mean()
+    # a burst on the dead-end pipe E hurts J4 (its end) most
+    e = sig.matrix[sig.pipes.index("E")]
+    assert int(np.argmax(e)) == sig.meters.index("J4")
+    # end nodes follow the steady flow: everything flows away from the reservoir
+    assert sig.endpoints["A"] == ("R1", "J1")
+    assert sig.endpoints["E"] == ("J3", "J4")
+    assert sig.network_hash == network_hash(tiny_network)
+
+
+@pytest.mark.parametrize(("pipe", "fraction", "coeff"), [("B", 0.5, 0.004), ("E", 0.3, 0.002)])
+def test_true_pipe_ranks_first_for_a_model_burst(
+    tiny_network: Path, pipe: str, fraction: float, coeff: float
+) -> None:
+    sig = compute_signatures(tiny_network)
+    after = _heads_with_burst(tiny_network, pipe, fraction, coeff)
+    drop = sig.baseline - np.array([after[m] for m in sig.meters])
+    ranking = rank_drop(drop, sig)
+    assert ranking.best is not None and ranking.best.pipe == pipe
+
+
+def test_compute_signatures_rejects_bad_input(tiny_network: Path) -> None:
+    with pytest.raises(NetworkError, match="R1"):
+        compute_signatures(tiny_network, meters=["R1"])
+    with pytest.raises(ConfigError):
+        compute_signatures(tiny_network, burst_coeff=0.0)
+    with pytest.raises(ConfigError):
+        compute_signatures(tiny_network, position=1.0)
+
+
+def test_cached_signatures_are_computed_once(
+    tiny_network: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    first = cached_signatures(tiny_network, ["J4", "J2"], cache_dir=tmp_path)
+    assert first.meters == ("J4", "J2")
+    files = list(tmp_path.glob("*.json"))
+    assert len(files) == 1
+
+    def boom(*args: object, **kwargs: object) -> SignatureSet:
+        raise AssertionError("recomputed although cached")
+
+    monkeypatch.setattr("burstloc.localize.signature.compute_signatures", boom)
+    again = cached_signatures(tiny_network, ["J4", "J2"], cache_dir=tmp_path)
+    np.testing.assert_array_equal(again.matrix, first.matrix)
+    # another network file is another entry (and here: computed, hence the error)
+    other = tmp_path / "other.inp"
+    other.write_text(tiny_network.read_text().replace("R1   60", "R1   61"))
+    with pytest.raises(AssertionError, match="recomputed"):
+        cached_signatures(other, cache_dir=tmp_path)
+
+
+def test_positions_along_the_pipe_match_an_off_centre_burst(
+    tiny_network: Path, tmp_path: Path
+) -> None:
+    from burstloc.localize.signature import DEFAULT_BURST_COEFF
+
+    sets = cached_signature_sets(tiny_network, cache_dir=tmp_path)
+    assert [s.params["position"] for s in sets] == [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9]
+    assert len(list(tmp_path.glob("*.json"))) == len(sets)
+    middle = sets[4]
+    for pipe in middle.pipes:
+        for fraction in (0.1, 0.9):
+            after = _heads_with_burst(tiny_network, pipe, fraction, DEFAULT_BURST_COEFF)
+            drop = middle.baseline - np.array([after[m] for m in middle.meters])
+            ranking = rank_drop(drop, sets)
+            # the reference burst at a candidate position is matched (to EPANET's precision)
+            assert ranking.best is not None and ranking.best.pipe == pipe
+            assert -ranking.best.score < 1e-3
+            # the mid-point signature alone fits it worse
+            mid_only = {p.pipe: p.score for p in rank_drop(drop, middle)}
+            assert mid_only[pipe] < ranking.best.score
+            # each pipe scores its best position
+            singles = [{p.pipe: p.score for p in rank_drop(drop, s)} for s in sets]
+            for ranked in ranking:
+                assert ranked.score == max(single[ranked.pipe] for single in singles)
+
+
+def test_signature_sets_must_agree() -> None:
+    one, other = _synthetic(meters=6), _synthetic(meters=5)
+    drop = one.matrix[1]
+    assert [p.pipe for p in rank_drop(drop, [one])] == [p.pipe for p in rank_drop(drop, one)]
+    with pytest.raises(ConfigError, match="disagree"):
+        rank_drop(drop, [one, other])
+    with pytest.raises(ConfigError, match="at least one"):
+        SignatureLocalizer([])
+    with pytest.raises(ConfigError, match="at least one"):
+        cached_signature_sets("x.inp", positions=())
+    loc = SignatureLocalizer([one, _synthetic(meters=6, seed=2)])
+    assert loc.signatures is loc.signature_sets[0] and len(loc.signature_sets) == 2
+
+
+def test_projected_mode_search_matches_a_direct_least_squares() -> None:
+    from burstloc.localize.steady_level import _basis, _pair_rss
+
+    rng = np.random.default_rng(3)
+    t = np.arange(0.0, 90.0, 2.0)
+    y = rng.normal(size=(t.size, 5))
+    y -= y.mean(axis=0)
+    fixed = [(0.4, 0.03)]
+    omegas, decays = np.array([0.2, 0.9, 1.4]), np.array([0.0, 0.02, 0.05])
+    for span in (0.0, 2.0):
+        fast = _pair_rss(t, span, y, fixed, omegas, decays)
+        for g in range(omegas.size):
+            basis = _basis(t, span, [*fixed, (float(omegas[g]), float(decays[g]))])
+            coef, *_ = np.linalg.lstsq(basis, y, rcond=None)
+            assert fast[g] == pytest.approx(float(np.sum((y - basis @ coef) ** 2)), rel=1e-9)
+
+
+def _ringing(
+    t: np.ndarray, level: np.ndarray, shapes: np.ndarray, dt: float, model: str
+) -> np.ndarray:
+    """Level plus two shared damped modes, sampled or averaged over (t - dt, t]."""
+
+    def signal(x: np.ndarray) -> np.ndarray:
+        m1 = np.exp(-0.03 * x) * np.cos(0.4 * x + 0.3)
+        m2 = np.exp(-0.01 * x) * np.sin(1.3 * x)
+        return level[None, :] + m1[:, None] * shapes[0] + m2[:, None] * shapes[1]
+
+    if model == "instantaneous":
+        return signal(t)
+    sub = np.linspace(0, 1, 41)[1:]
+    return np.mean([signal(t - dt + f * dt) for f in sub], axis=0)
+
+
+@pytest.mark.parametrize("model", ["instantaneous", "interval-averaged"])
+@pytest.mark.parametrize("dt", [2.0, 5.0])
+def test_damped_fit_sees_through_ringing(model: str, dt: float) -> None:
+    rng = np.random.default_rng(3)
+    level = rng.uniform(40, 60, size=5)
+    shapes = rng.uniform(-0.8, 0.8, size=(2, 5))
+    t = np.arange(60.0, 160.0 + 1e-9, dt)
+    y = _ringing(t, level, shapes, dt, model)
+    fitted = estimate_levels(t, y, capture_interval=dt, meter_model=model)  # type: ignore[arg-type]
+    naive = y.mean(axis=0)
+    assert np.max(np.abs(fitted - level)) < 0.01
+    assert np.max(np.abs(fitted - level)) < 0.2 * np.max(np.abs(naive - level))
+
+
+def test_damped_fit_of_a_quiet_window_is_the_mean() -> None:
+    rng = np.random.default_rng(0)
+    t = np.arange(0.0, 100.0, 5.0)
+    y = 30.0 + 0.001 * rng.standard_normal((t.size, 3))
+    fit = fit_damped_modes(t, y, capture_interval=5.0)
+    assert fit.omegas == ()  # no mode pays for its parameters
+    np.testing.assert_allclose(fit.levels, y.mean(axis=0))
+
+
+def test_estimators_reject_bad_input() -> None:
+    with pytest.raises(InputError, match="no reading after"):
+        estimate_levels(np.zeros(0), np.zeros((0, 2)), capture_interval=1.0)
+    with pytest.raises(InputError, match="before the burst"):
+        baseline_levels(np.zeros((0, 2)))
+    with pytest.raises(InputError):
+        estimate_levels(np.arange(3.0), np.ones((3, 2)), capture_interval=1.0, method="mode")  # type: ignore[arg-type]
+
+
+def test_block_average_keeps_full_blocks() -> None:
+    t = np.arange(1, 12) * 0.2
+    y = np.arange(11.0)[:, None]
+    tb, yb, width = block_average(t, y, 0.2, 1.0)
+    assert width == pytest.approx(1.0)
+    np.testing.assert_allclose(tb, [1.0, 2.0])
+    np.testing.assert_allclose(yb[:, 0], [2.0, 7.0])
+
+
+@pytest.mark.parametrize("model", ["instantaneous", "interval-averaged"])
+def test_localizer_finds_the_pipe_from_readings(model: str) -> None:
+    sig = _synthetic(pipes=6, meters=8, seed=4)
+    dt = 5.0
+    t = np.arange(0.0, 160.0 + 1e-9, dt)
+    onset = 10.0
+    rng = np.random.default_rng(5)
+    shapes = rng.uniform(-0.5, 0.5, size=(2, 8))
+    after = _ringing(t - onset, sig.baseline - 0.7 * sig.matrix[4], shapes, dt, model)
+    readings = np.where((t <= onset)[:, None], sig.baseline[None, :], after)
+    evidence = BurstEvidence(
+        meters=sig.meters,
+        times=t,
+        readings=readings,
+        onset=onset,
+        capture_interval=dt,
+        meter_model=model,  # type: ignore[arg-type]
+    )
+    loc = SignatureLocalizer(sig)
+    drop = loc.drop(evidence)
+    np.testing.assert_allclose(drop, 0.7 * sig.matrix[4], atol=0.01)
+    ranking = loc.rank(evidence)
+    assert ranking.best is not None and ranking.best.pipe == "p4"
+    assert len(ranking) == 6
+
+
+def test_localizer_needs_a_baseline_and_settled_readings() -> None:
+    sig = _synthetic()
+    t = np.arange(20.0, 200.0, 10.0)
+    evidence = BurstEvidence(
+        meters=sig.meters,
+        times=t,
+        readings=np.tile(sig.baseline, (t.size, 1)),
+        onset=10.0,
+        capture_interval=10.0,
+    )
+    with pytest.raises(InputError, match="before the burst"):
+        SignatureLocalizer(sig).rank(evidence)
+    with pytest.raises(ConfigError):
+        SignatureLocalizer(sig, settle=100.0, decision_delay=50.0)
+    with pytest.raises(ConfigError):
+        SignatureLocalizer(sig, estimator="best")  # type: ignore[arg-type]

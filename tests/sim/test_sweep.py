@@ -1,0 +1,73 @@
+"""burstloc.sim.sweep: map a function over items serially, in processes, or on Dask."""
+
+from __future__ import annotations
+
+import math
+import operator
+
+import pytest
+
+from burstloc.exceptions import ConfigError
+from burstloc.sim import sweep as sweep_mod
+from burstloc.sim.sweep import sweep
+
+# math.sqrt fails on negative numbers: a picklable function with a natural per-item failure.
+ITEMS = [4.0, -1.0, 9.0, 16.0, -4.0, 25.0]
+
+
+def _check(report, labelled: bool = False) -> None:  # type: ignore[no-untyped-def]
+    assert report.items == ITEMS
+    assert report.results == [2.0, None, 3.0, 4.0, None, 5.0]
+    assert [f.index for f in report.failures] == [1, 4]
+    assert [f.item for f in report.failures] == [-1.0, -4.0]
+    assert all(f.error_type == "ValueError" for f in report.failures)
+    assert all("math domain error" in f.message for f in report.failures)
+    assert all("ValueError" in f.traceback for f in report.failures)
+    assert not report.ok
+    assert report.succeeded() == [(4.0, 2.0), (9.0, 3.0), (16.0, 4.0), (25.0, 5.0)]
+    if labelled:
+        assert str(report.failures[0]) == "x=-1.0: ValueError: math domain error"
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_failures_are_reported_and_the_rest_complete(workers: int) -> None:
+    seen: list[tuple[int, float, float]] = []
+    report = sweep(
+        math.sqrt,
+        ITEMS,
+        workers=workers,
+        progress=False,
+        label=lambda x: f"x={x}",
+        on_result=lambda i, item, result: seen.append((i, item, result)),
+    )
+    _check(report, labelled=True)
+    assert sorted(seen) == [(0, 4.0, 2.0), (2, 9.0, 3.0), (3, 16.0, 4.0), (5, 25.0, 5.0)]
+
+
+def test_empty_and_single_item_sweeps() -> None:
+    empty = sweep(math.sqrt, [], progress=False)
+    assert empty.ok and empty.results == [] and empty.items == []
+    single = sweep(operator.neg, [3], workers=4, progress=False)
+    assert single.ok and single.results == [-3]
+
+
+def test_progress_bar_counts_every_item(capsys: pytest.CaptureFixture[str]) -> None:
+    sweep(math.sqrt, ITEMS, workers=1, progress=True, desc="roots")
+    err = capsys.readouterr().err
+    assert "roots" in err and "6/6" in err
+
+
+@pytest.mark.parametrize("workers", [0, -1, 1.5, "2"])
+def test_bad_worker_count(workers: object) -> None:
+    with pytest.raises(ConfigError, match="workers"):
+        sweep(math.sqrt, ITEMS, workers=workers, progress=False)  # type: ignore[arg-type]
+
+
+def test_dask_local_cluster_runs_items_and_reports_failures(dask_scheduler: str) -> None:
+    _check(sweep(math.sqrt, ITEMS, scheduler=dask_scheduler, progress=False))
+
+
+def test_unreachable_scheduler_is_a_config_error(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(sweep_mod, "DASK_CONNECT_TIMEOUT", 1.0)
+    with pytest.raises(ConfigError, match=r"tcp://127\.0\.0\.1:9"):
+        sweep(math.sqrt, ITEMS, scheduler="tcp://127.0.0.1:9", progress=False)
