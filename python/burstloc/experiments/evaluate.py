@@ -58,16 +58,18 @@ from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.experiments import paper
 from burstloc.experiments.calibrate import calibrated_bank
 from burstloc.live.stream import replay
-from burstloc.localize.decide import decision_time, rank_alarms, ranking_localizers
+from burstloc.localize.decide import decision_time, rank_alarms
 from burstloc.localize.detection import DetectorConfig, Mode, make_detector
 from burstloc.localize.evidence import Ranking
 from burstloc.localize.paper_rules import BurstLocator, Localization
 from burstloc.sim.capture import capture
+from burstloc.sim.prepare import ranking_localizers
 
 if TYPE_CHECKING:
     import networkx as nx
 
     from burstloc.experiments.calibrate import Calibration
+    from burstloc.localize.decide import RankingLocalizers
     from burstloc.sim.scenario import ScenarioResult
 
 __all__ = [
@@ -459,7 +461,7 @@ class RankingSetup:
 
     meters: list[str]
     config: Calibration
-    localizers: dict[str, Any]
+    localizers: RankingLocalizers
 
     @classmethod
     def build(

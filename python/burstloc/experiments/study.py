@@ -322,17 +322,14 @@ def score_point(task: tuple[StudyPoint, StudySettings]) -> list[dict[str, Any]]:
     """
     from burstloc.experiments.calibrate import DEFAULT_NOISE_SIGMA, calibrate
     from burstloc.experiments.evaluate import calibrated_bank
-    from burstloc.localize.arrival import ArrivalLocalizer
     from burstloc.localize.decide import rank_alarms
     from burstloc.localize.fused import FusedLocalizer
-    from burstloc.localize.signature import (
-        SignatureLocalizer,
-        cached_signature_sets,
-        cached_signatures,
-    )
+    from burstloc.localize.signature import SignatureLocalizer
     from burstloc.network import load_network
     from burstloc.sim.capture import capture
+    from burstloc.sim.prepare import arrival_localizer
     from burstloc.sim.sensors import SensorModel
+    from burstloc.sim.signatures import cached_signature_sets, cached_signatures
     from burstloc.sim.tsnet import simulate_burst
 
     point, settings = task
@@ -345,7 +342,7 @@ def score_point(task: tuple[StudyPoint, StudySettings]) -> list[dict[str, Any]]:
     meters = list(greedy_meters(all_signatures, count)) if count < len(junctions) else junctions
     columns = [junctions.index(m) for m in meters]
     wn = load_network(point.network)
-    arrival = ArrivalLocalizer.from_network(wn, meters)
+    arrival = arrival_localizer(wn, meters)
     signature = SignatureLocalizer([s.for_meters(meters) for s in signature_sets])
     fused = FusedLocalizer(arrival, signature)
     localizers: dict[str, Any] = {"arrival": arrival, "signature": signature, "fused": fused}

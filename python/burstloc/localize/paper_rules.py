@@ -50,6 +50,7 @@ import networkx as nx
 
 from burstloc.exceptions import NetworkError, StreamError
 from burstloc.live.stream import Item, ReadingStream, Window
+from burstloc.localize.evidence import Change
 
 __all__ = [
     "BurstLocator",
@@ -71,23 +72,6 @@ class Rule(str, Enum):
     SINGLE_PREDECESSOR = "single_predecessor"
     ALARMED_PREDECESSOR = "alarmed_predecessor"
     LOWEST_MEAN_PRESSURE = "lowest_mean_pressure"
-
-
-@dataclass(frozen=True, slots=True)
-class Change:
-    """One change a detector found at one meter in a window.
-
-    ``amplitude`` is signed where the detector gives a sign (CUSUM ``x[end] - x[start]``,
-    streaming alarms) and absolute for the paper's batch Shewhart (``|x - mean|``).
-    Times are timestamps of the stream (s); ``end_time`` is set when the detector estimates
-    the end of the change (TSNet-style CUSUM).
-    """
-
-    node: str
-    start_time: float
-    amplitude: float
-    alarm_time: float | None = None
-    end_time: float | None = None
 
 
 @dataclass(frozen=True)
