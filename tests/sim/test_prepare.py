@@ -68,6 +68,8 @@ def test_the_model_holds_geometry_and_signatures_of_the_meters(
     assert model.meters == ("J4", "J2") and model.wave_speed == 1000.0
     pipes, distances = arrival_geometry(tiny_network, meters)
     assert list(model.pipes) == pipes
+    # nodes in pipe order (not a set's): the same network gives the same file, run after run
+    assert list(model.node_distances) == ["R1", "J1", "J2", "J3", "J4"]
     for node, row in distances.items():
         np.testing.assert_array_equal(model.node_distances[node], row)
     sets = cached_signature_sets(tiny_network, meters, cache_dir=tmp_path)

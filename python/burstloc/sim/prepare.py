@@ -107,7 +107,7 @@ def arrival_geometry(
     per_meter = {
         m: nx.single_source_dijkstra_path_length(graph, m, weight="length") for m in meter_list
     }
-    nodes = {n for p in pipes for n in (p.start, p.end)}
+    nodes = dict.fromkeys(n for p in pipes for n in (p.start, p.end))  # pipe order: reproducible
     node_distances = {
         n: np.array([float(per_meter[m].get(n, math.inf)) for m in meter_list]) for n in nodes
     }
