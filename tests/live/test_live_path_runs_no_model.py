@@ -19,9 +19,10 @@ import pytest
 
 from burstloc.cli import main
 from burstloc.experiments.evaluate import RunSpec, readings_at_offset
-from burstloc.live.stream import Step, readings_of
+from burstloc.live.stream import readings_of
 from burstloc.localize.config import Calibration
 from burstloc.localize.detection import DetectorConfig
+from burstloc.readings import Step
 from burstloc.sim.scenario import BurstScenario
 from burstloc.sim.tsnet import simulate_burst
 

@@ -18,9 +18,10 @@ from burstloc.experiments import paper
 from burstloc.experiments.calibrate import calibrate
 from burstloc.experiments.evaluate import RunSpec, evaluate, readings_at_offset
 from burstloc.live.monitor import BurstMonitor, monitor_readings
-from burstloc.live.stream import Step, readings_of
+from burstloc.live.stream import readings_of
 from burstloc.localize.config import Calibration
 from burstloc.localize.detection import DetectorConfig
+from burstloc.readings import Step
 from conftest import write_tiny
 
 SHORT = paper.ScenarioConfig(burst_start=2.0)

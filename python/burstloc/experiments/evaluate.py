@@ -7,7 +7,7 @@ For a network and one or more runs (detector x capture interval x parameters x m
    interval``
    readings after the burst;
 2. each scenario is sampled at the run's capture interval at ``phases`` clock offsets and
-   replayed through the real-time loop (:class:`burstloc.localize.paper_rules.BurstLocator`): the
+   replayed through the real-time loop (:class:`burstloc.live.paper_locator.BurstLocator`): the
    first
    window whose changes make the rules name a pipe decides (the paper's single localization
    attempt); no decision means "not located", never a guess;
@@ -57,11 +57,12 @@ from burstloc.constants import (
 from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.experiments import paper
 from burstloc.experiments.calibrate import calibrated_bank
+from burstloc.live.paper_locator import BurstLocator
 from burstloc.live.stream import replay
 from burstloc.localize.decide import decision_time, rank_alarms
 from burstloc.localize.detection import DetectorConfig, Mode, make_detector
 from burstloc.localize.evidence import Ranking
-from burstloc.localize.paper_rules import BurstLocator, Localization
+from burstloc.localize.paper_rules import Localization
 from burstloc.sim.capture import capture
 from burstloc.sim.prepare import ranking_localizers
 

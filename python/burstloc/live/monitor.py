@@ -42,7 +42,7 @@ import numpy as np
 
 from burstloc.constants import METER_MODELS, RANKING_LOCALIZERS, MeterModel
 from burstloc.exceptions import ConfigError, InputError
-from burstloc.live.stream import Item, Reading, ReadingStream, Step
+from burstloc.live.stream import ReadingStream
 from burstloc.localize.config import Calibration, calibrated_bank
 from burstloc.localize.decide import (
     Decision,
@@ -52,6 +52,7 @@ from burstloc.localize.decide import (
     rank_alarms,
 )
 from burstloc.localize.evidence import IndexedAlarm, Localizer
+from burstloc.readings import Item, Reading, Step
 
 __all__ = [
     "HISTORY_BEFORE_ONSET",

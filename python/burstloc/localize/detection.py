@@ -46,8 +46,8 @@ import numpy as np
 from burstloc import _core
 from burstloc.constants import DETECTORS
 from burstloc.exceptions import ConfigError, StreamError
-from burstloc.live.stream import Window
 from burstloc.localize.evidence import Change
+from burstloc.readings import Window
 
 __all__ = [
     "DETECTORS",
