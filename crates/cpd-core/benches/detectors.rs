@@ -104,7 +104,7 @@ fn single_channel(c: &mut Criterion<CpuTime>) {
     }
     for w in [10usize, 100, 10_000] {
         group.bench_with_input(BenchmarkId::new("shewhart", w), &w, |b, &w| {
-            let mut det = Shewhart::new(ShewhartConfig::new(w, 3.0, 0.5).unwrap());
+            let mut det = Shewhart::new(ShewhartConfig::new(w, 3.0, 0.5).unwrap()).unwrap();
             b.iter(|| {
                 let mut alarms = 0u32;
                 for &v in &x {
@@ -132,7 +132,7 @@ fn single_channel(c: &mut Criterion<CpuTime>) {
     }
     for w in [10usize, 100, 10_000] {
         group.bench_with_input(BenchmarkId::new("shewhart", w), &w, |b, &w| {
-            let mut det = Shewhart::new(ShewhartConfig::new(w, 3.0, 0.5).unwrap());
+            let mut det = Shewhart::new(ShewhartConfig::new(w, 3.0, 0.5).unwrap()).unwrap();
             b.iter(|| {
                 out.clear();
                 det.update_slice(black_box(&x), &mut out).unwrap();

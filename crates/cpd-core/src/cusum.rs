@@ -7,6 +7,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::alarm::{Alarm, Direction};
 use crate::error::{check_sample, check_samples, non_negative, positive, Error};
+#[cfg(feature = "serde")]
+use crate::error::{ensure, MAX_COUNT};
 
 /// Validated CUSUM parameters.
 ///
@@ -175,6 +177,38 @@ impl CusumLane {
         0
     }
 
+    /// Validates a restored lane after `seen` samples: every value finite, the drift sums
+    /// `>= 0`, the real sums `<= threshold` (they reset on crossing it), the starts before
+    /// `seen`. These hold for every state a detector reaches from finite samples.
+    #[cfg(feature = "serde")]
+    pub(crate) fn check(&self, seen: u64, config: &CusumConfig) -> Result<(), Error> {
+        let values = [
+            self.x_prev,
+            self.gp,
+            self.gn,
+            self.gp_real,
+            self.gn_real,
+            self.x_tap,
+            self.x_tan,
+        ];
+        ensure(seen <= MAX_COUNT, "sample count out of range")?;
+        ensure(
+            values.iter().all(|v| v.is_finite()),
+            "non-finite CUSUM state value",
+        )?;
+        ensure(self.gp >= 0.0 && self.gn >= 0.0, "negative CUSUM drift sum")?;
+        let t = config.threshold;
+        ensure(
+            self.gp_real <= t && self.gn_real <= t,
+            "CUSUM real sum above the threshold",
+        )?;
+        let last = seen.saturating_sub(1);
+        ensure(
+            self.tap <= last && self.tan <= last,
+            "CUSUM change start past the sample count",
+        )
+    }
+
     /// The alarm for non-zero `flags` returned by [`CusumLane::step`] at sample `i` (value `x`).
     #[inline]
     pub(crate) fn alarm(&self, flags: u8, i: u64, x: f64) -> Alarm {
@@ -231,10 +265,33 @@ impl CusumLane {
 /// ```
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(Serialize, Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "CusumRepr"))]
 pub struct Cusum {
     config: CusumConfig,
     seen: u64,
     lane: CusumLane,
+}
+
+/// Unvalidated mirror used to validate deserialized detectors.
+#[cfg(feature = "serde")]
+#[derive(Deserialize)]
+struct CusumRepr {
+    config: CusumConfig,
+    seen: u64,
+    lane: CusumLane,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<CusumRepr> for Cusum {
+    type Error = Error;
+    fn try_from(r: CusumRepr) -> Result<Self, Error> {
+        r.lane.check(r.seen, &r.config)?;
+        Ok(Self {
+            config: r.config,
+            seen: r.seen,
+            lane: r.lane,
+        })
+    }
 }
 
 impl Cusum {

@@ -16,7 +16,9 @@
 //!   `{ start, end, amplitude }`, [`detect_shewhart`]`(x, sigma, threshold) -> `
 //!   [`ShewhartChanges`] `{ index, amplitude }`;
 //! - feature `serde`: every config, detector, bank and result type is `Serialize + Deserialize`
-//!   (deserialization re-validates configs and state shapes).
+//!   (deserialization re-validates configs and every state field);
+//! - feature `snapshot`: [`snapshot::to_bytes`] / [`snapshot::from_bytes`], the versioned CBOR
+//!   snapshots the Python package reads and writes.
 //!
 //! Non-finite input policy: a NaN or ±inf sample/reading is *rejected* with a typed error and
 //! the detector or bank is left exactly as it was (nothing consumed). Missing readings are
@@ -35,6 +37,8 @@ mod cusum;
 mod error;
 mod math;
 mod shewhart;
+#[cfg(feature = "snapshot")]
+pub mod snapshot;
 mod stats;
 
 pub use alarm::{Alarm, ChannelAlarm, Direction};

@@ -10,8 +10,6 @@ use crate::detectors::shewhart_config;
 use crate::errors::{config_err, core_err, input_err};
 use crate::state::pymethods_with_snapshots;
 
-const SNAPSHOT_KIND: &str = "DetectorBank";
-
 /// A bank of identical detectors, one per channel (sensor), advanced together.
 ///
 /// `kind` is `"cusum"` (parameters `threshold`, `drift`) or `"shewhart"` (parameters
@@ -47,7 +45,7 @@ impl PyDetectorBank {
     }
 }
 
-pymethods_with_snapshots!(PyDetectorBank, SNAPSHOT_KIND, {
+pymethods_with_snapshots!(PyDetectorBank, {
     #[new]
     #[pyo3(signature = (kind, channels, *, threshold, drift = None, window = None, sigma = None))]
     fn new(

@@ -1,6 +1,6 @@
 //! `Cusum` and `Shewhart`: single-channel streaming detectors wrapping the core's.
 
-use cpd_core::{Cusum, CusumConfig, Error, Shewhart, ShewhartConfig};
+use cpd_core::{Cusum, CusumConfig, Shewhart, ShewhartConfig};
 use pyo3::prelude::*;
 
 use crate::alarm::{float_repr, PyAlarm};
@@ -11,8 +11,8 @@ use crate::state::pymethods_with_snapshots;
 /// The `#[pymethods]` block of a single-channel detector class: `update`, `update_many`,
 /// `reset`, `samples_seen`, the snapshot methods, and `$extra`, the class's own methods.
 macro_rules! detector_methods {
-    ($py_type:ident, $kind:literal, { $($extra:tt)* }) => {
-        pymethods_with_snapshots!($py_type, $kind, {
+    ($py_type:ident, { $($extra:tt)* }) => {
+        pymethods_with_snapshots!($py_type, {
             /// Feeds one sample; returns the alarm it raises, if any.
             ///
             /// A NaN or infinite sample raises `InputError` and leaves the state unchanged.
@@ -69,7 +69,7 @@ pub struct PyCusum {
     inner: Cusum,
 }
 
-detector_methods!(PyCusum, "Cusum", {
+detector_methods!(PyCusum, {
     #[new]
     #[pyo3(signature = (threshold, drift = 0.0))]
     fn new(threshold: f64, drift: f64) -> PyResult<Self> {
@@ -137,7 +137,7 @@ pub struct PyShewhart {
 }
 
 /// A Shewhart config from Python arguments: `window` as a Python int (negative values named),
-/// `sigma` defaulting to `threshold` (the paper's single parameter).
+/// `sigma` left to the core's default (the threshold) when not given.
 pub(crate) fn shewhart_config(
     window: i64,
     threshold: f64,
@@ -145,28 +145,19 @@ pub(crate) fn shewhart_config(
 ) -> PyResult<ShewhartConfig> {
     let window = usize::try_from(window)
         .map_err(|_| config_err(format!("window must be an integer >= 2, got {window}")))?;
-    ShewhartConfig::new(window, sigma.unwrap_or(threshold), threshold).map_err(|err| {
-        match (sigma, &err) {
-            // sigma was not given: name the parameter the caller did give.
-            (
-                None,
-                Error::InvalidParameter {
-                    name: "sigma",
-                    value,
-                    reason,
-                },
-            ) => config_err(format!("invalid parameter `threshold` = {value}: {reason}")),
-            _ => core_err(err),
-        }
-    })
+    match sigma {
+        Some(sigma) => ShewhartConfig::new(window, sigma, threshold),
+        None => ShewhartConfig::with_threshold(window, threshold),
+    }
+    .map_err(core_err)
 }
 
-detector_methods!(PyShewhart, "Shewhart", {
+detector_methods!(PyShewhart, {
     #[new]
     #[pyo3(signature = (window, threshold, sigma = None))]
     fn new(window: i64, threshold: f64, sigma: Option<f64>) -> PyResult<Self> {
         Ok(Self {
-            inner: Shewhart::new(shewhart_config(window, threshold, sigma)?),
+            inner: Shewhart::new(shewhart_config(window, threshold, sigma)?).map_err(core_err)?,
         })
     }
 
