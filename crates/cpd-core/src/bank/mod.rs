@@ -83,7 +83,7 @@ fn checked_step_many<K: Kernel>(
 
 /// Validates a row-major `T x channels` matrix.
 fn check_matrix(matrix: &[f64], channels: usize) -> Result<(), Error> {
-    if matrix.len() % channels != 0 {
+    if !matrix.len().is_multiple_of(channels) {
         return Err(Error::MatrixShape {
             len: matrix.len(),
             channels,
