@@ -131,3 +131,12 @@ def test_burstloc_imports_without_river() -> None:
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert "pip install 'burstloc[river]'" in out.stdout
+
+
+def test_docstring_examples_run() -> None:
+    import doctest
+
+    import burstloc.river
+
+    result = doctest.testmod(burstloc.river)
+    assert result.attempted > 0 and result.failed == 0

@@ -40,7 +40,26 @@ __all__ = [
 ]
 
 
-class Cusum(DriftDetector):
+class _CoreDetector(DriftDetector):
+    """The River protocol around one of burstloc's core detectors (made by ``_make``)."""
+
+    def _make(self) -> _Cusum | _Shewhart:
+        raise NotImplementedError
+
+    def _reset(self) -> None:
+        super()._reset()
+        self._detector = self._make()
+        self.last_alarm: Alarm | None = None
+
+    def update(self, x: int | float) -> None:
+        """Feeds one sample; ``drift_detected`` tells whether it raised an alarm."""
+        alarm = self._detector.update(float(x))
+        self._drift_detected = alarm is not None
+        if alarm is not None:
+            self.last_alarm = alarm
+
+
+class Cusum(_CoreDetector):
     """Two-sided CUSUM (TSNet's ``detect_cusum``, online; burstloc's Rust core) for River.
 
     Parameters
@@ -68,20 +87,11 @@ class Cusum(DriftDetector):
         self.drift = drift
         self._reset()
 
-    def _reset(self) -> None:
-        super()._reset()
-        self._detector = _Cusum(self.threshold, self.drift)
-        self.last_alarm: Alarm | None = None
-
-    def update(self, x: int | float) -> None:
-        """Feeds one sample; ``drift_detected`` tells whether it raised an alarm."""
-        alarm = self._detector.update(float(x))
-        self._drift_detected = alarm is not None
-        if alarm is not None:
-            self.last_alarm = alarm
+    def _make(self) -> _Cusum:
+        return _Cusum(self.threshold, self.drift)
 
 
-class Shewhart(DriftDetector):
+class Shewhart(_CoreDetector):
     """Shewhart control chart over a sliding window (the paper's Algorithm 2) for River.
 
     Parameters
@@ -115,17 +125,8 @@ class Shewhart(DriftDetector):
         self.sigma = sigma
         self._reset()
 
-    def _reset(self) -> None:
-        super()._reset()
-        self._detector = _Shewhart(self.window, self.threshold, self.sigma)
-        self.last_alarm: Alarm | None = None
-
-    def update(self, x: int | float) -> None:
-        """Feeds one sample; ``drift_detected`` tells whether it raised an alarm."""
-        alarm = self._detector.update(float(x))
-        self._drift_detected = alarm is not None
-        if alarm is not None:
-            self.last_alarm = alarm
+    def _make(self) -> _Shewhart:
+        return _Shewhart(self.window, self.threshold, self.sigma)
 
 
 def detections(detector: DriftDetector, values: Iterable[float]) -> list[int]:
