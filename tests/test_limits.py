@@ -18,6 +18,10 @@ from burstloc import ConfigError, Cusum, DetectorBank, InputError, Shewhart
         (lambda: DetectorBank("cusum", 10**12, threshold=0.5), "channels"),
         (lambda: DetectorBank("shewhart", 10**6, window=10**7, threshold=0.5), "channels"),
         (lambda: DetectorBank("shewhart", 10**12, window=10, threshold=0.5), "channels"),
+        # Past a 64-bit integer: still a configuration error, not an OverflowError.
+        (lambda: Shewhart(window=2**63, threshold=0.5), "window"),
+        (lambda: DetectorBank("cusum", 2**70, threshold=0.5), "channels"),
+        (lambda: DetectorBank("shewhart", 2, window=2**64, threshold=0.5), "window"),
     ],
 )
 def test_huge_sizes_are_config_errors_not_aborts(make, name: str) -> None:

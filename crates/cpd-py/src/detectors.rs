@@ -1,6 +1,7 @@
 //! `Cusum` and `Shewhart`: single-channel streaming detectors wrapping the core's.
 
 use cpd_core::{Cusum, CusumConfig, Shewhart, ShewhartConfig};
+use pyo3::exceptions::PyOverflowError;
 use pyo3::prelude::*;
 
 use crate::alarm::{float_repr, PyAlarm};
@@ -136,15 +137,28 @@ pub struct PyShewhart {
     inner: Shewhart,
 }
 
-/// A Shewhart config from Python arguments: `window` as a Python int (negative values named),
-/// `sigma` left to the core's default (the threshold) when not given.
+/// A size argument (`window`, `channels`): a Python int of any magnitude. Negative values are a
+/// `ConfigError` naming `rule`; values past `i64` a `ConfigError` too (no machine holds them);
+/// other types keep PyO3's `TypeError`.
+pub(crate) fn size(obj: &Bound<'_, PyAny>, name: &str, rule: &str) -> PyResult<usize> {
+    match obj.extract::<i64>() {
+        Ok(v) => usize::try_from(v)
+            .map_err(|_| config_err(format!("{name} must be an integer {rule}, got {v}"))),
+        Err(err) if err.is_instance_of::<PyOverflowError>(obj.py()) => Err(config_err(format!(
+            "invalid parameter `{name}` = {obj}: needs more memory than can be allocated"
+        ))),
+        Err(err) => Err(err),
+    }
+}
+
+/// A Shewhart config from Python arguments: `window` as a Python int, `sigma` left to the
+/// core's default (the threshold) when not given.
 pub(crate) fn shewhart_config(
-    window: i64,
+    window: &Bound<'_, PyAny>,
     threshold: f64,
     sigma: Option<f64>,
 ) -> PyResult<ShewhartConfig> {
-    let window = usize::try_from(window)
-        .map_err(|_| config_err(format!("window must be an integer >= 2, got {window}")))?;
+    let window = size(window, "window", ">= 2")?;
     match sigma {
         Some(sigma) => ShewhartConfig::new(window, sigma, threshold),
         None => ShewhartConfig::with_threshold(window, threshold),
@@ -155,7 +169,7 @@ pub(crate) fn shewhart_config(
 detector_methods!(PyShewhart, {
     #[new]
     #[pyo3(signature = (window, threshold, sigma = None))]
-    fn new(window: i64, threshold: f64, sigma: Option<f64>) -> PyResult<Self> {
+    fn new(window: &Bound<'_, PyAny>, threshold: f64, sigma: Option<f64>) -> PyResult<Self> {
         Ok(Self {
             inner: Shewhart::new(shewhart_config(window, threshold, sigma)?).map_err(core_err)?,
         })
