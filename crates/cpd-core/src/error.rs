@@ -65,7 +65,7 @@ pub enum Error {
         /// What is inconsistent.
         reason: &'static str,
     },
-    /// Snapshot bytes that cannot be restored (see [`crate::snapshot`]): not a snapshot, of
+    /// Snapshot bytes that cannot be restored (see `cpd_core::snapshot`): not a snapshot, of
     /// another kind or format, or holding an invalid configuration or state.
     InvalidSnapshot {
         /// The kind that was expected (`"Cusum"`, `"Shewhart"`, `"DetectorBank"`).
