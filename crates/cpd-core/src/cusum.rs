@@ -195,11 +195,6 @@ impl CusumLane {
 
     /// Feeds `xs` (stream indices from `base >= 1`), pushing the alarms to `out`. The start
     /// values are not tracked sample by sample: a start inside `xs` reads its sample there.
-    ///
-    /// A drift of `+0.0` (burstloc's default) gets its own copy of the loop, where the compiler
-    /// drops `- drift`: `g - 0.0` is `g` bit for bit (`-0.0 - 0.0` is `-0.0`), and the
-    /// loop-carried chain loses one of its two dependent additions. (Not for a drift of `-0.0`:
-    /// `-0.0 + -(-0.0)` would be `+0.0`.)
     #[inline(always)]
     pub(crate) fn run(
         &mut self,
@@ -209,15 +204,6 @@ impl CusumLane {
         drift: f64,
         out: &mut Vec<Alarm>,
     ) {
-        if drift.to_bits() == 0 {
-            self.run_with(xs, base, thr, 0.0, out);
-        } else {
-            self.run_with(xs, base, thr, drift, out);
-        }
-    }
-
-    #[inline(always)]
-    fn run_with(&mut self, xs: &[f64], base: u64, thr: f64, drift: f64, out: &mut Vec<Alarm>) {
         let (x_tap0, x_tan0) = (self.x_tap, self.x_tan);
         let at = |t: u64, before: f64| {
             if t >= base {
