@@ -29,25 +29,27 @@ def test_unknown_names_raise_attribute_error() -> None:
         _ = burstloc.Nope  # type: ignore[attr-defined]
 
 
-def test_importing_burstloc_loads_no_layer_and_no_simulator() -> None:
+def _loaded_after(statement: str, prefixes: tuple[str, ...]) -> list[str]:
+    """The modules of ``wntr``, ``tsnet`` or under ``prefixes`` that a fresh interpreter has
+    loaded after running ``statement``."""
     code = (
-        "import sys, burstloc; "
-        "print(sorted(m for m in sys.modules if m.split('.')[0] in ('wntr', 'tsnet') "
-        "or m.startswith(('burstloc.sim', 'burstloc.live', 'burstloc.localize', "
-        "'burstloc.experiments', 'burstloc.cli'))))"
+        f"import sys; {statement}; "
+        "print('\\n'.join(m for m in sys.modules if m.split('.')[0] in ('wntr', 'tsnet') "
+        f"or m.startswith({prefixes!r})))"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    assert out.stdout.strip() == "[]"
+    return sorted(out.stdout.split())
+
+
+def test_importing_burstloc_loads_no_layer_and_no_simulator() -> None:
+    layers = tuple(f"burstloc.{p}" for p in ("sim", "live", "localize", "experiments", "cli"))
+    assert _loaded_after("import burstloc", layers) == []
+    assert "burstloc.sim.tsnet" in _loaded_after("import burstloc.sim.tsnet", layers)
 
 
 def test_the_live_names_do_not_load_the_simulator() -> None:
-    code = (
-        "import sys, burstloc; burstloc.BurstMonitor; burstloc.Calibration; burstloc.Decision; "
-        "print(sorted(m for m in sys.modules if m.split('.')[0] in ('wntr', 'tsnet') "
-        "or m.startswith(('burstloc.sim', 'burstloc.experiments'))))"
-    )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    assert out.stdout.strip() == "[]"
+    live = "import burstloc; burstloc.BurstMonitor; burstloc.Calibration; burstloc.Decision"
+    assert _loaded_after(live, ("burstloc.sim", "burstloc.experiments")) == []
 
 
 def test_the_api_page_lists_every_public_name() -> None:
