@@ -17,7 +17,6 @@ from burstloc.experiments.study import (
     StudyPoint,
     StudySettings,
     _scenarios,
-    _with_history,
     greedy_meters,
     run_study,
     study_grid,
@@ -97,15 +96,6 @@ def test_greedy_meters_prefer_separation_over_signal_strength() -> None:
     sig = _signatures([[3.0, 5.0, 0.0], [3.0, 5.0, 1.0]])
     assert greedy_meters(sig, 1) == ("M2",)
     assert greedy_meters(sig, 2) == ("M0", "M2")
-
-
-def test_history_prepends_the_steady_state_at_the_capture_interval() -> None:
-    ticks = np.array([0.5, 2.5, 4.5])
-    readings = np.array([[1.0, 2.0], [0.5, 1.5], [0.4, 1.4]])
-    t, r = _with_history(ticks, readings, np.array([1.0, 2.0]), 3)
-    np.testing.assert_allclose(t, [-5.5, -3.5, -1.5, 0.5, 2.5, 4.5])
-    np.testing.assert_allclose(r[:3], [[1.0, 2.0]] * 3)
-    np.testing.assert_allclose(r[3:], readings)
 
 
 def test_tiny_study_end_to_end(tiny_network: Path, tmp_path: Path) -> None:
