@@ -5,7 +5,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import networkx as nx
 import numpy as np
 import pytest
 
@@ -28,27 +27,9 @@ from burstloc.experiments.runs import RunSpec
 from burstloc.localize.detection import DetectorConfig, Mode
 from burstloc.sim.scenario import ScenarioResult
 from burstloc.sim.sensors import SensorModel
+from synthetic_bursts import small_graph, synthetic
 
 CUSUM = DetectorConfig("cusum", 0.3)
-
-
-def synthetic(pipe: str, drops: dict[str, tuple[float, float]], burst_start: float = 2.0):
-    """A 'simulation' on a 0.05 s grid: meter -> (drop in m, arrival delay in s)."""
-    time = np.arange(0, 8.0 + 1e-9, 0.05)
-    meters = ["A", "B", "C"]
-    heads = np.tile([100.0, 98.0, 97.0], (time.size, 1))
-    for j, m in enumerate(meters):
-        drop, delay = drops.get(m, (0.0, 0.0))
-        heads[time >= burst_start + delay, j] -= drop
-    meta = {"pipe": pipe, "burst_start": burst_start, "true_start": "A", "true_end": "B"}
-    return ScenarioResult(time, heads, meters, 0.05, meta)
-
-
-def small_graph() -> nx.DiGraph:
-    g = nx.DiGraph()
-    for pipe, u, v in [("pA", "R1", "A"), ("pB", "A", "B"), ("pC", "A", "C"), ("pD", "B", "C")]:
-        g.add_edge(u, v, pipe=pipe)
-    return g
 
 
 def test_clock_validation_and_offsets() -> None:

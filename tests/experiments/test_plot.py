@@ -5,37 +5,20 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import networkx as nx
-import numpy as np
-
 from burstloc.experiments.evaluate import Evaluation, RunResult, RunSpec, locate_burst
 from burstloc.experiments.plot import plot_accuracy_by_interval, write_plots
 from burstloc.localize.detection import DetectorConfig
-from burstloc.sim.scenario import ScenarioResult
+from synthetic_bursts import small_graph, synthetic
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
 
-def _result(pipe: str, drops: dict[str, tuple[float, float]]) -> ScenarioResult:
-    time = np.arange(0, 8.0 + 1e-9, 0.05)
-    heads = np.tile([100.0, 98.0, 97.0], (time.size, 1))
-    for j, m in enumerate(["A", "B", "C"]):
-        drop, delay = drops.get(m, (0.0, 0.0))
-        heads[time >= 2.0 + delay, j] -= drop
-    meta = {"pipe": pipe, "burst_start": 2.0, "true_start": "A", "true_end": "B"}
-    return ScenarioResult(time, heads, ["A", "B", "C"], 0.05, meta)
-
-
 def _evaluation() -> Evaluation:
-    graph = nx.DiGraph()
-    for node, pos in {"R1": (0, 0), "A": (1, 0), "B": (2, 1), "C": (2, -1)}.items():
-        graph.add_node(node, pos=pos)
-    for pipe, u, v in [("pA", "R1", "A"), ("pB", "A", "B"), ("pC", "A", "C"), ("pD", "B", "C")]:
-        graph.add_edge(u, v, pipe=pipe)
+    graph = small_graph()
     spec = RunSpec(DetectorConfig("cusum", 0.3), 0.2, 5)
     results = {
-        "pB": _result("pB", {"B": (3.0, 0.2), "A": (1.0, 0.2)}),  # named right
-        "pD": _result("pD", {}),  # not located
+        "pB": synthetic("pB", {"B": (3.0, 0.2), "A": (1.0, 0.2)}),  # named right
+        "pD": synthetic("pD", {}),  # not located
     }
     attempts = {p: [locate_burst(r, graph, spec)] for p, r in results.items()}
     truth = {"pB": ("A", "B"), "pD": ("B", "C")}

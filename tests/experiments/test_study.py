@@ -16,8 +16,8 @@ from burstloc.experiments.study import (
     Factors,
     StudyPoint,
     StudySettings,
-    _scenarios,
     greedy_meters,
+    point_scenarios,
     run_study,
     study_grid,
     write_report,
@@ -196,7 +196,7 @@ def test_cli_study_and_calibrate_commands(
 def test_scenarios_carry_the_factors_and_settings(tiny_network: Path) -> None:
     point = StudyPoint(str(tiny_network), "friction", Factors(friction="unsteady", position=0.3))
     settings = StudySettings(pipes=("B", "C"), duration=50.0, time_step=0.05)
-    scenarios = _scenarios(point, settings)
+    scenarios = point_scenarios(point, settings)
     assert [s.pipe for s in scenarios] == ["B", "C"]
     assert {(s.friction, s.position, s.duration, s.time_step) for s in scenarios} == {
         ("unsteady", 0.3, 50.0, 0.05)
@@ -219,4 +219,4 @@ def test_time_step_rule_keeps_tsnets_step_unless_coarser_than_the_finest_capture
     given = StudySettings(capture_intervals=(0.5 * tsnet_step,), time_step=0.001)
     assert study_time_step(scenario, given) == 0.001
     point = StudyPoint(str(tiny_network), "default")
-    assert {s.time_step for s in _scenarios(point, fine)} == {0.25 * tsnet_step}
+    assert {s.time_step for s in point_scenarios(point, fine)} == {0.25 * tsnet_step}

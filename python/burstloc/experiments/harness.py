@@ -110,10 +110,9 @@ class Clock:
     def at_offset(cls, capture_interval: float, offset: float, warm_up: int) -> Clock:
         """The clock ticking at ``t0 - offset - warm_up x capture_interval + k x
         capture_interval`` (``t0``: the simulation's start): ``offset`` moves the clock, and
-        with it the window grid, that many seconds earlier relative to the burst. The ticks
-        before ``t0`` are the history: the ``ceil(offset / capture_interval)`` ticks in ``[t0
-        - offset, t0)`` and the ``warm_up`` before them (a whole number of windows does not
-        move the window grid)."""
+        with it the window grid, that many seconds earlier relative to the burst. The history is
+        the ``ceil(offset / capture_interval)`` ticks in ``[t0 - offset, t0)`` and ``warm_up``
+        more before them (a whole number of windows does not move the window grid)."""
         ci = float(capture_interval)
         k = math.ceil(offset / ci - 1e-9)  # ticks in [t0 - offset, t0)
         phase = k * ci - offset

@@ -30,7 +30,7 @@ from burstloc.experiments import paper
 from burstloc.experiments.evaluate import Evaluation, RunResult
 
 if TYPE_CHECKING:
-    from burstloc.experiments.study import StudySettings
+    from burstloc.experiments.grid import StudySettings
 
 __all__ = ["CSV_FIELDS", "format_tables", "write_csv", "write_json", "write_study_report"]
 
