@@ -59,6 +59,9 @@ lint:
 	$(BIN)/python -m mypy
 	$(BIN)/python -m mypy.stubtest burstloc._core
 
+# Unit, golden, property, snapshot-interop and fuzz tests (fuzz: proptest's 256 cases per target;
+# PROPTEST_CASES=100000 for a longer run), the gateway example's end-to-end tests, and the
+# no_std + alloc build of the same.
 test-rust:
 	cargo test -p cpd-core
 	cargo test -p cpd-core --no-default-features
@@ -66,12 +69,16 @@ test-rust:
 test-python:
 	$(BIN)/python -m pytest -q
 
-## bench: Python-side benchmarks (bindings vs pure Python vs River vs TSNet)
+## bench: Python-side benchmarks on fresh data (bindings vs pure Python vs River vs TSNet), then
+## burstloc.river beside River's PageHinkley on River's annotated change-point datasets
 bench: setup
 	$(BIN)/python benches/bench_detectors.py
+	$(BIN)/python -m burstloc.river
 
+## bench-rust: criterion on fresh seeded traces, built for this CPU like the extension (in its
+## own target dir, so the test builds are not invalidated)
 bench-rust:
-	cargo bench -p cpd-core
+	RUSTFLAGS="$(EXT_RUSTFLAGS)" CARGO_TARGET_DIR=target-bench cargo bench -p cpd-core -- --warm-up-time 1 --measurement-time 2
 
 clean:
 	rm -rf $(VENV) target

@@ -3,7 +3,7 @@
 The network is TSNet's ``Tnet1`` example (reservoir R1, junctions N2..N8, pipes P1..P9 and a
 valve N7-N8) extended with junctions 1..8 and pipes 1..17 (no pipe 10), the valve replaced by
 pipe 16. Tnet1's figures for R1, N2..N8 and P1..P9 are *read* from Tnet1's INP file (it is not
-copied into this repository); the new figures are the table below (issue 4). Run from the
+copied into this repository); the new figures are the table below. Run from the
 repository root::
 
     python networks/build_paper15.py                 # rewrite networks/paper15.inp

@@ -247,6 +247,39 @@ def test_bad_engine_is_a_config_error(wn) -> None:  # type: ignore[no-untyped-de
         network.steady_state_flows(wn, "XX")
 
 
+def test_one_steady_state_gives_heads_and_flows(wn, recwarn, capfd) -> None:  # type: ignore[no-untyped-def]
+    hydraulic, times = wn.options.hydraulic, wn.options.time
+    before = (hydraulic.demand_model, times.duration)
+    state = network.steady_state(wn)
+    assert (hydraulic.demand_model, times.duration) == before  # the model is left as it was
+    assert set(state.heads) == set(wn.node_name_list)
+    assert set(state.flows) == set(wn.link_name_list)
+    assert state.flows == network.steady_state_flows(wn)
+    assert state.heads["R1"] == pytest.approx(wn.get_node("R1").base_head)
+    # the head drops along the flow: every pipe's upstream end is the higher one
+    for name in wn.pipe_name_list:
+        link = wn.get_link(name)
+        up, down = link.start_node_name, link.end_node_name
+        if state.flows[name] < 0:
+            up, down = down, up
+        assert state.heads[up] >= state.heads[down] - 1e-6, name
+    # demand-driven solves too, and nothing EPANET says reaches the user
+    assert network.steady_state(wn, "DD").flows["P1"] == pytest.approx(state.flows["P1"], rel=1e-3)
+    assert not [w for w in recwarn if "EPANET" in str(w.message).upper()]
+    assert capfd.readouterr() == ("", "")
+
+
+def test_network_hash_is_the_files_sha256(tmp_path: Path) -> None:
+    import hashlib
+
+    path = write_tiny(tmp_path / "a.inp")
+    digest = network.network_hash(path)
+    assert digest == "sha256:" + hashlib.sha256(path.read_bytes()).hexdigest()
+    assert network.network_hash(write_tiny(tmp_path / "b.inp", head=61.0)) != digest
+    with pytest.raises(NetworkError, match="cannot read network file"):
+        network.network_hash(tmp_path / "missing.inp")
+
+
 # --- split_pipe ------------------------------------------------------------------------------
 
 

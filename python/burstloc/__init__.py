@@ -1,19 +1,28 @@
 """burstloc: real-time pipe-burst localization in water distribution networks.
 
-The detectors are implemented in Rust (``cpd-core``) and exposed here:
+What a user imports (``docs/api.md`` describes each):
 
-* :class:`Cusum` and :class:`Shewhart`: streaming change-point detectors, one sample per
-  ``update(x)`` call, or a whole NumPy array per ``update_many(x)`` call;
-* :class:`DetectorBank`: one detector per pressure sensor, advanced a time step at a time;
-* :func:`detect_cusum` and :func:`detect_shewhart`: the batch reference algorithms (TSNet's
-  ``detect_cusum`` and the paper's Algorithm 2);
-* :class:`Alarm`: what the detectors report;
-* :class:`ConfigError` and :class:`InputError` (both ``ValueError``): bad parameters and bad
-  input, respectively.
+* the detectors, implemented in Rust (``cpd-core``): :class:`Cusum`, :class:`Shewhart`,
+  :class:`DetectorBank`, :class:`Alarm`, and the batch references :func:`detect_cusum`,
+  :func:`detect_shewhart`;
+* the errors: :class:`ConfigError`, :class:`InputError`, :class:`StreamError`,
+  :class:`NetworkError` (all ``ValueError``) and :class:`SimulationError`;
+* the live path: :class:`BurstMonitor`, :class:`ReadingStream`, :class:`Reading`, :class:`Step`,
+  :class:`Calibration` (the stored configuration, with its :class:`LocalizationModel`), and
+  what a decision holds: :class:`Decision`, :class:`Ranking`, :class:`RankedPipe`,
+  :class:`BurstEvidence`;
+* the offline side: :func:`calibrate`, :func:`evaluate`, :class:`BurstScenario`,
+  :func:`simulate_burst`.
 
-Importing ``burstloc`` loads only the native module: the simulation stack (TSNet, WNTR) is
-imported by ``burstloc.sim.tsnet`` when needed.
+Importing ``burstloc`` loads only the native module and the exceptions; every other name is
+imported on first use, so the live path never pays for the simulator (TSNet, WNTR), which
+only :func:`simulate_burst`, :func:`evaluate` and :func:`calibrate` load.
 """
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
 
 from burstloc._core import (
     Alarm,
@@ -24,16 +33,85 @@ from burstloc._core import (
     detect_cusum,
     detect_shewhart,
 )
-from burstloc.exceptions import ConfigError, InputError
+from burstloc.exceptions import (
+    ConfigError,
+    InputError,
+    NetworkError,
+    SimulationError,
+    StreamError,
+)
+
+if TYPE_CHECKING:
+    from burstloc.experiments.calibrate import calibrate
+    from burstloc.experiments.evaluate import evaluate
+    from burstloc.live.monitor import BurstMonitor
+    from burstloc.live.stream import ReadingStream
+    from burstloc.localize.config import Calibration
+    from burstloc.localize.decide import Decision
+    from burstloc.localize.evidence import BurstEvidence, RankedPipe, Ranking
+    from burstloc.localize.model import LocalizationModel
+    from burstloc.readings import Reading, Step
+    from burstloc.sim.scenario import BurstScenario
+    from burstloc.sim.tsnet import simulate_burst
+
+#: Names imported on first use, and the module each comes from.
+_LAZY: dict[str, str] = {
+    "BurstMonitor": "burstloc.live.monitor",
+    "ReadingStream": "burstloc.live.stream",
+    "Reading": "burstloc.readings",
+    "Step": "burstloc.readings",
+    "Calibration": "burstloc.localize.config",
+    "LocalizationModel": "burstloc.localize.model",
+    "Decision": "burstloc.localize.decide",
+    "Ranking": "burstloc.localize.evidence",
+    "RankedPipe": "burstloc.localize.evidence",
+    "BurstEvidence": "burstloc.localize.evidence",
+    "calibrate": "burstloc.experiments.calibrate",
+    "evaluate": "burstloc.experiments.evaluate",
+    "BurstScenario": "burstloc.sim.scenario",
+    "simulate_burst": "burstloc.sim.tsnet",
+}
 
 __all__ = [
     "Alarm",
+    "BurstEvidence",
+    "BurstMonitor",
+    "BurstScenario",
+    "Calibration",
     "ConfigError",
     "Cusum",
+    "Decision",
     "DetectorBank",
     "InputError",
+    "LocalizationModel",
+    "NetworkError",
+    "RankedPipe",
+    "Ranking",
+    "Reading",
+    "ReadingStream",
     "Shewhart",
+    "SimulationError",
+    "Step",
+    "StreamError",
     "__version__",
+    "calibrate",
     "detect_cusum",
     "detect_shewhart",
+    "evaluate",
+    "simulate_burst",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """Import a public name of a layer on first use (PEP 562)."""
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'burstloc' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    """The public names and the module's own."""
+    return sorted(set(globals()) | set(__all__))

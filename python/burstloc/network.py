@@ -2,9 +2,14 @@
 
 * :func:`load_network` reads an EPANET INP file into a WNTR ``WaterNetworkModel``; a malformed
   file raises :class:`~burstloc.exceptions.NetworkError` naming the file and line.
+* :func:`steady_state` is THE steady-state solver (heads and flows of one EPANET run, solved as
+  TSNet's ``Initializer`` solves it: WNTR's EPANET simulator, pressure-driven demand by default;
+  what EPANET warns is captured, never printed). The flow-direction graph and the burst
+  signatures (:mod:`burstloc.sim.signatures`) both use it.
 * :func:`flow_direction_graph` is the paper's directed graph (section IV.B): one edge per link,
-  pointing downstream in the steady state (pressure-driven demand, solved as TSNet's
-  ``Initializer`` solves it: WNTR's EPANET simulator with ``demand_model = "PDD"``).
+  pointing downstream in the steady state.
+* :func:`network_hash` fingerprints a network file (its bytes; no WNTR): what a stored
+  configuration is bound to.
 * :func:`split_pipe` cuts a pipe into two at a fraction of its length with a new junction
   between them, where a burst can then be placed (TSNet bursts only at junctions).
 
@@ -14,7 +19,7 @@ imported on first use, so that listing a file's pipes (:func:`pipe_names_in_file
 
 from __future__ import annotations
 
-import copy
+import hashlib
 import math
 import os
 import re
@@ -36,14 +41,17 @@ if TYPE_CHECKING:
 
 __all__ = [
     "SplitPipe",
+    "SteadyState",
     "flow_direction_graph",
     "junction_names",
     "load_network",
+    "network_hash",
     "pipe_endpoints",
     "pipe_names",
     "pipe_names_in_file",
     "require_pipe",
     "split_pipe",
+    "steady_state",
     "steady_state_flows",
 ]
 
@@ -238,24 +246,66 @@ def require_pipe(wn: WaterNetworkModel, pipe: str) -> Any:
     return wn.get_link(pipe)
 
 
-def steady_state_flows(wn: WaterNetworkModel, engine: str = "PDD") -> dict[str, float]:
-    """Solve the steady state and return each link's flow in m³/s (sign: INP orientation).
+def network_hash(path: str | os.PathLike[str]) -> str:
+    """Fingerprint of a network file: ``"sha256:<hex>"`` of its bytes (no model is built).
+
+    Raises:
+        NetworkError: the file cannot be read.
+    """
+    try:
+        data = Path(path).read_bytes()
+    except OSError as exc:
+        raise NetworkError(f"cannot read network file {os.fspath(path)}: {exc.strerror}") from exc
+    return f"sha256:{hashlib.sha256(data).hexdigest()}"
+
+
+@dataclass(frozen=True)
+class SteadyState:
+    """A network's steady state at t = 0: ``heads`` per node (m), ``flows`` per link (m³/s,
+    sign: INP orientation)."""
+
+    heads: dict[str, float]
+    flows: dict[str, float]
+
+
+def steady_state(wn: WaterNetworkModel, engine: str = "PDD") -> SteadyState:
+    """Solve the steady state at t = 0: heads and flows from one EPANET run.
 
     Solved as TSNet's ``Initializer`` does: WNTR's EPANET simulator with the given demand model
     (``"PDD"`` pressure-driven, ``"DD"`` demand-driven), first time step. EPANET's scratch files
-    go to a temporary directory; what it warns is kept out of the terminal (recorded in a
-    scenario's metadata when :mod:`burstloc.sim.tsnet` calls this). ``wn`` is not modified.
+    go to a temporary directory; what it warns (e.g. "REQUIRED PRESSURE raised to 0.1 m") is
+    kept out of the terminal (:func:`burstloc._diagnostics.capture_diagnostics`, recorded in a
+    scenario's metadata when :mod:`burstloc.sim.tsnet` calls this). ``wn`` is left as it was
+    (its demand model and duration are set for the run and restored).
+
+    Raises:
+        ConfigError: an unknown ``engine``.
     """
     wntr = _wntr()
 
     if engine.upper() not in ("PDD", "DD"):
         raise ConfigError(f"engine must be 'PDD' or 'DD', got {engine!r}")
-    model = copy.deepcopy(wn)
-    model.options.hydraulic.demand_model = engine.upper()
-    with tempfile.TemporaryDirectory(prefix="burstloc-steady-") as tmp, capture_diagnostics():
-        results = wntr.sim.EpanetSimulator(model).run_sim(file_prefix=os.path.join(tmp, "steady"))
+    hydraulic, times = wn.options.hydraulic, wn.options.time
+    saved = (hydraulic.demand_model, times.duration)
+    hydraulic.demand_model, times.duration = engine.upper(), 0
+    try:
+        with tempfile.TemporaryDirectory(prefix="burstloc-steady-") as tmp, capture_diagnostics():
+            sim = wntr.sim.EpanetSimulator(wn)
+            results = sim.run_sim(file_prefix=os.path.join(tmp, "steady"))
+    finally:
+        hydraulic.demand_model, times.duration = saved
+    heads = results.node["head"].iloc[0]
     flows = results.link["flowrate"].iloc[0]
-    return {name: float(flows[name]) for name in model.link_name_list}
+    return SteadyState(
+        heads={name: float(heads[name]) for name in wn.node_name_list},
+        flows={name: float(flows[name]) for name in wn.link_name_list},
+    )
+
+
+def steady_state_flows(wn: WaterNetworkModel, engine: str = "PDD") -> dict[str, float]:
+    """Each link's steady-state flow in m³/s (sign: INP orientation): :func:`steady_state`'s
+    flows."""
+    return steady_state(wn, engine).flows
 
 
 def flow_direction_graph(

@@ -2,25 +2,25 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from burstloc import _core
+from burstloc.constants import CANDIDATE_POSITIONS
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.experiments.calibrate import (
     RESOLUTION,
     Baseline,
     BaselineError,
-    Calibration,
     calibrate,
     check_baseline,
     cusum_threshold,
     localization_interval,
     shewhart_threshold,
 )
+from burstloc.network import network_hash
 
 FAST = 300_000  # noise samples per calibration run in these tests
 
@@ -74,7 +74,7 @@ def test_localization_interval_rule() -> None:
     assert localization_interval(0.01, 2.6) == 50  # ceiling
 
 
-def test_calibrate_save_load_and_refuse_other_network(tiny_network: Path, tmp_path: Path) -> None:
+def test_calibrate_computes_thresholds_per_interval_and_the_model(tiny_network: Path) -> None:
     config = calibrate(
         tiny_network, capture_intervals=[0.2, 5.0], noise_sigma=0.01, max_samples=FAST, name="t"
     )
@@ -83,21 +83,14 @@ def test_calibrate_save_load_and_refuse_other_network(tiny_network: Path, tmp_pa
     assert fine.cusum_threshold["J2"] > coarse.cusum_threshold["J2"]  # more readings per hour
     assert fine.uniform("cusum") == {"threshold": fine.cusum_threshold["J1"], "drift": 0.01}
     assert coarse.localization_interval == 10
-    path = config.save(tmp_path / "t.json")
-    assert json.loads(path.read_text())["name"] == "t"
-    back = Calibration.load(path, network=tiny_network, meters=config.meters)
-    assert back == config
-    with pytest.raises(ConfigError, match="10 s capture"):
-        back.for_interval(10.0)
-    other = tmp_path / "other.inp"
-    other.write_text(tiny_network.read_text().replace("J4   0      2", "J4   0      3"))
-    with pytest.raises(ConfigError, match="'t' was calibrated for network"):
-        Calibration.load(path, network=other)
-    with pytest.raises(ConfigError, match=r"other meters \(missing \['J4'\]"):
-        back.check(tiny_network, ["J1", "J2", "J3"])
-    path.write_text('{"format": "nope"}')
-    with pytest.raises(ConfigError, match="not a burstloc configuration"):
-        Calibration.load(path)
+    # the localization model is computed here, for the same network and meters
+    assert config.model.network_hash == config.network_hash == network_hash(tiny_network)
+    assert config.model.meters == config.meters
+    assert len(config.model.signature_sets) == len(CANDIDATE_POSITIONS)
+    assert {p.pipe for p in config.model.pipes} == {"A", "B", "C", "D", "E"}
+    subset = calibrate(tiny_network, capture_intervals=[5.0], meters=["J4", "J2"], max_samples=FAST)
+    assert subset.model.meters == ("J4", "J2")
+    assert subset.model.signature_sets[0].meters == ("J4", "J2")
 
 
 def test_calibrate_rejects_bad_parameters(tiny_network: Path) -> None:

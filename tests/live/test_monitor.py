@@ -15,11 +15,13 @@ import pytest
 from burstloc.cli import main
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.experiments import paper
-from burstloc.experiments.calibrate import Calibration, calibrate
+from burstloc.experiments.calibrate import calibrate
 from burstloc.experiments.evaluate import RunSpec, evaluate, readings_at_offset
 from burstloc.live.monitor import BurstMonitor, monitor_readings
-from burstloc.live.stream import Step, readings_of
+from burstloc.live.stream import readings_of
+from burstloc.localize.config import Calibration
 from burstloc.localize.detection import DetectorConfig
+from burstloc.readings import Step
 from conftest import write_tiny
 
 SHORT = paper.ScenarioConfig(burst_start=2.0)
@@ -68,9 +70,9 @@ def test_the_live_loop_decides_what_evaluate_decides(tiny: Path, config: Calibra
             assert decisions, (spec, pipe)
             live = decisions[0]
             assert live.pipe == expected.predicted_pipe
-            assert [r.pipe for r in live.decision.ranking] == [r.pipe for r in expected.ranking]
-            assert math.isclose(live.decision.time, expected.decided_at, abs_tol=1e-9)
-            assert live.first_alarm <= live.decision.time
+            assert [r.pipe for r in live.ranking] == [r.pipe for r in expected.ranking]
+            assert math.isclose(live.time, expected.decided_at, abs_tol=1e-9)
+            assert live.first_alarm <= live.time
             doc = live.to_json()
             assert [p["pipe"] for p in doc["pipes"]] == [r.pipe for r in expected.ranking.top(3)]
 
@@ -85,7 +87,7 @@ def test_raw_readings_go_through_the_reading_stream(tiny: Path, config: Calibrat
     readings[0], readings[1] = readings[1], readings[0]  # out of order within a step is fine
     decided = list(monitor_readings(monitor, readings, period=0.2, origin=steps[0].timestamp))
     assert decided and decided[0].pipe == expected.pipe
-    assert decided[0].decision.time == pytest.approx(expected.decision.time)
+    assert decided[0].time == pytest.approx(expected.time)
 
 
 def test_one_decision_per_burst_thanks_to_the_holdoff(tiny: Path, config: Calibration, batch):
@@ -97,8 +99,8 @@ def test_one_decision_per_burst_thanks_to_the_holdoff(tiny: Path, config: Calibr
         if decided is not None:
             decisions.append(decided)
         holding.append(monitor.holding_off)
-    assert len(decisions) == 1 and decisions[0].decision.time < SHORT.burst_start + 1.0
-    decided_at = decisions[0].decision.time
+    assert len(decisions) == 1 and decisions[0].time < SHORT.burst_start + 1.0
+    decided_at = decisions[0].time
     assert [h for s, h in zip(steps, holding, strict=True) if s.timestamp < decided_at] == [
         False
     ] * sum(s.timestamp < decided_at for s in steps)
@@ -198,14 +200,35 @@ def test_cli_monitor_prints_one_json_line_per_burst(
     assert "cannot read readings" in capsys.readouterr().err
 
 
+#: What the live loop must never import: the simulator, the experiments, WNTR (and EPANET in it),
+#: TSNet.
+FORBIDDEN = ("burstloc.sim", "burstloc.experiments", "wntr", "tsnet")
+
+
 def test_the_live_loop_does_not_import_the_simulator() -> None:
     code = (
-        "import sys; import burstloc.live.monitor, burstloc.localize.decide; "
-        "bad = sorted(m for m in sys.modules if m.split('.')[0] == 'tsnet' "
-        "or m == 'burstloc.sim.tsnet' "
-        "or m in ('burstloc.experiments.evaluate', 'burstloc.experiments.study')); "
+        "import sys; import burstloc.live.monitor, burstloc.localize.decide, "
+        "burstloc.localize.config, burstloc.localize.model; "
+        "bad = sorted(m for m in sys.modules "
+        f"if any(m == f or m.startswith(f + '.') for f in {FORBIDDEN!r})); "
         "assert not bad, bad; print('ok')"
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "ok"
+
+
+def test_the_monitor_never_loads_the_network(
+    tiny: Path, config: Calibration, batch, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import burstloc.network
+
+    def boom(*args: object, **kwargs: object) -> None:
+        raise AssertionError("the live loop loaded or solved the network")
+
+    for name in ("load_network", "steady_state", "flow_direction_graph"):
+        monkeypatch.setattr(burstloc.network, name, boom)
+    spec = batch.runs[1].spec  # fused at 0.2 s
+    monitor = BurstMonitor(tiny, config, capture_interval=0.2, localizer="fused")
+    decided = list(monitor.run(_steps(batch.results["C"], spec)))
+    assert decided and decided[0].pipe == batch.runs[1].attempts["C"][0].predicted_pipe

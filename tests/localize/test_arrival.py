@@ -1,4 +1,8 @@
-"""The arrival localizer: wave travel from a point on a pipe explains the meters' alarm starts."""
+"""The arrival localizer: wave travel from a point on a pipe explains the meters' alarm starts.
+
+The localizers on the tiny network are built offline from the network file
+(:func:`burstloc.sim.prepare.arrival_localizer`); the live path builds them from a stored model
+(tests/localize/test_model.py)."""
 
 from __future__ import annotations
 
@@ -11,12 +15,7 @@ import pytest
 
 from burstloc import _core
 from burstloc.exceptions import ConfigError, InputError, NetworkError
-from burstloc.localize.arrival import (
-    ArrivalLocalizer,
-    PipeGeometry,
-    length_graph,
-    travel_time_spread,
-)
+from burstloc.localize.arrival import ArrivalLocalizer, PipeGeometry
 from burstloc.localize.evidence import (
     BurstEvidence,
     MeterAlarm,
@@ -25,6 +24,7 @@ from burstloc.localize.evidence import (
     evidence_from_alarms,
 )
 from burstloc.network import load_network
+from burstloc.sim.prepare import arrival_localizer, length_graph
 
 A = 1000.0  # wave speed used by these tests, m/s
 
@@ -73,7 +73,7 @@ def _true_arrivals(
 def test_true_pipe_ranks_first_at_a_fine_capture_interval(
     tiny_network: Path, pipe: str, fraction: float
 ) -> None:
-    loc = ArrivalLocalizer.from_network(tiny_network, wave_speed=A)
+    loc = arrival_localizer(tiny_network, wave_speed=A)
     arrivals = _true_arrivals(loc, tiny_network, pipe, fraction, t0=1.0037)
     ranking = loc.rank(_evidence(arrivals, dt=0.01))
     assert ranking.best is not None and ranking.best.pipe == pipe
@@ -81,7 +81,7 @@ def test_true_pipe_ranks_first_at_a_fine_capture_interval(
 
 
 def test_exact_arrivals_fit_with_zero_misfit(tiny_network: Path) -> None:
-    loc = ArrivalLocalizer.from_network(tiny_network, wave_speed=A, positions=[0.5])
+    loc = arrival_localizer(tiny_network, wave_speed=A, positions=[0.5])
     arrivals = _true_arrivals(loc, tiny_network, "D", 0.5, t0=2.0)
     misfit = loc.misfit(_evidence(arrivals, dt=0.001))
     d = [p.pipe for p in loc.pipes].index("D")
@@ -90,7 +90,7 @@ def test_exact_arrivals_fit_with_zero_misfit(tiny_network: Path) -> None:
 
 
 def test_amplitudes_break_ties_at_coarse_intervals(tiny_network: Path) -> None:
-    loc = ArrivalLocalizer.from_network(tiny_network, wave_speed=A)
+    loc = arrival_localizer(tiny_network, wave_speed=A)
     arrivals = _true_arrivals(loc, tiny_network, "E", 0.5, t0=1.0)
     # at a 10 s capture interval every alarm lands in one tick: timing cannot tell pipes apart
     amps = {"J1": -0.5, "J2": -0.6, "J3": -1.5, "J4": -2.0}
@@ -101,7 +101,7 @@ def test_amplitudes_break_ties_at_coarse_intervals(tiny_network: Path) -> None:
 
 
 def test_pipes_follow_the_flow_direction(tiny_network: Path) -> None:
-    loc = ArrivalLocalizer.from_network(tiny_network)
+    loc = arrival_localizer(tiny_network)
     ends = {p.pipe: (p.start, p.end) for p in loc.pipes}
     assert ends["A"] == ("R1", "J1")
     assert ends["E"] == ("J3", "J4")
@@ -109,7 +109,7 @@ def test_pipes_follow_the_flow_direction(tiny_network: Path) -> None:
 
 
 def test_meters_subset_and_missing_alarms(tiny_network: Path) -> None:
-    loc = ArrivalLocalizer.from_network(tiny_network, ["J2", "J4"], wave_speed=A)
+    loc = arrival_localizer(tiny_network, ["J2", "J4"], wave_speed=A)
     arrivals = _true_arrivals(loc, tiny_network, "E", 0.5, t0=0.5)
     ranking = loc.rank(_evidence({"J4": arrivals["J4"]}, dt=0.01, amplitudes={"J4": -1}))
     assert ranking.best is not None
@@ -118,19 +118,13 @@ def test_meters_subset_and_missing_alarms(tiny_network: Path) -> None:
         loc.rank(_evidence({"J1": 1.0}, dt=0.01))
 
 
-def test_travel_time_spread(tiny_network: Path) -> None:
-    graph = length_graph(load_network(tiny_network))
-    # J2 -> J4: via J3 (150 + 180) m
-    assert travel_time_spread(graph, ["J2", "J4"], A) == pytest.approx(0.33)
-
-
 def test_bad_configuration_is_refused(tiny_network: Path) -> None:
     with pytest.raises(ConfigError):
-        ArrivalLocalizer.from_network(tiny_network, wave_speed=0.0)
+        arrival_localizer(tiny_network, wave_speed=0.0)
     with pytest.raises(ConfigError):
-        ArrivalLocalizer.from_network(tiny_network, positions=[1.5])
+        arrival_localizer(tiny_network, positions=[1.5])
     with pytest.raises(NetworkError, match="R1"):
-        ArrivalLocalizer.from_network(tiny_network, ["R1"])
+        arrival_localizer(tiny_network, ["R1"])
     with pytest.raises(ConfigError, match="no distances"):
         ArrivalLocalizer([PipeGeometry("x", "a", "b", 10.0)], ["m"], {"a": np.zeros(1)})
 

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from burstloc.exceptions import ConfigError, InputError
-from burstloc.experiments.calibrate import IntervalCalibration
-from burstloc.localize.decide import decision_time, rank_alarms
+from burstloc.localize.config import IntervalCalibration
+from burstloc.localize.decide import Decision, RankingLocalizers, decision_time, rank_alarms
 from burstloc.localize.evidence import IndexedAlarm, RankedPipe, Ranking
 from burstloc.localize.fused import FusedLocalizer, quantisation_margin
 from line_network import METERS, WAVE, line_arrival, line_signature
@@ -46,14 +46,19 @@ def _calibration(dt: float = 0.05) -> IntervalCalibration:
     )
 
 
-def _localizers(**fused_options: float) -> dict:
+def _localizers(**fused_options: float) -> RankingLocalizers:
     arrival, signature = line_arrival(), line_signature(MATRIX)
-    fused = FusedLocalizer(arrival, signature, **fused_options)
-    return {"arrival": arrival, "signature": signature, "fused": fused}
+    return RankingLocalizers(
+        arrival, signature, FusedLocalizer(arrival, signature, **fused_options)
+    )
 
 
 def _decide(
-    name: str, x: float, drop: np.ndarray, localizers: dict | None = None, dt: float = 0.05
+    name: str,
+    x: float,
+    drop: np.ndarray,
+    localizers: RankingLocalizers | None = None,
+    dt: float = 0.05,
 ) -> tuple:
     t, readings, alarms = _burst(x, drop, dt)
     decision = rank_alarms(
@@ -157,3 +162,33 @@ def test_fused_reuses_the_signature_ranking_of_the_same_readings(
     )
     swapped = decide("fused", signature_ranking=reversed_ranking)
     assert swapped.ranking.best != alone.ranking.best
+
+
+def test_ranking_localizers_read_by_name() -> None:
+    localizers = _localizers()
+    assert list(localizers) == ["arrival", "signature", "fused"] and len(localizers) == 3
+    assert localizers["arrival"] is localizers.arrival
+    assert localizers["fused"] is localizers.fused and localizers.get("paper") is None
+    with pytest.raises(KeyError):
+        localizers["paper"]
+    # a plain mapping works too, but its "fused" must be a FusedLocalizer
+    t, readings, alarms = _burst(300.0, MATRIX[0])
+    plain = {"arrival": localizers.arrival, "fused": localizers.arrival}
+    with pytest.raises(ConfigError, match="'fused' localizer must be a FusedLocalizer"):
+        rank_alarms("arrival", plain, METERS, t, readings, alarms, _calibration(), "instantaneous")
+
+
+def test_a_decision_knows_its_first_alarm_and_prints_as_json() -> None:
+    decision, t, alarms = _decide("arrival", 300.0, MATRIX[0])
+    first = min(float(t[a.index]) for a in alarms)
+    assert decision.first_alarm == first
+    assert decision.first_alarm <= decision.time
+    assert decision.pipe == decision.ranking[0].pipe == "p01"
+    doc = decision.to_json(top=2)
+    assert list(doc) == ["time", "first_alarm", "waited", "pipes"]
+    assert (doc["time"], doc["first_alarm"], doc["waited"]) == (decision.time, first, False)
+    assert doc["pipes"] == [
+        {"pipe": r.pipe, "start": r.start, "end": r.end, "score": r.score}
+        for r in decision.ranking.top(2)
+    ]
+    assert Decision(Ranking([]), 1.0, 0.5).pipe is None

@@ -8,7 +8,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from burstloc.exceptions import ConfigError, StreamError
-from burstloc.live.stream import ReadingStream, Step
+from burstloc.live.stream import ReadingStream
 from burstloc.localize.detection import (
     BatchDetector,
     DetectorConfig,
@@ -16,6 +16,7 @@ from burstloc.localize.detection import (
     StreamingDetector,
     make_detector,
 )
+from burstloc.readings import Step
 from reference import cusum_online, shewhart_batch, shewhart_streaming
 
 METERS = ("a", "b", "c")

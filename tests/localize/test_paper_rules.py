@@ -3,54 +3,17 @@
 from __future__ import annotations
 
 import networkx as nx
-import numpy as np
 import pytest
 
-from burstloc.exceptions import NetworkError, StreamError
-from burstloc.live.stream import Step, Window
+from burstloc.exceptions import NetworkError
 from burstloc.localize.paper_rules import (
-    BurstLocator,
     Change,
     Rule,
     locate,
     node_amplitudes,
     trigger_node,
 )
-
-
-def tnet1_like() -> nx.DiGraph:
-    """The upstream part of the paper's network, edges in flow direction.
-
-    R1 -> N3 -> {N4, N2};  N4 -> {N2, N6};  N2 -> {N6, N5};  N6 -> N5
-    """
-    g = nx.DiGraph()
-    for pipe, u, v in [
-        ("P1", "R1", "N3"),
-        ("P2", "N3", "N4"),
-        ("P3", "N3", "N2"),
-        ("P5", "N4", "N2"),
-        ("P4", "N4", "N6"),
-        ("P9", "N2", "N6"),
-        ("P6", "N2", "N5"),
-        ("P8", "N6", "N5"),
-    ]:
-        g.add_edge(u, v, pipe=pipe, flow=1.0)
-    return g
-
-
-METERS = ("N2", "N3", "N4", "N5", "N6")
-
-
-def changes(**amps: float | tuple[float, float]) -> dict[str, list[Change]]:
-    """``node=amplitude`` or ``node=(amplitude, start_time)``; every meter present."""
-    out: dict[str, list[Change]] = {m: [] for m in METERS}
-    for node, a in amps.items():
-        amp, start = a if isinstance(a, tuple) else (a, 1.0)
-        out[node] = [Change(node, start, amp)]
-    return out
-
-
-MEANS = {"N2": 150.0, "N3": 180.0, "N4": 160.0, "N5": 140.0, "N6": 145.0}
+from paper_graph import MEANS, METERS, changes, tnet1_like
 
 
 def test_nothing_alarmed_decides_nothing() -> None:
@@ -192,65 +155,3 @@ def test_localization_as_dict_is_json_ready() -> None:
     d = loc.as_dict()
     assert d["pipe"] == "P4" and d["rule"] == "two_alarms" and d["trigger_node"] == "N4"
     assert d["evidence"]["N4"][0]["amplitude"] == -5.0
-
-
-class ThresholdDetector:
-    """A stand-in detector: a meter alarms when its window range exceeds 1 m."""
-
-    def __init__(self) -> None:
-        self.calls = 0
-
-    def detect(self, window: Window) -> dict[str, list[Change]]:
-        self.calls += 1
-        out: dict[str, list[Change]] = {}
-        for j, m in enumerate(window.meters):
-            x = window.values[:, j]
-            span = float(x[-1] - x[0])
-            out[m] = [Change(m, float(window.times[0]), span)] if abs(span) > 1.0 else []
-        return out
-
-    def reset(self) -> None:
-        self.calls = 0
-
-
-def test_burst_locator_streams_detects_and_locates() -> None:
-    meters = list(METERS)
-    base = np.array([MEANS[m] for m in meters])
-    drop = np.array([0.0, 0.0, 3.0, 0.0, 1.5])  # N4 drops most, then N6: two alarms
-    steps = [Step(0.2 * k, base - (drop if k >= 6 else 0.0)) for k in range(12)]
-    locator = BurstLocator(tnet1_like(), meters, ThresholdDetector(), interval=2)
-    first = locator.first(steps)
-    assert first is not None
-    loc = first.localization
-    assert loc is not None and loc.pipe == "P4" and loc.rule is Rule.TWO_ALARMS
-    assert loc.decision_time == pytest.approx(0.2 * 7)  # first window holding the drop
-    assert [x.pipe for x in BurstLocator(tnet1_like(), meters, ThresholdDetector(), 2).run(steps)]
-    assert locator.detector.calls == 4  # windows ending at steps 1, 3, 5, 7
-
-
-def test_burst_locator_rejects_meters_outside_the_network() -> None:
-    with pytest.raises(StreamError, match="'Z9' is not a junction"):
-        BurstLocator(tnet1_like(), ["N2", "Z9"], ThresholdDetector(), interval=1)
-
-
-def test_burst_locator_async_feed_gives_the_same_localizations() -> None:
-    import asyncio
-
-    meters = list(METERS)
-    base = np.array([MEANS[m] for m in meters])
-    drop = np.array([0.0, 0.0, 3.0, 0.0, 1.5])
-    steps = [Step(0.2 * k, base - (drop if k >= 6 else 0.0)) for k in range(12)]
-
-    async def feed():
-        for s in steps:
-            await asyncio.sleep(0)
-            yield s
-
-    async def collect():
-        locator = BurstLocator(tnet1_like(), meters, ThresholdDetector(), 2)
-        return [loc async for loc in locator.arun(feed())]
-
-    got = asyncio.run(collect())
-    want = list(BurstLocator(tnet1_like(), meters, ThresholdDetector(), 2).run(steps))
-    assert [(x.pipe, x.decision_time) for x in got] == [(x.pipe, x.decision_time) for x in want]
-    assert got

@@ -1,27 +1,21 @@
-"""The signature localizer: WNTR steady-state signatures, the free-scale fit, the estimators."""
+"""The signature localizer: signature sets, the free-scale fit, the estimators (numpy only; the
+WNTR computation of the signatures is tested in tests/sim/test_signatures.py)."""
 
 from __future__ import annotations
 
 import json
 import math
-import os
-import tempfile
-import warnings
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from burstloc.exceptions import ConfigError, InputError, NetworkError
+from burstloc.exceptions import ConfigError, InputError
 from burstloc.localize.evidence import BurstEvidence
 from burstloc.localize.signature import (
     SignatureLocalizer,
     SignatureSet,
-    cached_signature_sets,
-    cached_signatures,
-    compute_signatures,
     fit_signatures,
-    network_hash,
     rank_drop,
 )
 from burstloc.localize.steady_level import (
@@ -30,7 +24,6 @@ from burstloc.localize.steady_level import (
     estimate_levels,
     fit_damped_modes,
 )
-from burstloc.network import load_network, split_pipe
 
 
 def _synthetic(pipes: int = 4, meters: int = 6, seed: int = 1) -> SignatureSet:
@@ -44,21 +37,6 @@ def _synthetic(pipes: int = 4, meters: int = 6, seed: int = 1) -> SignatureSet:
         baseline=np.full(meters, 50.0),
         params={},
     )
-
-
-def _heads_with_burst(network: Path, pipe: str, fraction: float, coeff: float) -> dict[str, float]:
-    """Steady heads with an emitter ``coeff`` at ``fraction`` along ``pipe`` (an 'observation')."""
-    import wntr
-
-    wn = load_network(network)
-    wn.options.hydraulic.demand_model = "PDD"
-    split = split_pipe(wn, pipe, fraction)
-    split.network.get_node(split.burst_node).emitter_coefficient = coeff
-    with tempfile.TemporaryDirectory() as tmp, warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        res = wntr.sim.EpanetSimulator(split.network).run_sim(file_prefix=os.path.join(tmp, "x"))
-    heads = res.node["head"].iloc[0]
-    return {n: float(heads[n]) for n in wn.junction_name_list}
 
 
 def test_fit_recovers_scale_and_pipe() -> None:
@@ -105,90 +83,6 @@ def test_signature_set_json_round_trip_and_subset(tmp_path: Path) -> None:
         SignatureSet.load(path)
 
 
-def test_computed_signatures_on_tiny_network(tiny_network: Path) -> None:
-    sig = compute_signatures(tiny_network)
-    assert set(sig.pipes) == {"A", "B", "C", "D", "E"}
-    assert sig.meters == ("J1", "J2", "J3", "J4")
-    # every burst lowers every head; a burst on the supply pipe A lowers them all about equally
-    assert np.all(sig.matrix > 0)
-    a = sig.matrix[sig.pipes.index("A")]
-    assert np.ptp(a) < 0.2 * a.mean()
-    # a burst on the dead-end pipe E hurts J4 (its end) most
-    e = sig.matrix[sig.pipes.index("E")]
-    assert int(np.argmax(e)) == sig.meters.index("J4")
-    # end nodes follow the steady flow: everything flows away from the reservoir
-    assert sig.endpoints["A"] == ("R1", "J1")
-    assert sig.endpoints["E"] == ("J3", "J4")
-    assert sig.network_hash == network_hash(tiny_network)
-
-
-@pytest.mark.parametrize(("pipe", "fraction", "coeff"), [("B", 0.5, 0.004), ("E", 0.3, 0.002)])
-def test_true_pipe_ranks_first_for_a_model_burst(
-    tiny_network: Path, pipe: str, fraction: float, coeff: float
-) -> None:
-    sig = compute_signatures(tiny_network)
-    after = _heads_with_burst(tiny_network, pipe, fraction, coeff)
-    drop = sig.baseline - np.array([after[m] for m in sig.meters])
-    ranking = rank_drop(drop, sig)
-    assert ranking.best is not None and ranking.best.pipe == pipe
-
-
-def test_compute_signatures_rejects_bad_input(tiny_network: Path) -> None:
-    with pytest.raises(NetworkError, match="R1"):
-        compute_signatures(tiny_network, meters=["R1"])
-    with pytest.raises(ConfigError):
-        compute_signatures(tiny_network, burst_coeff=0.0)
-    with pytest.raises(ConfigError):
-        compute_signatures(tiny_network, position=1.0)
-
-
-def test_cached_signatures_are_computed_once(
-    tiny_network: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    first = cached_signatures(tiny_network, ["J4", "J2"], cache_dir=tmp_path)
-    assert first.meters == ("J4", "J2")
-    files = list(tmp_path.glob("*.json"))
-    assert len(files) == 1
-
-    def boom(*args: object, **kwargs: object) -> SignatureSet:
-        raise AssertionError("recomputed although cached")
-
-    monkeypatch.setattr("burstloc.localize.signature.compute_signatures", boom)
-    again = cached_signatures(tiny_network, ["J4", "J2"], cache_dir=tmp_path)
-    np.testing.assert_array_equal(again.matrix, first.matrix)
-    # another network file is another entry (and here: computed, hence the error)
-    other = tmp_path / "other.inp"
-    other.write_text(tiny_network.read_text().replace("R1   60", "R1   61"))
-    with pytest.raises(AssertionError, match="recomputed"):
-        cached_signatures(other, cache_dir=tmp_path)
-
-
-def test_positions_along_the_pipe_match_an_off_centre_burst(
-    tiny_network: Path, tmp_path: Path
-) -> None:
-    from burstloc.localize.signature import DEFAULT_BURST_COEFF
-
-    sets = cached_signature_sets(tiny_network, cache_dir=tmp_path)
-    assert [s.params["position"] for s in sets] == [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9]
-    assert len(list(tmp_path.glob("*.json"))) == len(sets)
-    middle = sets[4]
-    for pipe in middle.pipes:
-        for fraction in (0.1, 0.9):
-            after = _heads_with_burst(tiny_network, pipe, fraction, DEFAULT_BURST_COEFF)
-            drop = middle.baseline - np.array([after[m] for m in middle.meters])
-            ranking = rank_drop(drop, sets)
-            # the reference burst at a candidate position is matched (to EPANET's precision)
-            assert ranking.best is not None and ranking.best.pipe == pipe
-            assert -ranking.best.score < 1e-3
-            # the mid-point signature alone fits it worse
-            mid_only = {p.pipe: p.score for p in rank_drop(drop, middle)}
-            assert mid_only[pipe] < ranking.best.score
-            # each pipe scores its best position
-            singles = [{p.pipe: p.score for p in rank_drop(drop, s)} for s in sets]
-            for ranked in ranking:
-                assert ranked.score == max(single[ranked.pipe] for single in singles)
-
-
 def test_signature_sets_must_agree() -> None:
     one, other = _synthetic(meters=6), _synthetic(meters=5)
     drop = one.matrix[1]
@@ -197,8 +91,6 @@ def test_signature_sets_must_agree() -> None:
         rank_drop(drop, [one, other])
     with pytest.raises(ConfigError, match="at least one"):
         SignatureLocalizer([])
-    with pytest.raises(ConfigError, match="at least one"):
-        cached_signature_sets("x.inp", positions=())
     loc = SignatureLocalizer([one, _synthetic(meters=6, seed=2)])
     assert loc.signatures is loc.signature_sets[0] and len(loc.signature_sets) == 2
 

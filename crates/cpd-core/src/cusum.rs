@@ -1,12 +1,15 @@
 //! Streaming two-sided CUSUM (the paper's eq. 1–2 and Algorithm 1; TSNet 0.3.1's online pass).
 
 use alloc::vec::Vec;
+use core::hint::select_unpredictable;
 
 #[cfg(feature = "serde")]
 use serde::{Deserialize, Serialize};
 
 use crate::alarm::{Alarm, Direction};
 use crate::error::{check_sample, check_samples, non_negative, positive, Error};
+#[cfg(feature = "serde")]
+use crate::error::{ensure, MAX_COUNT};
 
 /// Validated CUSUM parameters.
 ///
@@ -136,43 +139,123 @@ impl CusumLane {
         (up as u8 * RISE) | (down as u8 * DROP)
     }
 
-    /// Same as [`CusumLane::step`] (bit-identical results) with branches instead of selects:
-    /// for one channel, predicted branches take the resets off the loop-carried dependency
-    /// chain (the resets are nearly always taken, or nearly never, on real heads).
+    /// The sums and starts of [`CusumLane::step`] for one channel, without the start values
+    /// `x_tap`/`x_tan` (the caller keeps them). Bit-identical to `step`. The resets are
+    /// selects: the data decides them (on noisy heads each side resets about every other sample,
+    /// at random), so as branches they would be mispredicted half the time. Only the rare
+    /// alarm is a branch; the loop-carried chain is `(g + s) - drift` and a max. Returns the
+    /// alarm flags and the two reset decisions.
     #[inline(always)]
-    pub(crate) fn step_scalar(&mut self, x: f64, i: u64, threshold: f64, drift: f64) -> u8 {
+    fn advance(&mut self, x: f64, i: u64, threshold: f64, drift: f64) -> (u8, bool, bool) {
         let s = x - self.x_prev;
         self.x_prev = x;
-        let mut gp = self.gp + s - drift;
-        let mut gp_real = self.gp_real + s;
-        let mut gn = self.gn - s - drift;
-        let mut gn_real = self.gn_real - s;
-        if gp < 0.0 {
-            gp = 0.0;
-            gp_real = 0.0;
-            self.tap = i;
-            self.x_tap = x;
+        // The two sides as two lanes of one vector (`g - s` is exactly `g + (-s)`), so that
+        // the compiler keeps the resets as vector blends instead of scalar branches.
+        let t = [s, -s];
+        let g = [self.gp, self.gn];
+        let real = [self.gp_real, self.gn_real];
+        let mut reset = [false; 2];
+        let mut g_new = [0.0; 2];
+        let mut real_new = [0.0; 2];
+        for k in 0..2 {
+            // Same operation order as TSNet: (g + s) - drift.
+            let v = g[k] + t[k] - drift;
+            reset[k] = v < 0.0;
+            // `0 > v ? 0 : v` is `if v < 0 { 0 } else { v }` (a -0.0 is kept): a MAXPD.
+            g_new[k] = if 0.0 > v { 0.0 } else { v };
+            real_new[k] = select_unpredictable(reset[k], 0.0, real[k] + t[k]);
         }
-        if gn < 0.0 {
-            gn = 0.0;
-            gn_real = 0.0;
-            self.tan = i;
-            self.x_tan = x;
-        }
-        let up = gp_real > threshold;
-        let down = gn_real > threshold;
+        self.tap = select_unpredictable(reset[0], i, self.tap);
+        self.tan = select_unpredictable(reset[1], i, self.tan);
+        let up = real_new[0] > threshold;
+        let down = real_new[1] > threshold;
         if up | down {
             self.gp = 0.0;
             self.gn = 0.0;
             self.gp_real = 0.0;
             self.gn_real = 0.0;
-            return (up as u8 * RISE) | (down as u8 * DROP);
+            return ((up as u8 * RISE) | (down as u8 * DROP), reset[0], reset[1]);
         }
-        self.gp = gp;
-        self.gn = gn;
-        self.gp_real = gp_real;
-        self.gn_real = gn_real;
-        0
+        [self.gp, self.gn] = g_new;
+        [self.gp_real, self.gn_real] = real_new;
+        (0, reset[0], reset[1])
+    }
+
+    /// Same as [`CusumLane::step`] (bit-identical results), for one channel: [`Self::advance`]
+    /// plus the start values, selected on their bits (an integer CMOV; a float select would
+    /// become a branch).
+    #[inline(always)]
+    pub(crate) fn step_scalar(&mut self, x: f64, i: u64, threshold: f64, drift: f64) -> u8 {
+        let (flags, reset_p, reset_n) = self.advance(x, i, threshold, drift);
+        let bits = x.to_bits();
+        self.x_tap = f64::from_bits(select_unpredictable(reset_p, bits, self.x_tap.to_bits()));
+        self.x_tan = f64::from_bits(select_unpredictable(reset_n, bits, self.x_tan.to_bits()));
+        flags
+    }
+
+    /// Feeds `xs` (stream indices from `base >= 1`), pushing the alarms to `out`. The start
+    /// values are not tracked sample by sample: a start inside `xs` reads its sample there.
+    #[inline(always)]
+    pub(crate) fn run(
+        &mut self,
+        xs: &[f64],
+        base: u64,
+        thr: f64,
+        drift: f64,
+        out: &mut Vec<Alarm>,
+    ) {
+        let (x_tap0, x_tan0) = (self.x_tap, self.x_tan);
+        let at = |t: u64, before: f64| {
+            if t >= base {
+                xs[(t - base) as usize]
+            } else {
+                before
+            }
+        };
+        let mut lane = *self;
+        for (i, &x) in (base..).zip(xs) {
+            let (flags, _, _) = lane.advance(x, i, thr, drift);
+            if flags != 0 {
+                lane.x_tap = at(lane.tap, x_tap0);
+                lane.x_tan = at(lane.tan, x_tan0);
+                out.push(lane.alarm(flags, i, x));
+            }
+        }
+        lane.x_tap = at(lane.tap, x_tap0);
+        lane.x_tan = at(lane.tan, x_tan0);
+        *self = lane;
+    }
+
+    /// Validates a restored lane after `seen` samples: every value finite, the drift sums
+    /// `>= 0`, the real sums `<= threshold` (they reset on crossing it), the starts before
+    /// `seen`. These hold for every state a detector reaches from finite samples.
+    #[cfg(feature = "serde")]
+    pub(crate) fn check(&self, seen: u64, config: &CusumConfig) -> Result<(), Error> {
+        let values = [
+            self.x_prev,
+            self.gp,
+            self.gn,
+            self.gp_real,
+            self.gn_real,
+            self.x_tap,
+            self.x_tan,
+        ];
+        ensure(seen <= MAX_COUNT, "sample count out of range")?;
+        ensure(
+            values.iter().all(|v| v.is_finite()),
+            "non-finite CUSUM state value",
+        )?;
+        ensure(self.gp >= 0.0 && self.gn >= 0.0, "negative CUSUM drift sum")?;
+        let t = config.threshold;
+        ensure(
+            self.gp_real <= t && self.gn_real <= t,
+            "CUSUM real sum above the threshold",
+        )?;
+        let last = seen.saturating_sub(1);
+        ensure(
+            self.tap <= last && self.tan <= last,
+            "CUSUM change start past the sample count",
+        )
     }
 
     /// The alarm for non-zero `flags` returned by [`CusumLane::step`] at sample `i` (value `x`).
@@ -231,10 +314,33 @@ impl CusumLane {
 /// ```
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(Serialize, Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "CusumRepr"))]
 pub struct Cusum {
     config: CusumConfig,
     seen: u64,
     lane: CusumLane,
+}
+
+/// Unvalidated mirror used to validate deserialized detectors.
+#[cfg(feature = "serde")]
+#[derive(Deserialize)]
+struct CusumRepr {
+    config: CusumConfig,
+    seen: u64,
+    lane: CusumLane,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<CusumRepr> for Cusum {
+    type Error = Error;
+    fn try_from(r: CusumRepr) -> Result<Self, Error> {
+        r.lane.check(r.seen, &r.config)?;
+        Ok(Self {
+            config: r.config,
+            seen: r.seen,
+            lane: r.lane,
+        })
+    }
 }
 
 impl Cusum {
@@ -291,17 +397,8 @@ impl Cusum {
         };
         // The state lives in locals (registers) for the whole slice.
         let (thr, drift) = (self.config.threshold, self.config.drift);
-        let mut lane = self.lane;
-        let mut i = self.seen;
-        for &x in rest {
-            let flags = lane.step_scalar(x, i, thr, drift);
-            if flags != 0 {
-                out.push(lane.alarm(flags, i, x));
-            }
-            i += 1;
-        }
-        self.lane = lane;
-        self.seen = i;
+        self.lane.run(rest, self.seen, thr, drift, out);
+        self.seen += rest.len() as u64;
         Ok(())
     }
 

@@ -1,5 +1,7 @@
 //! The crate's single error type.
 
+use alloc::string::String;
+use alloc::vec::Vec;
 use core::fmt;
 
 /// Everything that can go wrong in `cpd-core`.
@@ -57,10 +59,19 @@ pub enum Error {
         /// The bank's number of channels (the row length).
         channels: usize,
     },
-    /// A deserialized state is internally inconsistent (e.g. a ring buffer of the wrong length).
+    /// A deserialized state is internally inconsistent (e.g. a ring buffer of the wrong length)
+    /// or holds a value no detector can reach (a non-finite sample, an index past the count).
     CorruptState {
         /// What is inconsistent.
         reason: &'static str,
+    },
+    /// Snapshot bytes that cannot be restored (see `cpd_core::snapshot`): not a snapshot, of
+    /// another kind or format, or holding an invalid configuration or state.
+    InvalidSnapshot {
+        /// The kind that was expected (`"Cusum"`, `"Shewhart"`, `"DetectorBank"`).
+        kind: &'static str,
+        /// What is wrong, e.g. the decoder's message.
+        detail: String,
     },
 }
 
@@ -104,6 +115,9 @@ impl fmt::Display for Error {
                 "matrix of {len} values is not a whole number of rows of {channels} channels"
             ),
             Error::CorruptState { reason } => write!(f, "corrupt detector state: {reason}"),
+            Error::InvalidSnapshot { kind, detail } => {
+                write!(f, "invalid {kind} snapshot: {detail}")
+            }
         }
     }
 }
@@ -120,6 +134,37 @@ pub(crate) fn positive(name: &'static str, value: f64) -> Result<f64, Error> {
             value,
             reason: "must be finite and > 0",
         })
+    }
+}
+
+/// `n` copies of `value`, or [`Error::InvalidParameter`] naming `name` (the parameter that sets
+/// the size) when the memory cannot be reserved: a huge window or channel count is a config
+/// error, never an allocation abort.
+pub(crate) fn filled<T: Clone>(name: &'static str, n: usize, value: T) -> Result<Vec<T>, Error> {
+    let mut v = Vec::new();
+    if v.try_reserve_exact(n).is_err() {
+        return Err(Error::InvalidParameter {
+            name,
+            value: n as f64,
+            reason: "needs more memory than can be allocated",
+        });
+    }
+    v.resize(n, value);
+    Ok(v)
+}
+
+/// Largest sample or step count a restored state may hold (2^62, i.e. 146 years at 1 GHz), so
+/// that counting on from it can never overflow.
+#[cfg(feature = "serde")]
+pub(crate) const MAX_COUNT: u64 = 1 << 62;
+
+/// A restored-state check: [`Error::CorruptState`] with `reason` unless `ok`.
+#[cfg(feature = "serde")]
+pub(crate) fn ensure(ok: bool, reason: &'static str) -> Result<(), Error> {
+    if ok {
+        Ok(())
+    } else {
+        Err(Error::CorruptState { reason })
     }
 }
 

@@ -1,22 +1,28 @@
 //! API (for binding authors; everything is re-exported at the crate root):
 //! - errors: [`Error`] (`InvalidParameter`, `NonFiniteSample`, `NonFiniteReading`,
-//!   `NonFiniteMatrixReading`, `ChannelCount`, `MatrixShape`, `CorruptState`), [`Error::is_config`];
+//!   `NonFiniteMatrixReading`, `ChannelCount`, `MatrixShape`, `CorruptState`,
+//!   `InvalidSnapshot`), [`Error::is_config`];
 //! - results: [`Alarm`] `{ index, start, direction, amplitude }`, [`Direction`] `{ Rise, Drop }`,
 //!   [`ChannelAlarm`] `{ channel, alarm }`;
 //! - CUSUM: [`CusumConfig::new`]`(threshold, drift)`, [`Cusum::new`]`(config)` with `update`,
 //!   `update_slice`, `reset`, `config`, `samples_seen`, `gp`, `gn`, `gp_real`, `gn_real`,
 //!   `rise_start`, `drop_start`;
-//! - Shewhart: [`ShewhartConfig::new`]`(window, sigma, threshold)`, [`Shewhart::new`]`(config)`
-//!   with `update`, `update_slice`, `reset`, `config`, `samples_seen`, `len`, `is_empty`,
-//!   `mean`, `std`;
+//! - Shewhart: [`ShewhartConfig::new`]`(window, sigma, threshold)`,
+//!   [`ShewhartConfig::with_threshold`]`(window, threshold)` (`sigma = threshold`, the paper's
+//!   rule), [`Shewhart::new`]`(config) -> Result` (the ring is allocated fallibly) with
+//!   `update`, `update_slice`, `reset`, `config`, `samples_seen`, `len`, `is_empty`, `mean`,
+//!   `std`;
 //! - banks: [`CusumBank::new`]`(channels, config)`, [`ShewhartBank::new`]`(channels, config)`,
-//!   [`Bank`] `{ Cusum, Shewhart }`, all with `step`, `step_many`, `reset`, `channels`,
+//!   [`Bank`] `{ Cusum, Shewhart }` (constructors return `Result`: channel count and memory
+//!   checked), all with `step`, `step_many`, `reset`, `channels`,
 //!   `steps_seen` (plus `config`; `Bank::kind`);
 //! - batch references: [`detect_cusum`]`(x, threshold, drift, ending) -> `[`CusumChanges`]
 //!   `{ start, end, amplitude }`, [`detect_shewhart`]`(x, sigma, threshold) -> `
 //!   [`ShewhartChanges`] `{ index, amplitude }`;
 //! - feature `serde`: every config, detector, bank and result type is `Serialize + Deserialize`
-//!   (deserialization re-validates configs and state shapes).
+//!   (deserialization re-validates configs and every state field);
+//! - feature `snapshot`: `snapshot::to_bytes` / `snapshot::from_bytes`, the versioned CBOR
+//!   snapshots the Python package reads and writes.
 //!
 //! Non-finite input policy: a NaN or ±inf sample/reading is *rejected* with a typed error and
 //! the detector or bank is left exactly as it was (nothing consumed). Missing readings are
@@ -35,6 +41,8 @@ mod cusum;
 mod error;
 mod math;
 mod shewhart;
+#[cfg(feature = "snapshot")]
+pub mod snapshot;
 mod stats;
 
 pub use alarm::{Alarm, ChannelAlarm, Direction};

@@ -131,7 +131,7 @@ proptest! {
         (kind, n, seed) in signal_spec(400), (w, sigma, thr) in shewhart_params()
     ) {
         let x = signal(kind, n, &mut Rng::new(seed));
-        let mut det = Shewhart::new(ShewhartConfig::new(w, sigma, thr).unwrap());
+        let mut det = Shewhart::new(ShewhartConfig::new(w, sigma, thr).unwrap()).unwrap();
         for (i, &xi) in x.iter().enumerate() {
             let got = det.update(xi).unwrap();
             if i + 1 < w {
@@ -157,7 +157,7 @@ proptest! {
     ) {
         // Long enough to cross several periodic rebuilds of the running sums.
         let x = signal(kind, 3500, &mut Rng::new(seed));
-        let mut det = Shewhart::new(ShewhartConfig::new(w, sigma, 0.05).unwrap());
+        let mut det = Shewhart::new(ShewhartConfig::new(w, sigma, 0.05).unwrap()).unwrap();
         for (i, &xi) in x.iter().enumerate() {
             let got = det.update(xi).unwrap().is_some();
             if i + 1 >= w {
@@ -241,7 +241,7 @@ proptest! {
         let m = matrix(channels.min(64), steps, seed); // keep the largest cases quick
         let channels = channels.min(64);
         let cfg = ShewhartConfig::new(w, sigma, thr).unwrap();
-        let want = independent(channels, &m, || Shewhart::new(cfg), |d, v| d.update(v).unwrap());
+        let want = independent(channels, &m, || Shewhart::new(cfg).unwrap(), |d, v| d.update(v).unwrap());
         let mut bank = Bank::from(ShewhartBank::new(channels, cfg).unwrap());
         let mut got = Vec::new();
         bank.step_many(&m, &mut got).unwrap();
@@ -255,7 +255,7 @@ proptest! {
     ) {
         let m = matrix(channels, steps, seed);
         let cfg = ShewhartConfig::new(w, sigma, thr).unwrap();
-        let want = independent(channels, &m, || Shewhart::new(cfg), |d, v| d.update(v).unwrap());
+        let want = independent(channels, &m, || Shewhart::new(cfg).unwrap(), |d, v| d.update(v).unwrap());
         let mut bank = ShewhartBank::new(channels, cfg).unwrap();
         let mut got = Vec::new();
         for row in m.chunks_exact(channels) {
@@ -272,10 +272,10 @@ proptest! {
         let x = signal(kind, n, &mut Rng::new(seed));
         let cc = CusumConfig::new(thr, drift).unwrap();
         let sc = ShewhartConfig::new(w, sigma, sthr).unwrap();
-        let (mut c1, mut s1) = (Cusum::new(cc), Shewhart::new(sc));
+        let (mut c1, mut s1) = (Cusum::new(cc), Shewhart::new(sc).unwrap());
         let want_c: Vec<Alarm> = x.iter().filter_map(|&v| c1.update(v).unwrap()).collect();
         let want_s = shewhart_alarms(&mut s1, &x);
-        let (mut c2, mut s2) = (Cusum::new(cc), Shewhart::new(sc));
+        let (mut c2, mut s2) = (Cusum::new(cc), Shewhart::new(sc).unwrap());
         let (mut got_c, mut got_s) = (Vec::new(), Vec::new());
         for part in x.chunks(chunk) {
             c2.update_slice(part, &mut got_c).unwrap();
@@ -303,7 +303,7 @@ proptest! {
         prop_assert_eq!(cusum_alarms(&mut c2, tail), cusum_alarms(&mut c, tail));
         prop_assert_eq!(&c2, &c);
 
-        let mut s = Shewhart::new(ShewhartConfig::new(w, sigma, sthr).unwrap());
+        let mut s = Shewhart::new(ShewhartConfig::new(w, sigma, sthr).unwrap()).unwrap();
         shewhart_alarms(&mut s, head);
         let mut s2: Shewhart = serde_json::from_str(&serde_json::to_string(&s).unwrap()).unwrap();
         prop_assert_eq!(&s2, &s);
@@ -343,7 +343,7 @@ proptest! {
     ) {
         let x = signal(kind, n, &mut Rng::new(seed));
         let mut c = Cusum::new(CusumConfig::new(thr, 0.01).unwrap());
-        let mut s = Shewhart::new(ShewhartConfig::new(w, sigma, thr).unwrap());
+        let mut s = Shewhart::new(ShewhartConfig::new(w, sigma, thr).unwrap()).unwrap();
         cusum_alarms(&mut c, &x);
         shewhart_alarms(&mut s, &x);
         let (c0, s0) = (c.clone(), s.clone());
@@ -418,10 +418,10 @@ proptest! {
         prop_assert_eq!(&c, &Cusum::new(cc));
         prop_assert_eq!(cusum_alarms(&mut c, &x), first);
 
-        let mut s = Shewhart::new(sc);
+        let mut s = Shewhart::new(sc).unwrap();
         let first = shewhart_alarms(&mut s, &x);
         s.reset();
-        prop_assert_eq!(&s, &Shewhart::new(sc));
+        prop_assert_eq!(&s, &Shewhart::new(sc).unwrap());
         prop_assert_eq!(shewhart_alarms(&mut s, &x), first);
 
         let m = matrix(channels, n / channels, seed);

@@ -72,7 +72,7 @@ fn shewhart_step_down_alarms_while_the_step_is_an_outlier() {
     // W = 48, s = 3: with k post-step samples in the window, |x - μ| = 1.5 (1 - k/48) and
     // σ = 1.5 sqrt(k (48 - k)) / 48, so the test holds for k < 4.8: samples 120..=123.
     let x = step_trace(300, 120, 1.5, 2);
-    let mut det = Shewhart::new(ShewhartConfig::new(48, 3.0, 0.5).unwrap());
+    let mut det = Shewhart::new(ShewhartConfig::new(48, 3.0, 0.5).unwrap()).unwrap();
     let mut alarms = Vec::new();
     det.update_slice(&x, &mut alarms).unwrap();
     let idx: Vec<u64> = alarms.iter().map(|a| a.index).collect();
@@ -87,7 +87,7 @@ fn shewhart_step_down_alarms_while_the_step_is_an_outlier() {
 
 #[test]
 fn shewhart_needs_a_full_window() {
-    let mut det = Shewhart::new(ShewhartConfig::new(5, 1.0, 0.1).unwrap());
+    let mut det = Shewhart::new(ShewhartConfig::new(5, 1.0, 0.1).unwrap()).unwrap();
     for (i, x) in [0.0, 0.0, 0.0, 100.0].into_iter().enumerate() {
         assert_eq!(det.update(x).unwrap(), None, "sample {i}");
     }
@@ -152,7 +152,7 @@ fn shewhart_window_statistics_are_stable_on_pressure_heads() {
         })
         .collect();
     for w in [10usize, 1000, 10_000] {
-        let mut det = Shewhart::new(ShewhartConfig::new(w, 3.0, 0.5).unwrap());
+        let mut det = Shewhart::new(ShewhartConfig::new(w, 3.0, 0.5).unwrap()).unwrap();
         let mut worst = 0.0f64;
         for (i, &xi) in x.iter().enumerate() {
             det.update(xi).unwrap();
@@ -249,7 +249,7 @@ fn deserialization_rejects_invalid_configs_and_corrupt_state() {
         .unwrap();
     assert_eq!(cfg, ShewhartConfig::new(3, 1.0, 1.0).unwrap());
 
-    let mut det = Shewhart::new(cfg);
+    let mut det = Shewhart::new(cfg).unwrap();
     det.update(1.0).unwrap();
     let mut json: serde_json::Value = serde_json::to_value(&det).unwrap();
     json["ring"] = serde_json::json!([1.0, 0.0]); // wrong length

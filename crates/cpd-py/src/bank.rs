@@ -6,11 +6,9 @@ use pyo3::prelude::*;
 
 use crate::alarm::{float_repr, PyAlarm};
 use crate::arrays;
-use crate::detectors::shewhart_config;
+use crate::detectors::{shewhart_config, size};
 use crate::errors::{config_err, core_err, input_err};
 use crate::state::pymethods_with_snapshots;
-
-const SNAPSHOT_KIND: &str = "DetectorBank";
 
 /// A bank of identical detectors, one per channel (sensor), advanced together.
 ///
@@ -33,32 +31,24 @@ fn unused(kind: &str, name: &str, given: bool) -> PyResult<()> {
     }
 }
 
-fn channel_count(channels: i64) -> PyResult<usize> {
-    usize::try_from(channels).map_err(|_| {
-        config_err(format!(
-            "channels must be a positive integer, got {channels}"
-        ))
-    })
-}
-
 impl PyDetectorBank {
     fn alarms(out: Vec<cpd_core::ChannelAlarm>) -> Vec<PyAlarm> {
         out.into_iter().map(PyAlarm::from).collect()
     }
 }
 
-pymethods_with_snapshots!(PyDetectorBank, SNAPSHOT_KIND, {
+pymethods_with_snapshots!(PyDetectorBank, {
     #[new]
     #[pyo3(signature = (kind, channels, *, threshold, drift = None, window = None, sigma = None))]
     fn new(
         kind: &str,
-        channels: i64,
+        channels: &Bound<'_, PyAny>,
         threshold: f64,
         drift: Option<f64>,
-        window: Option<i64>,
+        window: Option<&Bound<'_, PyAny>>,
         sigma: Option<f64>,
     ) -> PyResult<Self> {
-        let channels = channel_count(channels)?;
+        let channels = size(channels, "channels", ">= 1")?;
         let inner = match kind {
             "cusum" => {
                 unused(kind, "window", window.is_some())?;

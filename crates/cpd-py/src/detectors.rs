@@ -1,6 +1,7 @@
 //! `Cusum` and `Shewhart`: single-channel streaming detectors wrapping the core's.
 
-use cpd_core::{Cusum, CusumConfig, Error, Shewhart, ShewhartConfig};
+use cpd_core::{Cusum, CusumConfig, Shewhart, ShewhartConfig};
+use pyo3::exceptions::PyOverflowError;
 use pyo3::prelude::*;
 
 use crate::alarm::{float_repr, PyAlarm};
@@ -11,8 +12,8 @@ use crate::state::pymethods_with_snapshots;
 /// The `#[pymethods]` block of a single-channel detector class: `update`, `update_many`,
 /// `reset`, `samples_seen`, the snapshot methods, and `$extra`, the class's own methods.
 macro_rules! detector_methods {
-    ($py_type:ident, $kind:literal, { $($extra:tt)* }) => {
-        pymethods_with_snapshots!($py_type, $kind, {
+    ($py_type:ident, { $($extra:tt)* }) => {
+        pymethods_with_snapshots!($py_type, {
             /// Feeds one sample; returns the alarm it raises, if any.
             ///
             /// A NaN or infinite sample raises `InputError` and leaves the state unchanged.
@@ -69,7 +70,7 @@ pub struct PyCusum {
     inner: Cusum,
 }
 
-detector_methods!(PyCusum, "Cusum", {
+detector_methods!(PyCusum, {
     #[new]
     #[pyo3(signature = (threshold, drift = 0.0))]
     fn new(threshold: f64, drift: f64) -> PyResult<Self> {
@@ -136,37 +137,41 @@ pub struct PyShewhart {
     inner: Shewhart,
 }
 
-/// A Shewhart config from Python arguments: `window` as a Python int (negative values named),
-/// `sigma` defaulting to `threshold` (the paper's single parameter).
+/// A size argument (`window`, `channels`): a Python int of any magnitude. Negative values are a
+/// `ConfigError` naming `rule`; values past `i64` a `ConfigError` too (no machine holds them);
+/// other types keep PyO3's `TypeError`.
+pub(crate) fn size(obj: &Bound<'_, PyAny>, name: &str, rule: &str) -> PyResult<usize> {
+    match obj.extract::<i64>() {
+        Ok(v) => usize::try_from(v)
+            .map_err(|_| config_err(format!("{name} must be an integer {rule}, got {v}"))),
+        Err(err) if err.is_instance_of::<PyOverflowError>(obj.py()) => Err(config_err(format!(
+            "invalid parameter `{name}` = {obj}: needs more memory than can be allocated"
+        ))),
+        Err(err) => Err(err),
+    }
+}
+
+/// A Shewhart config from Python arguments: `window` as a Python int, `sigma` left to the
+/// core's default (the threshold) when not given.
 pub(crate) fn shewhart_config(
-    window: i64,
+    window: &Bound<'_, PyAny>,
     threshold: f64,
     sigma: Option<f64>,
 ) -> PyResult<ShewhartConfig> {
-    let window = usize::try_from(window)
-        .map_err(|_| config_err(format!("window must be an integer >= 2, got {window}")))?;
-    ShewhartConfig::new(window, sigma.unwrap_or(threshold), threshold).map_err(|err| {
-        match (sigma, &err) {
-            // sigma was not given: name the parameter the caller did give.
-            (
-                None,
-                Error::InvalidParameter {
-                    name: "sigma",
-                    value,
-                    reason,
-                },
-            ) => config_err(format!("invalid parameter `threshold` = {value}: {reason}")),
-            _ => core_err(err),
-        }
-    })
+    let window = size(window, "window", ">= 2")?;
+    match sigma {
+        Some(sigma) => ShewhartConfig::new(window, sigma, threshold),
+        None => ShewhartConfig::with_threshold(window, threshold),
+    }
+    .map_err(core_err)
 }
 
-detector_methods!(PyShewhart, "Shewhart", {
+detector_methods!(PyShewhart, {
     #[new]
     #[pyo3(signature = (window, threshold, sigma = None))]
-    fn new(window: i64, threshold: f64, sigma: Option<f64>) -> PyResult<Self> {
+    fn new(window: &Bound<'_, PyAny>, threshold: f64, sigma: Option<f64>) -> PyResult<Self> {
         Ok(Self {
-            inner: Shewhart::new(shewhart_config(window, threshold, sigma)?),
+            inner: Shewhart::new(shewhart_config(window, threshold, sigma)?).map_err(core_err)?,
         })
     }
 

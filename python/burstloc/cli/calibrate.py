@@ -18,8 +18,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "calibrate",
         help="derive detector thresholds from a burst-free baseline",
         description="Per meter and capture interval, thresholds that meet a target false-alarm "
-        "rate on the network's steady state plus the sensor noise model; written as a named "
-        "configuration that `evaluate --config` accepts.",
+        "rate on the network's steady state plus the sensor noise model, and the localization "
+        "model (pipe flow directions and lengths, path lengths to the meters, burst "
+        "signatures; computed here with WNTR/EPANET); written as a named configuration that "
+        "`evaluate --config` and `monitor --config` accept.",
     )
     parser.add_argument("network", help="EPANET INP file")
     parser.add_argument("--out", required=True, help="configuration file to write (JSON)")

@@ -20,13 +20,18 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         description=(
             "Read pressure readings 'timestamp,meter,value' (a file, or - for stdin) in "
             "arrival order, assemble complete time steps, run the calibrated detector bank of "
-            "--config and a ranking localizer, and print one JSON line per located burst: the "
-            "decision time, the first alarm and the three best pipes."
+            "--config and a ranking localizer built from the localization model stored in it "
+            "(no hydraulic model runs), and print one JSON line per located burst: the "
+            "decision time, the first alarm and the three best pipes. NETWORK.inp is only "
+            "checked against the configuration's SHA-256."
         ),
     )
     parser.add_argument("network", metavar="NETWORK.inp", help="EPANET INP file")
     parser.add_argument(
-        "--config", required=True, metavar="PATH", help="`burstloc calibrate` output"
+        "--config",
+        required=True,
+        metavar="PATH",
+        help="`burstloc calibrate` output (with its localization model)",
     )
     parser.add_argument(
         "--capture-interval",
@@ -53,8 +58,8 @@ def run(args: argparse.Namespace) -> int:
     """Handle ``burstloc monitor``."""
     import json
 
-    from burstloc.experiments.calibrate import Calibration
     from burstloc.live.monitor import BurstMonitor, monitor_readings, parse_readings
+    from burstloc.localize.config import Calibration
 
     config = Calibration.load(args.config)
     monitor = BurstMonitor(

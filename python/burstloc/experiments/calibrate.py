@@ -31,9 +31,13 @@ decides ``decision_delay`` = 150 s after the onset (the issue's budget); the arr
 ``max(median pipe length / wave speed, 2 * dt)`` after the first alarm: by then the wave has
 reached both end nodes of the burst pipe, the meters that matter most.
 
-**Configuration file.** :meth:`Calibration.save` writes a named JSON document with the network's
-SHA-256 and the meter list; :meth:`Calibration.check` refuses, by name, a configuration for
-another network or other meters.
+**Configuration file.** The result is a :class:`burstloc.localize.config.Calibration` (the stored
+configuration lives in the localize layer, which the live monitor reads without this module):
+:meth:`~burstloc.localize.config.Calibration.save` writes a named JSON document with the network's
+SHA-256, the meter list and the localization model (:func:`burstloc.sim.prepare.prepare_model`:
+pipe geometry and burst signatures, computed here once with WNTR/EPANET);
+:meth:`~burstloc.localize.config.Calibration.check` refuses, by name, a configuration for another
+network or other meters.
 
 **Bad baselines.** A baseline shorter than ``MIN_BASELINE_READINGS`` readings or
 ``MIN_BASELINE_SECONDS`` is refused, and so is one that contains a burst: a lasting step (the
@@ -44,11 +48,10 @@ median).
 
 from __future__ import annotations
 
-import json
 import math
 import os
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -56,11 +59,18 @@ import numpy as np
 from numpy.typing import NDArray
 
 from burstloc import _core
-from burstloc._atomic import write_json
 from burstloc.constants import CAPTURE_INTERVALS, SIGNATURE_DECISION_DELAY, WAVE_SPEED
 from burstloc.exceptions import ConfigError, InputError
-from burstloc.localize.signature import network_hash
+from burstloc.localize.config import (
+    CALIBRATION_FORMAT,
+    Calibration,
+    IntervalCalibration,
+    calibrated_bank,
+)
+from burstloc.network import network_hash
 
+# The stored configuration (CALIBRATION_FORMAT, Calibration, IntervalCalibration,
+# calibrated_bank) lives in burstloc.localize.config; re-exported here for the experiments.
 __all__ = [
     "CALIBRATION_FORMAT",
     "Baseline",
@@ -74,9 +84,6 @@ __all__ = [
     "localization_interval",
     "shewhart_threshold",
 ]
-
-CALIBRATION_FORMAT = "burstloc-calibration/1"
-"""Format tag of a configuration file."""
 
 DEFAULT_FALSE_ALARM_RATE = 0.1
 """Default target: false alarms per meter per hour (one per meter every 10 hours)."""
@@ -269,183 +276,6 @@ def localization_interval(capture_interval: float, travel_spread: float) -> int:
     return int(min(50, max(10, math.ceil(travel_spread / capture_interval - 1e-9))))
 
 
-@dataclass(frozen=True)
-class IntervalCalibration:
-    """Settings for one capture interval (thresholds per meter, in metres)."""
-
-    capture_interval: float
-    localization_interval: int
-    cusum_threshold: Mapping[str, float]
-    cusum_drift: Mapping[str, float]
-    shewhart_threshold: Mapping[str, float]
-    shewhart_sigma: float
-    decision_delay: float
-    arrival_decision_delay: float
-
-    def uniform(self, detector: str) -> dict[str, float]:
-        """One parameter set for a whole detector bank (the largest per-meter thresholds)."""
-        if detector == "cusum":
-            return {
-                "threshold": max(self.cusum_threshold.values()),
-                "drift": max(self.cusum_drift.values()),
-            }
-        if detector == "shewhart":
-            return {
-                "threshold": max(self.shewhart_threshold.values()),
-                "sigma": self.shewhart_sigma,
-            }
-        raise ConfigError(f"unknown detector {detector!r}; use 'cusum' or 'shewhart'")
-
-    def to_json(self) -> dict[str, Any]:
-        """JSON-ready dictionary."""
-        return {
-            "capture_interval": self.capture_interval,
-            "localization_interval": self.localization_interval,
-            "cusum": {"threshold": dict(self.cusum_threshold), "drift": dict(self.cusum_drift)},
-            "shewhart": {"threshold": dict(self.shewhart_threshold), "sigma": self.shewhart_sigma},
-            "decision_delay_s": self.decision_delay,
-            "arrival_decision_delay_s": self.arrival_decision_delay,
-        }
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> IntervalCalibration:
-        """Inverse of :meth:`to_json`."""
-        return cls(
-            capture_interval=float(data["capture_interval"]),
-            localization_interval=int(data["localization_interval"]),
-            cusum_threshold={k: float(v) for k, v in data["cusum"]["threshold"].items()},
-            cusum_drift={k: float(v) for k, v in data["cusum"]["drift"].items()},
-            shewhart_threshold={k: float(v) for k, v in data["shewhart"]["threshold"].items()},
-            shewhart_sigma=float(data["shewhart"]["sigma"]),
-            decision_delay=float(data["decision_delay_s"]),
-            arrival_decision_delay=float(data["arrival_decision_delay_s"]),
-        )
-
-
-@dataclass(frozen=True)
-class Calibration:
-    """A named configuration: per capture interval settings for one network and meter set."""
-
-    name: str
-    network: str
-    network_hash: str
-    meters: tuple[str, ...]
-    noise_sigma: Mapping[str, float]
-    false_alarm_rate: float
-    intervals: tuple[IntervalCalibration, ...]
-    provenance: Mapping[str, Any] = field(default_factory=dict)
-
-    def for_interval(self, capture_interval: float) -> IntervalCalibration:
-        """The settings calibrated for ``capture_interval`` (ConfigError if there are none)."""
-        for item in self.intervals:
-            if math.isclose(item.capture_interval, capture_interval, rel_tol=1e-9):
-                return item
-        have = ", ".join(f"{i.capture_interval:g}" for i in self.intervals)
-        raise ConfigError(
-            f"configuration {self.name!r} has no calibration for a {capture_interval:g} s "
-            f"capture interval (it has {have} s); run `burstloc calibrate` for it"
-        )
-
-    def check(self, network: str | os.PathLike[str], meters: Sequence[str] | None = None) -> None:
-        """Refuse (ConfigError) to be used with another network or another set of meters."""
-        digest = network_hash(network)
-        if digest != self.network_hash:
-            raise ConfigError(
-                f"configuration {self.name!r} was calibrated for network {self.network!r} "
-                f"({self.network_hash}), not for {os.fspath(network)!r} ({digest})"
-            )
-        if meters is not None and tuple(meters) != self.meters:
-            missing = sorted(set(self.meters) - set(meters))
-            extra = sorted(set(meters) - set(self.meters))
-            detail = f"missing {missing}, extra {extra}" if missing or extra else "other order"
-            raise ConfigError(
-                f"configuration {self.name!r} was calibrated for other meters ({detail})"
-            )
-
-    def to_json(self) -> dict[str, Any]:
-        """JSON-ready dictionary (see :data:`CALIBRATION_FORMAT`)."""
-        return {
-            "format": CALIBRATION_FORMAT,
-            "name": self.name,
-            "network": self.network,
-            "network_hash": self.network_hash,
-            "meters": list(self.meters),
-            "noise_sigma": dict(self.noise_sigma),
-            "false_alarm_rate_per_hour": self.false_alarm_rate,
-            "intervals": [i.to_json() for i in self.intervals],
-            "provenance": dict(self.provenance),
-        }
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> Calibration:
-        """Inverse of :meth:`to_json`; a malformed document raises ConfigError."""
-        if data.get("format") != CALIBRATION_FORMAT:
-            raise ConfigError(
-                f"not a burstloc configuration (format {data.get('format')!r}, "
-                f"want {CALIBRATION_FORMAT!r})"
-            )
-        try:
-            return cls(
-                name=str(data["name"]),
-                network=str(data["network"]),
-                network_hash=str(data["network_hash"]),
-                meters=tuple(data["meters"]),
-                noise_sigma={k: float(v) for k, v in data["noise_sigma"].items()},
-                false_alarm_rate=float(data["false_alarm_rate_per_hour"]),
-                intervals=tuple(IntervalCalibration.from_json(i) for i in data["intervals"]),
-                provenance=dict(data.get("provenance", {})),
-            )
-        except (KeyError, TypeError, ValueError, AttributeError) as exc:
-            raise ConfigError(f"malformed configuration: {exc!r}") from exc
-
-    def save(self, path: str | os.PathLike[str]) -> Path:
-        """Write the configuration as JSON (atomically); returns the path."""
-        return write_json(path, self.to_json())
-
-    @classmethod
-    def load(
-        cls,
-        path: str | os.PathLike[str],
-        *,
-        network: str | os.PathLike[str] | None = None,
-        meters: Sequence[str] | None = None,
-    ) -> Calibration:
-        """Read a configuration; with ``network`` (and ``meters``) it is also :meth:`check` ed."""
-        try:
-            with open(path) as fh:
-                data = json.load(fh)
-        except (OSError, json.JSONDecodeError) as exc:
-            raise ConfigError(f"cannot read configuration {os.fspath(path)!r}: {exc}") from exc
-        config = cls.from_json(data)
-        if network is not None:
-            config.check(network, meters)
-        return config
-
-
-def calibrated_bank(
-    kind: str, channels: int, calibration: IntervalCalibration
-) -> _core.DetectorBank:
-    """A :class:`burstloc.DetectorBank` of ``kind`` with one interval's calibrated settings
-    (:meth:`~burstloc.experiments.calibrate.IntervalCalibration.uniform`; Shewhart reference window
-    2N).
-
-    Raises:
-        ConfigError: unknown detector kind.
-    """
-    params = calibration.uniform(kind)
-    if kind == "cusum":
-        return _core.DetectorBank(
-            "cusum", channels, threshold=params["threshold"], drift=params["drift"]
-        )
-    return _core.DetectorBank(
-        "shewhart",
-        channels,
-        threshold=params["threshold"],
-        sigma=params["sigma"],
-        window=2 * calibration.localization_interval,
-    )
-
-
 def calibrate(
     network: str | os.PathLike[str],
     *,
@@ -463,10 +293,11 @@ def calibrate(
 
     The noise comes from ``baseline`` (recorded burst-free readings, checked by
     :func:`check_baseline`; their meters are the meters) or from ``noise_sigma`` (default
-    :data:`DEFAULT_NOISE_SIGMA`); ``meters`` default to every junction.
+    :data:`DEFAULT_NOISE_SIGMA`); ``meters`` default to every junction. The localization model
+    (:func:`burstloc.sim.prepare.prepare_model`, signatures cached on disk) is computed here.
     """
-    from burstloc.localize.arrival import length_graph, travel_time_spread
     from burstloc.network import junction_names, load_network
+    from burstloc.sim.prepare import length_graph, prepare_model, travel_time_spread
 
     if not (math.isfinite(false_alarm_rate) and false_alarm_rate > 0):
         raise ConfigError(f"false_alarm_rate must be > 0 per hour, got {false_alarm_rate}")
@@ -532,14 +363,16 @@ def calibrate(
                 arrival_decision_delay=max(pipe_travel, 2 * dt),
             )
         )
+    digest = network_hash(network)
     return Calibration(
         name=name or f"{Path(network).stem}-calibrated",
         network=os.fspath(network),
-        network_hash=network_hash(network),
+        network_hash=digest,
         meters=tuple(meter_list),
         noise_sigma={m: float(s) for m, s in zip(meter_list, sigmas, strict=True)},
         false_alarm_rate=float(false_alarm_rate),
         intervals=tuple(items),
+        model=prepare_model(network, meter_list, wave_speed=wave_speed, wn=wn),
         provenance={
             "baseline": kind,
             "seed": seed,

@@ -7,7 +7,7 @@ For a network and one or more runs (detector x capture interval x parameters x m
    :data:`burstloc.experiments.paper.SCENARIO` choices, long enough for every run to see
    ``2 x interval`` readings after the burst;
 2. each scenario is sampled at the run's capture interval at ``phases`` clock offsets and
-   replayed through the real-time loop (:class:`burstloc.localize.paper_rules.BurstLocator`):
+   replayed through the real-time loop (:class:`burstloc.live.paper_locator.BurstLocator`):
    the first window whose changes make the rules name a pipe decides (the paper's single
    localization attempt); no decision means "not located", never a guess;
 3. a prediction is correct when it names the burst pipe; accuracy = correct / pipes (eq. 4).

@@ -9,7 +9,7 @@ apart:
    :class:`Clock` (its phase, and the readings of the initial steady state that precede the
    simulated span, a live meter's history), with optional sensor noise;
 2. :func:`locate_burst` streams them through the paper's rules
-   (:class:`burstloc.localize.paper_rules.BurstLocator`); :func:`rank_attempts` runs the
+   (:class:`burstloc.live.paper_locator.BurstLocator`); :func:`rank_attempts` runs the
    calibrated detector bank once and asks every ranking localizer
    (:func:`burstloc.localize.decide.rank_alarms`; the fused one reuses the signature
    localizer's ranking of the same readings);
@@ -33,7 +33,7 @@ import os
 import statistics
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -47,16 +47,19 @@ from burstloc.experiments.calibrate import (
     calibrated_bank,
 )
 from burstloc.experiments.runs import RunSpec
+from burstloc.live.paper_locator import BurstLocator
 from burstloc.live.stream import replay
-from burstloc.localize.decide import rank_alarms, ranking_localizers
+from burstloc.localize.decide import rank_alarms
 from burstloc.localize.detection import make_detector
 from burstloc.localize.evidence import Ranking
-from burstloc.localize.paper_rules import BurstLocator, Localization
+from burstloc.localize.paper_rules import Localization
 from burstloc.sim.capture import capture
+from burstloc.sim.prepare import ranking_localizers
 
 if TYPE_CHECKING:
     import networkx as nx
 
+    from burstloc.localize.decide import RankingLocalizers
     from burstloc.sim.scenario import ScenarioResult
     from burstloc.sim.sensors import SensorModel
 
@@ -254,7 +257,7 @@ class RankingSetup:
 
     meters: list[str]
     config: Calibration
-    localizers: dict[str, Any]
+    localizers: RankingLocalizers
 
     @classmethod
     def build(

@@ -127,15 +127,13 @@ def score_point(task: tuple[StudyPoint, StudySettings]) -> list[dict[str, Any]]:
     ``top3`` (fractions of attempts), ``attempts``, ``not_located``, ``median_time_s`` (burst
     start to decision) and the point's description.
     """
-    from burstloc.localize.arrival import ArrivalLocalizer
+    from burstloc.localize.decide import RankingLocalizers
     from burstloc.localize.fused import FusedLocalizer
-    from burstloc.localize.signature import (
-        SignatureLocalizer,
-        cached_signature_sets,
-        cached_signatures,
-    )
+    from burstloc.localize.signature import SignatureLocalizer
     from burstloc.network import load_network
+    from burstloc.sim.prepare import arrival_localizer
     from burstloc.sim.sensors import SensorModel
+    from burstloc.sim.signatures import cached_signature_sets, cached_signatures
     from burstloc.sim.tsnet import simulate_burst
 
     point, settings = task
@@ -146,7 +144,7 @@ def score_point(task: tuple[StudyPoint, StudySettings]) -> list[dict[str, Any]]:
     signature_sets = cached_signature_sets(point.network, junctions)
     count = max(1, round(f.meter_fraction * len(junctions)))
     meters = list(greedy_meters(all_signatures, count)) if count < len(junctions) else junctions
-    arrival = ArrivalLocalizer.from_network(load_network(point.network), meters)
+    arrival = arrival_localizer(load_network(point.network), meters)
     signature = SignatureLocalizer([s.for_meters(meters) for s in signature_sets])
     config = calibrate(
         point.network,
@@ -156,11 +154,7 @@ def score_point(task: tuple[StudyPoint, StudySettings]) -> list[dict[str, Any]]:
         false_alarm_rate=settings.false_alarm_rate,
         seed=settings.seed,
     )
-    localizers = {
-        "arrival": arrival,
-        "signature": signature,
-        "fused": FusedLocalizer(arrival, signature),
-    }
+    localizers = RankingLocalizers(arrival, signature, FusedLocalizer(arrival, signature))
     setup = RankingSetup(meters, config, localizers)
     sensor = SensorModel(noise_sigma=f.noise_sigma, seed=settings.seed)
     rows: list[dict[str, Any]] = []

@@ -1,9 +1,10 @@
 """The live loop of the ranking localizers: complete time steps in, decisions out.
 
 A :class:`BurstMonitor` holds, for one network and one calibrated configuration
-(:class:`burstloc.experiments.calibrate.Calibration`, e.g. ``burstloc calibrate --out CONFIG``), the
-calibrated Rust detector bank of one capture interval, one ranking localizer and a bounded
-history of readings. Each :meth:`BurstMonitor.push` feeds one complete time step (a
+(:class:`burstloc.localize.config.Calibration`, e.g. ``burstloc calibrate --out CONFIG``), the
+calibrated Rust detector bank of one capture interval, one ranking localizer built from the
+configuration's stored localization model (:class:`burstloc.localize.model.LocalizationModel`)
+and a bounded history of readings. Each :meth:`BurstMonitor.push` feeds one complete time step (a
 :class:`burstloc.live.stream.Step`: one reading per meter, in the configuration's meter order) to
 the
 bank; once a meter alarms, the monitor answers at the localizer's decision time with the same
@@ -21,8 +22,12 @@ Raw ``(timestamp, meter, value)`` readings become steps through
 :func:`monitor_readings` wires the two. Bad input (a step with the wrong number of values, a
 non-finite value, a timestamp that does not advance) raises
 :class:`~burstloc.exceptions.InputError` naming it (and the meter) and leaves the monitor exactly
-as it was. A configuration for another network or other meters is refused by name. This module
-does not import the simulator.
+as it was. A configuration for another network or other meters is refused by name; the network
+file is only hashed (:func:`burstloc.network.network_hash`), never loaded. Each decision is a
+:class:`burstloc.localize.decide.Decision` (its ``to_json`` is what ``burstloc monitor`` prints).
+
+Nothing here runs a hydraulic model: this module imports neither WNTR, EPANET, TSNet nor
+:mod:`burstloc.sim` or :mod:`burstloc.experiments`.
 """
 
 from __future__ import annotations
@@ -31,60 +36,33 @@ import math
 import os
 from collections import deque
 from collections.abc import Iterable, Iterator, Mapping
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from burstloc.constants import METER_MODELS, RANKING_LOCALIZERS, MeterModel
 from burstloc.exceptions import ConfigError, InputError
-from burstloc.experiments.calibrate import Calibration, calibrated_bank
-from burstloc.live.stream import Item, Reading, ReadingStream, Step
+from burstloc.live.stream import ReadingStream
+from burstloc.localize.config import Calibration, calibrated_bank
 from burstloc.localize.decide import (
     Decision,
+    RankingLocalizers,
     decision_time,
+    fused_of,
     rank_alarms,
-    ranking_localizers,
 )
-from burstloc.localize.evidence import IndexedAlarm
+from burstloc.localize.evidence import IndexedAlarm, Localizer
+from burstloc.readings import Item, Reading, Step
 
 __all__ = [
     "HISTORY_BEFORE_ONSET",
     "BurstMonitor",
-    "LiveDecision",
     "monitor_readings",
     "parse_readings",
 ]
 
 #: Seconds of readings kept before a burst's onset (the baseline of the signature localizer).
 HISTORY_BEFORE_ONSET = 60.0
-
-
-@dataclass(frozen=True)
-class LiveDecision:
-    """One burst, decided: the ranking, the reading time it was given at, the time of the first
-    alarm, and whether the fused localizer waited for the signature."""
-
-    decision: Decision
-    first_alarm: float
-
-    @property
-    def pipe(self) -> str | None:
-        """The best-ranked pipe (``None`` for an empty ranking)."""
-        best = self.decision.ranking.best
-        return None if best is None else best.pipe
-
-    def to_json(self, top: int = 3) -> dict[str, Any]:
-        """JSON-ready summary: time, first alarm, waited, and the ``top`` best pipes."""
-        return {
-            "time": self.decision.time,
-            "first_alarm": self.first_alarm,
-            "waited": self.decision.waited,
-            "pipes": [
-                {"pipe": r.pipe, "start": r.start, "end": r.end, "score": r.score}
-                for r in self.decision.ranking.top(top)
-            ],
-        }
 
 
 class BurstMonitor:
@@ -95,7 +73,8 @@ class BurstMonitor:
     network:
         The EPANET INP file the configuration was calibrated for (checked by its SHA-256).
     config:
-        The calibration (``Calibration.load(path)``); its meters are the step's columns.
+        The configuration (``Calibration.load(path)``); its meters are the step's columns and
+        its localization model makes the localizers.
     capture_interval:
         Seconds between steps; the configuration must have been calibrated for it.
     detector:
@@ -105,7 +84,8 @@ class BurstMonitor:
     meter_model:
         What a reading is: ``"instantaneous"`` or ``"interval-averaged"``.
     localizers:
-        Prebuilt localizers by name (default: :func:`burstloc.localize.decide.ranking_localizers`).
+        Prebuilt localizers by name (default: built from the configuration's model,
+        :meth:`burstloc.localize.decide.RankingLocalizers.from_model`).
     holdoff:
         Seconds after a decision during which alarms are ignored (default: the calibrated
         ``decision_delay``).
@@ -113,7 +93,7 @@ class BurstMonitor:
     Raises:
         ConfigError: a configuration for another network or other meters, no calibration for
             the capture interval, or an unknown detector, localizer or meter model.
-        NetworkError: missing or malformed network.
+        NetworkError: the network file cannot be read.
     """
 
     def __init__(
@@ -125,7 +105,7 @@ class BurstMonitor:
         detector: str = "cusum",
         localizer: str = "fused",
         meter_model: MeterModel = "instantaneous",
-        localizers: Mapping[str, Any] | None = None,
+        localizers: Mapping[str, Localizer] | None = None,
         holdoff: float | None = None,
     ) -> None:
         if localizer not in RANKING_LOCALIZERS:
@@ -139,7 +119,10 @@ class BurstMonitor:
         self.localizer = localizer
         self.meter_model: MeterModel = meter_model
         self.bank = calibrated_bank(detector, len(self.meters), self.calibration)
-        self.localizers = dict(localizers or ranking_localizers(network, self.meters))
+        self.localizers: Mapping[str, Localizer] = (
+            RankingLocalizers.from_model(config.model) if localizers is None else dict(localizers)
+        )
+        self._fused = fused_of(self.localizers)
         if localizer not in self.localizers:
             raise ConfigError(f"no {localizer!r} localizer among {sorted(self.localizers)}")
         cal = self.calibration
@@ -165,7 +148,7 @@ class BurstMonitor:
         """Whether the monitor is ignoring alarms after a decision (see ``holdoff``)."""
         return self._quiet_until is not None
 
-    def push(self, step: Step) -> LiveDecision | None:
+    def push(self, step: Step) -> Decision | None:
         """Feed one complete time step; return the decision it completes, if any.
 
         Raises:
@@ -208,13 +191,13 @@ class BurstMonitor:
                 self._shifted(times.size),
                 times,
                 self.calibration,
-                self.localizers.get("fused"),
+                self._fused,
             )
         if self._due is None or t + 1e-9 < self._due:
             return None
         return self._decide()
 
-    def run(self, steps: Iterable[Step]) -> Iterator[LiveDecision]:
+    def run(self, steps: Iterable[Step]) -> Iterator[Decision]:
         """Yield the decisions of a feed of steps."""
         for step in steps:
             decided = self.push(step)
@@ -233,7 +216,7 @@ class BurstMonitor:
             if a.index >= first
         ]
 
-    def _decide(self) -> LiveDecision | None:
+    def _decide(self) -> Decision | None:
         times, readings = self._history()
         alarms = self._shifted(times.size)
         cal = self.calibration
@@ -252,16 +235,15 @@ class BurstMonitor:
             if times[-1] + 1e-9 < settled:  # the fused localizer waits for the signatures
                 self._due = settled
                 return None
-        first = min(float(times[a.index]) for a in alarms)
         self._alarms = []
         self._due = None
         self._quiet_until = float(times[-1]) + self.holdoff
-        return LiveDecision(decision, first)
+        return decision
 
 
 def monitor_readings(
     monitor: BurstMonitor, readings: Iterable[Item], **stream_options: Any
-) -> Iterator[LiveDecision]:
+) -> Iterator[Decision]:
     """Assemble raw readings into steps (:class:`burstloc.live.stream.ReadingStream` over the
     monitor's meters, one step per window; ``stream_options`` such as ``period``, ``timeout``,
     ``missing``) and yield the monitor's decisions."""

@@ -3,11 +3,16 @@
 On the live path: nothing here runs a hydraulic model or imports the simulator.
 
 * :mod:`~burstloc.localize.evidence`: what a localizer reads (:class:`BurstEvidence`) and
-  answers (:class:`Ranking`);
+  answers (:class:`Ranking`), the :class:`Localizer` protocol, a detector's :class:`Change`;
 * :mod:`~burstloc.localize.paper_rules` and :mod:`~burstloc.localize.detection`: the paper's
   rules over windows of readings;
 * :mod:`~burstloc.localize.arrival`, :mod:`~burstloc.localize.signature`,
   :mod:`~burstloc.localize.fused`: the ranking localizers;
 * :mod:`~burstloc.localize.steady_level`: the estimators of a meter's new steady level;
-* :mod:`~burstloc.localize.decide`: when a ranking localizer answers, and what.
+* :mod:`~burstloc.localize.model`: the stored localization model (what the ranking localizers
+  need of the network, computed offline by :mod:`burstloc.sim.prepare`);
+* :mod:`~burstloc.localize.config`: the stored configuration (calibrated detector settings and
+  the model) that ``burstloc calibrate`` writes and the monitor reads;
+* :mod:`~burstloc.localize.decide`: the localizers built from a model, when a ranking localizer
+  answers, and what (a :class:`~burstloc.localize.decide.Decision`).
 """

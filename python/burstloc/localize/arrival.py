@@ -18,33 +18,26 @@ is the mean absolute alarm amplitude at the pipe's two end nodes relative to the
 amplitude: amplitudes only break (near) ties, e.g. at coarse capture intervals where many pipes
 fit the arrival pattern equally well.
 
-The distance table is built once at setup (:meth:`ArrivalLocalizer.from_network`); ranking is numpy
-only and on the live path.
+The geometry (flow-direction end nodes and length of every pipe, shortest path lengths from the
+pipes' end nodes to the meters) is computed offline (:func:`burstloc.sim.prepare.arrival_geometry`)
+and stored with the calibrated configuration (:class:`burstloc.localize.model.LocalizationModel`);
+ranking is numpy only and on the live path.
 """
 
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
 
-import networkx as nx
 import numpy as np
 from numpy.typing import NDArray
 
 from burstloc.constants import CANDIDATE_POSITIONS, WAVE_SPEED
-from burstloc.exceptions import ConfigError, InputError, NetworkError
+from burstloc.exceptions import ConfigError, InputError
 from burstloc.localize.evidence import BurstEvidence, RankedPipe, Ranking
-from burstloc.network import flow_direction_graph, load_network
 
-__all__ = [
-    "ArrivalLocalizer",
-    "PipeGeometry",
-    "length_graph",
-    "travel_time_spread",
-]
+__all__ = ["ArrivalLocalizer", "PipeGeometry"]
 
 DEFAULT_POSITIONS = CANDIDATE_POSITIONS
 """Candidate burst positions along each pipe
@@ -61,46 +54,13 @@ class PipeGeometry:
     length: float
 
 
-def length_graph(wn: Any) -> nx.Graph:
-    """Undirected graph of a WNTR model weighted by link length (m).
-
-    Pipes weigh their length; valves and pumps, which have none, weigh 0 (the wave passes them).
-    Parallel links keep the shortest.
-    """
-    graph = nx.Graph()
-    graph.add_nodes_from(wn.node_name_list)
-    for name in wn.link_name_list:
-        link = wn.get_link(name)
-        length = float(getattr(link, "length", 0.0) or 0.0)
-        u, v = link.start_node_name, link.end_node_name
-        if graph.has_edge(u, v) and graph[u][v]["length"] <= length:
-            continue
-        graph.add_edge(u, v, length=length, link=name)
-    return graph
-
-
-def _flow_endpoints(wn: Any) -> dict[str, tuple[str, str]]:
-    """Pipe -> (start, end) in the steady-state flow direction (paper IV.B)."""
-    by_pipe = flow_direction_graph(wn).graph["edges_by_pipe"]
-    return {p: (str(by_pipe[p][0]), str(by_pipe[p][1])) for p in wn.pipe_name_list}
-
-
-def travel_time_spread(
-    graph: nx.Graph, meters: Sequence[str], wave_speed: float = WAVE_SPEED
-) -> float:
-    """Largest wave travel time (s) between two meters: how long arrivals keep coming in."""
-    best = 0.0
-    for m in meters:
-        lengths = nx.single_source_dijkstra_path_length(graph, m, weight="length")
-        best = max(best, max(float(lengths.get(o, 0.0)) for o in meters))
-    return best / wave_speed
-
-
 class ArrivalLocalizer:
     """Rank pipes by how well wave travel from a point on them explains the meters' alarm starts.
 
     ``distances[i, j]`` is the shortest path length (m) from ``nodes[i]`` to ``meters[j]``;
-    ``pipes`` the candidates. Build it with :meth:`from_network`.
+    ``pipes`` the candidates. Build it from a stored model
+    (:meth:`burstloc.localize.decide.RankingLocalizers.from_model`) or, offline, from a network
+    (:func:`burstloc.sim.prepare.arrival_localizer`).
     """
 
     def __init__(
@@ -151,49 +111,6 @@ class ArrivalLocalizer:
         )
         """How long after the first alarm the localizer wants to answer (default:
         ``pipe_travel``: by then the wave has reached both ends of the burst pipe)."""
-
-    @classmethod
-    def from_network(
-        cls,
-        network: str | os.PathLike[str] | Any,
-        meters: Sequence[str] | None = None,
-        *,
-        wave_speed: float = WAVE_SPEED,
-        positions: Iterable[float] = DEFAULT_POSITIONS,
-        amplitude_weight: float = 0.05,
-        decision_delay: float | None = None,
-        silence: bool = True,
-    ) -> ArrivalLocalizer:
-        """Build from an INP path or a WNTR model; ``meters`` default to every junction."""
-        wn = load_network(network) if isinstance(network, (str, os.PathLike)) else network
-        junctions = set(wn.junction_name_list)
-        meter_list = list(wn.junction_name_list if meters is None else meters)
-        unknown = [m for m in meter_list if m not in junctions]
-        if unknown:
-            raise NetworkError(f"meter(s) {unknown} are not junctions of the network")
-        graph = length_graph(wn)
-        endpoints = _flow_endpoints(wn)
-        pipes = [
-            PipeGeometry(p, *endpoints[p], length=float(wn.get_link(p).length))
-            for p in wn.pipe_name_list
-        ]
-        per_meter = {
-            m: nx.single_source_dijkstra_path_length(graph, m, weight="length") for m in meter_list
-        }
-        nodes = {n for p in pipes for n in (p.start, p.end)}
-        node_distances = {
-            n: np.array([float(per_meter[m].get(n, math.inf)) for m in meter_list]) for n in nodes
-        }
-        return cls(
-            pipes,
-            meter_list,
-            node_distances,
-            wave_speed=wave_speed,
-            positions=positions,
-            amplitude_weight=amplitude_weight,
-            decision_delay=decision_delay,
-            silence=silence,
-        )
 
     def misfit(self, evidence: BurstEvidence) -> NDArray[np.float64]:
         """RMS arrival misfit (s) of every pipe's best candidate point, shape (pipes,).

@@ -15,54 +15,112 @@ live caller holding the readings so far):
   equally well in time) it waits for the signature's decision time and answers with both. At
   coarse intervals it answers at the signature's time.
 
-Numpy only; on the live path.
+The localizers come as a :class:`RankingLocalizers` (built from a stored
+:class:`burstloc.localize.model.LocalizationModel` by :meth:`RankingLocalizers.from_model`, or any
+mapping of names to :class:`burstloc.localize.evidence.Localizer`); every answer is a
+:class:`Decision`. Numpy only; on the live path.
 """
 
 from __future__ import annotations
 
-import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from burstloc.constants import MeterModel
-from burstloc.exceptions import InputError
-from burstloc.localize.evidence import BurstEvidence, Ranking, evidence_from_alarms
+from burstloc.constants import RANKING_LOCALIZERS, MeterModel
+from burstloc.exceptions import ConfigError, InputError
+from burstloc.localize.arrival import ArrivalLocalizer
+from burstloc.localize.evidence import BurstEvidence, Localizer, Ranking, evidence_from_alarms
+from burstloc.localize.fused import FusedLocalizer
+from burstloc.localize.signature import SignatureLocalizer
 
 if TYPE_CHECKING:
-    from burstloc.experiments.calibrate import IntervalCalibration
-    from burstloc.localize.fused import FusedLocalizer
+    from burstloc.localize.config import IntervalCalibration
+    from burstloc.localize.model import LocalizationModel
 
-__all__ = ["Decision", "decision_time", "rank_alarms", "ranking_localizers"]
+__all__ = ["Decision", "RankingLocalizers", "decision_time", "fused_of", "rank_alarms"]
 
 
 @dataclass(frozen=True)
 class Decision:
-    """A ranking localizer's answer: the ranking, the reading time it was given at, and whether
-    the fused localizer waited for the signature (its arrivals were not decisive)."""
+    """A ranking localizer's answer: the ranking, the reading time it was given at, the reading
+    time of the first alarm, and whether the fused localizer waited for the signature (its
+    arrivals were not decisive)."""
 
     ranking: Ranking
     time: float
+    first_alarm: float
     waited: bool = False
 
+    @property
+    def pipe(self) -> str | None:
+        """The best-ranked pipe (``None`` for an empty ranking)."""
+        best = self.ranking.best
+        return None if best is None else best.pipe
 
-def ranking_localizers(network: str | os.PathLike[str], meters: Sequence[str]) -> dict[str, Any]:
-    """The ranking localizers of ``meters`` on ``network``, by name (``arrival``, ``signature``,
-    ``fused``): the shortest-path graph and the cached steady-state signature sets (one WNTR
-    run per pipe and candidate position the first time; see :mod:`burstloc.localize.signature`).
+    def to_json(self, top: int = 3) -> dict[str, Any]:
+        """JSON-ready summary: time, first alarm, waited, and the ``top`` best pipes."""
+        return {
+            "time": self.time,
+            "first_alarm": self.first_alarm,
+            "waited": self.waited,
+            "pipes": [
+                {"pipe": r.pipe, "start": r.start, "end": r.end, "score": r.score}
+                for r in self.ranking.top(top)
+            ],
+        }
+
+
+@dataclass(frozen=True)
+class RankingLocalizers(Mapping[str, Localizer]):
+    """The three ranking localizers of one network and meter set, also readable by name
+    (``localizers["fused"]``; names :data:`burstloc.constants.RANKING_LOCALIZERS`)."""
+
+    arrival: ArrivalLocalizer
+    signature: SignatureLocalizer
+    fused: FusedLocalizer
+
+    @classmethod
+    def from_model(cls, model: LocalizationModel) -> RankingLocalizers:
+        """Build the localizers from a stored model (numpy only: no hydraulic model runs).
+
+        Raises:
+            ConfigError: the model's parts do not make localizers (e.g. no shared pipe).
+        """
+        arrival = ArrivalLocalizer(
+            model.pipes, model.meters, model.node_distances, wave_speed=model.wave_speed
+        )
+        signature = SignatureLocalizer(model.signature_sets)
+        return cls(arrival, signature, FusedLocalizer(arrival, signature))
+
+    def __getitem__(self, name: str) -> Localizer:
+        """The localizer called ``name``."""
+        if name not in RANKING_LOCALIZERS:
+            raise KeyError(name)
+        localizer: Localizer = getattr(self, name)
+        return localizer
+
+    def __iter__(self) -> Iterator[str]:
+        """The names, in :data:`burstloc.constants.RANKING_LOCALIZERS` order."""
+        return iter(RANKING_LOCALIZERS)
+
+    def __len__(self) -> int:
+        """Three."""
+        return len(RANKING_LOCALIZERS)
+
+
+def fused_of(localizers: Mapping[str, Localizer]) -> FusedLocalizer | None:
+    """The ``"fused"`` localizer of ``localizers``, if there is one.
 
     Raises:
-        NetworkError: missing or malformed network, or a meter that is not one of its junctions.
+        ConfigError: ``"fused"`` is not a :class:`~burstloc.localize.fused.FusedLocalizer`.
     """
-    from burstloc.localize.arrival import ArrivalLocalizer
-    from burstloc.localize.fused import FusedLocalizer
-    from burstloc.localize.signature import SignatureLocalizer, cached_signature_sets
-
-    arrival = ArrivalLocalizer.from_network(network, meters)
-    signature = SignatureLocalizer(cached_signature_sets(network, meters))
-    return {"arrival": arrival, "signature": signature, "fused": FusedLocalizer(arrival, signature)}
+    fused = localizers.get("fused")
+    if fused is not None and not isinstance(fused, FusedLocalizer):
+        raise ConfigError(f"the 'fused' localizer must be a FusedLocalizer, got {type(fused)}")
+    return fused
 
 
 def _first_and_onset(alarms: Sequence[Any], times: np.ndarray) -> tuple[float, float]:
@@ -108,7 +166,7 @@ def decision_time(
 
 def rank_alarms(
     localizer: str,
-    localizers: Mapping[str, Any],
+    localizers: Mapping[str, Localizer],
     meters: Sequence[str],
     times: np.ndarray,
     readings: np.ndarray,
@@ -129,7 +187,7 @@ def rank_alarms(
     Raises:
         InputError: no alarm, or the localizer cannot answer from this evidence.
     """
-    fused: FusedLocalizer | None = localizers.get("fused")
+    fused = fused_of(localizers)
     chosen = localizers[localizer]
     last = float(times[-1])
 
@@ -146,18 +204,19 @@ def rank_alarms(
         )
 
     decided = decision_time(localizer, alarms, times, calibration, fused)
+    first, onset = _first_and_onset(alarms, times)
     early = evidence(decided)
     if fused is None or localizer != "fused":
-        return Decision(chosen.rank(early), min(decided, last))
+        return Decision(chosen.rank(early), min(decided, last), first)
     if not _arrival_first(localizer, calibration, fused):
         # at the signature's own decision time
-        return Decision(fused.rank(early, signature_ranking=signature_ranking), min(decided, last))
+        ranking = fused.rank(early, signature_ranking=signature_ranking)
+        return Decision(ranking, min(decided, last), first)
     arrivals = fused.arrival.rank(early)
-    _, onset = _first_and_onset(alarms, times)
     later = onset + calibration.decision_delay
     if fused.decisive(arrivals) or later <= decided:
-        return Decision(fused.rank(early, arrival_ranking=arrivals), min(decided, last))
+        return Decision(fused.rank(early, arrival_ranking=arrivals), min(decided, last), first)
     ranking = fused.rank(
         evidence(later), arrival_ranking=arrivals, signature_ranking=signature_ranking
     )
-    return Decision(ranking, min(later, last), waited=True)
+    return Decision(ranking, min(later, last), first, waited=True)

@@ -3,7 +3,7 @@
 The paper runs its detector once per window, per meter, on the *concatenated* window (previous
 ``interval`` steps + current ``interval`` steps). Two named modes map that call onto the Rust
 core; both take a :class:`~burstloc.live.stream.Window` and return the changes per meter
-(:class:`~burstloc.localize.paper_rules.Change`):
+(:class:`~burstloc.localize.evidence.Change`):
 
 ``"window"`` (:class:`BatchDetector`, the paper's semantics)
     Every window is analysed from scratch; nothing carries over between windows.
@@ -46,8 +46,8 @@ import numpy as np
 from burstloc import _core
 from burstloc.constants import DETECTORS
 from burstloc.exceptions import ConfigError, StreamError
-from burstloc.live.stream import Window
-from burstloc.localize.paper_rules import Change
+from burstloc.localize.evidence import Change
+from burstloc.readings import Window
 
 __all__ = [
     "DETECTORS",

@@ -5,7 +5,13 @@ Every localizer of :mod:`burstloc.localize.signature`, :mod:`burstloc.localize.a
 returns a :class:`Ranking`: every candidate pipe with a score, best first (higher is better), so
 that ``evaluate`` can report top-1 and top-3 accuracy. They all read the same input, a
 :class:`BurstEvidence`: the readings of the meters around a detected burst plus the first alarm
-of each meter. This module imports neither the simulator nor WNTR: it is on the live path.
+of each meter. A ranking localizer is anything with ``rank(evidence) -> Ranking``: the
+:class:`Localizer` protocol.
+
+The paper's rules (:mod:`burstloc.localize.paper_rules`) and the window detectors
+(:mod:`burstloc.localize.detection`) share one record of a detected change, :class:`Change`.
+
+This module imports neither the simulator nor WNTR: it is on the live path.
 """
 
 from __future__ import annotations
@@ -13,7 +19,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, overload
+from typing import Any, Protocol, overload
 
 import numpy as np
 from numpy.typing import NDArray
@@ -23,7 +29,9 @@ from burstloc.exceptions import InputError
 
 __all__ = [
     "BurstEvidence",
+    "Change",
     "IndexedAlarm",
+    "Localizer",
     "MeterAlarm",
     "RankedPipe",
     "Ranking",
@@ -210,6 +218,31 @@ class BurstEvidence:
         if missing:
             raise InputError(f"evidence has no readings for meter(s) {missing}")
         return np.array([index[m] for m in meters], dtype=np.intp)
+
+
+class Localizer(Protocol):
+    """A ranking localizer: every candidate pipe, scored, from one burst's evidence."""
+
+    def rank(self, evidence: BurstEvidence) -> Ranking:
+        """Every candidate pipe, best first."""
+        ...
+
+
+@dataclass(frozen=True, slots=True)
+class Change:
+    """One change a detector found at one meter in a window.
+
+    ``amplitude`` is signed where the detector gives a sign (CUSUM ``x[end] - x[start]``,
+    streaming alarms) and absolute for the paper's batch Shewhart (``|x - mean|``).
+    Times are timestamps of the stream (s); ``end_time`` is set when the detector estimates
+    the end of the change (TSNet-style CUSUM).
+    """
+
+    node: str
+    start_time: float
+    amplitude: float
+    alarm_time: float | None = None
+    end_time: float | None = None
 
 
 @dataclass(frozen=True)

@@ -24,21 +24,17 @@ rules name one pipe:
 If nothing alarmed, or the trigger node has no predecessor (or several, none metered, none
 alarmed), the window decides nothing: :func:`locate` returns ``None``, never a guess.
 
-:class:`BurstLocator` wires a :class:`~burstloc.live.stream.ReadingStream`, a detector (see
-:mod:`burstloc.localize.detection`) and these rules into the real-time loop. Nothing here imports
-the
-simulator.
+:class:`burstloc.live.paper_locator.BurstLocator` wires a reading stream, a window detector
+(:mod:`burstloc.localize.detection`) and these rules into the real-time loop. Nothing here imports
+the simulator.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import (
-    AsyncIterable,
-    AsyncIterator,
     Hashable,
     Iterable,
-    Iterator,
     Mapping,
     Sequence,
 )
@@ -48,11 +44,11 @@ from typing import Any, Protocol
 
 import networkx as nx
 
-from burstloc.exceptions import NetworkError, StreamError
-from burstloc.live.stream import Item, ReadingStream, Window
+from burstloc.exceptions import NetworkError
+from burstloc.localize.evidence import Change
+from burstloc.readings import Window
 
 __all__ = [
-    "BurstLocator",
     "Change",
     "Localization",
     "Rule",
@@ -71,23 +67,6 @@ class Rule(str, Enum):
     SINGLE_PREDECESSOR = "single_predecessor"
     ALARMED_PREDECESSOR = "alarmed_predecessor"
     LOWEST_MEAN_PRESSURE = "lowest_mean_pressure"
-
-
-@dataclass(frozen=True, slots=True)
-class Change:
-    """One change a detector found at one meter in a window.
-
-    ``amplitude`` is signed where the detector gives a sign (CUSUM ``x[end] - x[start]``,
-    streaming alarms) and absolute for the paper's batch Shewhart (``|x - mean|``).
-    Times are timestamps of the stream (s); ``end_time`` is set when the detector estimates
-    the end of the change (TSNet-style CUSUM).
-    """
-
-    node: str
-    start_time: float
-    amplitude: float
-    alarm_time: float | None = None
-    end_time: float | None = None
 
 
 @dataclass(frozen=True)
@@ -229,7 +208,8 @@ def locate(
 
 
 class WindowDetector(Protocol):
-    """What :class:`BurstLocator` needs from a detector (see :mod:`burstloc.localize.detection`)."""
+    """What the paper's real-time loop needs from a window detector
+    (:mod:`burstloc.localize.detection`)."""
 
     def detect(self, window: Window) -> dict[str, list[Change]]:
         """The changes found in ``window``, per meter."""
@@ -247,69 +227,3 @@ class WindowOutcome:
     window: Window
     changes: dict[str, list[Change]]
     localization: Localization | None
-
-
-class BurstLocator:
-    """The real-time loop: readings -> complete steps -> windows -> detector -> rules.
-
-    ``meters`` must all be nodes of ``graph`` (a :class:`~burstloc.exceptions.StreamError`
-    names the first one that is not). Stream options (``timeout``, ``missing``, ``period``,
-    ``origin``) are passed to :class:`~burstloc.live.stream.ReadingStream`.
-    """
-
-    def __init__(
-        self,
-        graph: nx.DiGraph,
-        meters: Sequence[str],
-        detector: WindowDetector,
-        interval: int,
-        **stream_options: Any,
-    ) -> None:
-        for m in meters:
-            if m not in graph:
-                raise StreamError(f"meter {m!r} is not a junction of the network")
-        self.graph = graph
-        self.detector = detector
-        self.stream = ReadingStream(meters, interval, **stream_options)
-        self.meters: tuple[str, ...] = self.stream.meters
-
-    def process(self, window: Window) -> WindowOutcome:
-        """Run the detector and the rules on one window."""
-        changes = self.detector.detect(window)
-        loc = None
-        if any(changes.values()):
-            loc = locate(
-                self.graph, changes, window.means(), window.decision_time, order=self.meters
-            )
-        return WindowOutcome(window, changes, loc)
-
-    def push(self, item: Item) -> list[WindowOutcome]:
-        """Feed one reading or step; return the outcomes of the windows it completed."""
-        return [self.process(w) for w in self.stream.push(item)]
-
-    def outcomes(self, source: Iterable[Item]) -> Iterator[WindowOutcome]:
-        """Every window's outcome over a feed (flushed at its end)."""
-        for w in self.stream.windows(source):
-            yield self.process(w)
-
-    def run(self, source: Iterable[Item]) -> Iterator[Localization]:
-        """The localizations of a feed, one per window that decided."""
-        for o in self.outcomes(source):
-            if o.localization is not None:
-                yield o.localization
-
-    async def arun(
-        self, source: AsyncIterable[Item] | Iterable[Item]
-    ) -> AsyncIterator[Localization]:
-        """Async twin of :meth:`run`."""
-        async for w in self.stream.awindows(source):
-            o = self.process(w)
-            if o.localization is not None:
-                yield o.localization
-
-    def first(self, source: Iterable[Item]) -> WindowOutcome | None:
-        """The first window that decided (the paper's single localization attempt), or ``None``."""
-        for o in self.outcomes(source):
-            if o.localization is not None:
-                return o
-        return None

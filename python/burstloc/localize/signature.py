@@ -2,19 +2,19 @@
 
 A burst on pipe ``p`` moves the network to a new steady state. Its *signature* ``s_p(x)`` is the
 vector of steady-state head drops at the meters caused by an emitter at position ``x`` along the
-pipe, computed once per network from the hydraulic model (EPANET steady states through WNTR,
-pressure-driven demand, the engine TSNet initialises from) and cached on disk as a small JSON file
-per position (one :class:`SignatureSet` each; by default at the candidate positions 0.1, ..., 0.9
-of :data:`burstloc.localize.evidence.CANDIDATE_POSITIONS`, the arrival localizer's). At run time the
-localizer estimates the observed drop ``d = baseline - new level`` per meter from the readings
-(:mod:`burstloc.localize.steady_level`), fits ``d ~ k * s_p(x)`` with a free scale ``k >= 0``
-(the burst size is unknown; closed-form least squares) and ranks pipes by the RMS residual of
-their best position: ``score = -min_x RMS``. A burst near a pipe's end looks like a burst at that
-end node, so one mid-point signature per pipe misranks off-centre bursts.
+pipe, computed offline, once per network, from the hydraulic model (EPANET steady states through
+WNTR: :mod:`burstloc.sim.signatures`) and stored with the calibrated configuration
+(:class:`burstloc.localize.model.LocalizationModel`): one :class:`SignatureSet` per position, by
+default at the candidate positions 0.1, ..., 0.9 of :data:`burstloc.constants.CANDIDATE_POSITIONS`,
+the arrival localizer's. At run time the localizer estimates the observed drop
+``d = baseline - new level`` per meter from the readings (:mod:`burstloc.localize.steady_level`),
+fits ``d ~ k * s_p(x)`` with a free scale ``k >= 0`` (the burst size is unknown; closed-form least
+squares) and ranks pipes by the RMS residual of their best position: ``score = -min_x RMS``. A
+burst near a pipe's end looks like a burst at that end node, so one mid-point signature per pipe
+misranks off-centre bursts.
 
-Setup (:func:`compute_signatures`, :func:`cached_signatures`) runs WNTR once; the run-time path
-(:class:`SignatureLocalizer`, :func:`rank_drop`) is numpy only and imports neither WNTR nor the
-transient simulator.
+Numpy only: this module (:class:`SignatureSet`, :class:`SignatureLocalizer`, :func:`rank_drop`)
+imports neither WNTR nor the simulator.
 """
 
 from __future__ import annotations
@@ -22,19 +22,16 @@ from __future__ import annotations
 import json
 import math
 import os
-import tempfile
-import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from burstloc._atomic import write_json
-from burstloc.constants import CANDIDATE_POSITIONS
-from burstloc.exceptions import ConfigError, InputError, NetworkError
+from burstloc.constants import SIGNATURE_DECISION_DELAY
+from burstloc.exceptions import ConfigError, InputError
 from burstloc.localize.evidence import BurstEvidence, RankedPipe, Ranking
 from burstloc.localize.steady_level import (
     ESTIMATORS,
@@ -42,51 +39,25 @@ from burstloc.localize.steady_level import (
     baseline_levels,
     estimate_levels,
 )
-from burstloc.network import load_network, split_pipe
-from burstloc.sim.cache import cache_key, default_cache_dir, file_sha256
 
 __all__ = [
-    "DEFAULT_BURST_COEFF",
     "SIGNATURE_FORMAT",
-    "DemandModel",
     "SignatureLocalizer",
     "SignatureSet",
-    "cached_signature_sets",
-    "cached_signatures",
-    "compute_signatures",
     "fit_signatures",
-    "network_hash",
     "rank_drop",
 ]
 
 SIGNATURE_FORMAT = "burstloc-signatures/1"
 """Format tag written into every signature file."""
 
-DEFAULT_BURST_COEFF = 0.01
-"""Emitter coefficient (m^3/s per m^0.5, TSNet's burst coefficient unit) of the reference burst.
-
-Only the shape of a signature matters (the fit has a free scale); the reference burst is kept
-moderate so that the drop stays in the near-linear range of the network's response."""
-
 DEFAULT_SETTLE = 60.0
 """Seconds after the onset skipped before estimating the new level: TSNet's slowest network mode
 (about 16 s period on paper15) starts at metres and decays with a ~30 s time constant."""
 
-DEFAULT_DECISION_DELAY = 150.0
-"""Seconds after the onset at which the signature localizer answers (issue 6's budget)."""
-
-DemandModel = Literal["pdd", "emitter"]
-"""How consumer demands respond to the burst's pressure drop in the steady-state runs: WNTR's
-pressure-driven demand (``"pdd"``, TSNet's initialiser) or TSNet's transient demand law
-``q = c * sqrt(p)`` (``"emitter"``, each demand becomes an emitter fitted at the base state)."""
-
-
-def network_hash(path: str | os.PathLike[str]) -> str:
-    """Fingerprint of a network file: ``"sha256:<hex>"`` of its bytes."""
-    try:
-        return f"sha256:{file_sha256(path)}"
-    except OSError as exc:
-        raise NetworkError(f"cannot read network file {path}: {exc}") from exc
+DEFAULT_DECISION_DELAY = SIGNATURE_DECISION_DELAY
+"""Seconds after the onset at which the signature localizer answers
+(:data:`burstloc.constants.SIGNATURE_DECISION_DELAY`)."""
 
 
 @dataclass(frozen=True)
@@ -202,147 +173,6 @@ class SignatureSet:
         return cls.from_json(data)
 
 
-def _steady_heads(wn: Any, workdir: str) -> tuple[Any, Any]:
-    """Heads (per node) and flows (per link) of the EPANET steady state at t = 0."""
-    import wntr
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # EPANET's "REQUIRED PRESSURE raised to 0.1 m" notice
-        sim = wntr.sim.EpanetSimulator(wn)
-        results = sim.run_sim(file_prefix=os.path.join(workdir, "sig"))
-    return results.node["head"].iloc[0], results.link["flowrate"].iloc[0]
-
-
-def compute_signatures(
-    network: str | os.PathLike[str],
-    meters: Sequence[str] | None = None,
-    *,
-    burst_coeff: float = DEFAULT_BURST_COEFF,
-    position: float = 0.5,
-    demand_model: DemandModel = "pdd",
-) -> SignatureSet:
-    """Burst signatures of every pipe of ``network`` at ``meters`` (default: every junction).
-
-    One EPANET steady-state run for the base state and one per pipe with the pipe split at
-    ``position`` and an emitter of coefficient ``burst_coeff`` at the new junction. Pipe end nodes
-    are oriented in the base state's flow direction (a pipe with negative flow is reversed).
-    """
-    if not (math.isfinite(burst_coeff) and burst_coeff > 0):
-        raise ConfigError(f"burst_coeff must be > 0, got {burst_coeff}")
-    if not 0.0 < position < 1.0:
-        raise ConfigError(f"position must be strictly between 0 and 1, got {position}")
-    if demand_model not in ("pdd", "emitter"):
-        raise ConfigError(f"unknown demand model {demand_model!r}; use 'pdd' or 'emitter'")
-    wn = load_network(network)
-    junctions = list(wn.junction_name_list)
-    meter_list = list(junctions if meters is None else meters)
-    unknown = [m for m in meter_list if m not in junctions]
-    if unknown:
-        raise NetworkError(f"meter(s) {unknown} are not junctions of {network}")
-    if not meter_list:
-        raise InputError("at least one meter is needed")
-    wn.options.hydraulic.demand_model = "PDD"
-    wn.options.time.duration = 0
-    with tempfile.TemporaryDirectory(prefix="burstloc-sig-") as workdir:
-        if demand_model == "emitter":
-            base_heads, _ = _steady_heads(wn, workdir)
-            for name in junctions:
-                node = wn.get_node(name)
-                q0 = sum(ts.base_value for ts in node.demand_timeseries_list)
-                pressure = float(base_heads[name]) - node.elevation
-                if q0 > 0 and pressure > 0:
-                    node.emitter_coefficient = q0 / math.sqrt(pressure)
-                for ts in node.demand_timeseries_list:
-                    ts.base_value = 0.0
-        base_heads, base_flows = _steady_heads(wn, workdir)
-        pipes = list(wn.pipe_name_list)
-        endpoints: dict[str, tuple[str, str]] = {}
-        rows = []
-        for pipe in pipes:
-            link = wn.get_link(pipe)
-            a, b = link.start_node_name, link.end_node_name
-            endpoints[pipe] = (b, a) if float(base_flows[pipe]) < 0 else (a, b)
-            split = split_pipe(wn, pipe, position)
-            split.network.get_node(split.burst_node).emitter_coefficient = burst_coeff
-            heads, _ = _steady_heads(split.network, workdir)
-            rows.append([float(base_heads[m]) - float(heads[m]) for m in meter_list])
-    return SignatureSet(
-        network_hash=network_hash(network),
-        meters=tuple(meter_list),
-        pipes=tuple(pipes),
-        endpoints=endpoints,
-        matrix=np.array(rows, dtype=np.float64),
-        baseline=np.array([float(base_heads[m]) for m in meter_list]),
-        params={"burst_coeff": burst_coeff, "position": position, "demand_model": demand_model},
-    )
-
-
-def cached_signatures(
-    network: str | os.PathLike[str],
-    meters: Sequence[str] | None = None,
-    *,
-    cache_dir: str | os.PathLike[str] | None = None,
-    burst_coeff: float = DEFAULT_BURST_COEFF,
-    position: float = 0.5,
-    demand_model: DemandModel = "pdd",
-) -> SignatureSet:
-    """:func:`compute_signatures` for every junction, cached on disk, restricted to ``meters``.
-
-    The cache key covers the network file's bytes, the parameters and the package versions
-    (:func:`burstloc.sim.cache.cache_key`), so an edited network file is recomputed. The default
-    folder is ``signatures/`` in burstloc's cache directory (``$BURSTLOC_CACHE_DIR``). Call
-    once at setup; the result is what :class:`SignatureLocalizer` needs.
-    """
-    key = cache_key(
-        SIGNATURE_FORMAT,
-        {"burst_coeff": burst_coeff, "position": position, "demand_model": demand_model},
-        files=[network],
-    )
-    folder = Path(cache_dir) if cache_dir is not None else default_cache_dir() / "signatures"
-    path = folder / f"{Path(network).stem}-{key[:24]}.json"
-    full: SignatureSet | None = None
-    if path.exists():
-        try:
-            full = SignatureSet.load(path)
-        except InputError:
-            full = None  # a damaged cache entry is recomputed
-    if full is None:
-        full = compute_signatures(
-            network, burst_coeff=burst_coeff, position=position, demand_model=demand_model
-        )
-        full.save(path)
-    return full if meters is None else full.for_meters(meters)
-
-
-def cached_signature_sets(
-    network: str | os.PathLike[str],
-    meters: Sequence[str] | None = None,
-    *,
-    positions: Sequence[float] = CANDIDATE_POSITIONS,
-    cache_dir: str | os.PathLike[str] | None = None,
-    burst_coeff: float = DEFAULT_BURST_COEFF,
-    demand_model: DemandModel = "pdd",
-) -> tuple[SignatureSet, ...]:
-    """:func:`cached_signatures` at every position of ``positions`` (one set each, same order).
-
-    Raises:
-        ConfigError: no position, or a position outside (0, 1).
-    """
-    if not positions:
-        raise ConfigError("at least one signature position is needed")
-    return tuple(
-        cached_signatures(
-            network,
-            meters,
-            cache_dir=cache_dir,
-            burst_coeff=burst_coeff,
-            position=float(x),
-            demand_model=demand_model,
-        )
-        for x in positions
-    )
-
-
 def _as_sets(signatures: SignatureSet | Sequence[SignatureSet]) -> tuple[SignatureSet, ...]:
     """One or several signature sets of the same meters and pipes, as a non-empty tuple."""
     sets = (signatures,) if isinstance(signatures, SignatureSet) else tuple(signatures)
@@ -399,9 +229,9 @@ def rank_drop(
 class SignatureLocalizer:
     """Rank pipes by the fit of the observed lasting drop to their burst signatures.
 
-    ``signatures`` is one :class:`SignatureSet` or several (positions along each pipe, e.g.
-    :func:`cached_signature_sets`) of the same meters and pipes; :attr:`signatures` is the first,
-    :attr:`signature_sets` all of them.
+    ``signatures`` is one :class:`SignatureSet` or several (positions along each pipe, e.g. a
+    stored model's :attr:`~burstloc.localize.model.LocalizationModel.signature_sets`) of the same
+    meters and pipes; :attr:`signatures` is the first, :attr:`signature_sets` all of them.
 
     ``settle`` seconds after the onset are skipped (the fast transient); the new level of each
     meter is estimated by ``estimator`` from the readings between ``onset + settle`` and the

@@ -6,5 +6,10 @@ Nothing on the live path imports this package (it pulls in TSNet and WNTR).
 * :mod:`~burstloc.sim.capture`: meter sampling (instantaneous or interval-averaged readings);
 * :mod:`~burstloc.sim.sensors`: sensor noise models;
 * :mod:`~burstloc.sim.cache`: the content-addressed cache of simulations on disk;
+* :mod:`~burstloc.sim.signatures`: burst signatures from the hydraulic model (WNTR/EPANET steady
+  states), cached on disk;
+* :mod:`~burstloc.sim.prepare`: the localization model the ranking localizers are built from
+  (pipe flow directions and lengths, path lengths to the meters, signatures), prepared offline
+  for ``burstloc calibrate`` to store;
 * :mod:`~burstloc.sim.sweep`: many scenarios on local processes or a Dask cluster.
 """

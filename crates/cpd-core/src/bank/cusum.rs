@@ -1,0 +1,312 @@
+//! The CUSUM bank: structure-of-arrays state, one branch-free kernel per block of channels.
+
+use alloc::vec::Vec;
+
+#[cfg(feature = "serde")]
+use serde::{Deserialize, Serialize};
+
+use super::{check_channels, checked_step, checked_step_many, Kernel, BLOCK};
+use crate::alarm::ChannelAlarm;
+use crate::cusum::{CusumConfig, CusumLane};
+use crate::error::{filled, Error};
+
+/// The state of a block of channels, borrowed for one step. Separate `&mut` slices tell the
+/// compiler they do not alias, so the kernel's loop vectorizes.
+struct Block<'a> {
+    x_prev: &'a mut [f64],
+    gp: &'a mut [f64],
+    gn: &'a mut [f64],
+    gp_real: &'a mut [f64],
+    gn_real: &'a mut [f64],
+    tap: &'a mut [u64],
+    tan: &'a mut [u64],
+    x_tap: &'a mut [f64],
+    x_tan: &'a mut [f64],
+}
+
+/// What one step needs besides the state: the step index and the config.
+#[derive(Clone, Copy)]
+struct Step {
+    i: u64,
+    threshold: f64,
+    drift: f64,
+}
+
+/// One CUSUM step for the block's channels (readings `xs`); writes each channel's alarm flags
+/// to `flags` and returns their OR.
+#[inline(never)]
+fn kernel(xs: &[f64], s: Block<'_>, flags: &mut [u8], p: Step) -> u8 {
+    let m = xs.len();
+    let (x_prev, gp, gn) = (&mut s.x_prev[..m], &mut s.gp[..m], &mut s.gn[..m]);
+    let (gp_real, gn_real) = (&mut s.gp_real[..m], &mut s.gn_real[..m]);
+    let (tap, tan) = (&mut s.tap[..m], &mut s.tan[..m]);
+    let (x_tap, x_tan) = (&mut s.x_tap[..m], &mut s.x_tan[..m]);
+    let flags = &mut flags[..m];
+    let mut any = 0u8;
+    for k in 0..m {
+        let mut lane = CusumLane {
+            x_prev: x_prev[k],
+            gp: gp[k],
+            gn: gn[k],
+            gp_real: gp_real[k],
+            gn_real: gn_real[k],
+            tap: tap[k],
+            tan: tan[k],
+            x_tap: x_tap[k],
+            x_tan: x_tan[k],
+        };
+        let f = lane.step(xs[k], p.i, p.threshold, p.drift);
+        x_prev[k] = lane.x_prev;
+        gp[k] = lane.gp;
+        gn[k] = lane.gn;
+        gp_real[k] = lane.gp_real;
+        gn_real[k] = lane.gn_real;
+        tap[k] = lane.tap;
+        tan[k] = lane.tan;
+        x_tap[k] = lane.x_tap;
+        x_tan[k] = lane.x_tan;
+        flags[k] = f;
+        any |= f;
+    }
+    any
+}
+
+/// `N` independent [`crate::Cusum`] detectors with one config, stepped together.
+///
+/// ```
+/// use cpd_core::{CusumBank, CusumConfig, Direction};
+///
+/// let mut bank = CusumBank::new(3, CusumConfig::new(0.5, 0.01)?)?;
+/// let mut alarms = Vec::new();
+/// bank.step(&[200.0, 180.0, 150.0], &mut alarms)?;
+/// bank.step(&[200.0, 180.0, 150.0], &mut alarms)?;
+/// bank.step(&[200.0, 179.0, 150.0], &mut alarms)?; // meter 1 sees a 1 m drop
+/// assert_eq!(alarms.len(), 1);
+/// assert_eq!((alarms[0].channel, alarms[0].alarm.index), (1, 2));
+/// assert_eq!(alarms[0].alarm.direction, Direction::Drop);
+/// // A NaN reading rejects the whole step and changes nothing.
+/// let before = bank.clone();
+/// assert!(bank.step(&[200.0, f64::NAN, 150.0], &mut alarms).is_err());
+/// assert_eq!(bank, before);
+/// # Ok::<(), cpd_core::Error>(())
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(Serialize, Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "CusumBankRepr"))]
+pub struct CusumBank {
+    config: CusumConfig,
+    channels: usize,
+    steps: u64,
+    x_prev: Vec<f64>,
+    gp: Vec<f64>,
+    gn: Vec<f64>,
+    gp_real: Vec<f64>,
+    gn_real: Vec<f64>,
+    tap: Vec<u64>,
+    tan: Vec<u64>,
+    x_tap: Vec<f64>,
+    x_tan: Vec<f64>,
+}
+
+/// Unvalidated mirror used to validate deserialized banks.
+#[cfg(feature = "serde")]
+#[derive(Deserialize)]
+struct CusumBankRepr {
+    config: CusumConfig,
+    channels: usize,
+    steps: u64,
+    x_prev: Vec<f64>,
+    gp: Vec<f64>,
+    gn: Vec<f64>,
+    gp_real: Vec<f64>,
+    gn_real: Vec<f64>,
+    tap: Vec<u64>,
+    tan: Vec<u64>,
+    x_tap: Vec<f64>,
+    x_tan: Vec<f64>,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<CusumBankRepr> for CusumBank {
+    type Error = Error;
+    fn try_from(r: CusumBankRepr) -> Result<Self, Error> {
+        let n = check_channels(r.channels)?;
+        let f = [
+            &r.x_prev, &r.gp, &r.gn, &r.gp_real, &r.gn_real, &r.x_tap, &r.x_tan,
+        ];
+        if f.iter().any(|v| v.len() != n) || r.tap.len() != n || r.tan.len() != n {
+            return Err(Error::CorruptState {
+                reason: "bank state arrays do not match the number of channels",
+            });
+        }
+        let bank = Self {
+            config: r.config,
+            channels: n,
+            steps: r.steps,
+            x_prev: r.x_prev,
+            gp: r.gp,
+            gn: r.gn,
+            gp_real: r.gp_real,
+            gn_real: r.gn_real,
+            tap: r.tap,
+            tan: r.tan,
+            x_tap: r.x_tap,
+            x_tan: r.x_tan,
+        };
+        for c in 0..n {
+            bank.lane(c).check(bank.steps, &bank.config)?;
+        }
+        Ok(bank)
+    }
+}
+
+impl Kernel for CusumBank {
+    fn width(&self) -> usize {
+        self.channels
+    }
+    #[inline]
+    fn step_unchecked(&mut self, readings: &[f64], out: &mut Vec<ChannelAlarm>) {
+        self.advance(readings, out);
+    }
+}
+
+impl CusumBank {
+    /// A fresh bank of `channels >= 1` detectors.
+    ///
+    /// Errors with [`Error::InvalidParameter`] (`channels`) when `channels` is 0 or its state
+    /// cannot be allocated.
+    pub fn new(channels: usize, config: CusumConfig) -> Result<Self, Error> {
+        let n = check_channels(channels)?;
+        let zeros = || filled("channels", n, 0.0);
+        Ok(Self {
+            config,
+            channels: n,
+            steps: 0,
+            x_prev: zeros()?,
+            gp: zeros()?,
+            gn: zeros()?,
+            gp_real: zeros()?,
+            gn_real: zeros()?,
+            tap: filled("channels", n, 0)?,
+            tan: filled("channels", n, 0)?,
+            x_tap: zeros()?,
+            x_tan: zeros()?,
+        })
+    }
+
+    /// Feeds one reading per channel; appends this step's alarms to `out` in channel order.
+    ///
+    /// All readings are validated first ([`Error::ChannelCount`], [`Error::NonFiniteReading`]);
+    /// on error the bank is unchanged.
+    pub fn step(&mut self, readings: &[f64], out: &mut Vec<ChannelAlarm>) -> Result<(), Error> {
+        checked_step(self, readings, out)
+    }
+
+    /// Feeds a row-major `T x channels` matrix (one row per time step), appending the alarms
+    /// step by step. The whole matrix is validated first; on error the bank is unchanged.
+    pub fn step_many(&mut self, matrix: &[f64], out: &mut Vec<ChannelAlarm>) -> Result<(), Error> {
+        checked_step_many(self, matrix, out)
+    }
+
+    /// The state of channels `b..e`.
+    fn block(&mut self, b: usize, e: usize) -> Block<'_> {
+        Block {
+            x_prev: &mut self.x_prev[b..e],
+            gp: &mut self.gp[b..e],
+            gn: &mut self.gn[b..e],
+            gp_real: &mut self.gp_real[b..e],
+            gn_real: &mut self.gn_real[b..e],
+            tap: &mut self.tap[b..e],
+            tan: &mut self.tan[b..e],
+            x_tap: &mut self.x_tap[b..e],
+            x_tan: &mut self.x_tan[b..e],
+        }
+    }
+
+    fn advance(&mut self, readings: &[f64], out: &mut Vec<ChannelAlarm>) {
+        let i = self.steps;
+        self.steps += 1;
+        if i == 0 {
+            self.x_prev.copy_from_slice(readings);
+            self.x_tap.copy_from_slice(readings);
+            self.x_tan.copy_from_slice(readings);
+            return;
+        }
+        let p = Step {
+            i,
+            threshold: self.config.threshold(),
+            drift: self.config.drift(),
+        };
+        let mut flags = [0u8; BLOCK];
+        let mut b = 0;
+        while b < self.channels {
+            let e = (b + BLOCK).min(self.channels);
+            let flags = &mut flags[..e - b];
+            if kernel(&readings[b..e], self.block(b, e), flags, p) != 0 {
+                self.collect(b, flags, &readings[b..e], i, out);
+            }
+            b = e;
+        }
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn collect(&self, b: usize, flags: &[u8], xs: &[f64], i: u64, out: &mut Vec<ChannelAlarm>) {
+        for (k, &f) in flags.iter().enumerate() {
+            if f != 0 {
+                let c = b + k;
+                out.push(ChannelAlarm {
+                    channel: c,
+                    alarm: self.lane(c).alarm(f, i, xs[k]),
+                });
+            }
+        }
+    }
+
+    fn lane(&self, c: usize) -> CusumLane {
+        CusumLane {
+            x_prev: self.x_prev[c],
+            gp: self.gp[c],
+            gn: self.gn[c],
+            gp_real: self.gp_real[c],
+            gn_real: self.gn_real[c],
+            tap: self.tap[c],
+            tan: self.tan[c],
+            x_tap: self.x_tap[c],
+            x_tan: self.x_tan[c],
+        }
+    }
+
+    /// Back to the state of [`CusumBank::new`].
+    pub fn reset(&mut self) {
+        self.steps = 0;
+        for v in [
+            &mut self.x_prev,
+            &mut self.gp,
+            &mut self.gn,
+            &mut self.gp_real,
+            &mut self.gn_real,
+            &mut self.x_tap,
+            &mut self.x_tan,
+        ] {
+            v.fill(0.0);
+        }
+        self.tap.fill(0);
+        self.tan.fill(0);
+    }
+
+    /// Number of channels.
+    pub fn channels(&self) -> usize {
+        self.channels
+    }
+
+    /// Number of steps consumed so far.
+    pub fn steps_seen(&self) -> u64 {
+        self.steps
+    }
+
+    /// The shared config.
+    pub fn config(&self) -> &CusumConfig {
+        &self.config
+    }
+}

@@ -1,0 +1,182 @@
+//! Multi-channel banks: one detector per pressure meter, one call per time step.
+//!
+//! State is kept as structure-of-arrays (one `Vec` per state variable, indexed by channel) and
+//! updated with branch-free per-channel kernels shared with the single-channel detectors, so the
+//! compiler vectorizes across channels and a bank is bit-for-bit equal to `N` independent
+//! detectors. Channels that alarm are handled afterwards on a rare slow path.
+
+mod cusum;
+mod shewhart;
+
+use alloc::vec::Vec;
+
+#[cfg(feature = "serde")]
+use serde::{Deserialize, Serialize};
+
+pub use cusum::CusumBank;
+pub use shewhart::ShewhartBank;
+
+use crate::alarm::ChannelAlarm;
+use crate::error::{first_non_finite, Error};
+
+/// Channels processed per block: the alarm flags of a block live on the stack.
+const BLOCK: usize = 256;
+
+fn check_channels(channels: usize) -> Result<usize, Error> {
+    if channels == 0 {
+        Err(Error::InvalidParameter {
+            name: "channels",
+            value: 0.0,
+            reason: "must be >= 1",
+        })
+    } else {
+        Ok(channels)
+    }
+}
+
+/// Validates one step's readings.
+fn check_readings(readings: &[f64], channels: usize) -> Result<(), Error> {
+    if readings.len() != channels {
+        return Err(Error::ChannelCount {
+            expected: channels,
+            got: readings.len(),
+        });
+    }
+    match first_non_finite(readings) {
+        Some((channel, value)) => Err(Error::NonFiniteReading { channel, value }),
+        None => Ok(()),
+    }
+}
+
+/// The per-step kernel of a bank: the validated entry points below are shared by every kind.
+trait Kernel {
+    /// Number of channels.
+    fn width(&self) -> usize;
+    /// Advances one step on readings already validated.
+    fn step_unchecked(&mut self, readings: &[f64], out: &mut Vec<ChannelAlarm>);
+}
+
+/// Validates one step's readings, then runs the kernel; on error the bank is unchanged.
+fn checked_step<K: Kernel>(
+    bank: &mut K,
+    readings: &[f64],
+    out: &mut Vec<ChannelAlarm>,
+) -> Result<(), Error> {
+    check_readings(readings, bank.width())?;
+    bank.step_unchecked(readings, out);
+    Ok(())
+}
+
+/// Validates a whole row-major matrix, then runs the kernel row by row.
+fn checked_step_many<K: Kernel>(
+    bank: &mut K,
+    matrix: &[f64],
+    out: &mut Vec<ChannelAlarm>,
+) -> Result<(), Error> {
+    let channels = bank.width();
+    check_matrix(matrix, channels)?;
+    for row in matrix.chunks_exact(channels) {
+        bank.step_unchecked(row, out);
+    }
+    Ok(())
+}
+
+/// Validates a row-major `T x channels` matrix.
+fn check_matrix(matrix: &[f64], channels: usize) -> Result<(), Error> {
+    if !matrix.len().is_multiple_of(channels) {
+        return Err(Error::MatrixShape {
+            len: matrix.len(),
+            channels,
+        });
+    }
+    match first_non_finite(matrix) {
+        Some((k, value)) => Err(Error::NonFiniteMatrixReading {
+            row: k / channels,
+            channel: k % channels,
+            value,
+        }),
+        None => Ok(()),
+    }
+}
+
+/// A bank of either kind, for callers that pick the detector at run time.
+///
+/// ```
+/// use cpd_core::{Bank, CusumBank, CusumConfig};
+/// let mut bank = Bank::Cusum(CusumBank::new(2, CusumConfig::new(1.0, 0.0)?)?);
+/// let mut alarms = Vec::new();
+/// bank.step_many(&[5.0, 5.0, 5.0, 7.0], &mut alarms)?;
+/// assert_eq!(alarms.len(), 1);
+/// assert_eq!((bank.channels(), bank.steps_seen(), bank.kind()), (2, 2, "cusum"));
+/// # Ok::<(), cpd_core::Error>(())
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(Serialize, Deserialize))]
+pub enum Bank {
+    /// A bank of CUSUM detectors.
+    Cusum(CusumBank),
+    /// A bank of Shewhart detectors.
+    Shewhart(ShewhartBank),
+}
+
+impl Bank {
+    /// See [`CusumBank::step`] / [`ShewhartBank::step`].
+    pub fn step(&mut self, readings: &[f64], out: &mut Vec<ChannelAlarm>) -> Result<(), Error> {
+        match self {
+            Bank::Cusum(b) => b.step(readings, out),
+            Bank::Shewhart(b) => b.step(readings, out),
+        }
+    }
+
+    /// See [`CusumBank::step_many`] / [`ShewhartBank::step_many`].
+    pub fn step_many(&mut self, matrix: &[f64], out: &mut Vec<ChannelAlarm>) -> Result<(), Error> {
+        match self {
+            Bank::Cusum(b) => b.step_many(matrix, out),
+            Bank::Shewhart(b) => b.step_many(matrix, out),
+        }
+    }
+
+    /// Back to a fresh bank.
+    pub fn reset(&mut self) {
+        match self {
+            Bank::Cusum(b) => b.reset(),
+            Bank::Shewhart(b) => b.reset(),
+        }
+    }
+
+    /// Number of channels.
+    pub fn channels(&self) -> usize {
+        match self {
+            Bank::Cusum(b) => b.channels(),
+            Bank::Shewhart(b) => b.channels(),
+        }
+    }
+
+    /// Number of steps consumed so far.
+    pub fn steps_seen(&self) -> u64 {
+        match self {
+            Bank::Cusum(b) => b.steps_seen(),
+            Bank::Shewhart(b) => b.steps_seen(),
+        }
+    }
+
+    /// `"cusum"` or `"shewhart"`.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Bank::Cusum(_) => "cusum",
+            Bank::Shewhart(_) => "shewhart",
+        }
+    }
+}
+
+impl From<CusumBank> for Bank {
+    fn from(b: CusumBank) -> Self {
+        Bank::Cusum(b)
+    }
+}
+
+impl From<ShewhartBank> for Bank {
+    fn from(b: ShewhartBank) -> Self {
+        Bank::Shewhart(b)
+    }
+}

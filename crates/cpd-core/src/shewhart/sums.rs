@@ -1,0 +1,206 @@
+//! The running window sums of one Shewhart channel and the decision made from them, shared by
+//! the detector and the bank (see the parent module's docs for the numerics).
+
+use crate::alarm::Direction;
+use crate::math::{abs, sqrt};
+use crate::stats::{lane_sum, np_mean_std, out_of_control};
+
+#[cfg(feature = "serde")]
+use serde::{Deserialize, Serialize};
+
+use super::ShewhartConfig;
+
+/// At a ring wrap, the sums are also rebuilt when `mean(y)² > CANCELLATION · var`, i.e. when the
+/// reference is so far from the window (after a level shift) that `E[y²] - E[y]²` would lose
+/// more than about 6 of its 16 digits.
+const CANCELLATION: f64 = (1u64 << 20) as f64;
+
+/// Relative error margin of the fast decision (about 4.5e5 machine epsilons).
+pub(super) const MARGIN: f64 = 1e-10;
+
+/// Classification of one sample by the fast path.
+pub(crate) const NONE: u8 = 0;
+/// Out of control, `x > μ`.
+pub(crate) const RISE: u8 = 1;
+/// Out of control, `x < μ`.
+pub(crate) const DROP: u8 = 2;
+/// Too close to a tie for the running sums: decide with the exact window scan.
+pub(crate) const EXACT: u8 = 4;
+
+/// Constants of the hot path, derived from the config.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Derived {
+    pub inv_w: f64,
+    pub sigma2_hi: f64,
+    pub sigma2_lo: f64,
+}
+
+/// Adds `v` to the compensated sum `(s, c)` (Knuth's TwoSum; branch-free).
+#[inline(always)]
+fn acc(s: f64, c: f64, v: f64) -> (f64, f64) {
+    let t = s + v;
+    let bp = t - s;
+    let err = (s - (t - bp)) + (v - bp);
+    (t, c + err)
+}
+
+/// Running window sums of one channel, shared by the detector and the bank.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(Serialize, Deserialize))]
+pub(crate) struct Sums {
+    /// Reference subtracted from every sample.
+    pub reference: f64,
+    /// Σy and its compensation.
+    pub s1: f64,
+    pub c1: f64,
+    /// Σy² and its compensation.
+    pub s2: f64,
+    pub c2: f64,
+}
+
+impl Sums {
+    pub(crate) const ZERO: Self = Self {
+        reference: 0.0,
+        s1: 0.0,
+        c1: 0.0,
+        s2: 0.0,
+        c2: 0.0,
+    };
+
+    /// Adds a sample while the window is filling.
+    #[inline(always)]
+    pub(crate) fn push(&mut self, x: f64) {
+        let y = x - self.reference;
+        (self.s1, self.c1) = acc(self.s1, self.c1, y);
+        (self.s2, self.c2) = acc(self.s2, self.c2, y * y);
+    }
+
+    /// Adds `x` and removes `old` (the window is full).
+    #[inline(always)]
+    pub(crate) fn slide(&mut self, x: f64, old: f64) {
+        let y = x - self.reference;
+        let yo = old - self.reference;
+        let (s1, c1) = acc(self.s1, self.c1, y);
+        (self.s1, self.c1) = acc(s1, c1, -yo);
+        let (s2, c2) = acc(self.s2, self.c2, y * y);
+        (self.s2, self.c2) = acc(s2, c2, -(yo * yo));
+    }
+
+    /// Recomputes the sums of the `n` window values `get(0..n)` around their mean.
+    #[inline]
+    pub(crate) fn rebuild(&mut self, n: usize, inv_n: f64, get: impl Fn(usize) -> f64) {
+        let reference = lane_sum(n, &get) * inv_n;
+        self.reference = reference;
+        self.s1 = lane_sum(n, |i| get(i) - reference);
+        self.c1 = 0.0;
+        self.s2 = lane_sum(n, |i| {
+            let y = get(i) - reference;
+            y * y
+        });
+        self.c2 = 0.0;
+    }
+
+    /// True when the reference is far enough from the window to cost precision (see
+    /// [`CANCELLATION`]).
+    #[inline(always)]
+    pub(crate) fn off_centre(&self, inv_w: f64) -> bool {
+        let mu_y = (self.s1 + self.c1) * inv_w;
+        let var = (self.s2 + self.c2) * inv_w - mu_y * mu_y;
+        mu_y * mu_y > CANCELLATION * var
+    }
+
+    /// `x - μ` from the running sums (the fast amplitude).
+    #[inline(always)]
+    pub(crate) fn deviation(&self, x: f64, inv_w: f64) -> f64 {
+        (x - self.reference) - (self.s1 + self.c1) * inv_w
+    }
+
+    /// Cheap first test, true for most in-control samples: `|x - μ| <= threshold` holds even
+    /// with the worst-case error of the running sums. Uses `sqrt(m2) <= 1 + m2` instead of a
+    /// square root, so it implies the [`Sums::classify`] outcome [`NONE`]; branch-free.
+    #[inline(always)]
+    pub(crate) fn surely_in_control(&self, x: f64, d: &Derived, threshold: f64) -> bool {
+        let y = x - self.reference;
+        let mu_y = (self.s1 + self.c1) * d.inv_w;
+        let m2 = (self.s2 + self.c2) * d.inv_w;
+        let ad = abs(y - mu_y);
+        let ed = MARGIN * (abs(x) + abs(self.reference) + abs(y) + 1.0 + abs(m2) + ad);
+        ad + ed <= threshold
+    }
+
+    /// Fast classification of the newest sample `x` of a full window:
+    /// [`NONE`], [`RISE`], [`DROP`] or [`EXACT`] (too close to call). Branch-free.
+    #[inline(always)]
+    pub(crate) fn classify(&self, x: f64, d: &Derived, threshold: f64) -> u8 {
+        let y = x - self.reference;
+        let mu_y = (self.s1 + self.c1) * d.inv_w;
+        let m2 = (self.s2 + self.c2) * d.inv_w;
+        let dev = y - mu_y;
+        let var = m2 - mu_y * mu_y;
+        let var = if var > 0.0 { var } else { 0.0 };
+        let ad = abs(dev);
+        // Bound on |fast deviation - NumPy deviation| and on |fast var - NumPy var|.
+        let ed = MARGIN * (abs(x) + abs(self.reference) + abs(y) + sqrt(abs(m2)) + ad);
+        let ev = MARGIN * (2.0 * m2 + var) + 4.0 * ed * ed;
+        let lo = ad - ed;
+        let hi = ad + ed;
+        let surely_out = lo > threshold && lo * lo > d.sigma2_hi * (var + ev);
+        let surely_in = hi <= threshold || hi * hi < d.sigma2_lo * (var - ev);
+        let dir = if dev > 0.0 { RISE } else { DROP };
+        let fast = if surely_out { dir } else { NONE };
+        if surely_out | surely_in {
+            fast
+        } else {
+            EXACT
+        }
+    }
+}
+
+impl Sums {
+    /// The decision for the newest sample `x` of a full window: the direction and `x - μ` of
+    /// an alarm, or `None`; from the running sums, or from `exact()` (the window re-scanned)
+    /// when they are too close to a tie.
+    #[inline(always)]
+    pub(crate) fn decide(
+        &self,
+        x: f64,
+        config: &ShewhartConfig,
+        exact: impl FnOnce() -> Option<(Direction, f64)>,
+    ) -> Option<(Direction, f64)> {
+        let d = &config.derived;
+        match self.classify(x, d, config.threshold) {
+            NONE => None,
+            EXACT => exact(),
+            dir => {
+                let direction = if dir == RISE {
+                    Direction::Rise
+                } else {
+                    Direction::Drop
+                };
+                Some((direction, self.deviation(x, d.inv_w)))
+            }
+        }
+    }
+}
+
+/// The exact decision for the newest sample `x` of the window `get(0..w)` (oldest first):
+/// the alarm direction and `x - μ`, or `None`.
+pub(crate) fn exact_decision(
+    x: f64,
+    w: usize,
+    get: impl Fn(usize) -> f64,
+    config: &ShewhartConfig,
+) -> Option<(Direction, f64)> {
+    let (mean, std) = np_mean_std(w, get);
+    if out_of_control(x, mean, std, config.sigma, config.threshold) {
+        let amp = x - mean;
+        let dir = if amp > 0.0 {
+            Direction::Rise
+        } else {
+            Direction::Drop
+        };
+        Some((dir, amp))
+    } else {
+        None
+    }
+}

@@ -1,0 +1,165 @@
+"""The localization model: what the ranking localizers need of a network, stored, versioned.
+
+The arrival and signature localizers need facts about the network that only a hydraulic model
+gives: each pipe's end nodes in the steady-state flow direction and its length, the shortest path
+lengths from those end nodes to the meters, and the burst signatures (steady-state head drops at
+the meters, per pipe and position). ``burstloc calibrate`` computes them once, offline
+(:func:`burstloc.sim.prepare.prepare_model`: WNTR and EPANET), and stores them in the
+configuration it writes (:class:`burstloc.localize.config.Calibration`); the live monitor builds
+its localizers from the stored model
+(:meth:`burstloc.localize.decide.RankingLocalizers.from_model`) and never runs a hydraulic model.
+
+A model is bound to one network file (its SHA-256, :func:`burstloc.network.network_hash`) and one
+ordered list of meters: :meth:`LocalizationModel.check` refuses, by name, a model for another
+network or other meters. The JSON document carries the format tag :data:`MODEL_FORMAT`; a
+distance to an unreachable meter is stored as ``null``. Numpy only; on the live path.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from burstloc.constants import WAVE_SPEED
+from burstloc.exceptions import ConfigError, InputError
+from burstloc.localize.arrival import PipeGeometry
+from burstloc.localize.signature import SignatureSet
+
+__all__ = ["MODEL_FORMAT", "LocalizationModel"]
+
+MODEL_FORMAT = "burstloc-localization-model/1"
+"""Format tag of a stored localization model."""
+
+
+@dataclass(frozen=True, eq=False)
+class LocalizationModel:
+    """The network facts the ranking localizers need (module docstring).
+
+    ``pipes``: every candidate pipe with its flow-direction end nodes and length (m).
+    ``node_distances[node][j]``: shortest path length (m) along the pipes from ``node`` (an end
+    node of a candidate pipe) to ``meters[j]`` (``inf`` when there is no path).
+    ``signature_sets``: the burst signatures at ``meters``, one set per position along the pipes.
+    ``wave_speed``: the pressure-wave speed (m/s) the arrival localizer assumes.
+
+    Raises:
+        ConfigError: the parts do not fit together (a pipe end without distances, signatures of
+            other meters or another network, no pipe, a bad wave speed).
+    """
+
+    network_hash: str
+    meters: tuple[str, ...]
+    pipes: tuple[PipeGeometry, ...]
+    node_distances: Mapping[str, NDArray[np.float64]]
+    signature_sets: tuple[SignatureSet, ...]
+    wave_speed: float = WAVE_SPEED
+
+    def __post_init__(self) -> None:
+        meters = tuple(str(m) for m in self.meters)
+        if not meters or len(set(meters)) != len(meters):
+            raise ConfigError(f"a localization model needs distinct meters, got {list(meters)}")
+        if not self.pipes:
+            raise ConfigError("a localization model needs at least one pipe")
+        if not (math.isfinite(self.wave_speed) and self.wave_speed > 0):
+            raise ConfigError(f"wave_speed must be > 0 m/s, got {self.wave_speed}")
+        distances: dict[str, NDArray[np.float64]] = {}
+        for node, row in self.node_distances.items():
+            values = np.array(row, dtype=np.float64)
+            if values.shape != (len(meters),) or np.any(np.isnan(values)) or np.any(values < 0):
+                raise ConfigError(
+                    f"distances from node {node!r} must be {len(meters)} lengths >= 0 (m)"
+                )
+            values.setflags(write=False)
+            distances[str(node)] = values
+        for p in self.pipes:
+            for node in (p.start, p.end):
+                if node not in distances:
+                    raise ConfigError(f"no distances from node {node!r} (pipe {p.pipe!r})")
+        if not self.signature_sets:
+            raise ConfigError("a localization model needs at least one signature set")
+        for sig in self.signature_sets:
+            if sig.network_hash != self.network_hash or sig.meters != meters:
+                raise ConfigError(
+                    f"signature set at position {sig.params.get('position')} is for another "
+                    f"network or other meters than the model ({self.network_hash})"
+                )
+        object.__setattr__(self, "meters", meters)
+        object.__setattr__(self, "pipes", tuple(self.pipes))
+        object.__setattr__(self, "node_distances", distances)
+        object.__setattr__(self, "signature_sets", tuple(self.signature_sets))
+        object.__setattr__(self, "wave_speed", float(self.wave_speed))
+
+    def __eq__(self, other: object) -> bool:
+        """Equal when the stored documents are (arrays compared element by element)."""
+        if not isinstance(other, LocalizationModel):
+            return NotImplemented
+        return self.to_json() == other.to_json()
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def check(self, network_hash: str, meters: Sequence[str]) -> None:
+        """Refuse (ConfigError, naming the difference) to serve another network or other meters."""
+        if network_hash != self.network_hash:
+            raise ConfigError(
+                f"the localization model is for network {self.network_hash}, not {network_hash}; "
+                "re-run `burstloc calibrate` for this network"
+            )
+        if tuple(meters) != self.meters:
+            raise ConfigError(
+                f"the localization model is for meters {list(self.meters)}, not {list(meters)}; "
+                "re-run `burstloc calibrate` for these meters"
+            )
+
+    def to_json(self) -> dict[str, Any]:
+        """JSON-ready dictionary (see :data:`MODEL_FORMAT`)."""
+        return {
+            "format": MODEL_FORMAT,
+            "network_hash": self.network_hash,
+            "meters": list(self.meters),
+            "wave_speed": self.wave_speed,
+            "pipes": [
+                {"pipe": p.pipe, "start": p.start, "end": p.end, "length": p.length}
+                for p in self.pipes
+            ],
+            "node_distances": {
+                node: [float(d) if math.isfinite(d) else None for d in row]
+                for node, row in self.node_distances.items()
+            },
+            "signature_sets": [s.to_json() for s in self.signature_sets],
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> LocalizationModel:
+        """Inverse of :meth:`to_json`; a malformed document or another format raises
+        ConfigError."""
+        if not isinstance(data, Mapping) or data.get("format") != MODEL_FORMAT:
+            found = data.get("format") if isinstance(data, Mapping) else type(data).__name__
+            raise ConfigError(
+                f"not a burstloc localization model (format {found!r}, want {MODEL_FORMAT!r}); "
+                "re-run `burstloc calibrate`"
+            )
+        try:
+            return cls(
+                network_hash=str(data["network_hash"]),
+                meters=tuple(data["meters"]),
+                wave_speed=float(data["wave_speed"]),
+                pipes=tuple(
+                    PipeGeometry(str(p["pipe"]), str(p["start"]), str(p["end"]), float(p["length"]))
+                    for p in data["pipes"]
+                ),
+                node_distances={
+                    node: np.array([math.inf if d is None else float(d) for d in row])
+                    for node, row in data["node_distances"].items()
+                },
+                signature_sets=tuple(SignatureSet.from_json(s) for s in data["signature_sets"]),
+            )
+        except ConfigError:
+            raise
+        except InputError as exc:
+            raise ConfigError(f"malformed localization model: {exc}") from exc
+        except (KeyError, TypeError, ValueError, AttributeError) as exc:
+            raise ConfigError(f"malformed localization model: {exc!r}") from exc

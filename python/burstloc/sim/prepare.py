@@ -1,0 +1,179 @@
+"""Prepare the localization model offline: the network facts the ranking localizers need.
+
+:func:`prepare_model` loads the network with WNTR, solves its steady state once for the flow
+directions (:func:`burstloc.network.flow_direction_graph`), measures the shortest path lengths
+from every pipe's end nodes to the meters (:func:`arrival_geometry`) and takes the burst
+signatures (:func:`burstloc.sim.signatures.cached_signature_sets`). The result, a
+:class:`burstloc.localize.model.LocalizationModel`, is stored in the configuration that
+``burstloc calibrate`` writes; the live monitor only reads it.
+
+:func:`arrival_localizer` and :func:`ranking_localizers` are conveniences for the experiments,
+which work from network files: they prepare (signatures cached on disk) and build at once.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Iterable, Sequence
+from typing import TYPE_CHECKING, Any
+
+import networkx as nx
+import numpy as np
+from numpy.typing import NDArray
+
+from burstloc.constants import CANDIDATE_POSITIONS, WAVE_SPEED
+from burstloc.exceptions import NetworkError
+from burstloc.localize.arrival import ArrivalLocalizer, PipeGeometry
+from burstloc.localize.decide import RankingLocalizers
+from burstloc.localize.model import LocalizationModel
+from burstloc.network import flow_direction_graph, load_network, network_hash
+from burstloc.sim.signatures import cached_signature_sets
+
+if TYPE_CHECKING:
+    from wntr.network import WaterNetworkModel
+
+__all__ = [
+    "arrival_geometry",
+    "arrival_localizer",
+    "length_graph",
+    "prepare_model",
+    "ranking_localizers",
+    "travel_time_spread",
+]
+
+
+def length_graph(wn: WaterNetworkModel) -> nx.Graph:
+    """Undirected graph of a WNTR model weighted by link length (m).
+
+    Pipes weigh their length; valves and pumps, which have none, weigh 0 (the wave passes them).
+    Parallel links keep the shortest.
+    """
+    graph = nx.Graph()
+    graph.add_nodes_from(wn.node_name_list)
+    for name in wn.link_name_list:
+        link = wn.get_link(name)
+        length = float(getattr(link, "length", 0.0) or 0.0)
+        u, v = link.start_node_name, link.end_node_name
+        if graph.has_edge(u, v) and graph[u][v]["length"] <= length:
+            continue
+        graph.add_edge(u, v, length=length, link=name)
+    return graph
+
+
+def travel_time_spread(
+    graph: nx.Graph, meters: Sequence[str], wave_speed: float = WAVE_SPEED
+) -> float:
+    """Largest wave travel time (s) between two meters: how long arrivals keep coming in."""
+    best = 0.0
+    for m in meters:
+        lengths = nx.single_source_dijkstra_path_length(graph, m, weight="length")
+        best = max(best, max(float(lengths.get(o, 0.0)) for o in meters))
+    return best / wave_speed
+
+
+def _model_of(network: str | os.PathLike[str] | WaterNetworkModel) -> WaterNetworkModel:
+    return load_network(network) if isinstance(network, (str, os.PathLike)) else network
+
+
+def _meters_of(wn: WaterNetworkModel, meters: Sequence[str] | None) -> list[str]:
+    junctions = list(wn.junction_name_list)
+    meter_list = list(junctions if meters is None else meters)
+    unknown = [m for m in meter_list if m not in set(junctions)]
+    if unknown:
+        raise NetworkError(f"meter(s) {unknown} are not junctions of the network")
+    return meter_list
+
+
+def arrival_geometry(
+    network: str | os.PathLike[str] | WaterNetworkModel, meters: Sequence[str] | None = None
+) -> tuple[list[PipeGeometry], dict[str, NDArray[np.float64]]]:
+    """Every pipe's flow-direction end nodes and length, and the shortest path lengths (m) from
+    those end nodes to each of ``meters`` (default: every junction; ``inf`` without a path).
+
+    One EPANET steady state (:func:`burstloc.network.flow_direction_graph`, pressure-driven).
+
+    Raises:
+        NetworkError: missing or malformed network, or a meter that is not a junction.
+    """
+    wn = _model_of(network)
+    meter_list = _meters_of(wn, meters)
+    graph = length_graph(wn)
+    by_pipe = flow_direction_graph(wn).graph["edges_by_pipe"]
+    pipes = [
+        PipeGeometry(p, str(by_pipe[p][0]), str(by_pipe[p][1]), float(wn.get_link(p).length))
+        for p in wn.pipe_name_list
+    ]
+    per_meter = {
+        m: nx.single_source_dijkstra_path_length(graph, m, weight="length") for m in meter_list
+    }
+    nodes = dict.fromkeys(n for p in pipes for n in (p.start, p.end))  # pipe order: reproducible
+    node_distances = {
+        n: np.array([float(per_meter[m].get(n, math.inf)) for m in meter_list]) for n in nodes
+    }
+    return pipes, node_distances
+
+
+def arrival_localizer(
+    network: str | os.PathLike[str] | WaterNetworkModel,
+    meters: Sequence[str] | None = None,
+    *,
+    wave_speed: float = WAVE_SPEED,
+    positions: Iterable[float] = CANDIDATE_POSITIONS,
+    **options: Any,
+) -> ArrivalLocalizer:
+    """An :class:`~burstloc.localize.arrival.ArrivalLocalizer` for ``meters`` (default: every
+    junction) of an INP path or a WNTR model, from :func:`arrival_geometry`; ``options`` are the
+    localizer's other keyword arguments (``amplitude_weight``, ``decision_delay``, ``silence``).
+
+    Raises:
+        NetworkError: missing or malformed network, or a meter that is not a junction.
+        ConfigError: a bad wave speed, position or option.
+    """
+    wn = _model_of(network)
+    meter_list = _meters_of(wn, meters)
+    pipes, node_distances = arrival_geometry(wn, meter_list)
+    return ArrivalLocalizer(
+        pipes, meter_list, node_distances, wave_speed=wave_speed, positions=positions, **options
+    )
+
+
+def prepare_model(
+    network: str | os.PathLike[str],
+    meters: Sequence[str] | None = None,
+    *,
+    wave_speed: float = WAVE_SPEED,
+    positions: Sequence[float] = CANDIDATE_POSITIONS,
+    cache_dir: str | os.PathLike[str] | None = None,
+    wn: WaterNetworkModel | None = None,
+) -> LocalizationModel:
+    """The :class:`~burstloc.localize.model.LocalizationModel` of ``meters`` (default: every
+    junction) on the INP file ``network`` (module docstring). ``wn``: the file's WNTR model, if
+    the caller has it loaded already; ``cache_dir``: where the signatures are cached.
+
+    Raises:
+        NetworkError: missing or malformed network, or a meter that is not a junction.
+    """
+    model = load_network(network) if wn is None else wn
+    meter_list = _meters_of(model, meters)
+    pipes, node_distances = arrival_geometry(model, meter_list)
+    return LocalizationModel(
+        network_hash=network_hash(network),
+        meters=tuple(meter_list),
+        pipes=tuple(pipes),
+        node_distances=node_distances,
+        signature_sets=cached_signature_sets(
+            network, meter_list, positions=positions, cache_dir=cache_dir
+        ),
+        wave_speed=wave_speed,
+    )
+
+
+def ranking_localizers(network: str | os.PathLike[str], meters: Sequence[str]) -> RankingLocalizers:
+    """The ranking localizers of ``meters`` on ``network`` (``arrival``, ``signature``,
+    ``fused``), built from :func:`prepare_model` (the signatures cached on disk).
+
+    Raises:
+        NetworkError: missing or malformed network, or a meter that is not a junction.
+    """
+    return RankingLocalizers.from_model(prepare_model(network, meters))

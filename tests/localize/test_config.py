@@ -1,0 +1,118 @@
+"""The stored configuration (burstloc.localize.config): save, load, refuse by name, and the
+localization model it carries."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from burstloc import _core
+from burstloc.exceptions import ConfigError
+from burstloc.experiments.calibrate import calibrate
+from burstloc.localize.config import CALIBRATION_FORMAT, Calibration, calibrated_bank
+
+
+@pytest.fixture(scope="module")
+def stored(tiny: Path) -> Calibration:
+    return calibrate(tiny, capture_intervals=[0.2], noise_sigma=0.01, max_samples=300_000)
+
+
+def test_save_load_and_refuse_other_network(tiny_network: Path, tmp_path: Path) -> None:
+    config = calibrate(
+        tiny_network, capture_intervals=[0.2, 5.0], noise_sigma=0.01, max_samples=300_000, name="t"
+    )
+    assert config.meters == ("J1", "J2", "J3", "J4")
+    fine, coarse = config.for_interval(0.2), config.for_interval(5.0)
+    assert fine.cusum_threshold["J2"] > coarse.cusum_threshold["J2"]  # more readings per hour
+    assert fine.uniform("cusum") == {"threshold": fine.cusum_threshold["J1"], "drift": 0.01}
+    assert coarse.localization_interval == 10
+    path = config.save(tmp_path / "t.json")
+    assert json.loads(path.read_text())["name"] == "t"
+    back = Calibration.load(path, network=tiny_network, meters=config.meters)
+    assert back == config
+    with pytest.raises(ConfigError, match="10 s capture"):
+        back.for_interval(10.0)
+    other = tmp_path / "other.inp"
+    other.write_text(tiny_network.read_text().replace("J4   0      2", "J4   0      3"))
+    with pytest.raises(ConfigError, match="'t' was calibrated for network"):
+        Calibration.load(path, network=other)
+    with pytest.raises(ConfigError, match=r"other meters \(missing \['J4'\]"):
+        back.check(tiny_network, ["J1", "J2", "J3"])
+    path.write_text('{"format": "nope"}')
+    with pytest.raises(ConfigError, match="not a burstloc configuration"):
+        Calibration.load(path)
+
+
+def test_the_model_travels_with_the_configuration(
+    tiny: Path, stored: Calibration, tmp_path: Path
+) -> None:
+    path = stored.save(tmp_path / "c.json")
+    doc = json.loads(path.read_text())
+    assert doc["format"] == CALIBRATION_FORMAT
+    assert doc["model"]["format"] == "burstloc-localization-model/1"
+    assert doc["model"]["network_hash"] == doc["network_hash"]
+    back = Calibration.load(path, network=tiny)
+    assert back.model == stored.model
+    # a model for other meters than the configuration's is refused by name
+    doc["meters"] = ["J1", "J2", "J3"]
+    path.write_text(json.dumps(doc))
+    with pytest.raises(
+        ConfigError,
+        match=r"model is for meters \['J1', 'J2', 'J3', 'J4'\], not \['J1', 'J2', 'J3'\]",
+    ):
+        Calibration.load(path)
+    # and one for another network
+    doc = stored.to_json()
+    doc["model"]["network_hash"] = "sha256:0"
+    for sig in doc["model"]["signature_sets"]:
+        sig["network_hash"] = "sha256:0"
+    path.write_text(json.dumps(doc))
+    with pytest.raises(ConfigError, match="model is for network sha256:0"):
+        Calibration.load(path)
+    # a damaged model is a malformed configuration
+    doc = stored.to_json()
+    del doc["model"]["pipes"]
+    path.write_text(json.dumps(doc))
+    with pytest.raises(ConfigError, match="malformed localization model"):
+        Calibration.load(path)
+
+
+def test_a_configuration_of_the_previous_format_asks_to_recalibrate(
+    stored: Calibration, tmp_path: Path
+) -> None:
+    doc = stored.to_json()
+    del doc["model"]
+    doc["format"] = "burstloc-calibration/1"
+    path = tmp_path / "old.json"
+    path.write_text(json.dumps(doc))
+    with pytest.raises(
+        ConfigError,
+        match=r"earlier burstloc .*holds no localization model; "
+        r"re-run `burstloc calibrate .*tiny\.inp --out PATH`",
+    ):
+        Calibration.load(path)
+    doc["format"] = CALIBRATION_FORMAT  # the current format without a model is malformed
+    path.write_text(json.dumps(doc))
+    with pytest.raises(ConfigError, match="malformed configuration"):
+        Calibration.load(path)
+
+
+def test_calibrated_bank_uses_the_interval_settings(stored: Calibration) -> None:
+    cal = stored.for_interval(0.2)
+    readings = np.full((400, 4), 50.0)
+    readings[200:, 2] -= 0.5  # a step on the third meter
+    cusum = _core.DetectorBank("cusum", 4, **cal.uniform("cusum"))
+    shewhart = _core.DetectorBank(
+        "shewhart", 4, **cal.uniform("shewhart"), window=2 * cal.localization_interval
+    )
+    for kind, reference in (("cusum", cusum), ("shewhart", shewhart)):
+        bank = calibrated_bank(kind, 4, cal)
+        assert (bank.kind, bank.channels) == (kind, 4)
+        alarms = [(a.channel, a.index) for a in bank.run(readings)]
+        assert alarms and alarms == [(a.channel, a.index) for a in reference.run(readings)]
+        assert {channel for channel, _ in alarms} == {2}
+    with pytest.raises(ConfigError, match="unknown detector"):
+        calibrated_bank("ewma", 4, cal)

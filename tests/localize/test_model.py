@@ -1,0 +1,133 @@
+"""The stored localization model (burstloc.localize.model) and the localizers built from it."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from burstloc.exceptions import ConfigError
+from burstloc.localize.arrival import PipeGeometry
+from burstloc.localize.decide import RankingLocalizers
+from burstloc.localize.evidence import BurstEvidence, MeterAlarm
+from burstloc.localize.model import MODEL_FORMAT, LocalizationModel
+from burstloc.localize.signature import SignatureSet
+from line_network import METERS, PIPES, WAVE, line_arrival, line_signature
+
+MATRIX = np.array([[1.0, 1.0, 0.4, 0.2], [0.6, 1.0, 0.9, 0.4], [0.1, 0.3, 1.0, 1.0]])
+
+
+def _sets(network_hash: str = "sha256:line", meters: tuple[str, ...] = METERS) -> tuple:
+    return tuple(
+        SignatureSet(
+            network_hash=network_hash,
+            meters=meters,
+            pipes=PIPES,
+            endpoints={f"p{i}{i + 1}": (f"m{i}", f"m{i + 1}") for i in range(3)},
+            matrix=MATRIX[:, : len(meters)] * scale,
+            baseline=np.full(len(meters), 50.0),
+            params={"position": position},
+        )
+        for position, scale in ((0.25, 1.0), (0.75, 1.1))
+    )
+
+
+def _line_model(**changes: object) -> LocalizationModel:
+    """The line network of line_network.py as a stored model (plus an unreachable node x)."""
+    pos = {m: 600.0 * i for i, m in enumerate(METERS)}
+    distances = {n: np.array([abs(pos[n] - pos[m]) for m in METERS]) for n in METERS}
+    distances["x"] = np.full(len(METERS), math.inf)
+    fields: dict[str, object] = {
+        "network_hash": "sha256:line",
+        "meters": METERS,
+        "pipes": tuple(PipeGeometry(f"p{i}{i + 1}", f"m{i}", f"m{i + 1}", 600.0) for i in range(3)),
+        "node_distances": distances,
+        "signature_sets": _sets(),
+        "wave_speed": WAVE,
+    }
+    fields.update(changes)
+    return LocalizationModel(**fields)  # type: ignore[arg-type]
+
+
+def _evidence() -> BurstEvidence:
+    """A burst 150 m along p12 at t = 10 s: alarms as arrivals, and its lasting drop."""
+    t = np.arange(0.0, 90.0, 0.5)
+    arrive = [10.0 + abs(750.0 - 600.0 * i) / WAVE for i in range(len(METERS))]
+    drop = 0.8 * MATRIX[1]
+    readings = np.stack(
+        [np.where(t < a, 50.0, 50.0 - d) for a, d in zip(arrive, drop, strict=True)], axis=1
+    )
+    alarms = {
+        m: MeterAlarm(m, math.floor(a / 0.5) * 0.5, -float(d))
+        for m, a, d in zip(METERS, arrive, drop, strict=True)
+    }
+    return BurstEvidence(METERS, t, readings, onset=10.0, capture_interval=0.5, alarms=alarms)
+
+
+def test_json_round_trip_keeps_everything() -> None:
+    model = _line_model()
+    doc = json.loads(json.dumps(model.to_json(), allow_nan=False))  # strict JSON: no Infinity
+    assert doc["format"] == MODEL_FORMAT
+    assert doc["node_distances"]["x"] == [None] * len(METERS)
+    back = LocalizationModel.from_json(doc)
+    assert back == model
+    assert np.all(np.isinf(back.node_distances["x"]))
+    np.testing.assert_array_equal(back.node_distances["m1"], [600.0, 0.0, 600.0, 1200.0])
+    assert [s.params["position"] for s in back.signature_sets] == [0.25, 0.75]
+    assert back != _line_model(wave_speed=1000.0)
+
+
+def test_localizers_from_the_model_rank_as_the_directly_built_ones() -> None:
+    evidence = _evidence()
+    stored = LocalizationModel.from_json(json.loads(json.dumps(_line_model().to_json())))
+    built = RankingLocalizers.from_model(stored)
+    direct_arrival = line_arrival()
+    assert built.arrival.rank(evidence).scores() == direct_arrival.rank(evidence).scores()
+    assert built.arrival.pipe_travel == direct_arrival.pipe_travel
+    direct_signature = line_signature(MATRIX)
+    assert [s.params["position"] for s in built.signature.signature_sets] == [0.25, 0.75]
+    ranking = built.fused.rank(evidence)
+    assert ranking.best is not None and ranking.best.pipe == "p12"
+    assert built.signature.rank(evidence).best.pipe == direct_signature.rank(evidence).best.pipe  # type: ignore[union-attr]
+
+
+def test_the_model_refuses_another_network_or_other_meters_by_name() -> None:
+    model = _line_model()
+    model.check("sha256:line", METERS)
+    with pytest.raises(ConfigError, match="model is for network sha256:line, not sha256:other"):
+        model.check("sha256:other", METERS)
+    with pytest.raises(ConfigError, match=r"model is for meters \['m0', 'm1', 'm2', 'm3'\], not"):
+        model.check("sha256:line", ("m1", "m0", "m2", "m3"))
+
+
+def test_parts_that_do_not_fit_are_refused() -> None:
+    with pytest.raises(ConfigError, match="no distances from node 'm3'"):
+        _line_model(node_distances={"m0": np.zeros(4), "m1": np.zeros(4), "m2": np.zeros(4)})
+    with pytest.raises(ConfigError, match="distances from node 'm0' must be 4 lengths"):
+        _line_model(node_distances={n: np.zeros(3) for n in METERS})
+    with pytest.raises(ConfigError, match="another network or other meters"):
+        _line_model(signature_sets=_sets(network_hash="sha256:other"))
+    with pytest.raises(ConfigError, match="another network or other meters"):
+        _line_model(signature_sets=_sets(meters=METERS[:3]))
+    with pytest.raises(ConfigError, match="at least one signature set"):
+        _line_model(signature_sets=())
+    with pytest.raises(ConfigError, match="at least one pipe"):
+        _line_model(pipes=())
+    with pytest.raises(ConfigError, match="wave_speed"):
+        _line_model(wave_speed=0.0)
+    with pytest.raises(ConfigError, match="distinct meters"):
+        _line_model(meters=("m0", "m0", "m2", "m3"))
+
+
+def test_malformed_documents_are_config_errors() -> None:
+    doc = _line_model().to_json()
+    with pytest.raises(ConfigError, match="not a burstloc localization model"):
+        LocalizationModel.from_json({**doc, "format": "burstloc-localization-model/0"})
+    with pytest.raises(ConfigError, match="malformed localization model"):
+        LocalizationModel.from_json({k: v for k, v in doc.items() if k != "node_distances"})
+    broken = json.loads(json.dumps(doc))
+    broken["signature_sets"][0]["matrix"] = [[1.0]]
+    with pytest.raises(ConfigError, match="malformed localization model"):
+        LocalizationModel.from_json(broken)

@@ -1,0 +1,89 @@
+"""Preparing the localization model offline (burstloc.sim.prepare): geometry, signatures."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from burstloc.constants import CANDIDATE_POSITIONS
+from burstloc.exceptions import NetworkError
+from burstloc.localize.decide import RankingLocalizers
+from burstloc.network import load_network, network_hash
+from burstloc.sim.prepare import (
+    arrival_geometry,
+    arrival_localizer,
+    length_graph,
+    prepare_model,
+    ranking_localizers,
+    travel_time_spread,
+)
+from burstloc.sim.signatures import cached_signature_sets
+
+
+def test_travel_time_spread(tiny_network: Path) -> None:
+    graph = length_graph(load_network(tiny_network))
+    # J2 -> J4: via J3 (150 + 180) m
+    assert travel_time_spread(graph, ["J2", "J4"], 1000.0) == pytest.approx(0.33)
+
+
+def test_arrival_geometry_follows_the_flow_and_the_pipes(tiny_network: Path) -> None:
+    pipes, distances = arrival_geometry(tiny_network, ["J2", "J4"])
+    ends = {p.pipe: (p.start, p.end, p.length) for p in pipes}
+    assert ends == {
+        "A": ("R1", "J1", 300.0),
+        "B": ("J1", "J2", 200.0),
+        "C": ("J1", "J3", 250.0),
+        "D": ("J2", "J3", 150.0),
+        "E": ("J3", "J4", 180.0),
+    }
+    assert set(distances) == {"R1", "J1", "J2", "J3", "J4"}
+    np.testing.assert_allclose(distances["R1"], [500.0, 730.0])  # R1-J1-J2, R1-J1-J3-J4
+    np.testing.assert_allclose(distances["J2"], [0.0, 330.0])  # J2-J3-J4
+    with pytest.raises(NetworkError, match="R1"):
+        arrival_geometry(tiny_network, ["R1"])
+
+
+def test_an_unreachable_meter_is_infinitely_far(tmp_path: Path) -> None:
+    # two networks in one file: J9 hangs off its own reservoir
+    inp = tmp_path / "two.inp"
+    inp.write_text(
+        "[JUNCTIONS]\n J1 0 1\n J2 0 1\n J9 0 1\n[RESERVOIRS]\n R1 50\n R2 50\n"
+        "[PIPES]\n A R1 J1 100 200 100 0 Open\n B J1 J2 100 200 100 0 Open\n"
+        " C R2 J9 100 200 100 0 Open\n"
+        "[OPTIONS]\n Units LPS\n[END]\n"
+    )
+    _, distances = arrival_geometry(inp, ["J2", "J9"])
+    assert distances["J1"][0] == 100.0 and math.isinf(distances["J1"][1])
+
+
+def test_the_model_holds_geometry_and_signatures_of_the_meters(
+    tiny_network: Path, tmp_path: Path
+) -> None:
+    meters = ["J4", "J2"]
+    model = prepare_model(tiny_network, meters, cache_dir=tmp_path, wave_speed=1000.0)
+    assert model.network_hash == network_hash(tiny_network)
+    assert model.meters == ("J4", "J2") and model.wave_speed == 1000.0
+    pipes, distances = arrival_geometry(tiny_network, meters)
+    assert list(model.pipes) == pipes
+    # nodes in pipe order (not a set's): the same network gives the same file, run after run
+    assert list(model.node_distances) == ["R1", "J1", "J2", "J3", "J4"]
+    for node, row in distances.items():
+        np.testing.assert_array_equal(model.node_distances[node], row)
+    sets = cached_signature_sets(tiny_network, meters, cache_dir=tmp_path)
+    assert [s.params["position"] for s in model.signature_sets] == list(CANDIDATE_POSITIONS)
+    for stored, cached in zip(model.signature_sets, sets, strict=True):
+        assert stored.meters == ("J4", "J2")
+        np.testing.assert_array_equal(stored.matrix, cached.matrix)
+
+
+def test_conveniences_build_what_the_model_builds(tiny_network: Path) -> None:
+    built = ranking_localizers(tiny_network, ["J1", "J3"])
+    assert isinstance(built, RankingLocalizers)
+    direct = arrival_localizer(tiny_network, ["J1", "J3"])
+    assert built.arrival.meters == direct.meters == ("J1", "J3")
+    assert built.arrival.pipes == direct.pipes
+    np.testing.assert_array_equal(built.arrival._dist, direct._dist)
+    assert built.signature.signatures.meters == ("J1", "J3")

@@ -1,0 +1,105 @@
+"""The package's layers import only downwards, with no import cycle (every import, lazy ones too).
+
+Layers: the base (``exceptions``, ``constants``, ``network``, ``readings``, ``_atomic``, ...),
+``localize`` (base only), ``live`` (base and localize: the live path never reaches the
+simulator), ``sim`` (base and localize, whose model it prepares offline), ``experiments`` (all
+of those) and ``cli`` (anything; nothing imports it).
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import networkx as nx
+import pytest
+
+PACKAGE = Path(__file__).resolve().parents[1] / "python" / "burstloc"
+LAYERS = ("localize", "live", "sim", "experiments", "cli")
+ALLOWED: dict[str, set[str]] = {
+    "base": {"base"},
+    "localize": {"base", "localize"},
+    "live": {"base", "localize", "live"},
+    "sim": {"base", "localize", "sim"},
+    "experiments": {"base", "localize", "live", "sim", "experiments"},
+    "cli": {"base", "localize", "live", "sim", "experiments", "cli"},
+}
+
+
+def _module_name(path: Path) -> str:
+    parts = list(path.relative_to(PACKAGE.parent).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def _layer(module: str) -> str:
+    if module == "burstloc.__main__":  # ``python -m burstloc``: the command line
+        return "cli"
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 and parts[1] in LAYERS else "base"
+
+
+def _imports(path: Path) -> set[str]:
+    """Every ``burstloc`` module ``path`` imports, at module level or inside functions."""
+    found: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            found |= {a.name for a in node.names if a.name.split(".")[0] == "burstloc"}
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            if node.module.split(".")[0] != "burstloc":
+                continue
+            for alias in node.names:  # `from burstloc.sim import tsnet` imports a module
+                sub = f"{node.module}.{alias.name}"
+                found.add(sub if _exists(sub) else node.module)
+    return found
+
+
+def _exists(module: str) -> bool:
+    rel = Path(*module.split("."))
+    return (PACKAGE.parent / rel).with_suffix(".py").is_file() or (
+        PACKAGE.parent / rel / "__init__.py"
+    ).is_file()
+
+
+def _graph() -> nx.DiGraph:
+    graph = nx.DiGraph()
+    for path in sorted(PACKAGE.rglob("*.py")):
+        module = _module_name(path)
+        graph.add_node(module)
+        for target in _imports(path):
+            if target != module:
+                graph.add_edge(module, target)
+    return graph
+
+
+def test_the_graph_sees_the_package() -> None:
+    graph = _graph()
+    assert {"burstloc.live.monitor", "burstloc.sim.tsnet", "burstloc.cli"} <= set(graph)
+    assert graph.has_edge("burstloc.live.monitor", "burstloc.localize.config")
+
+
+@pytest.mark.parametrize("layer", sorted(ALLOWED))
+def test_layers_import_only_downwards(layer: str) -> None:
+    graph = _graph()
+    wrong = sorted(
+        f"{source} imports {target}"
+        for source, target in graph.edges
+        if _layer(source) == layer
+        and _layer(target) not in ALLOWED[layer]
+        and source != "burstloc"  # the façade re-exports from every layer, lazily
+    )
+    assert not wrong, wrong
+
+
+def test_nothing_imports_the_cli() -> None:
+    graph = _graph()
+    users = sorted(s for s, t in graph.edges if _layer(t) == "cli" and _layer(s) != "cli")
+    assert not users, users
+
+
+def test_no_import_cycle() -> None:
+    graph = _graph()
+    graph.remove_node("burstloc")  # the façade: imports from the layers, imported by none
+    cycles = list(nx.simple_cycles(graph))
+    assert not cycles, cycles
