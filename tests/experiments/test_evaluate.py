@@ -6,7 +6,6 @@ import json
 from pathlib import Path
 
 import jsonschema
-import networkx as nx
 import numpy as np
 import pytest
 
@@ -17,93 +16,14 @@ from burstloc.experiments.evaluate import (
     RunSpec,
     evaluate,
     locate_burst,
-    paper_runs,
-    phase_offsets,
     readings_at_offset,
-    required_duration,
 )
 from burstloc.localize.detection import DetectorConfig, Mode
-from burstloc.sim.scenario import ScenarioResult
 from conftest import PAPER15
+from synthetic_bursts import small_graph, synthetic
 
 SCHEMA = json.loads((Path(__file__).parents[1] / "evaluate_schema.json").read_text())
 CUSUM = DetectorConfig("cusum", 0.3)
-
-
-def small_graph() -> nx.DiGraph:
-    g = nx.DiGraph()
-    for pipe, u, v in [("pA", "R1", "A"), ("pB", "A", "B"), ("pC", "A", "C"), ("pD", "B", "C")]:
-        g.add_edge(u, v, pipe=pipe)
-    return g
-
-
-def synthetic(pipe: str, drops: dict[str, tuple[float, float]], burst_start: float = 2.0):
-    """A 'simulation' on a 0.05 s grid: meter -> (drop in m, arrival delay in s)."""
-    time = np.arange(0, 8.0 + 1e-9, 0.05)
-    meters = ["A", "B", "C"]
-    heads = np.tile([100.0, 98.0, 97.0], (time.size, 1))
-    for j, m in enumerate(meters):
-        drop, delay = drops.get(m, (0.0, 0.0))
-        heads[time >= burst_start + delay, j] -= drop
-    meta = {"pipe": pipe, "burst_start": burst_start, "true_start": "A", "true_end": "B"}
-    return ScenarioResult(time, heads, meters, 0.05, meta)
-
-
-def test_run_spec_validation_and_params() -> None:
-    spec = RunSpec(CUSUM, 0.2, 5)
-    assert spec.params() == {
-        "threshold": 0.3,
-        "drift": 0.0,
-        "localization_interval": 5,
-        "mode": "window",
-    }
-    assert spec.paper_run() == paper.TABLE_I[0]
-    assert RunSpec(CUSUM, 0.2, 6).paper_run() is None
-    with pytest.raises(ConfigError, match="capture interval must be > 0"):
-        RunSpec(CUSUM, 0.0, 5)
-    with pytest.raises(ConfigError, match="localization interval must be >= 1"):
-        RunSpec(CUSUM, 0.2, 0)
-    with pytest.raises(ValueError):
-        RunSpec(CUSUM, 0.2, 5, mode="guess")  # type: ignore[arg-type]
-
-
-def test_paper_runs_follow_tables_i_and_ii() -> None:
-    runs = paper_runs()
-    assert [
-        (r.detector.kind, r.capture_interval, r.detector.threshold, r.localization_interval)
-        for r in runs
-    ] == [
-        (p.detector, p.capture_interval, p.threshold, p.localization_interval)
-        for p in paper.PAPER_RUNS
-    ]
-    assert [r.label for r in runs] == [p.scenario for p in paper.PAPER_RUNS]
-    assert all(r.mode is Mode(paper.DEFAULT_MODE) for r in runs)
-    both = paper_runs(["shewhart"], [0.2], ["window", "stream"], sigma=3.0)
-    assert [(r.mode, r.detector.effective_sigma) for r in both] == [
-        (Mode.WINDOW, 3.0),
-        (Mode.STREAM, 3.0),
-    ]
-    with pytest.raises(ConfigError, match="unknown detector"):
-        paper_runs(["ewma"])
-    with pytest.raises(ConfigError, match="not one of the paper's"):
-        paper_runs(["cusum"], [1.0])
-    assert paper_runs(["cusum"], [1.0], threshold=1.0, localization_interval=3)[0].label is None
-    with pytest.raises(ConfigError, match="Shewhart chart only"):
-        paper_runs(["cusum"], sigma=2.0)
-    with pytest.raises(ConfigError, match="CUSUM only"):
-        paper_runs(["shewhart"], drift=0.1)
-
-
-def test_phase_offsets_and_required_duration() -> None:
-    spec = RunSpec(CUSUM, 0.2, 5)
-    assert phase_offsets(spec, 5) == pytest.approx([0.0, 0.04, 0.08, 0.12, 0.16])
-    assert phase_offsets(spec, 2, "window") == pytest.approx([0.0, 0.5])
-    with pytest.raises(ConfigError, match="phases"):
-        phase_offsets(spec, 0)
-    with pytest.raises(ConfigError, match="phase span"):
-        phase_offsets(spec, 2, "day")
-    ten = RunSpec(CUSUM, 10.0, 10)
-    assert required_duration(ten, 10.0) == 220.0  # the paper's coarsest run, whatever the phase
 
 
 def test_capture_offsets_move_the_clock_earlier_with_steady_warm_up() -> None:

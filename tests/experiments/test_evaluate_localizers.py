@@ -1,4 +1,4 @@
-"""burstloc.experiments.evaluate with the ranking localizers of issue 6: calibrated bank, top-k,
+"""burstloc.experiments.evaluate with the ranking localizers: calibrated bank, top-k,
 --config."""
 
 from __future__ import annotations

@@ -4,8 +4,12 @@ library imports it but :mod:`burstloc.cli`.
 
 * :mod:`~burstloc.experiments.calibrate`: thresholds and localization settings from a baseline;
 * :mod:`~burstloc.experiments.paper`: the paper's tables and scenario;
+* :mod:`~burstloc.experiments.runs`: the runs of an evaluation (detector, interval, localizer);
+* :mod:`~burstloc.experiments.harness`: the one harness both experiments score through
+  (captured readings, the localizers' attempts, the tally);
 * :mod:`~burstloc.experiments.evaluate`: burst every pipe, replay, localize, score;
-* :mod:`~burstloc.experiments.study`: the one-factor-at-a-time robustness grid;
+* :mod:`~burstloc.experiments.grid`, :mod:`~burstloc.experiments.study`: the
+  one-factor-at-a-time robustness grid and its scoring;
 * :mod:`~burstloc.experiments.report`, :mod:`~burstloc.experiments.plot`: tables, JSON, CSV,
   figures.
 """

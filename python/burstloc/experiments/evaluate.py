@@ -1,17 +1,19 @@
 """Burst every pipe, stream the meters' readings, localize, and score (paper section V).
 
-For a network and one or more runs (detector x capture interval x parameters x mode):
+For a network and one or more runs (detector x capture interval x parameters x mode; built in
+:mod:`burstloc.experiments.runs`):
 
 1. one burst scenario per pipe is simulated (or loaded from the cache) with the
-   :data:`burstloc.experiments.paper.SCENARIO` choices, long enough for every run to see ``2 x
-   interval``
-   readings after the burst;
+   :data:`burstloc.experiments.paper.SCENARIO` choices, long enough for every run to see
+   ``2 x interval`` readings after the burst;
 2. each scenario is sampled at the run's capture interval at ``phases`` clock offsets and
-   replayed through the real-time loop (:class:`burstloc.live.paper_locator.BurstLocator`): the
-   first
-   window whose changes make the rules name a pipe decides (the paper's single localization
-   attempt); no decision means "not located", never a guess;
+   replayed through the real-time loop (:class:`burstloc.live.paper_locator.BurstLocator`):
+   the first window whose changes make the rules name a pipe decides (the paper's single
+   localization attempt); no decision means "not located", never a guess;
 3. a prediction is correct when it names the burst pipe; accuracy = correct / pipes (eq. 4).
+
+Every attempt is captured, decided and counted by :mod:`burstloc.experiments.harness`, the same
+code ``burstloc study`` scores with.
 
 **Phases.** Phase ``k`` of ``N`` starts the capture clock, and with it the window grid, ``k / N``
 of one capture interval (``phase_span="capture"``, the default) or of one localization window,
@@ -21,56 +23,56 @@ phase 0 (the per-pipe tables) and as mean, min and max over the phases. The time
 is the decision time (the timestamp of the newest reading of the deciding window) minus the
 burst start; its median is taken over every located attempt, all phases.
 
-**Localizers.** ``RunSpec.localizer`` is ``"paper"`` (the rules above, the default)
-or one of the ranking localizers ``"arrival"``, ``"signature"``, ``"fused"``
+**Localizers.** ``RunSpec.localizer`` is ``"paper"`` (the rules above, the default) or one of
+the ranking localizers ``"arrival"``, ``"signature"``, ``"fused"``
 (:mod:`burstloc.localize.arrival`, :mod:`burstloc.localize.signature`,
-:mod:`burstloc.localize.fused`). These run the Rust
-detector bank with a calibrated configuration (:mod:`burstloc.experiments.calibrate`; computed for
-the
-network when none is given: no hand tuning), build the evidence from its alarms at the
-localizer's decision time (:func:`burstloc.localize.decide.rank_alarms`) and rank every pipe; the
-prediction is the best-ranked pipe, and top-1 / top-3 accuracy are reported (for the paper's
-rules, which name one pipe, top-3 equals top-1). ``RunSpec.meter_model`` chooses instantaneous
-samples (the paper's) or interval-averaged readings (:func:`burstloc.sim.capture.capture`).
+:mod:`burstloc.localize.fused`). These run the Rust detector bank with a calibrated
+configuration (:mod:`burstloc.experiments.calibrate`; computed for the network when none is
+given: no hand tuning), build the evidence from its alarms at the localizer's decision time
+(:func:`burstloc.localize.decide.rank_alarms`) and rank every pipe; the prediction is the
+best-ranked pipe, and top-1 / top-3 accuracy are reported (for the paper's rules, which name
+one pipe, top-3 equals top-1). ``RunSpec.meter_model`` chooses instantaneous samples (the
+paper's) or interval-averaged readings (:func:`burstloc.sim.capture.capture`).
 """
 
 from __future__ import annotations
 
 import math
 import os
-import statistics
 from collections.abc import Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
-from burstloc.constants import (
-    CAPTURE_INTERVALS,
-    DETECTORS,
-    LOCALIZERS,
-    METER_MODELS,
-    SIGNATURE_DECISION_DELAY,
-    MeterModel,
-)
+from burstloc.constants import CAPTURE_INTERVALS
 from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.experiments import paper
-from burstloc.experiments.calibrate import calibrated_bank
-from burstloc.live.paper_locator import BurstLocator
-from burstloc.live.stream import replay
-from burstloc.localize.decide import decision_time, rank_alarms
-from burstloc.localize.detection import DetectorConfig, Mode, make_detector
-from burstloc.localize.evidence import Ranking
-from burstloc.localize.paper_rules import Localization
-from burstloc.sim.capture import capture
-from burstloc.sim.prepare import ranking_localizers
+from burstloc.experiments.harness import (
+    Attempt,
+    RankingSetup,
+    Tally,
+    calibrated_bank,
+    locate_burst,
+    locate_ranked,
+    rank_attempts,
+    readings_at_offset,
+)
+from burstloc.experiments.runs import (
+    PAPER_OPTIONS,
+    PHASE_SPANS,
+    RANKING_LOCALIZATION_INTERVAL,
+    RunSpec,
+    paper_runs,
+    phase_offsets,
+    plan_runs,
+    ranking_runs,
+    readings_after,
+    required_duration,
+)
+from burstloc.localize.decide import decision_time
 
 if TYPE_CHECKING:
-    import networkx as nx
-
-    from burstloc.experiments.calibrate import Calibration
-    from burstloc.localize.decide import RankingLocalizers
+    from burstloc.experiments.harness import Calibration
     from burstloc.sim.scenario import ScenarioResult
 
 __all__ = [
@@ -97,427 +99,9 @@ __all__ = [
     "required_duration",
 ]
 
-#: What the phases of an evaluation are spread over.
-PHASE_SPANS: tuple[str, ...] = ("capture", "window")
-
 #: ``burstloc evaluate``'s localizer: the fused one, ahead of the paper's rules at every capture
 #: interval in ``burstloc study`` (docs/study/report.md).
 DEFAULT_LOCALIZER = "fused"
-
-
-@dataclass(frozen=True)
-class RunSpec:
-    """One run of the experiment: a detector configuration at a capture interval.
-
-    ``label`` names the paper's scenario (``"S_C1"``...) when the run is one of Tables I/II.
-    ``localizer`` is one of :data:`LOCALIZERS`; ``meter_model`` one of
-    :data:`burstloc.sim.capture.METER_MODELS`. A ranking localizer uses the detector's kind with the
-    calibrated thresholds (the configuration given to :func:`evaluate`), not ``detector``'s.
-    """
-
-    detector: DetectorConfig
-    capture_interval: float
-    localization_interval: int
-    mode: Mode = Mode.WINDOW
-    label: str | None = None
-    localizer: str = "paper"
-    meter_model: str = "instantaneous"
-
-    def __post_init__(self) -> None:
-        ci = self.capture_interval
-        if isinstance(ci, bool) or not isinstance(ci, (int, float)) or not math.isfinite(ci):
-            raise ConfigError(f"capture interval must be a number of seconds, got {ci!r}")
-        if ci <= 0:
-            raise ConfigError(f"capture interval must be > 0 s, got {ci}")
-        li = self.localization_interval
-        if isinstance(li, bool) or not isinstance(li, int):
-            raise ConfigError(f"localization interval must be an integer, got {li!r}")
-        if li < 1:
-            raise ConfigError(f"localization interval must be >= 1, got {li}")
-        object.__setattr__(self, "capture_interval", float(ci))
-        object.__setattr__(self, "mode", Mode(self.mode))
-        if self.localizer not in LOCALIZERS:
-            raise ConfigError(f"localizer must be one of {LOCALIZERS}, got {self.localizer!r}")
-        if self.meter_model not in METER_MODELS:
-            raise ConfigError(
-                f"meter model must be one of {METER_MODELS}, got {self.meter_model!r}"
-            )
-
-    def params(self) -> dict[str, Any]:
-        """The run's parameters (JSON ``params``)."""
-        return {
-            **self.detector.params(),
-            "localization_interval": self.localization_interval,
-            "mode": self.mode.value,
-        }
-
-    def paper_run(self) -> paper.PaperRun | None:
-        """The paper's run with the same detector, capture interval, threshold and interval
-        (``None`` for a ranking localizer: the paper's figures are for its rules)."""
-        if self.localizer != "paper":
-            return None
-        for run in paper.PAPER_RUNS:
-            if (
-                run.detector == self.detector.kind
-                and run.capture_interval == self.capture_interval
-                and run.threshold == self.detector.threshold
-                and run.localization_interval == self.localization_interval
-            ):
-                return run
-        return None
-
-
-def paper_runs(
-    detectors: Sequence[str] = ("cusum", "shewhart"),
-    capture_intervals: Sequence[float] | None = None,
-    modes: Sequence[Mode | str] = (paper.DEFAULT_MODE,),
-    *,
-    threshold: float | None = None,
-    drift: float | None = None,
-    sigma: float | None = None,
-    localization_interval: int | None = None,
-) -> list[RunSpec]:
-    """Runs for detectors x capture intervals x modes, with Tables I/II parameters by default.
-
-    A capture interval the paper did not use needs ``threshold`` and ``localization_interval``.
-    ``threshold``, ``drift`` (CUSUM), ``sigma`` (Shewhart) and ``localization_interval``
-    override the paper's values for every run.
-    """
-    intervals = list(CAPTURE_INTERVALS if capture_intervals is None else capture_intervals)
-    runs: list[RunSpec] = []
-    for kind in detectors:
-        table = {r.capture_interval: r for r in paper.PAPER_RUNS if r.detector == kind}
-        if kind not in ("cusum", "shewhart"):
-            raise ConfigError(f"unknown detector {kind!r}; choose cusum, shewhart or both")
-        for ci in intervals:
-            ci = float(ci)
-            if not (math.isfinite(ci) and ci > 0):
-                raise ConfigError(f"capture interval must be > 0 s, got {ci:g}")
-            base = table.get(ci)
-            thr = threshold if threshold is not None else (base.threshold if base else None)
-            li = (
-                localization_interval
-                if localization_interval is not None
-                else (base.localization_interval if base else None)
-            )
-            if thr is None or li is None:
-                raise ConfigError(
-                    f"capture interval {ci:g} s is not one of the paper's "
-                    f"({', '.join(f'{c:g}' for c in CAPTURE_INTERVALS)}); give "
-                    "--threshold and --localization-interval for it"
-                )
-            if kind == "cusum":
-                if sigma is not None:
-                    raise ConfigError("--sigma applies to the Shewhart chart only")
-                cfg = DetectorConfig("cusum", thr, drift=drift or 0.0)
-            else:
-                if drift is not None:
-                    raise ConfigError("--drift applies to the CUSUM only")
-                cfg = DetectorConfig("shewhart", thr, sigma=sigma)
-            for mode in modes:
-                spec = RunSpec(cfg, ci, li, Mode(mode))
-                label = spec.paper_run()
-                runs.append(RunSpec(cfg, ci, li, Mode(mode), label.scenario if label else None))
-    return runs
-
-
-#: Localization interval of a ranking run at a capture interval the paper did not use (the
-#: paper's value at every coarse interval): it only sets the warm-up history and the simulated
-#: span; the calibrated bank and the localizer's decision delay do the rest.
-RANKING_LOCALIZATION_INTERVAL = 10
-
-
-def ranking_runs(
-    detectors: Sequence[str],
-    capture_intervals: Sequence[float] | None,
-    localizers: Sequence[str],
-    meter_models: Sequence[str] = ("instantaneous",),
-) -> list[RunSpec]:
-    """Runs of ranking localizers (not ``"paper"``) for detectors x intervals x meter models.
-
-    A ranking run detects with the calibrated bank of its detector kind, so only the kind
-    matters; its ``detector`` carries the paper's Tables I/II threshold where the paper used
-    the interval (for the JSON record) and 1 m otherwise, and its localization interval the
-    paper's, else :data:`RANKING_LOCALIZATION_INTERVAL`. Any capture interval > 0 is accepted.
-    Its mode is ``stream``: the bank is fed once per reading and never reset.
-
-    Raises:
-        ConfigError: an unknown detector or localizer, ``"paper"`` among ``localizers``, or a
-            capture interval that is not > 0.
-    """
-    if "paper" in localizers:
-        raise ConfigError("ranking_runs builds ranking localizers only; use paper_runs for 'paper'")
-    intervals = list(CAPTURE_INTERVALS if capture_intervals is None else capture_intervals)
-    runs: list[RunSpec] = []
-    for kind in detectors:
-        table = {r.capture_interval: r for r in paper.PAPER_RUNS if r.detector == kind}
-        for ci in intervals:
-            ci = float(ci)
-            if not (math.isfinite(ci) and ci > 0):
-                raise ConfigError(f"capture interval must be > 0 s, got {ci:g}")
-            base = table.get(ci)
-            cfg = DetectorConfig(kind, base.threshold if base else 1.0)
-            li = base.localization_interval if base else RANKING_LOCALIZATION_INTERVAL
-            runs += [
-                RunSpec(cfg, ci, li, Mode.STREAM, localizer=name, meter_model=model)
-                for name in localizers
-                for model in meter_models
-            ]
-    return runs
-
-
-#: Options that configure the paper's rules only (:func:`plan_runs` refuses them otherwise).
-PAPER_OPTIONS: tuple[str, ...] = ("threshold", "drift", "sigma", "localization_interval", "mode")
-
-
-def plan_runs(
-    *,
-    localizers: Sequence[str],
-    detectors: Sequence[str] = DETECTORS,
-    capture_intervals: Sequence[float] | None = None,
-    meter_models: Sequence[MeterModel] = ("instantaneous",),
-    mode: str | None = None,
-    threshold: float | None = None,
-    drift: float | None = None,
-    sigma: float | None = None,
-    localization_interval: int | None = None,
-) -> list[RunSpec]:
-    """The runs of one evaluation: the paper's rules (Tables I/II parameters, or the given ones)
-    and the ranking localizers, for every detector, capture interval and meter model.
-
-    ``mode`` is the paper's detection mode (``"window"``, ``"stream"`` or ``"both"``; default
-    :data:`burstloc.experiments.paper.DEFAULT_MODE`).
-
-    Raises:
-        ConfigError: a paper-only option (:data:`PAPER_OPTIONS`) without the paper's rules.
-    """
-    chosen = list(dict.fromkeys(localizers))
-    ranking = [name for name in chosen if name != "paper"]
-    paper_options = {
-        "threshold": threshold,
-        "drift": drift,
-        "sigma": sigma,
-        "localization_interval": localization_interval,
-        "mode": mode,
-    }
-    if "paper" not in chosen:
-        given = [f"--{k.replace('_', '-')}" for k, v in paper_options.items() if v is not None]
-        if given:
-            raise ConfigError(
-                f"{', '.join(given)} apply to the paper's rules only (add --localizer paper); "
-                f"{', '.join(ranking)} use the calibrated configuration (--config)"
-            )
-    runs: list[RunSpec] = []
-    if "paper" in chosen:
-        chosen_mode = mode or paper.DEFAULT_MODE
-        runs += [
-            replace(spec, meter_model=model)
-            for spec in paper_runs(
-                detectors,
-                capture_intervals,
-                ("window", "stream") if chosen_mode == "both" else (chosen_mode,),
-                threshold=threshold,
-                drift=drift,
-                sigma=sigma,
-                localization_interval=localization_interval,
-            )
-            for model in meter_models
-        ]
-    if ranking:
-        runs += ranking_runs(detectors, capture_intervals, ranking, meter_models)
-    return runs
-
-
-def phase_offsets(spec: RunSpec, phases: int, span: str = "capture") -> list[float]:
-    """The clock offsets (s) of the ``phases`` attempts of a run, evenly spread."""
-    if isinstance(phases, bool) or not isinstance(phases, int) or phases < 1:
-        raise ConfigError(f"phases must be an integer >= 1, got {phases!r}")
-    if span not in PHASE_SPANS:
-        raise ConfigError(f"phase span must be one of {PHASE_SPANS}, got {span!r}")
-    period = spec.capture_interval
-    if span == "window":
-        period *= spec.localization_interval
-    return [k * period / phases for k in range(phases)]
-
-
-def required_duration(spec: RunSpec, burst_start: float) -> float:
-    """Simulated time a run needs: ``2 x interval`` readings after the burst at any phase.
-
-    ``burst_start + (2 x interval + 1) x capture_interval``: one capture interval of margin for
-    the clock phase and for TSNet's grid, which ends up to one time step short of the duration.
-    """
-    need = burst_start + (2 * spec.localization_interval + 1) * spec.capture_interval
-    if spec.localizer in ("signature", "fused"):
-        need = max(need, burst_start + SIGNATURE_DECISION_DELAY + 2 * spec.capture_interval)
-    return need
-
-
-def readings_after(times: np.ndarray, burst_start: float) -> int:
-    """How many capture ticks fall strictly after the burst start."""
-    return int(np.count_nonzero(times > burst_start + 1e-9))
-
-
-@dataclass(frozen=True)
-class Attempt:
-    """One burst streamed at one clock offset: what was decided, when, and by which rule."""
-
-    pipe: str
-    offset: float
-    burst_start: float
-    localization: Localization | None
-    ranking: Ranking | None = None
-    decided_at: float | None = None
-
-    @property
-    def located(self) -> bool:
-        """Whether the rules (or a ranking localizer) named a pipe."""
-        return self.predicted_pipe is not None
-
-    @property
-    def predicted_pipe(self) -> str | None:
-        """The named (best-ranked) pipe, or ``None``."""
-        if self.ranking is not None:
-            best = self.ranking.best
-            return None if best is None else best.pipe
-        return None if self.localization is None else self.localization.pipe
-
-    @property
-    def correct(self) -> bool:
-        """Whether the named (best-ranked) pipe is the burst pipe."""
-        return self.predicted_pipe == self.pipe
-
-    def in_top(self, k: int) -> bool:
-        """Whether the burst pipe is among the ``k`` best-ranked (the paper's rules name one)."""
-        if self.ranking is not None:
-            return self.ranking.in_top(self.pipe, k)
-        return self.correct
-
-    @property
-    def predicted(self) -> tuple[str, str] | None:
-        """The named pipe's ``(start, end)`` in flow direction, or ``None``."""
-        if self.ranking is not None:
-            best = self.ranking.best
-            return None if best is None else (best.start, best.end)
-        loc = self.localization
-        return None if loc is None else (loc.start_node, loc.end_node)
-
-    @property
-    def time_to_localize(self) -> float | None:
-        """Seconds from the burst start to the decision, or ``None``."""
-        if self.ranking is not None:
-            return None if self.decided_at is None else self.decided_at - self.burst_start
-        loc = self.localization
-        return None if loc is None else loc.decision_time - self.burst_start
-
-
-def readings_at_offset(result: ScenarioResult, spec: RunSpec, offset: float) -> tuple[Any, Any]:
-    """The readings of one run at a clock offset (s).
-
-    The capture clock ticks at ``t0 - offset - 2 x interval x capture_interval + k x
-    capture_interval`` (``t0``: the simulation's start): the offset moves the clock, and with
-    it the window grid, ``offset`` seconds earlier relative to the burst. Ticks before ``t0``
-    carry the initial steady state, which is exact (TSNet starts from it and it holds until the
-    burst): ``2 x interval`` of them are a warm-up, so that a streaming detector's reference
-    window is full when the simulated span begins, as it would be for meters that have been
-    reporting long before a burst. Being a whole number of windows, the warm-up does not move
-    the window grid. Ticks from ``t0`` on sample the simulation (sample-and-hold).
-    """
-    ci = spec.capture_interval
-    t0 = float(result.time[0])
-    k = math.ceil(offset / ci - 1e-9)  # ticks in [t0 - offset, t0)
-    phase = k * ci - offset
-    if phase < 1e-9 * ci:
-        phase = 0.0
-    times, values = capture(result.time - t0, result.heads, ci, phase, spec.meter_model)
-    lead = k + 2 * spec.localization_interval
-    pre = times[0] - ci * np.arange(lead, 0, -1, dtype=np.float64)
-    times = np.concatenate([pre, times]) + t0
-    values = np.concatenate([np.repeat(result.heads[:1], lead, axis=0), values])
-    return times, values
-
-
-def locate_burst(
-    result: ScenarioResult,
-    graph: nx.DiGraph,
-    spec: RunSpec,
-    offset: float = 0.0,
-) -> Attempt:
-    """Stream one simulated burst at a clock offset through the real-time loop.
-
-    The capture clock, and with it the window grid, starts ``offset`` seconds earlier relative
-    to the burst than at offset 0 (see :func:`readings_at_offset`).
-    """
-    times, values = readings_at_offset(result, spec, offset)
-    meters = list(result.junctions)
-    detector = make_detector(spec.detector, meters, spec.localization_interval, spec.mode)
-    locator = BurstLocator(graph, meters, detector, spec.localization_interval)
-    outcome = locator.first(replay(times, values))
-    burst_start = float(result.metadata["burst_start"])
-    return Attempt(result.pipe, offset, burst_start, outcome.localization if outcome else None)
-
-
-@dataclass
-class RankingSetup:
-    """What the ranking localizers of one network need, built once per evaluation."""
-
-    meters: list[str]
-    config: Calibration
-    localizers: RankingLocalizers
-
-    @classmethod
-    def build(
-        cls,
-        network: str,
-        meters: Sequence[str],
-        capture_intervals: Sequence[float],
-        config: Calibration | None = None,
-    ) -> RankingSetup:
-        """Localizers for ``meters`` of ``network`` and a calibration covering the intervals.
-
-        Without ``config`` the network is calibrated here
-        (:func:`burstloc.experiments.calibrate.calibrate`
-        with its defaults). A ``config`` for another network or other meters is refused by
-        name (:meth:`burstloc.experiments.calibrate.Calibration.check`), as is one without an
-        interval.
-        """
-        from burstloc.experiments.calibrate import calibrate
-
-        if config is None:
-            config = calibrate(network, capture_intervals=capture_intervals, meters=meters)
-        else:
-            config.check(network, meters)
-            for ci in capture_intervals:
-                config.for_interval(ci)
-        return cls(list(meters), config, ranking_localizers(network, meters))
-
-
-def locate_ranked(
-    result: ScenarioResult, spec: RunSpec, setup: RankingSetup, offset: float = 0.0
-) -> Attempt:
-    """One burst at a clock offset through the calibrated bank and a ranking localizer."""
-    from burstloc.exceptions import InputError
-
-    times, values = readings_at_offset(result, spec, offset)
-    burst_start = float(result.metadata["burst_start"])
-    cal = setup.config.for_interval(spec.capture_interval)
-    bank = calibrated_bank(spec.detector.kind, len(setup.meters), cal)
-    alarms = bank.run(np.ascontiguousarray(values))
-    if not alarms:
-        return Attempt(result.pipe, offset, burst_start, None)
-    try:
-        decision = rank_alarms(
-            spec.localizer,
-            setup.localizers,
-            setup.meters,
-            times,
-            values,
-            alarms,
-            cal,
-            spec.meter_model,  # type: ignore[arg-type]
-        )
-    except InputError:
-        return Attempt(result.pipe, offset, burst_start, None)
-    return Attempt(result.pipe, offset, burst_start, None, decision.ranking, decision.time)
 
 
 @dataclass
@@ -553,19 +137,18 @@ class RunResult:
         """Correct / pipes at phase 0 (eq. 4, as a fraction)."""
         return self.correct / self.total
 
+    def tally(self) -> Tally:
+        """Every attempt of the run (all pipes, all phases) counted by the harness."""
+        return Tally.of(a for p in self.pipes for a in self.attempts[p])
+
     def median_time_to_localize(self) -> float | None:
         """Median seconds from burst to decision over every located attempt (all phases)."""
-        times = [
-            a.time_to_localize
-            for p in self.pipes
-            for a in self.attempts[p]
-            if a.time_to_localize is not None
-        ]
-        return float(statistics.median(times)) if times else None
+        return self.tally().median_time()
 
     def to_json(self) -> dict[str, Any]:
         """The run as the CLI's JSON contract (tests/evaluate_schema.json)."""
         acc = self.phase_accuracies()
+        tally = self.tally()
         pipes = []
         for p in self.pipes:
             a = self.attempts[p][0]
@@ -604,14 +187,14 @@ class RunResult:
             "correct": self.correct,
             "total": self.total,
             "accuracy": self.accuracy,
-            "accuracy_phase_mean": float(np.mean(acc)),
+            "accuracy_phase_mean": tally.top1_fraction,
             "accuracy_phase_min": float(min(acc)),
             "accuracy_phase_max": float(max(acc)),
-            "top1": float(np.mean(acc)),
-            "top3": float(np.mean(self.phase_accuracies(3))),
+            "top1": tally.top1_fraction,
+            "top3": tally.top3_fraction,
             "accuracy_per_phase": acc,
             "phase_offsets_s": list(self.offsets),
-            "median_time_to_localize_s": self.median_time_to_localize(),
+            "median_time_to_localize_s": tally.median_time(),
             "paper": published,
             "pipes": pipes,
         }
@@ -742,16 +325,65 @@ def evaluate(
         meters = list(next(iter(results.values())).junctions)
         intervals = sorted({spec.capture_interval for spec in ranked})
         setup = RankingSetup.build(path, meters, intervals, config)
-    out: list[RunResult] = []
-    for spec in runs:
-        offsets = phase_offsets(spec, phases, phase_span)
-        if setup is not None and spec.localizer != "paper":
-            attempts = {
-                p: [locate_ranked(results[p], spec, setup, o) for o in offsets] for p in chosen
-            }
-        else:
-            attempts = {
-                p: [locate_burst(results[p], graph, spec, o) for o in offsets] for p in chosen
-            }
-        out.append(RunResult(spec, chosen, truth, offsets, attempts))
+    attempts = _score(runs, results, chosen, graph, setup, phases, phase_span)
+    out = [
+        RunResult(spec, chosen, truth, phase_offsets(spec, phases, phase_span), attempts[spec])
+        for spec in runs
+    ]
     return Evaluation(path, out, params, phase_span, warnings, results, graph)
+
+
+def _score(
+    runs: Sequence[RunSpec],
+    results: dict[str, ScenarioResult],
+    pipes: Sequence[str],
+    graph: Any,
+    setup: RankingSetup | None,
+    phases: int,
+    phase_span: str,
+) -> dict[RunSpec, dict[str, list[Attempt]]]:
+    """Every run's attempts, ``[spec][pipe][k]``. Ranking runs that differ only in their
+    localizer see the same readings: they share one pass of the bank per attempt
+    (:func:`burstloc.experiments.harness.rank_attempts`)."""
+    scored: dict[RunSpec, dict[str, list[Attempt]]] = {}
+    for spec in runs:
+        if spec in scored:
+            continue
+        offsets = phase_offsets(spec, phases, phase_span)
+        if setup is None or spec.localizer == "paper":
+            scored[spec] = {
+                p: [locate_burst(results[p], graph, spec, o) for o in offsets] for p in pipes
+            }
+            continue
+        key = _readings_key(spec)
+        group = [s for s in runs if s.localizer != "paper" and _readings_key(s) == key]
+        names = [s.localizer for s in group]
+        by_name: dict[str, dict[str, list[Attempt]]] = {n: {p: [] for p in pipes} for n in names}
+        for p in pipes:
+            for o in offsets:
+                ranked = rank_attempts(
+                    results[p],
+                    readings_at_offset(results[p], spec, o),
+                    setup,
+                    detector=spec.detector.kind,
+                    capture_interval=spec.capture_interval,
+                    localizers=names,
+                    meter_model=spec.meter_model,
+                    offset=o,
+                )
+                for name, attempt in ranked.items():
+                    by_name[name][p].append(attempt)
+        for s in group:
+            scored[s] = by_name[s.localizer]
+    return scored
+
+
+def _readings_key(spec: RunSpec) -> tuple[Any, ...]:
+    """What a ranking run's readings and bank depend on (all but its localizer)."""
+    return (
+        spec.detector.kind,
+        spec.capture_interval,
+        spec.localization_interval,
+        spec.mode,
+        spec.meter_model,
+    )

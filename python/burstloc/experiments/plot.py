@@ -15,18 +15,21 @@ matplotlib is imported only when a figure is drawn.
 
 from __future__ import annotations
 
+import io
 import math
 import os
 import re
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from burstloc._atomic import write_bytes
 from burstloc.experiments.evaluate import Evaluation, RunResult
 from burstloc.sim.capture import resample
 
-__all__ = ["plot_network", "plot_traces", "write_plots"]
+__all__ = ["plot_accuracy_by_interval", "plot_network", "plot_traces", "write_plots"]
 
 _UNSAFE = re.compile(r"[^A-Za-z0-9._-]")
 
@@ -38,6 +41,14 @@ def _pyplot() -> Any:
     import matplotlib.pyplot as plt
 
     return plt
+
+
+def _save(plt: Any, fig: Any, path: str | os.PathLike[str]) -> Path:
+    """Write ``fig`` as a PNG to ``path`` (atomically) and close it."""
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=110)
+    plt.close(fig)
+    return write_bytes(path, buffer.getvalue())
 
 
 def _stem(ev: Evaluation, r: RunResult) -> str:
@@ -79,7 +90,7 @@ def plot_network(ev: Evaluation, r: RunResult, path: str | os.PathLike[str]) -> 
             ax.plot(*zip(pos[p0], pos[p1], strict=True), color="tab:red", lw=3, zorder=4)
         if not a.located:
             status = "not located"
-        elif a.localization is None:  # a ranking localizer (issue 6)
+        elif a.localization is None:  # a ranking localizer
             status = "correct" if a.correct else f"named {a.predicted_pipe}"
             status += f" ({r.spec.localizer}, rank {a.ranking.rank_of(pipe) if a.ranking else '-'})"
         else:
@@ -98,10 +109,7 @@ def plot_network(ev: Evaluation, r: RunResult, path: str | os.PathLike[str]) -> 
         fontsize=10,
     )
     fig.tight_layout()
-    target = Path(path)
-    fig.savefig(target, dpi=110)
-    plt.close(fig)
-    return target
+    return _save(plt, fig, path)
 
 
 def plot_traces(ev: Evaluation, r: RunResult, pipe: str, path: str | os.PathLike[str]) -> Path:
@@ -146,10 +154,7 @@ def plot_traces(ev: Evaluation, r: RunResult, pipe: str, path: str | os.PathLike
     ax.set_ylabel("pressure head (m)")
     ax.legend(fontsize=7, ncol=2, loc="lower left")
     fig.tight_layout()
-    target = Path(path)
-    fig.savefig(target, dpi=110)
-    plt.close(fig)
-    return target
+    return _save(plt, fig, path)
 
 
 def write_plots(
@@ -166,3 +171,38 @@ def write_plots(
         safe = _UNSAFE.sub("_", chosen)
         paths.append(plot_traces(ev, r, chosen, out / f"{stem}_traces_{safe}.png"))
     return paths
+
+
+def plot_accuracy_by_interval(
+    rows: Sequence[Mapping[str, Any]],
+    path: str | os.PathLike[str],
+    title: str,
+    series_keys: Sequence[str],
+) -> Path:
+    """Top-1 accuracy (%) against the capture interval (log axis), one panel per meter model
+    and one line per value of ``series_keys`` (study rows: ``capture_interval``, ``top1``,
+    ``meter_model`` and the series keys)."""
+    plt = _pyplot()
+
+    models = sorted({r["meter_model"] for r in rows})
+    fig, axes = plt.subplots(1, len(models), figsize=(5 * len(models), 3.6), squeeze=False)
+    for ax, model in zip(axes[0], models, strict=True):
+        series: dict[tuple[Any, ...], list[tuple[float, float]]] = {}
+        for r in rows:
+            if r["meter_model"] == model:
+                key = tuple(r[k] for k in series_keys)
+                series.setdefault(key, []).append((r["capture_interval"], 100 * r["top1"]))
+        for key, pts in sorted(series.items(), key=lambda kv: str(kv[0])):
+            pts.sort()
+            ax.plot(
+                [p[0] for p in pts], [p[1] for p in pts], marker="o", label=" ".join(map(str, key))
+            )
+        ax.set_xscale("log")
+        ax.set_xlabel("capture interval (s)")
+        ax.set_ylabel("top-1 accuracy (%)")
+        ax.set_ylim(-2, 102)
+        ax.set_title(f"{title} - {model}", fontsize=9)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    return _save(plt, fig, path)

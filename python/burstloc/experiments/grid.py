@@ -1,0 +1,213 @@
+"""The robustness study's grid: its networks, factors and levels, the one-factor-at-a-time
+points, the settings every point is scored with, and each point's simulated bursts.
+
+Scored by :mod:`burstloc.experiments.study`.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from burstloc.constants import (
+    CAPTURE_INTERVALS,
+    DETECTORS,
+    METER_MODELS,
+    RANKING_LOCALIZERS,
+    SCENARIO_DURATION,
+)
+from burstloc.exceptions import ConfigError, NetworkError
+
+if TYPE_CHECKING:
+    from burstloc.localize.evidence import MeterModel
+
+__all__ = [
+    "DEFAULT_LEVELS",
+    "DEFAULT_NETWORKS",
+    "Factors",
+    "StudyPoint",
+    "StudySettings",
+    "point_scenarios",
+    "study_grid",
+    "study_time_step",
+]
+
+#: The study's networks, relative to the repository root (see networks/README.md).
+DEFAULT_NETWORKS = ("networks/paper15.inp", "networks/todini6.inp", "networks/awumah11.inp")
+
+#: Levels of each factor; the first network's grid varies one factor at a time around
+#: :class:`Factors`' defaults.
+DEFAULT_LEVELS: dict[str, tuple[Any, ...]] = {
+    "noise_sigma": (0.0, 0.01, 0.05, 0.1),
+    "meter_fraction": (1.0, 0.5, 0.25),
+    "position": (0.1, 0.5, 0.9),
+    "burst_coeff": (0.003, 0.01, 0.03),
+    "friction": ("steady", "quasi-steady", "unsteady"),
+}
+
+
+@dataclass(frozen=True)
+class Factors:
+    """One setting of the study's factors (defaults: the study's centre point).
+
+    Attributes:
+        noise_sigma: additive Gaussian noise per reading, m.
+        meter_fraction: fraction of junctions with meters, in (0, 1] (placed by
+            :func:`greedy_meters`).
+        position: burst position along the pipe, fraction of its length.
+        burst_coeff: the burst's emitter coefficient (TSNet's ``final_burst_coeff``).
+        friction: TSNet's friction model (:data:`burstloc.sim.scenario.FRICTION_MODELS`).
+    """
+
+    noise_sigma: float = 0.0
+    meter_fraction: float = 1.0
+    position: float = 0.5
+    burst_coeff: float = 0.01
+    friction: str = "steady"
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.noise_sigma) and self.noise_sigma >= 0):
+            raise ConfigError(f"noise_sigma must be >= 0 m, got {self.noise_sigma!r}")
+        if not (0 < self.meter_fraction <= 1):
+            raise ConfigError(f"meter_fraction must be in (0, 1], got {self.meter_fraction!r}")
+
+
+@dataclass(frozen=True)
+class StudyPoint:
+    """A grid point: a network, the factor varied (``"default"`` for the centre) and the levels."""
+
+    network: str
+    factor: str
+    factors: Factors = field(default_factory=Factors)
+
+    @property
+    def label(self) -> str:
+        """``"paper15: noise_sigma=0.05"`` style name."""
+        name = Path(self.network).stem
+        if self.factor == "default":
+            return f"{name}: default"
+        return f"{name}: {self.factor}={getattr(self.factors, self.factor)}"
+
+
+@dataclass(frozen=True)
+class StudySettings:
+    """What every grid point is scored with.
+
+    Attributes:
+        capture_intervals: seconds.
+        detectors: ``"cusum"`` and/or ``"shewhart"``.
+        localizers: any of :data:`burstloc.constants.RANKING_LOCALIZERS`.
+        meter_models: any of :data:`burstloc.sim.capture.METER_MODELS`.
+        phases: capture-clock phases per burst, spread evenly over one interval.
+        duration: simulated seconds per burst (must cover the signature decision, 150 s after
+            the burst).
+        false_alarm_rate: calibration target, alarms per meter per hour.
+        pipes: restrict every network to these pipes (``None`` = all; for tests).
+        seed: noise seed.
+        time_step: TSNet's requested time step, s (``None``: the rule of
+            :func:`study_time_step`, TSNet's own step unless it is coarser than the finest
+            capture interval).
+    """
+
+    capture_intervals: tuple[float, ...] = CAPTURE_INTERVALS
+    detectors: tuple[str, ...] = DETECTORS
+    localizers: tuple[str, ...] = RANKING_LOCALIZERS
+    meter_models: tuple[MeterModel, ...] = METER_MODELS
+    phases: int = 5
+    duration: float = SCENARIO_DURATION
+    false_alarm_rate: float = 0.1
+    pipes: tuple[str, ...] | None = None
+    seed: int = 0
+    time_step: float | None = None
+
+    def __post_init__(self) -> None:
+        for name, values, allowed in (
+            ("detectors", self.detectors, DETECTORS),
+            ("localizers", self.localizers, RANKING_LOCALIZERS),
+            ("meter_models", self.meter_models, METER_MODELS),
+        ):
+            bad = [v for v in values if v not in allowed]
+            if bad or not values:
+                raise ConfigError(f"{name} must be a non-empty subset of {allowed}, got {values}")
+        if not self.capture_intervals or not all(
+            math.isfinite(dt) and dt > 0 for dt in self.capture_intervals
+        ):
+            raise ConfigError(f"capture_intervals must be > 0 s, got {self.capture_intervals}")
+        if not (isinstance(self.phases, int) and self.phases >= 1):
+            raise ConfigError(f"phases must be a positive integer, got {self.phases!r}")
+
+
+def study_grid(
+    networks: Sequence[str | os.PathLike[str]],
+    levels: dict[str, Sequence[Any]] | None = None,
+    vary: Sequence[str] | None = None,
+) -> list[StudyPoint]:
+    """The one-factor-at-a-time grid: every network at the defaults, then, on the networks in
+    ``vary`` (default: the first one), every non-default level of every factor in ``levels``.
+
+    Raises:
+        ConfigError: an unknown factor, or no network.
+    """
+    if not networks:
+        raise ConfigError("the study needs at least one network")
+    chosen: dict[str, Sequence[Any]] = dict(DEFAULT_LEVELS if levels is None else levels)
+    defaults = Factors()
+    unknown = [f for f in chosen if not hasattr(defaults, f)]
+    if unknown:
+        raise ConfigError(f"unknown study factor(s) {unknown}; known: {list(asdict(defaults))}")
+    paths = [os.fspath(n) for n in networks]
+    varied = {os.fspath(n) for n in (paths[:1] if vary is None else vary)}
+    points = [StudyPoint(path, "default") for path in paths]
+    for path in paths:
+        if path not in varied:
+            continue
+        for factor, values in chosen.items():
+            for value in values:
+                if value != getattr(defaults, factor):
+                    points.append(StudyPoint(path, factor, replace(defaults, **{factor: value})))
+    return points
+
+
+def point_scenarios(point: StudyPoint, settings: StudySettings) -> list[Any]:
+    """The point's bursts, one per pipe, with the time step rule of :func:`study_time_step`."""
+    from burstloc.network import load_network, pipe_names
+    from burstloc.sim.scenario import BurstScenario
+
+    pipes = settings.pipes or tuple(pipe_names(load_network(point.network)))
+    f = point.factors
+    scenarios = [
+        BurstScenario(
+            point.network,
+            pipe,
+            position=f.position,
+            burst_coeff=f.burst_coeff,
+            friction=f.friction,
+            duration=settings.duration,
+            time_step=settings.time_step,
+        )
+        for pipe in pipes
+    ]
+    return [replace(s, time_step=study_time_step(s, settings)) for s in scenarios]
+
+
+def study_time_step(scenario: Any, settings: StudySettings) -> float | None:
+    """TSNet time step for a study burst: ``settings.time_step`` if given; else TSNet's own
+    (``None``) when it is no coarser than the finest capture interval, and half that interval
+    otherwise (a capture needs simulated samples at least as fine as its interval; half of it
+    keeps TSNet's wave-speed adjustment, which can lengthen a requested step by up to 50 %,
+    below the interval).
+    """
+    from burstloc.sim.tsnet import expected_time_step
+
+    if settings.time_step is not None:
+        return settings.time_step
+    finest = min(settings.capture_intervals)
+    try:
+        expected = expected_time_step(replace(scenario, time_step=None))
+    except NetworkError:
+        return None  # an unknown pipe: its simulation fails and names it
+    return None if expected <= finest else finest / 2
