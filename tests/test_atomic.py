@@ -49,3 +49,19 @@ def test_text_replaces_the_whole_file_and_creates_the_directory(tmp_path: Path) 
     write_text(target, "a long first version\n")
     write_text(target, "short\n")
     assert target.read_text() == "short\n"
+
+
+def test_permissions_are_an_ordinary_files_or_the_old_ones(tmp_path: Path) -> None:
+    import os
+
+    mask = os.umask(0o022)
+    try:
+        fresh = write_text(tmp_path / "fresh.txt", "x")
+        assert fresh.stat().st_mode & 0o777 == 0o644  # mkstemp alone would give 0o600
+        kept = tmp_path / "kept.txt"
+        kept.write_text("old")
+        kept.chmod(0o640)
+        write_text(kept, "new")
+        assert kept.stat().st_mode & 0o777 == 0o640
+    finally:
+        os.umask(mask)

@@ -11,7 +11,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from burstloc import network
+from burstloc import inp, network
 from burstloc.exceptions import ConfigError, NetworkError
 from conftest import PAPER15, REPO, TINY_INP, TNET1, write_tiny
 
@@ -126,7 +126,7 @@ def test_paper15_is_what_the_builder_writes() -> None:
 
 
 def test_pipe_names_in_file_lists_pipes_in_order() -> None:
-    assert network.pipe_names_in_file(PAPER15) == list(PAPER_TABLE)
+    assert inp.pipe_names_in_file(PAPER15) == list(PAPER_TABLE)
 
 
 def test_missing_file_is_a_network_error(tmp_path: Path) -> None:
@@ -273,11 +273,11 @@ def test_network_hash_is_the_files_sha256(tmp_path: Path) -> None:
     import hashlib
 
     path = write_tiny(tmp_path / "a.inp")
-    digest = network.network_hash(path)
+    digest = inp.network_hash(path)
     assert digest == "sha256:" + hashlib.sha256(path.read_bytes()).hexdigest()
-    assert network.network_hash(write_tiny(tmp_path / "b.inp", head=61.0)) != digest
+    assert inp.network_hash(write_tiny(tmp_path / "b.inp", head=61.0)) != digest
     with pytest.raises(NetworkError, match="cannot read network file"):
-        network.network_hash(tmp_path / "missing.inp")
+        inp.network_hash(tmp_path / "missing.inp")
 
 
 # --- split_pipe ------------------------------------------------------------------------------

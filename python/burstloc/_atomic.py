@@ -2,14 +2,17 @@
 
 A file is written to a temporary file in the target's directory, flushed to disk, then moved
 over the target with ``os.replace``: a reader sees the old file or the new one, never a partial
-one, and a failed or interrupted write leaves the old file untouched. JSON is written with
-``allow_nan=False``: a NaN or an infinity is refused (a ``ValueError``), never written.
+one, and a failed or interrupted write leaves the old file untouched. The new file keeps the
+old one's permissions, or gets those of an ordinary new file (``0o666`` less the umask).
+JSON is written with ``allow_nan=False``: a NaN or an infinity is refused (a ``ValueError``),
+never written.
 """
 
 from __future__ import annotations
 
 import json
 import os
+import stat
 import tempfile
 from collections.abc import Callable, Mapping
 from pathlib import Path
@@ -34,11 +37,22 @@ def atomic_write(path: str | os.PathLike[str], write: Callable[[IO[bytes]], None
             write(f)
             f.flush()
             os.fsync(f.fileno())
+        os.chmod(tmp, _mode_for(target))
         os.replace(tmp, target)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
     return target
+
+
+def _mode_for(target: Path) -> int:
+    """The permissions the written file gets: the old file's, else an ordinary new file's."""
+    try:
+        return stat.S_IMODE(target.stat().st_mode)
+    except FileNotFoundError:
+        mask = os.umask(0)
+        os.umask(mask)
+        return 0o666 & ~mask
 
 
 def write_bytes(path: str | os.PathLike[str], data: bytes) -> Path:

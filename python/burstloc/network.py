@@ -8,24 +8,21 @@
   signatures (:mod:`burstloc.sim.signatures`) both use it.
 * :func:`flow_direction_graph` is the paper's directed graph (section IV.B): one edge per link,
   pointing downstream in the steady state.
-* :func:`network_hash` fingerprints a network file (its bytes; no WNTR): what a stored
-  configuration is bound to.
 * :func:`split_pipe` cuts a pipe into two at a fraction of its length with a new junction
   between them, where a burst can then be placed (TSNet bursts only at junctions).
 
 This module never imports TSNet: the live path (stream, detectors, localize) uses it. WNTR is
-imported on first use, so that listing a file's pipes (:func:`pipe_names_in_file`) is cheap.
+imported on first use. The INP file read as text (structure checks, pipe IDs, fingerprint)
+is :mod:`burstloc.inp`.
 """
 
 from __future__ import annotations
 
-import hashlib
 import math
 import os
 import re
 import tempfile
 import warnings
-from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -35,6 +32,7 @@ import numpy as np
 
 from burstloc._diagnostics import capture_diagnostics
 from burstloc.exceptions import ConfigError, NetworkError
+from burstloc.inp import pipe_names_in_file
 
 if TYPE_CHECKING:
     from wntr.network import WaterNetworkModel
@@ -45,49 +43,15 @@ __all__ = [
     "flow_direction_graph",
     "junction_names",
     "load_network",
-    "network_hash",
     "pipe_endpoints",
     "pipe_names",
-    "pipe_names_in_file",
     "require_pipe",
     "split_pipe",
     "steady_state",
     "steady_state_flows",
 ]
 
-#: Section headers EPANET 2.2 accepts (as WNTR reads them), and ``[END]``.
-_SECTIONS = frozenset(
-    f"[{name}]"
-    for name in (  # noqa: SIM905 (one string reads better than 28 list items)
-        "TITLE JUNCTIONS RESERVOIRS TANKS PIPES PUMPS VALVES EMITTERS CURVES PATTERNS ENERGY "
-        "STATUS CONTROLS RULES DEMANDS QUALITY REACTIONS SOURCES MIXING OPTIONS TIMES REPORT "
-        "COORDINATES VERTICES LABELS BACKDROP TAGS END"
-    ).split()
-)
-#: Per section: the minimum number of fields of a data line and the fields that must be numbers.
-_FIELDS: dict[str, tuple[int, tuple[int, ...]]] = {
-    "[JUNCTIONS]": (2, (1, 2)),
-    "[RESERVOIRS]": (2, (1,)),
-    "[TANKS]": (6, (1, 2, 3, 4, 5, 6)),
-    "[PIPES]": (6, (3, 4, 5, 6)),
-    "[PUMPS]": (4, ()),
-    "[VALVES]": (6, (3,)),
-    "[EMITTERS]": (2, (1,)),
-    "[DEMANDS]": (2, (1,)),
-    "[COORDINATES]": (3, (1, 2)),
-    "[VERTICES]": (3, (1, 2)),
-}
-_NODE_SECTIONS = ("[JUNCTIONS]", "[RESERVOIRS]", "[TANKS]")
-_LINK_SECTIONS = ("[PIPES]", "[PUMPS]", "[VALVES]")
-_PIPE_STATUS = frozenset({"OPEN", "CLOSED", "CV"})
 _WNTR_LINE = re.compile(r"at line (\d+)")
-
-
-@dataclass(frozen=True)
-class _Row:
-    section: str
-    line: int
-    fields: list[str]
 
 
 def _wntr() -> Any:
@@ -96,100 +60,6 @@ def _wntr() -> Any:
         warnings.simplefilter("ignore", DeprecationWarning)
         import wntr
     return wntr
-
-
-def _section_name(header: str) -> str:
-    """Map a header to its canonical name, forgiving a missing or extra S as WNTR does."""
-    for candidate in (header, header.replace("]", "S]"), header.replace("S]", "]")):
-        if candidate in _SECTIONS:
-            return candidate
-    return header
-
-
-def _rows(path: Path) -> Iterator[_Row]:
-    """Yield the data lines of an INP file with their section and 1-based line number."""
-    try:
-        text = path.read_text(encoding="utf-8", errors="replace")
-    except FileNotFoundError:
-        raise NetworkError(f"network file not found: {path}") from None
-    except OSError as exc:
-        raise NetworkError(f"cannot read network file {path}: {exc.strerror}") from None
-    section: str | None = None
-    for number, raw in enumerate(text.splitlines(), start=1):
-        line = raw.split(";", 1)[0].strip()
-        if not line:
-            continue
-        if line.startswith("["):
-            header = _section_name(line.split()[0].upper())
-            if header not in _SECTIONS:
-                raise NetworkError(f"{path}:{number}: unknown INP section {header}")
-            if header == "[END]":
-                return
-            section = header
-            continue
-        if section is None:
-            raise NetworkError(f"{path}:{number}: data before any [SECTION] header: {line!r}")
-        yield _Row(section, number, line.split())
-
-
-def _lint(path: Path) -> list[str]:
-    """Check the structure WNTR's reader does not report with a line number; return the pipes."""
-    nodes: dict[str, int] = {}
-    pipes: list[str] = []
-    links: dict[str, int] = {}
-    refs: list[tuple[_Row, str]] = []
-    for row in _rows(path):
-        spec = _FIELDS.get(row.section)
-        if spec is None:
-            continue
-        minimum, numeric = spec
-        where = f"{path}:{row.line}"
-        if len(row.fields) < minimum:
-            raise NetworkError(
-                f"{where}: {row.section} line needs at least {minimum} fields, "
-                f"got {len(row.fields)}: {' '.join(row.fields)!r}"
-            )
-        for i in numeric:
-            if i < len(row.fields):
-                try:
-                    float(row.fields[i])
-                except ValueError:
-                    raise NetworkError(
-                        f"{where}: {row.section} field {i + 1} of {row.fields[0]!r} is not a "
-                        f"number: {row.fields[i]!r}"
-                    ) from None
-        name = row.fields[0]
-        if row.section in _NODE_SECTIONS or row.section in _LINK_SECTIONS:
-            table = nodes if row.section in _NODE_SECTIONS else links
-            if name in table:
-                raise NetworkError(
-                    f"{where}: duplicate ID {name!r} (first defined at line {table[name]})"
-                )
-            table[name] = row.line
-        if row.section in _LINK_SECTIONS:
-            refs.extend((row, node) for node in row.fields[1:3])
-        if row.section == "[PIPES]":
-            pipes.append(name)
-            if len(row.fields) >= 8 and row.fields[7].upper() not in _PIPE_STATUS:
-                raise NetworkError(f"{where}: pipe {name!r} has unknown status {row.fields[7]!r}")
-    for row, node in refs:
-        if node not in nodes:
-            raise NetworkError(
-                f"{path}:{row.line}: link {row.fields[0]!r} refers to unknown node {node!r}"
-            )
-    return pipes
-
-
-def pipe_names_in_file(path: str | os.PathLike[str]) -> list[str]:
-    """Return the pipe IDs of an INP file in file order, without building a network model.
-
-    The file's structure is checked as :func:`load_network` checks it before WNTR reads it
-    (sections, field counts, numbers, IDs, node references), cheaply and without WNTR.
-
-    Raises:
-        NetworkError: the file is missing or malformed (naming file and line).
-    """
-    return _lint(Path(path))
 
 
 def load_network(path: str | os.PathLike[str]) -> WaterNetworkModel:
@@ -202,7 +72,7 @@ def load_network(path: str | os.PathLike[str]) -> WaterNetworkModel:
     wntr = _wntr()
 
     file = Path(path)
-    _lint(file)
+    pipe_names_in_file(file)  # names a malformed file's line before WNTR reads it
     try:
         return wntr.network.WaterNetworkModel(str(file))
     except Exception as exc:  # WNTR raises many types for bad input; name file and line
@@ -244,19 +114,6 @@ def require_pipe(wn: WaterNetworkModel, pipe: str) -> Any:
         kind = "a valve or pump, not a pipe" if pipe in wn.link_name_list else "no such pipe"
         raise NetworkError(f"unknown pipe {pipe!r}{_source(wn)}: {kind}")
     return wn.get_link(pipe)
-
-
-def network_hash(path: str | os.PathLike[str]) -> str:
-    """Fingerprint of a network file: ``"sha256:<hex>"`` of its bytes (no model is built).
-
-    Raises:
-        NetworkError: the file cannot be read.
-    """
-    try:
-        data = Path(path).read_bytes()
-    except OSError as exc:
-        raise NetworkError(f"cannot read network file {os.fspath(path)}: {exc.strerror}") from exc
-    return f"sha256:{hashlib.sha256(data).hexdigest()}"
 
 
 @dataclass(frozen=True)

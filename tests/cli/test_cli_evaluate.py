@@ -10,14 +10,11 @@ import jsonschema
 import pytest
 
 from burstloc.cli import build_parser, main
+from burstloc.constants import METER_MODELS
 from burstloc.exceptions import ConfigError
-from burstloc.experiments.evaluate import (
-    DEFAULT_LOCALIZER,
-    RANKING_LOCALIZATION_INTERVAL,
-    ranking_runs,
-)
+from burstloc.experiments.evaluate import DEFAULT_LOCALIZER
 from burstloc.experiments.report import CSV_FIELDS
-from burstloc.sim.capture import METER_MODELS
+from burstloc.experiments.runs import RANKING_LOCALIZATION_INTERVAL, ranking_runs
 from conftest import PAPER15
 
 SCHEMA = json.loads((Path(__file__).parents[1] / "evaluate_schema.json").read_text())

@@ -20,7 +20,7 @@ from burstloc.experiments.calibrate import (
     localization_interval,
     shewhart_threshold,
 )
-from burstloc.network import network_hash
+from burstloc.inp import network_hash
 
 FAST = 300_000  # noise samples per calibration run in these tests
 

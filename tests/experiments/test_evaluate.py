@@ -11,13 +11,9 @@ import pytest
 
 from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.experiments import paper
-from burstloc.experiments.evaluate import (
-    RunResult,
-    RunSpec,
-    evaluate,
-    locate_burst,
-    readings_at_offset,
-)
+from burstloc.experiments.evaluate import RunResult, evaluate
+from burstloc.experiments.harness import locate_burst, readings_at_offset
+from burstloc.experiments.runs import RunSpec
 from burstloc.localize.detection import DetectorConfig, Mode
 from conftest import PAPER15
 from synthetic_bursts import small_graph, synthetic

@@ -14,8 +14,11 @@ import pytest
 from burstloc.cli import main
 from burstloc.exceptions import ConfigError
 from burstloc.experiments import paper
-from burstloc.experiments.calibrate import Calibration, calibrate
-from burstloc.experiments.evaluate import RunSpec, decision_time, evaluate
+from burstloc.experiments.calibrate import calibrate
+from burstloc.experiments.evaluate import evaluate
+from burstloc.experiments.runs import RunSpec
+from burstloc.localize.config import Calibration
+from burstloc.localize.decide import decision_time
 from burstloc.localize.detection import DetectorConfig
 from conftest import write_tiny
 

@@ -10,13 +10,13 @@ import pytest
 
 from burstloc.exceptions import ConfigError, InputError, NetworkError
 from burstloc.experiments import paper
+from burstloc.experiments.calibrate import calibrate
 from burstloc.experiments.evaluate import RunResult, evaluate
 from burstloc.experiments.harness import (
     Attempt,
     Clock,
     RankingSetup,
     Tally,
-    calibrate,
     capture_readings,
     locate_burst,
     locate_ranked,

@@ -5,8 +5,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from burstloc.experiments.evaluate import Evaluation, RunResult, RunSpec, locate_burst
+from burstloc.experiments.evaluate import Evaluation, RunResult
+from burstloc.experiments.harness import locate_burst
 from burstloc.experiments.plot import plot_accuracy_by_interval, write_plots
+from burstloc.experiments.runs import RunSpec
 from burstloc.localize.detection import DetectorConfig
 from synthetic_bursts import small_graph, synthetic
 

@@ -11,7 +11,8 @@ import jsonschema
 import pytest
 
 from burstloc.experiments import paper
-from burstloc.experiments.evaluate import Evaluation, RunSpec, evaluate
+from burstloc.experiments.evaluate import Evaluation, evaluate
+from burstloc.experiments.grid import StudySettings
 from burstloc.experiments.report import (
     CSV_FIELDS,
     format_tables,
@@ -19,7 +20,7 @@ from burstloc.experiments.report import (
     write_json,
     write_study_report,
 )
-from burstloc.experiments.study import StudySettings
+from burstloc.experiments.runs import RunSpec
 from burstloc.localize.detection import DetectorConfig, Mode
 from conftest import PAPER15
 

@@ -11,14 +11,9 @@ import pytest
 
 from burstloc.cli import main
 from burstloc.exceptions import ConfigError
-from burstloc.experiments.study import (
-    StudyPoint,
-    StudySettings,
-    greedy_meters,
-    run_study,
-    study_grid,
-    write_report,
-)
+from burstloc.experiments.grid import StudyPoint, StudySettings, study_grid
+from burstloc.experiments.report import write_study_report as write_report
+from burstloc.experiments.study import greedy_meters, run_study
 from burstloc.localize.signature import SignatureSet
 
 
@@ -115,7 +110,7 @@ def test_cli_study_and_calibrate_commands(
     tiny_network: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     from burstloc.cli import main as cli
-    from burstloc.experiments.calibrate import Calibration
+    from burstloc.localize.config import Calibration
 
     config = tmp_path / "tiny.json"
     argv = ["calibrate", str(tiny_network), "--out", str(config), "--capture-interval", "2"]

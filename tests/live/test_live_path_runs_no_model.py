@@ -18,7 +18,8 @@ from pathlib import Path
 import pytest
 
 from burstloc.cli import main
-from burstloc.experiments.evaluate import RunSpec, readings_at_offset
+from burstloc.experiments.harness import readings_at_offset
+from burstloc.experiments.runs import RunSpec
 from burstloc.live.stream import readings_of
 from burstloc.localize.config import Calibration
 from burstloc.localize.detection import DetectorConfig

@@ -16,7 +16,9 @@ from burstloc.cli import main
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.experiments import paper
 from burstloc.experiments.calibrate import calibrate
-from burstloc.experiments.evaluate import RunSpec, evaluate, readings_at_offset
+from burstloc.experiments.evaluate import evaluate
+from burstloc.experiments.harness import readings_at_offset
+from burstloc.experiments.runs import RunSpec
 from burstloc.live.monitor import BurstMonitor, monitor_readings
 from burstloc.live.stream import readings_of
 from burstloc.localize.config import Calibration

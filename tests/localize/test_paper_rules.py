@@ -6,13 +6,8 @@ import networkx as nx
 import pytest
 
 from burstloc.exceptions import NetworkError
-from burstloc.localize.paper_rules import (
-    Change,
-    Rule,
-    locate,
-    node_amplitudes,
-    trigger_node,
-)
+from burstloc.localize.evidence import Change
+from burstloc.localize.paper_rules import Rule, locate, node_amplitudes, trigger_node
 from paper_graph import MEANS, METERS, changes, tnet1_like
 
 

@@ -7,8 +7,9 @@ import pytest
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
+from burstloc.constants import METER_MODELS
 from burstloc.exceptions import ConfigError, InputError
-from burstloc.sim.capture import METER_MODELS, capture, interval_average, resample, time_step_of
+from burstloc.sim.capture import capture, interval_average, resample, time_step_of
 
 
 def test_holds_the_last_simulated_value() -> None:

@@ -10,8 +10,9 @@ import pytest
 
 from burstloc.constants import CANDIDATE_POSITIONS
 from burstloc.exceptions import NetworkError
+from burstloc.inp import network_hash
 from burstloc.localize.decide import RankingLocalizers
-from burstloc.network import load_network, network_hash
+from burstloc.network import load_network
 from burstloc.sim.prepare import (
     arrival_geometry,
     arrival_localizer,

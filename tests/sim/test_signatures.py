@@ -11,8 +11,9 @@ import numpy as np
 import pytest
 
 from burstloc.exceptions import ConfigError, NetworkError
+from burstloc.inp import network_hash
 from burstloc.localize.signature import SignatureSet, rank_drop
-from burstloc.network import load_network, network_hash, split_pipe
+from burstloc.network import load_network, split_pipe
 from burstloc.sim.signatures import (
     DEFAULT_BURST_COEFF,
     cached_signature_sets,

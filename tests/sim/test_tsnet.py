@@ -14,7 +14,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from burstloc import network
+from burstloc import inp, network
 from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.sim.cache import DiskCache
 from burstloc.sim.scenario import BurstScenario, ScenarioResult, burst_scenarios, output_path
@@ -268,7 +268,7 @@ def test_too_short_a_simulation(tiny_network: Path) -> None:
 
 def test_burst_scenarios_default_to_every_pipe(paper15: Path) -> None:
     scenarios = burst_scenarios(paper15, duration=100.0)
-    assert [s.pipe for s in scenarios] == network.pipe_names_in_file(paper15)
+    assert [s.pipe for s in scenarios] == inp.pipe_names_in_file(paper15)
     assert len(scenarios) == 25 and all(s.duration == 100.0 for s in scenarios)
 
 

@@ -118,7 +118,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> int:
     """Handle ``burstloc evaluate``."""
     from burstloc.experiments import report
-    from burstloc.experiments.evaluate import evaluate, plan_runs
+    from burstloc.experiments.evaluate import evaluate
+    from burstloc.experiments.runs import plan_runs
     from burstloc.sim.cache import DiskCache
 
     runs = plan_runs(
@@ -134,7 +135,7 @@ def run(args: argparse.Namespace) -> int:
     )
     config = None
     if args.config:
-        from burstloc.experiments.calibrate import Calibration
+        from burstloc.localize.config import Calibration
 
         config = Calibration.load(args.config)
     cache: DiskCache | bool = False if args.no_cache else DiskCache(args.cache_dir)

@@ -8,14 +8,9 @@ from typing import Any
 
 from burstloc.constants import CAPTURE_INTERVALS, DETECTORS, RANKING_LOCALIZERS, SCENARIO_DURATION
 from burstloc.exceptions import ConfigError
-from burstloc.experiments.study import (
-    DEFAULT_LEVELS,
-    DEFAULT_NETWORKS,
-    StudySettings,
-    run_study,
-    study_grid,
-    write_report,
-)
+from burstloc.experiments.grid import DEFAULT_LEVELS, DEFAULT_NETWORKS, StudySettings, study_grid
+from burstloc.experiments.report import write_study_report as write_report
+from burstloc.experiments.study import run_study
 
 __all__ = ["add_parser", "run"]
 

@@ -61,24 +61,16 @@ from numpy.typing import NDArray
 from burstloc import _core
 from burstloc.constants import CAPTURE_INTERVALS, SIGNATURE_DECISION_DELAY, WAVE_SPEED
 from burstloc.exceptions import ConfigError, InputError
+from burstloc.inp import network_hash
 from burstloc.localize.config import (
-    CALIBRATION_FORMAT,
     Calibration,
     IntervalCalibration,
-    calibrated_bank,
 )
-from burstloc.network import network_hash
 
-# The stored configuration (CALIBRATION_FORMAT, Calibration, IntervalCalibration,
-# calibrated_bank) lives in burstloc.localize.config; re-exported here for the experiments.
 __all__ = [
-    "CALIBRATION_FORMAT",
     "Baseline",
     "BaselineError",
-    "Calibration",
-    "IntervalCalibration",
     "calibrate",
-    "calibrated_bank",
     "check_baseline",
     "cusum_threshold",
     "localization_interval",

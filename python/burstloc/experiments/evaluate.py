@@ -51,52 +51,26 @@ from burstloc.experiments.harness import (
     Attempt,
     RankingSetup,
     Tally,
-    calibrated_bank,
     locate_burst,
-    locate_ranked,
     rank_attempts,
     readings_at_offset,
 )
 from burstloc.experiments.runs import (
-    PAPER_OPTIONS,
-    PHASE_SPANS,
-    RANKING_LOCALIZATION_INTERVAL,
     RunSpec,
-    paper_runs,
     phase_offsets,
-    plan_runs,
-    ranking_runs,
     readings_after,
     required_duration,
 )
-from burstloc.localize.decide import decision_time
 
 if TYPE_CHECKING:
-    from burstloc.experiments.harness import Calibration
+    from burstloc.localize.config import Calibration
     from burstloc.sim.scenario import ScenarioResult
 
 __all__ = [
     "DEFAULT_LOCALIZER",
-    "PAPER_OPTIONS",
-    "PHASE_SPANS",
-    "RANKING_LOCALIZATION_INTERVAL",
-    "Attempt",
     "Evaluation",
-    "RankingSetup",
     "RunResult",
-    "RunSpec",
-    "calibrated_bank",
-    "decision_time",
     "evaluate",
-    "locate_burst",
-    "locate_ranked",
-    "paper_runs",
-    "phase_offsets",
-    "plan_runs",
-    "ranking_runs",
-    "readings_after",
-    "readings_at_offset",
-    "required_duration",
 ]
 
 #: ``burstloc evaluate``'s localizer: the fused one, ahead of the paper's rules at every capture
@@ -248,6 +222,7 @@ def evaluate(
             time step.
         SimulationError: a burst could not be simulated.
     """
+    from burstloc import inp
     from burstloc import network as netmod
     from burstloc.sim import tsnet as simulate
     from burstloc.sim.scenario import burst_scenarios
@@ -261,15 +236,7 @@ def evaluate(
         raise NetworkError(f"network file not found: {path}")
     wn = netmod.load_network(path)
     graph = netmod.flow_direction_graph(wn)
-    all_pipes = netmod.pipe_names(wn)
-    chosen = list(all_pipes if pipes is None else pipes)
-    unknown = [p for p in chosen if p not in all_pipes]
-    if unknown:
-        raise NetworkError(f"unknown pipe(s) {unknown} in {path}; pipes: {', '.join(all_pipes)}")
-    if not chosen:
-        raise NetworkError(f"no pipes to burst in {path}")
-    if len(set(chosen)) != len(chosen):
-        raise ConfigError(f"pipes listed more than once: {chosen}")
+    chosen = inp.choose_pipes(netmod.pipe_names(wn), pipes, path)
 
     warnings: list[str] = []
     params: dict[str, Any] = scenario.parameters()

@@ -40,15 +40,11 @@ from numpy.typing import NDArray
 
 from burstloc.constants import MeterModel
 from burstloc.exceptions import ConfigError, InputError, NetworkError
-from burstloc.experiments.calibrate import (
-    DEFAULT_NOISE_SIGMA,
-    Calibration,
-    calibrate,
-    calibrated_bank,
-)
+from burstloc.experiments.calibrate import calibrate
 from burstloc.experiments.runs import RunSpec
 from burstloc.live.paper_locator import BurstLocator
 from burstloc.live.stream import replay
+from burstloc.localize.config import Calibration, calibrated_bank
 from burstloc.localize.decide import rank_alarms
 from burstloc.localize.detection import make_detector
 from burstloc.localize.evidence import Ranking
@@ -64,14 +60,10 @@ if TYPE_CHECKING:
     from burstloc.sim.sensors import SensorModel
 
 __all__ = [
-    "DEFAULT_NOISE_SIGMA",
     "Attempt",
-    "Calibration",
     "Clock",
     "RankingSetup",
     "Tally",
-    "calibrate",
-    "calibrated_bank",
     "capture_readings",
     "locate_burst",
     "locate_ranked",

@@ -43,39 +43,18 @@ from typing import Any
 import numpy as np
 
 from burstloc.exceptions import ConfigError
+from burstloc.experiments.calibrate import DEFAULT_NOISE_SIGMA, calibrate
 from burstloc.experiments.grid import (
-    DEFAULT_LEVELS,
-    DEFAULT_NETWORKS,
-    Factors,
     StudyPoint,
     StudySettings,
     point_scenarios,
-    study_grid,
-    study_time_step,
 )
-from burstloc.experiments.harness import (
-    DEFAULT_NOISE_SIGMA,
-    Clock,
-    RankingSetup,
-    Tally,
-    calibrate,
-    capture_readings,
-    rank_attempts,
-)
-from burstloc.experiments.report import write_study_report as write_report
+from burstloc.experiments.harness import Clock, RankingSetup, Tally, capture_readings, rank_attempts
 
 __all__ = [
-    "DEFAULT_LEVELS",
-    "DEFAULT_NETWORKS",
-    "Factors",
-    "StudyPoint",
-    "StudySettings",
     "greedy_meters",
     "run_study",
     "score_point",
-    "study_grid",
-    "study_time_step",
-    "write_report",
 ]
 
 

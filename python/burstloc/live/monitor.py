@@ -23,7 +23,7 @@ Raw ``(timestamp, meter, value)`` readings become steps through
 non-finite value, a timestamp that does not advance) raises
 :class:`~burstloc.exceptions.InputError` naming it (and the meter) and leaves the monitor exactly
 as it was. A configuration for another network or other meters is refused by name; the network
-file is only hashed (:func:`burstloc.network.network_hash`), never loaded. Each decision is a
+file is only hashed (:func:`burstloc.inp.network_hash`), never loaded. Each decision is a
 :class:`burstloc.localize.decide.Decision` (its ``to_json`` is what ``burstloc monitor`` prints).
 
 Nothing here runs a hydraulic model: this module imports neither WNTR, EPANET, TSNet nor

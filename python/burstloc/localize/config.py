@@ -3,7 +3,7 @@
 ``burstloc calibrate`` (:func:`burstloc.experiments.calibrate.calibrate`, the threshold search)
 writes a :class:`Calibration` as a named JSON document (format :data:`CALIBRATION_FORMAT`):
 
-* the network file's SHA-256 (:func:`burstloc.network.network_hash`) and the ordered meters;
+* the network file's SHA-256 (:func:`burstloc.inp.network_hash`) and the ordered meters;
 * per capture interval, an :class:`IntervalCalibration`: CUSUM and Shewhart thresholds per meter,
   the localization interval and the decision delays;
 * the noise model and false-alarm target it was calibrated for, and its provenance;
@@ -33,8 +33,8 @@ from typing import Any
 from burstloc import _core
 from burstloc._atomic import write_json
 from burstloc.exceptions import ConfigError
+from burstloc.inp import network_hash
 from burstloc.localize.model import LocalizationModel
-from burstloc.network import network_hash
 
 __all__ = ["CALIBRATION_FORMAT", "Calibration", "IntervalCalibration", "calibrated_bank"]
 

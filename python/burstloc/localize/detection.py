@@ -50,7 +50,6 @@ from burstloc.localize.evidence import Change
 from burstloc.readings import Window
 
 __all__ = [
-    "DETECTORS",
     "HISTORY",
     "BatchDetector",
     "DetectorConfig",

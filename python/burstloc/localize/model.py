@@ -9,7 +9,7 @@ configuration it writes (:class:`burstloc.localize.config.Calibration`); the liv
 its localizers from the stored model
 (:meth:`burstloc.localize.decide.RankingLocalizers.from_model`) and never runs a hydraulic model.
 
-A model is bound to one network file (its SHA-256, :func:`burstloc.network.network_hash`) and one
+A model is bound to one network file (its SHA-256, :func:`burstloc.inp.network_hash`) and one
 ordered list of meters: :meth:`LocalizationModel.check` refuses, by name, a model for another
 network or other meters. The JSON document carries the format tag :data:`MODEL_FORMAT`; a
 distance to an unreachable meter is stored as ``null``. Numpy only; on the live path.

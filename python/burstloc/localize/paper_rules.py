@@ -49,7 +49,6 @@ from burstloc.localize.evidence import Change
 from burstloc.readings import Window
 
 __all__ = [
-    "Change",
     "Localization",
     "Rule",
     "WindowDetector",

@@ -22,7 +22,12 @@ from numpy.typing import ArrayLike, NDArray
 from burstloc.constants import METER_MODELS
 from burstloc.exceptions import ConfigError, InputError
 
-__all__ = ["METER_MODELS", "capture", "interval_average", "resample", "time_step_of"]
+__all__ = [
+    "capture",
+    "interval_average",
+    "resample",
+    "time_step_of",
+]
 
 
 def time_step_of(time: ArrayLike) -> float:

@@ -24,10 +24,11 @@ from numpy.typing import NDArray
 
 from burstloc.constants import CANDIDATE_POSITIONS, WAVE_SPEED
 from burstloc.exceptions import NetworkError
+from burstloc.inp import network_hash
 from burstloc.localize.arrival import ArrivalLocalizer, PipeGeometry
 from burstloc.localize.decide import RankingLocalizers
 from burstloc.localize.model import LocalizationModel
-from burstloc.network import flow_direction_graph, load_network, network_hash
+from burstloc.network import flow_direction_graph, load_network
 from burstloc.sim.signatures import cached_signature_sets
 
 if TYPE_CHECKING:

@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from burstloc import network
+from burstloc import inp
 from burstloc._atomic import write_npz
 from burstloc.constants import SCENARIO_DURATION, WAVE_SPEED
 from burstloc.exceptions import ConfigError, NetworkError
@@ -267,13 +267,7 @@ def burst_scenarios(
         NetworkError: missing or malformed file, or a pipe the file does not have.
         ConfigError: a bad parameter.
     """
-    known = network.pipe_names_in_file(network_path)
-    chosen = list(known if pipes is None else pipes)
-    unknown = [p for p in chosen if p not in known]
-    if unknown:
-        raise NetworkError(f"unknown pipe(s) {unknown} in {os.fspath(network_path)}")
-    if not chosen:
-        raise NetworkError(f"no pipes to burst in {os.fspath(network_path)}")
+    chosen = inp.choose_pipes(inp.pipe_names_in_file(network_path), pipes, network_path)
     return [BurstScenario(os.fspath(network_path), pipe, **parameters) for pipe in chosen]
 
 

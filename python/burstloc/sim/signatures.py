@@ -24,8 +24,9 @@ import numpy as np
 
 from burstloc.constants import CANDIDATE_POSITIONS
 from burstloc.exceptions import ConfigError, InputError, NetworkError
+from burstloc.inp import network_hash
 from burstloc.localize.signature import SIGNATURE_FORMAT, SignatureSet
-from burstloc.network import load_network, network_hash, split_pipe, steady_state
+from burstloc.network import load_network, split_pipe, steady_state
 from burstloc.sim.cache import cache_key, default_cache_dir
 
 __all__ = [

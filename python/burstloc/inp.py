@@ -1,0 +1,183 @@
+"""EPANET INP files read as text, without WNTR: structure checks, pipe IDs, a fingerprint.
+
+* :func:`pipe_names_in_file` checks a file's structure (sections, field counts, numbers, IDs,
+  node references) and returns its pipe IDs, cheaply; :func:`burstloc.network.load_network`
+  runs the same checks before WNTR reads the file, so a malformed file is named with its line.
+* :func:`network_hash` fingerprints a network file (its bytes): what a stored configuration
+  is bound to.
+* :func:`choose_pipes` checks a selection of pipes against a file's.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from burstloc.exceptions import ConfigError, NetworkError
+
+__all__ = ["choose_pipes", "network_hash", "pipe_names_in_file"]
+
+#: Section headers EPANET 2.2 accepts (as WNTR reads them), and ``[END]``.
+_SECTIONS = frozenset(
+    f"[{name}]"
+    for name in (  # noqa: SIM905 (one string reads better than 28 list items)
+        "TITLE JUNCTIONS RESERVOIRS TANKS PIPES PUMPS VALVES EMITTERS CURVES PATTERNS ENERGY "
+        "STATUS CONTROLS RULES DEMANDS QUALITY REACTIONS SOURCES MIXING OPTIONS TIMES REPORT "
+        "COORDINATES VERTICES LABELS BACKDROP TAGS END"
+    ).split()
+)
+#: Per section: the minimum number of fields of a data line and the fields that must be numbers.
+_FIELDS: dict[str, tuple[int, tuple[int, ...]]] = {
+    "[JUNCTIONS]": (2, (1, 2)),
+    "[RESERVOIRS]": (2, (1,)),
+    "[TANKS]": (6, (1, 2, 3, 4, 5, 6)),
+    "[PIPES]": (6, (3, 4, 5, 6)),
+    "[PUMPS]": (4, ()),
+    "[VALVES]": (6, (3,)),
+    "[EMITTERS]": (2, (1,)),
+    "[DEMANDS]": (2, (1,)),
+    "[COORDINATES]": (3, (1, 2)),
+    "[VERTICES]": (3, (1, 2)),
+}
+_NODE_SECTIONS = ("[JUNCTIONS]", "[RESERVOIRS]", "[TANKS]")
+_LINK_SECTIONS = ("[PIPES]", "[PUMPS]", "[VALVES]")
+_PIPE_STATUS = frozenset({"OPEN", "CLOSED", "CV"})
+
+
+@dataclass(frozen=True)
+class _Row:
+    section: str
+    line: int
+    fields: list[str]
+
+
+def _section_name(header: str) -> str:
+    """Map a header to its canonical name, forgiving a missing or extra S as WNTR does."""
+    for candidate in (header, header.replace("]", "S]"), header.replace("S]", "]")):
+        if candidate in _SECTIONS:
+            return candidate
+    return header
+
+
+def _rows(path: Path) -> Iterator[_Row]:
+    """Yield the data lines of an INP file with their section and 1-based line number."""
+    try:
+        text = path.read_text(encoding="utf-8", errors="replace")
+    except FileNotFoundError:
+        raise NetworkError(f"network file not found: {path}") from None
+    except OSError as exc:
+        raise NetworkError(f"cannot read network file {path}: {exc.strerror}") from None
+    section: str | None = None
+    for number, raw in enumerate(text.splitlines(), start=1):
+        line = raw.split(";", 1)[0].strip()
+        if not line:
+            continue
+        if line.startswith("["):
+            header = _section_name(line.split()[0].upper())
+            if header not in _SECTIONS:
+                raise NetworkError(f"{path}:{number}: unknown INP section {header}")
+            if header == "[END]":
+                return
+            section = header
+            continue
+        if section is None:
+            raise NetworkError(f"{path}:{number}: data before any [SECTION] header: {line!r}")
+        yield _Row(section, number, line.split())
+
+
+def _lint(path: Path) -> list[str]:
+    """Check the structure WNTR's reader does not report with a line number; return the pipes."""
+    nodes: dict[str, int] = {}
+    pipes: list[str] = []
+    links: dict[str, int] = {}
+    refs: list[tuple[_Row, str]] = []
+    for row in _rows(path):
+        spec = _FIELDS.get(row.section)
+        if spec is None:
+            continue
+        minimum, numeric = spec
+        where = f"{path}:{row.line}"
+        if len(row.fields) < minimum:
+            raise NetworkError(
+                f"{where}: {row.section} line needs at least {minimum} fields, "
+                f"got {len(row.fields)}: {' '.join(row.fields)!r}"
+            )
+        for i in numeric:
+            if i < len(row.fields):
+                try:
+                    float(row.fields[i])
+                except ValueError:
+                    raise NetworkError(
+                        f"{where}: {row.section} field {i + 1} of {row.fields[0]!r} is not a "
+                        f"number: {row.fields[i]!r}"
+                    ) from None
+        name = row.fields[0]
+        if row.section in _NODE_SECTIONS or row.section in _LINK_SECTIONS:
+            table = nodes if row.section in _NODE_SECTIONS else links
+            if name in table:
+                raise NetworkError(
+                    f"{where}: duplicate ID {name!r} (first defined at line {table[name]})"
+                )
+            table[name] = row.line
+        if row.section in _LINK_SECTIONS:
+            refs.extend((row, node) for node in row.fields[1:3])
+        if row.section == "[PIPES]":
+            pipes.append(name)
+            if len(row.fields) >= 8 and row.fields[7].upper() not in _PIPE_STATUS:
+                raise NetworkError(f"{where}: pipe {name!r} has unknown status {row.fields[7]!r}")
+    for row, node in refs:
+        if node not in nodes:
+            raise NetworkError(
+                f"{path}:{row.line}: link {row.fields[0]!r} refers to unknown node {node!r}"
+            )
+    return pipes
+
+
+def pipe_names_in_file(path: str | os.PathLike[str]) -> list[str]:
+    """Return the pipe IDs of an INP file in file order, without building a network model.
+
+    The file's structure is checked as :func:`burstloc.network.load_network` checks it before
+    WNTR reads it (sections, field counts, numbers, IDs, node references), cheaply and without WNTR.
+
+    Raises:
+        NetworkError: the file is missing or malformed (naming file and line).
+    """
+    return _lint(Path(path))
+
+
+def choose_pipes(
+    known: Sequence[str], pipes: Sequence[str] | None, source: str | os.PathLike[str]
+) -> list[str]:
+    """The pipes to burst: ``pipes`` (default: every one of ``known``), checked against the
+    network read from ``source``.
+
+    Raises:
+        NetworkError: a pipe the network does not have, or no pipe at all.
+        ConfigError: a pipe listed twice.
+    """
+    chosen = list(known if pipes is None else pipes)
+    unknown = [p for p in chosen if p not in known]
+    where = os.fspath(source)
+    if unknown:
+        raise NetworkError(f"unknown pipe(s) {unknown} in {where}; pipes: {', '.join(known)}")
+    if not chosen:
+        raise NetworkError(f"no pipes to burst in {where}")
+    if len(set(chosen)) != len(chosen):
+        raise ConfigError(f"pipes listed more than once: {chosen}")
+    return chosen
+
+
+def network_hash(path: str | os.PathLike[str]) -> str:
+    """Fingerprint of a network file: ``"sha256:<hex>"`` of its bytes (no model is built).
+
+    Raises:
+        NetworkError: the file cannot be read.
+    """
+    try:
+        data = Path(path).read_bytes()
+    except OSError as exc:
+        raise NetworkError(f"cannot read network file {os.fspath(path)}: {exc.strerror}") from exc
+    return f"sha256:{hashlib.sha256(data).hexdigest()}"
