@@ -15,8 +15,8 @@ from burstloc import inp, network
 from burstloc.exceptions import ConfigError, NetworkError
 from conftest import PAPER15, REPO, TINY_INP, TNET1, write_tiny
 
-# Issue 4's table (and the paper's result tables): pipe -> (start, end) in steady-state flow
-# direction, length m, diameter mm, Hazen-Williams C (None: Tnet1's figures, checked below).
+# The paper's table of the extended network (and its result tables): pipe -> (start, end) in
+# steady-state flow direction, length m, diameter mm, Hazen-Williams C (None: Tnet1's figures).
 PAPER_TABLE: dict[str, tuple[str, str, float | None, float | None, float | None]] = {
     "P1": ("R1", "N3", None, None, None),
     "P2": ("N3", "N4", None, None, None),
@@ -267,17 +267,6 @@ def test_one_steady_state_gives_heads_and_flows(wn, recwarn, capfd) -> None:  # 
     assert network.steady_state(wn, "DD").flows["P1"] == pytest.approx(state.flows["P1"], rel=1e-3)
     assert not [w for w in recwarn if "EPANET" in str(w.message).upper()]
     assert capfd.readouterr() == ("", "")
-
-
-def test_network_hash_is_the_files_sha256(tmp_path: Path) -> None:
-    import hashlib
-
-    path = write_tiny(tmp_path / "a.inp")
-    digest = inp.network_hash(path)
-    assert digest == "sha256:" + hashlib.sha256(path.read_bytes()).hexdigest()
-    assert inp.network_hash(write_tiny(tmp_path / "b.inp", head=61.0)) != digest
-    with pytest.raises(NetworkError, match="cannot read network file"):
-        inp.network_hash(tmp_path / "missing.inp")
 
 
 # --- split_pipe ------------------------------------------------------------------------------
