@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from burstloc.cli._options import add_run_options, cache_of
 from burstloc.constants import DETECTORS, LOCALIZERS, METER_MODELS
 from burstloc.experiments.evaluate import DEFAULT_LOCALIZER
 
@@ -106,11 +107,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="write PNGs: per run, a map of every burst's true and named pipe, and the meters' "
         "traces with their alarms for the first pipe of --pipes",
     )
-    parser.add_argument("--workers", type=int, default=None, metavar="N")
-    parser.add_argument("--scheduler", default=None, metavar="ADDR", help="Dask scheduler")
-    parser.add_argument("--cache-dir", default=None, metavar="DIR")
-    parser.add_argument("--no-cache", action="store_true", help="simulate; store nothing")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_run_options(parser)
     parser.set_defaults(handler=run)
     return parser
 
@@ -120,7 +117,6 @@ def run(args: argparse.Namespace) -> int:
     from burstloc.experiments import report
     from burstloc.experiments.evaluate import evaluate
     from burstloc.experiments.runs import plan_runs
-    from burstloc.sim.cache import DiskCache
 
     runs = plan_runs(
         localizers=args.localizer,
@@ -138,7 +134,7 @@ def run(args: argparse.Namespace) -> int:
         from burstloc.localize.config import Calibration
 
         config = Calibration.load(args.config)
-    cache: DiskCache | bool = False if args.no_cache else DiskCache(args.cache_dir)
+    cache = cache_of(args)
     ev = evaluate(
         args.network,
         runs,

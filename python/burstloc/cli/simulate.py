@@ -6,6 +6,7 @@ import argparse
 import sys
 from typing import Any
 
+from burstloc.cli._options import add_run_options, cache_of
 from burstloc.constants import SCENARIO_DURATION, WAVE_SPEED
 
 __all__ = ["add_parser", "run"]
@@ -52,11 +53,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     parser.add_argument("--capture-phase", type=float, default=0.0, metavar="S")
     parser.add_argument("--out", default="out/simulations", metavar="DIR")
-    parser.add_argument("--workers", type=int, default=None, metavar="N")
-    parser.add_argument("--scheduler", default=None, metavar="ADDR", help="Dask scheduler")
-    parser.add_argument("--cache-dir", default=None, metavar="DIR")
-    parser.add_argument("--no-cache", action="store_true", help="simulate; store nothing")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_run_options(parser)
     parser.set_defaults(handler=run)
     return parser
 
@@ -64,7 +61,6 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> int:
     """Handle ``burstloc simulate``."""
     from burstloc.sim import scenario
-    from burstloc.sim.cache import DiskCache
     from burstloc.sim.tsnet import simulate_many
 
     scenarios = scenario.burst_scenarios(
@@ -78,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
         duration=args.duration,
         time_step=args.time_step,
     )
-    cache: DiskCache | bool = False if args.no_cache else DiskCache(args.cache_dir)
+    cache = cache_of(args)
     report = simulate_many(
         scenarios,
         cache=cache,

@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from burstloc.cli._options import add_run_options
 from burstloc.constants import CAPTURE_INTERVALS, DETECTORS, RANKING_LOCALIZERS, SCENARIO_DURATION
 from burstloc.exceptions import ConfigError
 from burstloc.experiments.grid import DEFAULT_LEVELS, DEFAULT_NETWORKS, StudySettings, study_grid
@@ -51,9 +52,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         default=None,
         help="TSNet time step, s (default: TSNet's, or half the finest capture if coarser)",
     )
-    parser.add_argument("--workers", type=int, default=None)
-    parser.add_argument("--scheduler", default=None, help="Dask scheduler address")
-    parser.add_argument("--quiet", action="store_true", help="no progress bars")
+    add_run_options(parser, cache=False)
     parser.set_defaults(handler=run)
     return parser
 

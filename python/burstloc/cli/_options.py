@@ -1,0 +1,29 @@
+"""Options several subcommands share: where simulations run and whether they are cached."""
+
+from __future__ import annotations
+
+import argparse
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from burstloc.sim.cache import DiskCache
+
+__all__ = ["add_run_options", "cache_of"]
+
+
+def add_run_options(parser: argparse.ArgumentParser, *, cache: bool = True) -> None:
+    """``--workers``, ``--scheduler``, ``--quiet`` and (with ``cache``) ``--cache-dir`` and
+    ``--no-cache``."""
+    parser.add_argument("--workers", type=int, default=None, metavar="N", help="local processes")
+    parser.add_argument("--scheduler", default=None, metavar="ADDR", help="Dask scheduler")
+    if cache:
+        parser.add_argument("--cache-dir", default=None, metavar="DIR")
+        parser.add_argument("--no-cache", action="store_true", help="simulate; store nothing")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def cache_of(args: argparse.Namespace) -> DiskCache | bool:
+    """The simulation cache the options ask for (``False``: none)."""
+    from burstloc.sim.cache import DiskCache
+
+    return False if args.no_cache else DiskCache(args.cache_dir)
