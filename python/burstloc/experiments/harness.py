@@ -45,7 +45,7 @@ from burstloc.experiments.runs import RunSpec
 from burstloc.live.paper_locator import BurstLocator
 from burstloc.live.stream import replay
 from burstloc.localize.config import Calibration, calibrated_bank
-from burstloc.localize.decide import rank_alarms
+from burstloc.localize.decide import Decision, rank_alarms
 from burstloc.localize.detection import make_detector
 from burstloc.localize.evidence import Ranking
 from burstloc.localize.paper_rules import Localization
@@ -171,14 +171,26 @@ def readings_at_offset(result: ScenarioResult, spec: RunSpec, offset: float) -> 
 
 @dataclass(frozen=True)
 class Attempt:
-    """One burst streamed at one clock offset: what was decided, when, and by which rule."""
+    """One burst streamed at one clock offset, and the answer: the paper's rules'
+    :class:`~burstloc.localize.paper_rules.Localization` or a ranking localizer's
+    :class:`~burstloc.localize.decide.Decision` (the monitor's result type), or neither (not
+    located)."""
 
     pipe: str
     offset: float
     burst_start: float
-    localization: Localization | None
-    ranking: Ranking | None = None
-    decided_at: float | None = None
+    localization: Localization | None = None
+    decision: Decision | None = None
+
+    @property
+    def ranking(self) -> Ranking | None:
+        """The ranking localizer's ranking, or ``None``."""
+        return None if self.decision is None else self.decision.ranking
+
+    @property
+    def decided_at(self) -> float | None:
+        """Reading time of the ranking localizer's decision, or ``None``."""
+        return None if self.decision is None else self.decision.time
 
     @property
     def located(self) -> bool:
@@ -328,7 +340,7 @@ def rank_attempts(
             continue
         if name == "signature":
             signature_ranking = decision.ranking
-        out[name] = Attempt(result.pipe, offset, burst_start, None, decision.ranking, decision.time)
+        out[name] = Attempt(result.pipe, offset, burst_start, decision=decision)
     return {name: out[name] for name in localizers}
 
 

@@ -15,4 +15,12 @@ On the live path: nothing here runs a hydraulic model or imports the simulator.
   the model) that ``burstloc calibrate`` writes and the monitor reads;
 * :mod:`~burstloc.localize.decide`: the localizers built from a model, when a ranking localizer
   answers, and what (a :class:`~burstloc.localize.decide.Decision`).
+
+The results, one lineage: a ranking localizer answers a
+:class:`~burstloc.localize.evidence.Ranking`; a
+:class:`~burstloc.localize.decide.Decision` is that ranking at a reading time (with the first
+alarm and whether the fused localizer waited), what the monitor reports and the experiments
+score; the paper's rules answer a :class:`~burstloc.localize.paper_rules.Localization` (one
+pipe and the rule that named it). An experiment's
+:class:`~burstloc.experiments.harness.Attempt` holds one or the other.
 """

@@ -2,7 +2,8 @@
 
 Nothing on the live path imports this package (it pulls in TSNet and WNTR).
 
-* :mod:`~burstloc.sim.tsnet`: burst scenarios and the TSNet transient driver;
+* :mod:`~burstloc.sim.scenario`: burst scenarios and their results (NPZ files);
+* :mod:`~burstloc.sim.tsnet`: the TSNet transient driver;
 * :mod:`~burstloc.sim.capture`: meter sampling (instantaneous or interval-averaged readings);
 * :mod:`~burstloc.sim.sensors`: sensor noise models;
 * :mod:`~burstloc.sim.cache`: the content-addressed cache of simulations on disk;
