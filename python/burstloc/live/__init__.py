@@ -1,4 +1,5 @@
-"""The live loop: readings in, burst decisions out. Never imports :mod:`burstloc.sim`, WNTR or TSNet.
+"""The live loop: readings in, burst decisions out. Never imports :mod:`burstloc.sim`, WNTR
+or TSNet.
 
 * :mod:`~burstloc.live.stream`: raw readings assembled into complete time steps;
 * :mod:`~burstloc.live.monitor`: the detector bank, history and localizer over those steps,
