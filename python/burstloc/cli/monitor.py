@@ -1,9 +1,13 @@
-"""``burstloc monitor``: the live loop over a feed of readings."""
+"""``burstloc monitor``: the live loop over a feed of readings (a file, stdin or an MQTT topic)."""
 
 from __future__ import annotations
 
 import argparse
+import hashlib
+import json
+import signal
 import sys
+from collections.abc import Iterator
 from typing import Any
 
 from burstloc.constants import DETECTORS, METER_MODELS, RANKING_LOCALIZERS
@@ -12,33 +16,47 @@ from burstloc.exceptions import InputError
 __all__ = ["add_parser", "run"]
 
 
+class _StopError(Exception):
+    """SIGTERM arrived while waiting for input."""
+
+
+def _plausible(text: str) -> tuple[str | None, tuple[float, float]]:
+    meter, _, bounds = text.rpartition("=")
+    low, sep, high = bounds.partition(":")
+    try:
+        if not sep:
+            raise ValueError
+        return (meter or None), (float(low), float(high))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"want [METER=]LOW:HIGH, got {text!r}") from None
+
+
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Register ``burstloc monitor``."""
     parser = subparsers.add_parser(
         "monitor",
-        help="the live loop: readings in (CSV), one JSON line per located burst out",
+        help="the live loop: readings in (CSV or MQTT), decision and health records out",
         description=(
-            "Read pressure readings 'timestamp,meter,value' (a file, or - for stdin) in "
-            "arrival order, assemble complete time steps, run the calibrated detector bank of "
-            "--config and a ranking localizer built from the localization model stored in it "
-            "(no hydraulic model runs), and print one JSON line per located burst: the "
-            "decision time, the first alarm and the three best pipes. NETWORK.inp is only "
-            "checked against the configuration's SHA-256."
+            "Read pressure readings 'timestamp,meter,value' (a file, - for stdin, or an MQTT "
+            "topic with --mqtt), assemble complete time steps, run the calibrated detector bank "
+            "of --config and a ranking localizer built from the localization model stored in it "
+            "(no hydraulic model runs), and write JSON lines: one per located burst "
+            '("type": "decision") and a health record every --health-every seconds '
+            '("type": "health"). Bad readings are reported on stderr and skipped; silent meters '
+            "are excluded until they report again. NETWORK.inp is only checked against the "
+            "configuration's SHA-256."
         ),
     )
     parser.add_argument("network", metavar="NETWORK.inp", help="EPANET INP file")
     parser.add_argument(
-        "--config",
-        required=True,
-        metavar="PATH",
-        help="`burstloc calibrate` output (with its localization model)",
+        "--config", required=True, metavar="PATH", help="`burstloc calibrate` output"
     )
     parser.add_argument(
         "--capture-interval",
         type=float,
         required=True,
         metavar="S",
-        help="seconds between readings",
+        help="s between readings",
     )
     parser.add_argument("--readings", default="-", metavar="FILE", help="CSV file (default: stdin)")
     parser.add_argument("--detector", choices=DETECTORS, default="cusum")
@@ -50,15 +68,44 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument(
         "--missing", choices=("skip", "hold"), default="hold", help="policy for incomplete steps"
     )
+    mqtt = parser.add_argument_group("MQTT")
+    mqtt.add_argument("--mqtt", metavar="HOST:PORT", help="read readings from this broker")
+    mqtt.add_argument("--topic", default="burstloc/readings/#", help="readings topic (subscribe)")
+    mqtt.add_argument("--decisions-topic", default="burstloc/decisions", help="publish decisions")
+    mqtt.add_argument("--health-topic", default="burstloc/health", help="publish health records")
+    mqtt.add_argument("--client-id", help="MQTT client id (default: derived from the setup)")
+    mqtt.add_argument(
+        "--queue-size", type=int, default=100_000, metavar="N", help="bounded queue, messages"
+    )
+    live = parser.add_argument_group("operation")
+    live.add_argument("--state", metavar="FILE", help="save the state here; resume from it")
+    live.add_argument("--save-every", type=float, default=5.0, metavar="S", help="state saves, s")
+    live.add_argument(
+        "--health-every", type=float, default=60.0, metavar="S", help="health records (0: off)"
+    )
+    live.add_argument(
+        "--silent-after", type=float, default=30.0, metavar="S", help="exclude a silent meter"
+    )
+    live.add_argument("--clock-tolerance", type=float, metavar="S", help="clock offset allowed")
+    live.add_argument(
+        "--plausible",
+        type=_plausible,
+        action="append",
+        default=[],
+        metavar="[METER=]LOW:HIGH",
+        help="believable readings, m (default: -10 m to twice the highest steady head)",
+    )
     parser.set_defaults(handler=run)
     return parser
 
 
 def run(args: argparse.Namespace) -> int:
     """Handle ``burstloc monitor``."""
-    import json
-
-    from burstloc.live.monitor import BurstMonitor, monitor_readings, parse_readings
+    from burstloc.live.health import Health, PlausibleRange
+    from burstloc.live.loop import LiveLoop, Reporter
+    from burstloc.live.monitor import BurstMonitor
+    from burstloc.live.parse import parse_lines, parse_payload
+    from burstloc.live.state import StateFile, identity
     from burstloc.localize.config import Calibration
 
     config = Calibration.load(args.config)
@@ -70,20 +117,116 @@ def run(args: argparse.Namespace) -> int:
         localizer=args.localizer,
         meter_model=args.meter_model,
     )
+    plausible = PlausibleRange.default(monitor.meters, monitor.steady.tolist())
+    health = Health(
+        monitor.meters,
+        plausible.with_overrides(dict(args.plausible)),
+        capture_interval=args.capture_interval,
+        silent_after=args.silent_after,
+        clock_tolerance=args.clock_tolerance,
+    )
+    report = Reporter(lambda text: print(text, file=sys.stderr, flush=True))
+    ident = identity(
+        config,
+        capture_interval=args.capture_interval,
+        detector=args.detector,
+        localizer=args.localizer,
+        meter_model=args.meter_model,
+    )
+    state = None if args.state is None else StateFile(args.state, ident)
+    link = None
+    if args.mqtt is not None:
+        from burstloc.live.mqtt import MqttLink, parse_address
+
+        host, port = parse_address(args.mqtt)
+        digest = hashlib.sha256(json.dumps([ident, args.topic]).encode()).hexdigest()[:12]
+        link = MqttLink(
+            host,
+            port,
+            args.topic,
+            client_id=args.client_id or f"burstloc-monitor-{digest}",
+            report=report,
+            queue_size=args.queue_size,
+        )
+
+    def emit(record: dict[str, Any]) -> None:
+        print(json.dumps(record), flush=True)
+        if link is not None:
+            topic = args.decisions_topic if record["type"] == "decision" else args.health_topic
+            link.publish(topic, record)
+
+    loop = LiveLoop(
+        monitor,
+        health,
+        emit,
+        report,
+        timeout=args.timeout,
+        missing=args.missing,
+        health_every=args.health_every,
+        state=state,
+        save_every=args.save_every,
+    )
+    saved = None if state is None else state.load()
+    if saved is not None:
+        loop.restore(saved)
+        report("state", f"resumed from state file {args.state}")
+    flags = {"waiting": False, "stop": False}
+
+    def on_term(signum: int, frame: Any) -> None:
+        flags["stop"] = True
+        if flags["waiting"]:
+            raise _StopError
+
+    previous = signal.signal(signal.SIGTERM, on_term)
     try:
-        source = sys.stdin if args.readings == "-" else open(args.readings)  # noqa: SIM115
-    except OSError as exc:
-        raise InputError(f"cannot read readings {args.readings!r}: {exc.strerror}") from exc
-    try:
-        readings = parse_readings(source)
-        options = {
-            "period": args.capture_interval,
-            "timeout": args.timeout,
-            "missing": args.missing,
-        }
-        for decided in monitor_readings(monitor, readings, **options):
-            print(json.dumps(decided.to_json()), flush=True)
+        if link is not None:
+            items: Iterator[Any] = _from_broker(link, flags, parse_payload)
+        else:
+            items = _from_file(args.readings, flags, parse_lines)
+        loop.run(items)
+    except _StopError:
+        loop.finish()
     finally:
-        if source is not sys.stdin:
-            source.close()
+        signal.signal(signal.SIGTERM, previous)
+        if link is not None:
+            link.close()
+    if flags["stop"]:
+        saved_to = f"; state saved to {args.state}" if args.state else ""
+        print(f"burstloc monitor: stopped by SIGTERM{saved_to}", file=sys.stderr)
     return 0
+
+
+def _from_broker(link: Any, flags: dict[str, bool], parse: Any) -> Iterator[Any]:
+    for message in link.messages():
+        if flags["stop"]:
+            return
+        if message is None:
+            yield None
+            continue
+        number, payload = message
+        yield from parse(payload, f"message {number}")
+
+
+def _from_file(path: str, flags: dict[str, bool], parse: Any) -> Iterator[Any]:
+    try:
+        source = sys.stdin.buffer if path == "-" else open(path, "rb")  # noqa: SIM115
+    except OSError as exc:
+        raise InputError(f"cannot read readings {path!r}: {exc.strerror}") from exc
+
+    def lines() -> Iterator[bytes]:
+        it = iter(source)
+        while not flags["stop"]:
+            flags["waiting"] = True
+            try:
+                line = next(it)
+            except StopIteration:
+                return
+            finally:
+                flags["waiting"] = False
+            yield line
+
+    try:
+        yield from parse(lines())
+    finally:
+        if source is not sys.stdin.buffer:
+            source.close()

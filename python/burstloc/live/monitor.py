@@ -2,29 +2,33 @@
 
 A :class:`BurstMonitor` holds, for one network and one calibrated configuration
 (:class:`burstloc.localize.config.Calibration`, e.g. ``burstloc calibrate --out CONFIG``), the
-calibrated Rust detector bank of one capture interval, one ranking localizer built from the
+calibrated Rust detector bank of one capture interval, the ranking localizers built from the
 configuration's stored localization model (:class:`burstloc.localize.model.LocalizationModel`)
 and a bounded history of readings. Each :meth:`BurstMonitor.push` feeds one complete time step (a
-:class:`burstloc.live.stream.Step`: one reading per meter, in the configuration's meter order) to
-the
-bank; once a meter alarms, the monitor answers at the localizer's decision time with the same
-rule as ``burstloc evaluate`` (:func:`burstloc.localize.decide.rank_alarms`: about one wave travel
-time
-after the first alarm for the arrival localizer and a decisive fused one, 150 s after the onset
-for the signature localizer and an undecided fused one). A burst rings through the network for
-minutes, so after a decision the monitor holds off for ``holdoff`` seconds (default: the
-calibrated signature delay, 150 s): the readings still fill the history, alarms are ignored,
-and then the bank starts afresh, ready for the next burst. A second burst within the hold-off is
-not reported separately.
+:class:`burstloc.readings.Step`: one reading per meter, in the configuration's meter order) to
+the bank; once a meter alarms, the monitor answers at the localizer's decision time with the same
+rule as ``burstloc evaluate`` (:func:`burstloc.localize.decide.rank_alarms`).
 
-Raw ``(timestamp, meter, value)`` readings become steps through
-:class:`burstloc.live.stream.ReadingStream` (its rules for late, duplicate and missing readings);
-:func:`monitor_readings` wires the two. Bad input (a step with the wrong number of values, a
-non-finite value, a timestamp that does not advance) raises
-:class:`~burstloc.exceptions.InputError` naming it (and the meter) and leaves the monitor exactly
-as it was. A configuration for another network or other meters is refused by name; the network
-file is only hashed (:func:`burstloc.inp.network_hash`), never loaded. Each decision is a
-:class:`burstloc.localize.decide.Decision` (its ``to_json`` is what ``burstloc monitor`` prints).
+After a decision the monitor holds off for ``holdoff`` seconds (default: the calibrated
+signature delay, 150 s): a burst rings through the network for minutes; the readings still fill
+the history, alarms are ignored. Then the bank starts afresh from the current level and
+*re-arms*: it must run ``rearm`` steps in a row without an alarm (any alarm restarts the bank
+and the count) before an alarm may start a new decision, so the tail of the ringing never
+becomes a phantom second burst. A second burst within the hold-off is not reported separately.
+
+**Meters that do not report.** :attr:`BurstMonitor.excluded` (kept by the live loop from
+:mod:`burstloc.live.health`: silent meters) take no part: their alarms are ignored and the
+localizers run on the other meters (:class:`burstloc.live.subset.SubsetLocalizers`). A value
+filled for a meter (named in :attr:`Step.filled`; NaN when the stream had nothing to fill with)
+is replaced by the meter's last value (at first its steady head from the model) and cannot
+alarm. A meter that comes back is ignored for ``rearm`` steps while its detector settles.
+
+Bad input (a step with the wrong number of values, a non-finite value of a meter that reported,
+a timestamp that does not advance) raises :class:`~burstloc.exceptions.InputError` naming it
+and leaves the monitor exactly as it was. A configuration for another network or other meters
+is refused by name; the network file is only hashed (:func:`burstloc.inp.network_hash`). Each
+decision is a :class:`LiveDecision`. :meth:`BurstMonitor.to_state` / :meth:`~BurstMonitor.restore`
+carry the whole state (bank snapshot, history, pending decision, hold-off) across a restart.
 
 Nothing here runs a hydraulic model: this module imports neither WNTR, EPANET, TSNet nor
 :mod:`burstloc.sim` or :mod:`burstloc.experiments`.
@@ -32,17 +36,20 @@ Nothing here runs a hydraulic model: this module imports neither WNTR, EPANET, T
 
 from __future__ import annotations
 
+import base64
 import math
 import os
 from collections import deque
 from collections.abc import Iterable, Iterator, Mapping
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
+from burstloc import _core
 from burstloc.constants import METER_MODELS, RANKING_LOCALIZERS, MeterModel
 from burstloc.exceptions import ConfigError, InputError
-from burstloc.live.stream import ReadingStream
+from burstloc.live.subset import SubsetLocalizers
 from burstloc.localize.config import Calibration, calibrated_bank
 from burstloc.localize.decide import (
     Decision,
@@ -51,22 +58,74 @@ from burstloc.localize.decide import (
     fused_of,
     rank_alarms,
 )
-from burstloc.localize.evidence import IndexedAlarm, Localizer
-from burstloc.readings import Item, Reading, Step
+from burstloc.localize.evidence import IndexedAlarm, Localizer, Ranking
+from burstloc.readings import Step
 
-__all__ = [
-    "HISTORY_BEFORE_ONSET",
-    "BurstMonitor",
-    "monitor_readings",
-    "parse_readings",
-]
+__all__ = ["HISTORY_BEFORE_ONSET", "BurstMonitor", "LiveDecision"]
 
 #: Seconds of readings kept before a burst's onset (the baseline of the signature localizer).
 HISTORY_BEFORE_ONSET = 60.0
 
 
+@dataclass(frozen=True)
+class LiveDecision:
+    """A decision as the monitor reports it: the localizer's :class:`Decision`, which meters
+    took part (``meters``), which were excluded and which alarmed, and how long it waited after
+    the first alarm. ``waited`` is true when the answer came later than the arrival localizer's
+    own delay (plus one capture interval): the monitor waited for settled readings.
+    ``health``: the health record at decision time (set by the live loop)."""
+
+    decision: Decision
+    localizer: str
+    meters: tuple[str, ...]
+    excluded: tuple[str, ...]
+    alarmed: tuple[str, ...]
+    waited: bool
+    health: Mapping[str, Any] | None = field(default=None, compare=False)
+
+    @property
+    def pipe(self) -> str | None:
+        """The best-ranked pipe."""
+        return self.decision.pipe
+
+    @property
+    def ranking(self) -> Ranking:
+        """The ranking."""
+        return self.decision.ranking
+
+    @property
+    def time(self) -> float:
+        """Reading time of the decision (s)."""
+        return self.decision.time
+
+    @property
+    def first_alarm(self) -> float:
+        """Reading time of the first alarm (s)."""
+        return self.decision.first_alarm
+
+    @property
+    def delay(self) -> float:
+        """Seconds from the first alarm to the decision."""
+        return self.decision.time - self.decision.first_alarm
+
+    def to_json(self, top: int = 3) -> dict[str, Any]:
+        """The decision record (``"type": "decision"``) that ``burstloc monitor`` prints."""
+        doc: dict[str, Any] = {"type": "decision", **self.decision.to_json(top)}
+        doc.update(
+            waited=self.waited,
+            decision_delay_s=self.delay,
+            localizer=self.localizer,
+            meters=list(self.meters),
+            excluded=list(self.excluded),
+            alarmed=list(self.alarmed),
+        )
+        if self.health is not None:
+            doc["health"] = dict(self.health)
+        return doc
+
+
 class BurstMonitor:
-    """Calibrated detector bank + ranking localizer over a live feed of complete time steps.
+    """Calibrated detector bank + ranking localizers over a live feed of complete time steps.
 
     Parameters
     ----------
@@ -84,15 +143,19 @@ class BurstMonitor:
     meter_model:
         What a reading is: ``"instantaneous"`` or ``"interval-averaged"``.
     localizers:
-        Prebuilt localizers by name (default: built from the configuration's model,
-        :meth:`burstloc.localize.decide.RankingLocalizers.from_model`).
+        Prebuilt localizers by name (default: built from the configuration's model). With
+        prebuilt localizers, excluded meters cannot be left out of the localization.
     holdoff:
         Seconds after a decision during which alarms are ignored (default: the calibrated
         ``decision_delay``).
+    rearm:
+        Alarm-free steps needed after the hold-off before an alarm counts again (default: two
+        localization intervals).
 
     Raises:
         ConfigError: a configuration for another network or other meters, no calibration for
-            the capture interval, or an unknown detector, localizer or meter model.
+            the capture interval, an unknown detector, localizer or meter model, a bad
+            ``holdoff`` or ``rearm``.
         NetworkError: the network file cannot be read.
     """
 
@@ -107,6 +170,7 @@ class BurstMonitor:
         meter_model: MeterModel = "instantaneous",
         localizers: Mapping[str, Localizer] | None = None,
         holdoff: float | None = None,
+        rearm: int | None = None,
     ) -> None:
         if localizer not in RANKING_LOCALIZERS:
             raise ConfigError(f"localizer must be one of {RANKING_LOCALIZERS}, got {localizer!r}")
@@ -119,6 +183,7 @@ class BurstMonitor:
         self.localizer = localizer
         self.meter_model: MeterModel = meter_model
         self.bank = calibrated_bank(detector, len(self.meters), self.calibration)
+        self._subsets = SubsetLocalizers(config.model) if localizers is None else None
         self.localizers: Mapping[str, Localizer] = (
             RankingLocalizers.from_model(config.model) if localizers is None else dict(localizers)
         )
@@ -129,14 +194,23 @@ class BurstMonitor:
         self.holdoff = cal.decision_delay if holdoff is None else float(holdoff)
         if not (math.isfinite(self.holdoff) and self.holdoff >= 0):
             raise ConfigError(f"holdoff must be a finite number of seconds >= 0, got {holdoff}")
+        self.rearm = 2 * cal.localization_interval if rearm is None else rearm
+        if isinstance(self.rearm, bool) or not isinstance(self.rearm, int) or self.rearm < 0:
+            raise ConfigError(f"rearm must be a whole number of steps >= 0, got {rearm!r}")
+        self.steady = np.asarray(config.model.signature_sets[0].baseline, dtype=np.float64)
         span = HISTORY_BEFORE_ONSET + cal.decision_delay + cal.arrival_decision_delay
         steps = math.ceil(span / cal.capture_interval) + 2 * cal.localization_interval + 2
         self._times: deque[float] = deque(maxlen=steps)
         self._values: deque[np.ndarray] = deque(maxlen=steps)
+        self._fill = self.steady.copy()  # last value of each meter (filled values replace NaN)
         self._seen = 0  # steps fed to the bank since it last started afresh
-        self._alarms: list[Any] = []
+        self._steps = 0  # steps fed in all
+        self._alarms: list[IndexedAlarm] = []  # by bank index
         self._due: float | None = None
         self._quiet_until: float | None = None  # end of the hold-off after a decision
+        self._arming = 0  # alarm-free steps still needed after the hold-off
+        self._grace: dict[str, int] = {}  # meter back from silence -> step it counts again
+        self.excluded: set[str] = set()
 
     @property
     def pending(self) -> bool:
@@ -148,64 +222,96 @@ class BurstMonitor:
         """Whether the monitor is ignoring alarms after a decision (see ``holdoff``)."""
         return self._quiet_until is not None
 
-    def push(self, step: Step) -> Decision | None:
+    @property
+    def arming(self) -> bool:
+        """Whether the monitor is re-arming after a hold-off (see ``rearm``)."""
+        return self._arming > 0
+
+    def exclude(self, meter: str) -> None:
+        """Leave ``meter`` out (silent) until :meth:`include`."""
+        self.excluded.add(meter)
+
+    def include(self, meter: str) -> None:
+        """Take ``meter`` back; its alarms count again after ``rearm`` steps."""
+        if meter in self.excluded:
+            self.excluded.discard(meter)
+            self._grace[meter] = self._steps + self.rearm
+
+    def push(self, step: Step) -> LiveDecision | None:
         """Feed one complete time step; return the decision it completes, if any.
 
         Raises:
-            InputError: wrong number of values, a non-finite value (the bank names the meter
-                column) or a timestamp not after the previous one; the monitor is unchanged.
+            InputError: wrong number of values, a non-finite value of a meter that is neither
+                excluded nor filled, a timestamp not after the previous one, or a burst that the
+                localizer cannot place (the pending decision is then dropped); the monitor is
+                otherwise unchanged.
         """
         t = float(step.timestamp)
-        values = np.ascontiguousarray(step.values, dtype=np.float64)
+        values = np.array(step.values, dtype=np.float64)
         if values.shape != (len(self.meters),):
             raise InputError(
                 f"step at t = {t:g} s has {values.size} values for {len(self.meters)} meters"
             )
         if not math.isfinite(t):
             raise InputError(f"step timestamp {t!r} is not finite")
+        absent = set(step.filled) | self.excluded
         bad = np.flatnonzero(~np.isfinite(values))
-        if bad.size:
-            j = int(bad[0])
-            raise InputError(
-                f"non-finite reading {values[j]} from meter {self.meters[j]!r} at t = {t:g} s"
-            )
+        for j in bad:
+            if self.meters[j] not in absent:
+                raise InputError(
+                    f"non-finite reading {values[j]} from meter {self.meters[j]!r} at t = {t:g} s"
+                )
         if self._times and t <= self._times[-1]:
             raise InputError(
                 f"step at t = {t:g} s is not after the previous one (t = {self._times[-1]:g} s)"
             )
+        values[bad] = self._fill[bad]
+        self._fill = values
         if self._quiet_until is not None and t + 1e-9 >= self._quiet_until:
-            self.bank.reset()  # the hold-off is over: start afresh for the next burst
-            self._seen = 0
+            self._restart_bank()  # the hold-off is over: start afresh from the current level
             self._quiet_until = None
+            self._arming = self.rearm
         alarms = self.bank.step(values)
         self._times.append(t)
-        self._values.append(values.copy())
+        self._values.append(values)
         self._seen += 1
+        self._steps += 1
         if self._quiet_until is not None:
             return None
-        self._alarms += alarms
+        if self._arming > 0:
+            if alarms:
+                self._restart_bank()
+                self._arming = self.rearm
+            else:
+                self._arming -= 1
+            return None
+        self._alarms += [
+            IndexedAlarm(int(a.channel or 0), a.index, a.start, a.amplitude)
+            for a in alarms
+            if self._counts(self.meters[int(a.channel or 0)], absent)
+        ]
         if self._alarms and self._due is None:
-            times, _ = self._history()
+            times = np.fromiter(self._times, dtype=np.float64)
             self._due = decision_time(
-                self.localizer,
-                self._shifted(times.size),
-                times,
-                self.calibration,
-                self._fused,
+                self.localizer, self._shifted(times.size), times, self.calibration, self._fused
             )
         if self._due is None or t + 1e-9 < self._due:
             return None
         return self._decide()
 
-    def run(self, steps: Iterable[Step]) -> Iterator[Decision]:
+    def run(self, steps: Iterable[Step]) -> Iterator[LiveDecision]:
         """Yield the decisions of a feed of steps."""
         for step in steps:
             decided = self.push(step)
             if decided is not None:
                 yield decided
 
-    def _history(self) -> tuple[np.ndarray, np.ndarray]:
-        return np.fromiter(self._times, dtype=np.float64), np.array(self._values)
+    def _counts(self, meter: str, absent: set[str]) -> bool:
+        return meter not in absent and self._grace.get(meter, -1) <= self._steps
+
+    def _restart_bank(self) -> None:
+        self.bank.reset()
+        self._seen = 0
 
     def _shifted(self, size: int) -> list[IndexedAlarm]:
         """The bank's alarms with indices into the history (starts clipped to its oldest)."""
@@ -216,69 +322,98 @@ class BurstMonitor:
             if a.index >= first
         ]
 
-    def _decide(self) -> Decision | None:
-        times, readings = self._history()
+    def _decide(self) -> LiveDecision | None:
+        times = np.fromiter(self._times, dtype=np.float64)
+        readings = np.array(self._values)
         alarms = self._shifted(times.size)
         cal = self.calibration
-        decision = rank_alarms(
-            self.localizer,
-            self.localizers,
-            self.meters,
-            times,
-            readings,
-            alarms,
-            cal,
-            self.meter_model,
-        )
+        meters, localizers = self.meters, self.localizers
+        part = [j for j, m in enumerate(self.meters) if m not in self.excluded]
+        if self._subsets is not None and len(part) < len(self.meters):
+            column = {j: k for k, j in enumerate(part)}
+            meters = tuple(self.meters[j] for j in part)
+            localizers = self._subsets.get(meters)
+            readings = readings[:, part]
+            alarms = [
+                IndexedAlarm(column[a.channel], a.index, a.start, a.amplitude)
+                for a in alarms
+                if a.channel in column
+            ]
+        try:
+            if not alarms:
+                raise InputError("every meter that alarmed has gone silent")
+            decision = rank_alarms(
+                self.localizer, localizers, meters, times, readings, alarms, cal, self.meter_model
+            )
+        except InputError as exc:
+            self._alarms, self._due = [], None
+            raise InputError(
+                f"burst detected but not located at t = {times[-1]:g} s: {exc}"
+            ) from exc
         if decision.waited:
             settled = decision_time("signature", alarms, times, cal)
             if times[-1] + 1e-9 < settled:  # the fused localizer waits for the signatures
                 self._due = settled
                 return None
+        alarmed = tuple(sorted({meters[a.channel] for a in alarms}, key=self.meters.index))
         self._alarms = []
         self._due = None
         self._quiet_until = float(times[-1]) + self.holdoff
-        return decision
+        waited = decision.waited or (
+            decision.time - decision.first_alarm
+            > cal.arrival_decision_delay + cal.capture_interval + 1e-9
+        )
+        return LiveDecision(
+            decision,
+            self.localizer,
+            tuple(meters),
+            tuple(m for m in self.meters if m in self.excluded),
+            alarmed,
+            waited,
+        )
 
+    # ------------------------------------------------------------------ state
+    def to_state(self) -> dict[str, Any]:
+        """The whole state (bank snapshot, history, pending decision, hold-off), JSON-ready."""
+        return {
+            "bank": base64.b64encode(self.bank.snapshot()).decode("ascii"),
+            "times": list(self._times),
+            "values": [v.tolist() for v in self._values],
+            "fill": self._fill.tolist(),
+            "seen": self._seen,
+            "steps": self._steps,
+            "alarms": [[a.channel, a.index, a.start, a.amplitude] for a in self._alarms],
+            "due": self._due,
+            "quiet_until": self._quiet_until,
+            "arming": self._arming,
+            "grace": dict(self._grace),
+            "excluded": sorted(self.excluded),
+        }
 
-def monitor_readings(
-    monitor: BurstMonitor, readings: Iterable[Item], **stream_options: Any
-) -> Iterator[Decision]:
-    """Assemble raw readings into steps (:class:`burstloc.live.stream.ReadingStream` over the
-    monitor's meters, one step per window; ``stream_options`` such as ``period``, ``timeout``,
-    ``missing``) and yield the monitor's decisions."""
-    stream = ReadingStream(monitor.meters, 1, **stream_options)
-    for window in stream.windows(readings):
-        decided = monitor.push(Step(float(window.times[-1]), window.values[-1]))
-        if decided is not None:
-            yield decided
+    def restore(self, state: Mapping[str, Any]) -> None:
+        """Carry on from :meth:`to_state` of a monitor of the same configuration and options.
 
-
-def parse_readings(lines: Iterable[str]) -> Iterator[Reading]:
-    """Readings from CSV lines ``timestamp,meter,value`` (seconds, junction name, metres of head).
-
-    A first line ``timestamp,meter,value`` is a header; blank lines and lines starting with
-    ``#`` are skipped.
-
-    Raises:
-        InputError: a line without three fields or with a timestamp or value that is not a
-            finite number, naming the line.
-    """
-    for number, line in enumerate(lines, start=1):
-        text = line.strip()
-        if not text or text.startswith("#"):
-            continue
-        fields = [f.strip() for f in text.split(",")]
-        if number == 1 and fields == ["timestamp", "meter", "value"]:
-            continue
-        if len(fields) != 3:
-            raise InputError(f"line {number}: want 'timestamp,meter,value', got {text!r}")
-        try:
-            timestamp, value = float(fields[0]), float(fields[2])
-        except ValueError:
-            raise InputError(
-                f"line {number}: timestamp and value must be numbers: {text!r}"
-            ) from None
-        if not (math.isfinite(timestamp) and math.isfinite(value)):
-            raise InputError(f"line {number}: non-finite timestamp or value: {text!r}")
-        yield Reading(timestamp, fields[1], value)
+        Raises:
+            ConfigError: the saved bank is not this monitor's kind and size.
+        """
+        bank = _core.DetectorBank.restore(base64.b64decode(state["bank"]))
+        if bank.kind != self.bank.kind or bank.channels != self.bank.channels:
+            raise ConfigError(
+                f"saved detector bank is {bank.kind} x {bank.channels}, "
+                f"not {self.bank.kind} x {self.bank.channels}"
+            )
+        self.bank = bank
+        self._times = deque((float(t) for t in state["times"]), maxlen=self._times.maxlen)
+        self._values = deque(
+            (np.array(v, dtype=np.float64) for v in state["values"]), maxlen=self._values.maxlen
+        )
+        self._fill = np.array(state["fill"], dtype=np.float64)
+        self._seen, self._steps = int(state["seen"]), int(state["steps"])
+        self._alarms = [
+            IndexedAlarm(int(c), int(i), int(s), float(a)) for c, i, s, a in state["alarms"]
+        ]
+        self._due = state["due"]
+        self._quiet_until = state["quiet_until"]
+        self._arming = int(state["arming"])
+        self._grace = {str(m): int(k) for m, k in state["grace"].items()}
+        self.excluded = set(state["excluded"])

@@ -32,6 +32,10 @@ Rules for imperfect feeds (each case is counted in :class:`StreamStats`, never s
   heard of; with one, a step nobody reported (a gap on the clock) also waits for its timeout
   and is then skipped, never filled. :meth:`ReadingStream.flush` applies the same policy to every
   pending step at the end of a feed.
+* **Excluded meters.** Meters in :attr:`ReadingStream.excluded` (e.g. silent ones, see
+  :mod:`burstloc.live.health`) are not waited for: a step is complete when every other meter has
+  reported; an excluded meter that did not report gets its last value (NaN if it never reported)
+  and is named in :attr:`Step.filled`.
 * **Errors.** A reading from a meter that is not configured, or with a non-finite timestamp or
   value, raises :class:`~burstloc.exceptions.StreamError` naming it; the stream's state is left
   unchanged.
@@ -157,6 +161,7 @@ class ReadingStream:
         self._previous: list[Step] = []
         self._current: list[Step] = []
         self._emitted = 0
+        self.excluded: set[str] = set()
 
     # ----------------------------------------------------------------- input
     def push(self, item: Item) -> list[Window]:
@@ -297,6 +302,16 @@ class ReadingStream:
             del self._pending[key]
             values = np.array([head.values[j] for j in range(m)], dtype=np.float64)
             return [self._emit(key, values, ())]
+        if self.excluded and all(
+            self.meters[j] in self.excluded for j in range(m) if j not in head.values
+        ):
+            del self._pending[key]
+            values = np.full(m, np.nan) if self._last is None else self._last.copy()
+            for j, v in head.values.items():
+                values[j] = v
+            filled = tuple(self.meters[j] for j in range(m) if j not in head.values)
+            self.stats.filled_readings += len(filled)
+            return [self._emit(key, values, filled)]
         newer = len(self._pending) - 1
         if not force and newer <= self.timeout:
             return None
@@ -311,6 +326,41 @@ class ReadingStream:
             return [self._emit(key, values, filled)]
         self.stats.skipped_steps += 1
         return []
+
+    # ---------------------------------------------------------------- state
+    def to_state(self) -> dict[str, object]:
+        """The assembly state (pending steps, newest step, last values, counters), JSON-ready.
+
+        Only for a stream of single-step windows (``interval=1``), as the monitor uses.
+        """
+        return {
+            "pending": [
+                [p.timestamp, {str(j): v for j, v in p.values.items()}]
+                for p in self._pending.values()
+            ],
+            "newest": None if self._newest == -math.inf else self._newest,
+            "last": None if self._last is None else [float(x) for x in self._last],
+            "excluded": sorted(self.excluded),
+            "stats": {name: getattr(self.stats, name) for name in StreamStats.__slots__},
+        }
+
+    def restore(self, state: dict[str, object]) -> None:
+        """Inverse of :meth:`to_state` on a stream with the same meters and clock."""
+        pending = state["pending"]
+        assert isinstance(pending, list)
+        self._pending = {
+            float(k): _Pending(float(k), {int(j): float(v) for j, v in vals.items()})
+            for k, vals in pending
+        }
+        newest = state["newest"]
+        self._newest = -math.inf if newest is None else float(newest)  # type: ignore[arg-type]
+        last = state["last"]
+        self._last = None if last is None else np.array(last, dtype=np.float64)
+        self.excluded = set(state["excluded"])  # type: ignore[call-overload]
+        stats = state["stats"]
+        assert isinstance(stats, dict)
+        for name, value in stats.items():
+            setattr(self.stats, name, int(value))
 
     def _emit(self, key: float, values: FloatArray, filled: tuple[str, ...]) -> Step:
         self._newest = key

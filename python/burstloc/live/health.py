@@ -1,0 +1,269 @@
+"""Meter health on the live path: what each meter sends, whether it is believable, whether it is
+on time.
+
+A :class:`Health` stands between the parsed readings and the
+:class:`~burstloc.live.stream.ReadingStream`. Every reading passes :meth:`Health.admit`, which
+answers the reading to feed (its timestamp corrected for a known clock offset), a
+:class:`~burstloc.live.parse.BadReading` (to report and skip) or ``None`` (held back while the
+meter's clock is off). The rules:
+
+* **Plausible range.** A value outside the meter's range (:class:`PlausibleRange`; default: below
+  -10 m or above twice the highest steady head at the meters) is a bad reading: counted
+  (``implausible``), reported, skipped. It never reaches the detectors, so it never starts an
+  alarm.
+* **Clock.** The reference time is the median of the meters' newest timestamps. A reading more
+  than ``clock_tolerance`` seconds from it is held back (counted ``off_clock``). Once the last
+  :data:`CLOCK_WINDOW` readings of a meter agree on an offset (at least 80 % within the
+  tolerance of their median), the offset, rounded to the capture interval, is **corrected**: the
+  meter's later timestamps are shifted by it, and the offset is reported in the health record.
+  A meter's data is worth more than its clock; correcting keeps it in the localization.
+* **Silence.** A meter with no reading for ``silent_after`` seconds of reference time is
+  *silent*: it is excluded (the stream completes steps without it; the localizers run on the
+  meters that report) until its next reading, when it is included again.
+* **Counts.** Per meter: readings, bad, implausible, late (dropped by the stream), off-clock,
+  filled, and the newest timestamp; :meth:`Health.record` is the JSON health record.
+"""
+
+from __future__ import annotations
+
+import math
+import statistics
+from collections import deque
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from burstloc.exceptions import ConfigError
+from burstloc.live.parse import BadReading
+from burstloc.readings import Reading
+
+__all__ = ["CLOCK_WINDOW", "Health", "MeterHealth", "PlausibleRange"]
+
+#: Readings of one meter that must agree before its clock offset is corrected.
+CLOCK_WINDOW = 25
+
+_COUNTS = ("readings", "bad", "implausible", "late", "off_clock", "filled")
+
+
+@dataclass(frozen=True)
+class PlausibleRange:
+    """Per meter, the lowest and highest believable reading (m of head)."""
+
+    low: Mapping[str, float]
+    high: Mapping[str, float]
+
+    @classmethod
+    def default(cls, meters: Sequence[str], steady_heads: Sequence[float]) -> PlausibleRange:
+        """Below -10 m or above twice the highest steady head at the meters is implausible."""
+        top = 2.0 * max(max(float(h) for h in steady_heads), 10.0)
+        return cls({m: -10.0 for m in meters}, {m: top for m in meters})
+
+    def with_overrides(self, overrides: Mapping[str | None, tuple[float, float]]) -> PlausibleRange:
+        """This range with ``overrides`` (meter, or ``None`` for every meter, → (low, high)).
+
+        Raises:
+            ConfigError: an unknown meter or an empty or non-finite range.
+        """
+        low, high = dict(self.low), dict(self.high)
+        for meter, (lo, hi) in overrides.items():
+            if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+                raise ConfigError(f"plausible range must be finite LOW < HIGH, got {lo}:{hi}")
+            if meter is not None and meter not in low:
+                raise ConfigError(f"plausible range for unknown meter {meter!r}")
+            for m in low if meter is None else (meter,):
+                low[m], high[m] = float(lo), float(hi)
+        return PlausibleRange(low, high)
+
+
+@dataclass
+class MeterHealth:
+    """What one meter has sent (module docstring)."""
+
+    last: float | None = None
+    silent: bool = False
+    clock_offset: float = 0.0
+    counts: dict[str, int] = field(default_factory=lambda: dict.fromkeys(_COUNTS, 0))
+    deviations: deque[float] = field(default_factory=lambda: deque(maxlen=CLOCK_WINDOW))
+
+    def to_json(self) -> dict[str, Any]:
+        """JSON-ready: newest timestamp, silent, clock offset (s) and the counts."""
+        return {
+            "last": self.last,
+            "silent": self.silent,
+            "clock_offset": self.clock_offset,
+            **self.counts,
+        }
+
+
+class Health:
+    """The health of every meter of one feed, and the gate readings pass (module docstring).
+
+    Raises:
+        ConfigError: a non-positive capture interval, ``silent_after`` or ``clock_tolerance``.
+    """
+
+    def __init__(
+        self,
+        meters: Sequence[str],
+        plausible: PlausibleRange,
+        *,
+        capture_interval: float,
+        silent_after: float = 30.0,
+        clock_tolerance: float | None = None,
+    ) -> None:
+        tolerance = max(3 * capture_interval, 1.0) if clock_tolerance is None else clock_tolerance
+        for name, x in [
+            ("capture interval", capture_interval),
+            ("silent_after", silent_after),
+            ("clock tolerance", tolerance),
+        ]:
+            if not (math.isfinite(x) and x > 0):
+                raise ConfigError(f"{name} must be a positive number of seconds, got {x}")
+        self.meters = tuple(meters)
+        self.capture_interval = float(capture_interval)
+        self.silent_after = float(silent_after)
+        self.clock_tolerance = float(tolerance)
+        self.meter: dict[str, MeterHealth] = {m: MeterHealth() for m in self.meters}
+        self.plausible = plausible
+        self._low = dict(plausible.low)
+        self._high = dict(plausible.high)
+        self._newest = np.full(len(self.meters), np.nan)
+        self._index = {m: j for j, m in enumerate(self.meters)}
+        self._reference: float | None = None
+        self._since = 0
+        self.bad_unknown = 0  # bad input naming no meter of the configuration
+
+    # ------------------------------------------------------------------ gate
+    @property
+    def reference(self) -> float | None:
+        """The reference time: the median of the meters' newest timestamps (None at first)."""
+        return self._reference
+
+    def bad(self, item: BadReading) -> None:
+        """Count a bad input item (per meter when it names one)."""
+        h = self.meter.get(item.meter) if item.meter is not None else None
+        if h is None:
+            self.bad_unknown += 1
+        else:
+            h.counts["bad"] += 1
+
+    def admit(self, r: Reading, where: str) -> Reading | BadReading | None:
+        """The reading to feed (clock-corrected), a bad reading, or None (held back)."""
+        h = self.meter.get(r.meter)
+        if h is None:
+            self.bad_unknown += 1
+            return BadReading(where, f"unknown meter {r.meter!r}")
+        if not (self._low[r.meter] <= r.value <= self._high[r.meter]):
+            h.counts["implausible"] += 1
+            return BadReading(
+                where,
+                f"implausible value {r.value:g} m from meter {r.meter!r} (believable: "
+                f"{self._low[r.meter]:g} to {self._high[r.meter]:g} m)",
+                r.meter,
+            )
+        h.counts["readings"] += 1
+        ref = self._reference
+        t = r.timestamp - h.clock_offset
+        if ref is not None:
+            h.deviations.append(r.timestamp - ref)
+            if abs(t - ref) > self.clock_tolerance and not self._settle_clock(h, ref):
+                h.counts["off_clock"] += 1
+                return None
+            t = r.timestamp - h.clock_offset
+        if h.last is None or t > h.last:
+            h.last = t
+            self._newest[self._index[r.meter]] = t
+        self._since += 1
+        if ref is None or self._since >= len(self.meters):
+            self._update_reference()
+        return r if t == r.timestamp else Reading(t, r.meter, r.value)
+
+    def _settle_clock(self, h: MeterHealth, ref: float) -> bool:
+        """Estimate the meter's clock offset from its recent deviations; True if now on time."""
+        if len(h.deviations) < CLOCK_WINDOW:
+            return False
+        mid = statistics.median(h.deviations)
+        agree = sum(abs(d - mid) <= self.clock_tolerance for d in h.deviations)
+        if agree < 0.8 * len(h.deviations):
+            return False
+        h.clock_offset = round(mid / self.capture_interval) * self.capture_interval
+        h.deviations.clear()
+        return True
+
+    def _update_reference(self) -> None:
+        self._since = 0
+        known = self._newest[~np.isnan(self._newest)]
+        if known.size * 2 >= len(self.meters):
+            self._reference = float(np.median(known))
+
+    # ------------------------------------------------------------ bookkeeping
+    def late(self, meter: str, count: int = 1) -> None:
+        """Count readings of ``meter`` the stream dropped as late."""
+        self.meter[meter].counts["late"] += count
+
+    def filled(self, meters: Sequence[str]) -> None:
+        """Count readings filled for ``meters`` (a step completed without them)."""
+        for m in meters:
+            self.meter[m].counts["filled"] += 1
+
+    def update_silence(self) -> tuple[list[str], list[str]]:
+        """Mark meters silent (no reading for ``silent_after`` s of reference time) or back;
+        return (newly silent, back)."""
+        ref = self._reference
+        gone: list[str] = []
+        back: list[str] = []
+        if ref is None:
+            return gone, back
+        for m, h in self.meter.items():
+            silent = h.last is None or ref - h.last > self.silent_after
+            if silent and not h.silent:
+                gone.append(m)
+            elif h.silent and not silent:
+                back.append(m)
+            h.silent = silent
+        return gone, back
+
+    @property
+    def silent(self) -> tuple[str, ...]:
+        """The meters currently silent."""
+        return tuple(m for m, h in self.meter.items() if h.silent)
+
+    def record(self) -> dict[str, Any]:
+        """The health record (JSON-ready, ``"type": "health"``)."""
+        return {
+            "type": "health",
+            "time": self._reference,
+            "silent": list(self.silent),
+            "clock_corrected": {
+                m: h.clock_offset for m, h in self.meter.items() if h.clock_offset != 0.0
+            },
+            "bad_unknown_meter": self.bad_unknown,
+            "meters": {m: h.to_json() for m, h in self.meter.items()},
+        }
+
+    # ------------------------------------------------------------------ state
+    def to_state(self) -> dict[str, Any]:
+        """Everything needed to carry on after a restart (JSON-ready)."""
+        return {
+            "reference": self._reference,
+            "bad_unknown": self.bad_unknown,
+            "meters": {
+                m: {**h.to_json(), "deviations": list(h.deviations)} for m, h in self.meter.items()
+            },
+        }
+
+    def restore(self, state: Mapping[str, Any]) -> None:
+        """Inverse of :meth:`to_state` (same meters)."""
+        self._reference = state["reference"]
+        self.bad_unknown = int(state["bad_unknown"])
+        for m, doc in state["meters"].items():
+            h = self.meter[m]
+            h.last = doc["last"]
+            h.silent = bool(doc["silent"])
+            h.clock_offset = float(doc["clock_offset"])
+            h.counts = {k: int(doc[k]) for k in _COUNTS}
+            h.deviations = deque(doc["deviations"], maxlen=CLOCK_WINDOW)
+            if h.last is not None:
+                self._newest[self._index[m]] = h.last

@@ -1,0 +1,141 @@
+"""Readings from text: CSV lines and MQTT JSON payloads. Never raises on bad input.
+
+Two forms, one result type. Each source item (a CSV line, an MQTT message) gives zero or more
+:class:`~burstloc.readings.Reading` and zero or more :class:`BadReading` (what was wrong and
+where: the line number or the message id); the live loop counts, reports and skips the bad ones
+and goes on.
+
+* **CSV line**: ``timestamp,meter,value`` (seconds, junction name, metres of head). A first line
+  ``timestamp,meter,value`` is a header; blank lines and lines starting with ``#`` are skipped; a
+  UTF-8 byte-order mark and quotes around a field are removed.
+* **JSON payload** (MQTT): one reading ``{"t": 12.4, "meter": "N2", "value": 181.2}``, or a
+  batch: a list of such objects, or ``{"readings": [...]}``. A payload that is not JSON is read
+  as CSV lines (the CSV line form over MQTT).
+
+Timestamps and values must be finite numbers; meter names non-empty strings (a number is taken
+as its text).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
+from typing import Any
+
+from burstloc.readings import Reading
+
+__all__ = ["BadReading", "parse_csv_line", "parse_lines", "parse_payload"]
+
+_HEADER = ("timestamp", "meter", "value")
+
+
+@dataclass(frozen=True, slots=True)
+class BadReading:
+    """An input item that is not a reading: ``where`` (``"line 12"``, ``"message 7"``) and
+    ``reason``; ``meter`` when known (bad readings are counted per meter)."""
+
+    where: str
+    reason: str
+    meter: str | None = None
+
+    def __str__(self) -> str:
+        """``where: reason``."""
+        return f"{self.where}: {self.reason}"
+
+
+def _number(text: Any) -> float | None:
+    try:
+        x = float(text)
+    except (TypeError, ValueError, OverflowError):
+        return None
+    return x if math.isfinite(x) else None
+
+
+def parse_csv_line(text: str, where: str) -> Reading | BadReading | None:
+    """One CSV line: a reading, a bad reading, or ``None`` (blank, comment or header)."""
+    text = text.lstrip("\ufeff").strip()
+    if not text or text.startswith("#"):
+        return None
+    fields = [f.strip().strip('"').strip("'").strip() for f in text.split(",")]
+    if tuple(f.lower() for f in fields) == _HEADER:
+        return None
+    shown = text if len(text) <= 80 else text[:77] + "..."
+    if len(fields) != 3:
+        return BadReading(where, f"want 'timestamp,meter,value', got {shown!r}")
+    meter = fields[1] or None
+    if meter is None:
+        return BadReading(where, f"no meter name: {shown!r}")
+    t, value = _number(fields[0]), _number(fields[2])
+    if t is None:
+        return BadReading(where, f"timestamp is not a finite number of seconds: {shown!r}", meter)
+    if value is None:
+        return BadReading(where, f"value is not a finite number: {shown!r}", meter)
+    return Reading(t, meter, value)
+
+
+def parse_lines(lines: Iterable[str | bytes]) -> Iterator[Reading | BadReading]:
+    """Readings (and bad readings) from CSV lines, numbered from 1; undecodable bytes are bad
+    readings too."""
+    for number, line in enumerate(lines, start=1):
+        where = f"line {number}"
+        if isinstance(line, bytes):
+            try:
+                line = line.decode("utf-8")
+            except UnicodeDecodeError:
+                yield BadReading(where, "not UTF-8 text")
+                continue
+        if "\x00" in line:
+            yield BadReading(where, "binary data (NUL byte)")
+            continue
+        item = parse_csv_line(line, where)
+        if item is not None:
+            yield item
+
+
+def _from_object(obj: Any, where: str) -> Reading | BadReading:
+    if not isinstance(obj, dict):
+        return BadReading(where, f"a reading must be a JSON object, got {type(obj).__name__}")
+    meter = obj.get("meter")
+    if isinstance(meter, (int, float)) and not isinstance(meter, bool):
+        meter = str(meter)
+    if not isinstance(meter, str) or not meter:
+        return BadReading(where, f"'meter' must be a non-empty string, got {meter!r}")
+    raw_t, raw_v = obj.get("t", obj.get("timestamp")), obj.get("value")
+    ok = all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in (raw_t, raw_v))
+    t = _number(raw_t) if ok else None
+    value = _number(raw_v) if ok else None
+    if t is None:
+        return BadReading(where, f"'t' must be a finite number of seconds, got {raw_t!r}", meter)
+    if value is None:
+        return BadReading(where, f"'value' must be a finite number, got {raw_v!r}", meter)
+    return Reading(t, meter, value)
+
+
+def parse_payload(payload: bytes, where: str) -> list[Reading | BadReading]:
+    """The readings of one MQTT message (module docstring); never raises."""
+    try:
+        text = payload.decode("utf-8")
+    except UnicodeDecodeError:
+        return [BadReading(where, "payload is not UTF-8 text")]
+    stripped = text.lstrip("\ufeff").strip()
+    if stripped[:1] in ("{", "["):
+        try:
+            doc = json.loads(stripped)
+        except (ValueError, RecursionError):
+            return [BadReading(where, "payload is not valid JSON")]
+        items = doc.get("readings", doc) if isinstance(doc, dict) else doc
+        if isinstance(items, dict):
+            return [_from_object(items, where)]
+        if not isinstance(items, list):
+            return [BadReading(where, "'readings' must be a list")]
+        return [_from_object(o, f"{where} item {i}") for i, o in enumerate(items)]
+    out: list[Reading | BadReading] = []
+    for i, line in enumerate(stripped.splitlines()):
+        item = parse_csv_line(line, where if i == 0 else f"{where} line {i + 1}")
+        if item is not None:
+            out.append(item)
+    if not out:
+        out.append(BadReading(where, "empty payload"))
+    return out
