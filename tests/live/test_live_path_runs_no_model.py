@@ -124,7 +124,8 @@ def test_the_monitor_decides_the_same_without_any_hydraulic_model(
     blocked = _run(_monitor(localizer, setup), setup, blocked=True, cache=blocked_cache)
     assert blocked.returncode == 0, blocked.stderr
     assert blocked.stdout == free.stdout
-    decisions = [json.loads(line) for line in blocked.stdout.splitlines()]
+    records = [json.loads(line) for line in blocked.stdout.splitlines()]
+    decisions = [r for r in records if r["type"] == "decision"]
     assert decisions, "no burst located"
     assert decisions[0]["pipes"][0]["pipe"] == BURST_PIPE
     assert decisions[0]["first_alarm"] <= decisions[0]["time"]

@@ -19,12 +19,13 @@ from burstloc.experiments.calibrate import calibrate
 from burstloc.experiments.evaluate import evaluate
 from burstloc.experiments.harness import readings_at_offset
 from burstloc.experiments.runs import RunSpec
-from burstloc.live.monitor import BurstMonitor, monitor_readings
+from burstloc.live.monitor import BurstMonitor
 from burstloc.live.stream import readings_of
 from burstloc.localize.config import Calibration
 from burstloc.localize.detection import DetectorConfig
 from burstloc.readings import Step
 from conftest import write_tiny
+from live_feed import Collected
 
 SHORT = paper.ScenarioConfig(burst_start=2.0)
 
@@ -87,9 +88,9 @@ def test_raw_readings_go_through_the_reading_stream(tiny: Path, config: Calibrat
     monitor = BurstMonitor(tiny, config, capture_interval=0.2, localizer="arrival")
     readings = list(readings_of(steps, monitor.meters))
     readings[0], readings[1] = readings[1], readings[0]  # out of order within a step is fine
-    decided = list(monitor_readings(monitor, readings, period=0.2, origin=steps[0].timestamp))
-    assert decided and decided[0].pipe == expected.pipe
-    assert decided[0].time == pytest.approx(expected.time)
+    decided = Collected(monitor).run(readings).decisions
+    assert decided and decided[0]["pipes"][0]["pipe"] == expected.pipe
+    assert decided[0]["time"] == pytest.approx(expected.time)
 
 
 def test_one_decision_per_burst_thanks_to_the_holdoff(tiny: Path, config: Calibration, batch):
@@ -112,8 +113,13 @@ def test_one_decision_per_burst_thanks_to_the_holdoff(tiny: Path, config: Calibr
         if s.timestamp >= decided_at
     )
     # Without a hold-off the ringing network is "located" again and again.
-    eager = BurstMonitor(tiny, config, capture_interval=0.2, localizer="arrival", holdoff=0.0)
+    eager = BurstMonitor(
+        tiny, config, capture_interval=0.2, localizer="arrival", holdoff=0.0, rearm=0
+    )
     assert len(list(eager.run(steps))) > 1
+    # Re-arming (alarm-free steps before an alarm counts again) alone already prevents that.
+    rearmed = BurstMonitor(tiny, config, capture_interval=0.2, localizer="arrival", holdoff=0.0)
+    assert len(list(rearmed.run(steps))) == 1
     with pytest.raises(ConfigError, match="holdoff"):
         BurstMonitor(tiny, config, capture_interval=0.2, holdoff=-1.0)
 
@@ -185,19 +191,22 @@ def test_cli_monitor_prints_one_json_line_per_burst(
     csv = _write_csv(tmp_path / "feed.csv", steps, config.meters)
     argv = ["monitor", str(tiny), "--config", str(cfg), "--capture-interval", "0.2"]
     assert main([*argv, "--localizer", "arrival", "--readings", str(csv)]) == 0
-    lines = capsys.readouterr().out.splitlines()
-    assert len(lines) == 1
-    doc = json.loads(lines[0])
+    records = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    decisions = [r for r in records if r["type"] == "decision"]
+    assert len(decisions) == 1 and {r["type"] for r in records} == {"decision", "health"}
+    doc = decisions[0]
     assert doc["pipes"][0]["pipe"] == expected.predicted_pipe
     assert doc["time"] == pytest.approx(expected.decided_at)
+    assert doc["meters"] == list(config.meters) and doc["excluded"] == []
+    assert doc["health"]["type"] == "health"
 
+    # bad lines are reported and skipped: the loop goes on
     bad = tmp_path / "bad.csv"
-    bad.write_text("timestamp,meter,value\n0.0,J1,50.0\n0.0,J2\n")
-    assert main([*argv, "--readings", str(bad)]) == 2
-    assert "line 3: want 'timestamp,meter,value'" in capsys.readouterr().err
-    bad.write_text("0.0,nowhere,50.0\n")
-    assert main([*argv, "--readings", str(bad)]) == 2
-    assert "nowhere" in capsys.readouterr().err
+    bad.write_text("timestamp,meter,value\n0.0,J1,50.0\n0.0,J2\n0.0,nowhere,50.0\n")
+    assert main([*argv, "--readings", str(bad)]) == 0
+    err = capsys.readouterr().err
+    assert "line 3: want 'timestamp,meter,value'" in err
+    assert "unknown meter 'nowhere'" in err
     assert main([*argv, "--readings", str(tmp_path / "missing.csv")]) == 2
     assert "cannot read readings" in capsys.readouterr().err
 
