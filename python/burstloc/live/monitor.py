@@ -14,7 +14,9 @@ signature delay, 150 s): a burst rings through the network for minutes; the read
 the history, alarms are ignored. Then the bank starts afresh from the current level and
 *re-arms*: it must run ``rearm`` steps in a row without an alarm (any alarm restarts the bank
 and the count) before an alarm may start a new decision, so the tail of the ringing never
-becomes a phantom second burst. A second burst within the hold-off is not reported separately.
+becomes a phantom second burst. A second burst within the hold-off is not reported separately. A decision needs alarms
+from at least ``corroborate`` meters (default 2): a single meter's alarm (the calibrated false
+alarms of a noisy meter, the tail of the ringing after the hold-off) is dismissed and counted.
 
 **Meters that do not report.** :attr:`BurstMonitor.excluded` (kept by the live loop from
 :mod:`burstloc.live.health`: silent meters) take no part: their alarms are ignored and the
@@ -151,6 +153,10 @@ class BurstMonitor:
     rearm:
         Alarm-free steps needed after the hold-off before an alarm counts again (default: two
         localization intervals).
+    corroborate:
+        Meters that must have alarmed by the decision time (default 2; fewer when fewer meters
+        report). Alarms of fewer meters are dismissed (counted in :attr:`dismissed`): a burst
+        reaches every meter near it, a noise excursion or a glitch one.
 
     Raises:
         ConfigError: a configuration for another network or other meters, no calibration for
@@ -171,6 +177,7 @@ class BurstMonitor:
         localizers: Mapping[str, Localizer] | None = None,
         holdoff: float | None = None,
         rearm: int | None = None,
+        corroborate: int = 2,
     ) -> None:
         if localizer not in RANKING_LOCALIZERS:
             raise ConfigError(f"localizer must be one of {RANKING_LOCALIZERS}, got {localizer!r}")
@@ -197,6 +204,10 @@ class BurstMonitor:
         self.rearm = 2 * cal.localization_interval if rearm is None else rearm
         if isinstance(self.rearm, bool) or not isinstance(self.rearm, int) or self.rearm < 0:
             raise ConfigError(f"rearm must be a whole number of steps >= 0, got {rearm!r}")
+        if isinstance(corroborate, bool) or not isinstance(corroborate, int) or corroborate < 1:
+            raise ConfigError(f"corroborate must be a whole number >= 1, got {corroborate!r}")
+        self.corroborate = corroborate
+        self.dismissed = 0  # alarms not corroborated by enough meters
         self.steady = np.asarray(config.model.signature_sets[0].baseline, dtype=np.float64)
         span = HISTORY_BEFORE_ONSET + cal.decision_delay + cal.arrival_decision_delay
         steps = math.ceil(span / cal.capture_interval) + 2 * cal.localization_interval + 2
@@ -297,6 +308,11 @@ class BurstMonitor:
             )
         if self._due is None or t + 1e-9 < self._due:
             return None
+        alarmed = {a.channel for a in self._alarms}
+        if len(alarmed) < min(self.corroborate, len(self.meters) - len(self.excluded)):
+            self.dismissed += 1  # one meter alone: noise or a glitch, not a burst
+            self._alarms, self._due = [], None
+            return None
         return self._decide()
 
     def run(self, steps: Iterable[Step]) -> Iterator[LiveDecision]:
@@ -386,6 +402,7 @@ class BurstMonitor:
             "due": self._due,
             "quiet_until": self._quiet_until,
             "arming": self._arming,
+            "dismissed": self.dismissed,
             "grace": dict(self._grace),
             "excluded": sorted(self.excluded),
         }
@@ -415,5 +432,6 @@ class BurstMonitor:
         self._due = state["due"]
         self._quiet_until = state["quiet_until"]
         self._arming = int(state["arming"])
+        self.dismissed = int(state["dismissed"])
         self._grace = {str(m): int(k) for m, k in state["grace"].items()}
         self.excluded = set(state["excluded"])
