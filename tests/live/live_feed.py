@@ -5,11 +5,13 @@ from __future__ import annotations
 from collections.abc import Iterable
 from typing import Any
 
+import numpy as np
+
 from burstloc.live.health import Health, PlausibleRange
 from burstloc.live.loop import LiveLoop, Reporter
 from burstloc.live.monitor import BurstMonitor
 from burstloc.live.parse import BadReading
-from burstloc.readings import Reading
+from burstloc.readings import Reading, Step
 
 
 class Collected:
@@ -44,3 +46,35 @@ class Collected:
     @property
     def health_records(self) -> list[dict[str, Any]]:
         return [r for r in self.records if r["type"] == "health"]
+
+
+def burst_steps(
+    network: Any,
+    meters: tuple[str, ...],
+    pipe: str,
+    *,
+    capture_interval: float = 0.2,
+    before: float = 60.0,
+    after: float = 300.0,
+    sigma: float = 0.0,
+    seed: int = 0,
+    duration: float = 30.0,
+) -> list[Step]:
+    """Steps of a real TSNet burst on ``pipe`` (burst at ``before`` + 2 s), steady readings
+    ``before`` it and the final readings held ``after`` it, plus seeded noise ``sigma``."""
+    from burstloc.sim.scenario import BurstScenario
+    from burstloc.sim.tsnet import simulate_burst
+
+    scenario = BurstScenario(str(network), pipe, burst_start=2.0, duration=duration)
+    result = simulate_burst(scenario).resample(capture_interval)
+    heads = result.heads[:, [result.junctions.index(m) for m in meters]]
+    pre = np.repeat(heads[:1], round(before / capture_interval), axis=0)
+    post = np.repeat(heads[-1:], round(after / capture_interval), axis=0)
+    values = np.vstack([pre, heads, post])
+    values = values + np.random.default_rng(seed).normal(0.0, sigma, values.shape)
+    return [Step(round(k * capture_interval, 9), v) for k, v in enumerate(values)]
+
+
+def readings(steps: list[Step], meters: tuple[str, ...]) -> list[Reading]:
+    """Every step as per-meter readings, meter order within a step."""
+    return [Reading(s.timestamp, m, float(x)) for s in steps for m, x in zip(meters, s.values)]

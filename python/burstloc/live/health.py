@@ -132,6 +132,7 @@ class Health:
         self._newest = np.full(len(self.meters), np.nan)
         self._index = {m: j for j, m in enumerate(self.meters)}
         self._reference: float | None = None
+        self._bias = 0.0
         self._since = 0
         self.bad_unknown = 0  # bad input naming no meter of the configuration
 
@@ -172,6 +173,7 @@ class Health:
                 h.counts["off_clock"] += 1
                 return None
             t = r.timestamp - h.clock_offset
+            self._bias += 0.01 * (t - ref - self._bias)  # how far on-time readings lead ref
         if h.last is None or t > h.last:
             h.last = t
             self._newest[self._index[r.meter]] = t
@@ -188,14 +190,15 @@ class Health:
         agree = sum(abs(d - mid) <= self.clock_tolerance for d in h.deviations)
         if agree < 0.8 * len(h.deviations):
             return False
-        h.clock_offset = round(mid / self.capture_interval) * self.capture_interval
+        steps = round((mid - self._bias) / self.capture_interval)
+        h.clock_offset = round(steps * self.capture_interval, 9)
         h.deviations.clear()
         return True
 
     def _update_reference(self) -> None:
         self._since = 0
         known = self._newest[~np.isnan(self._newest)]
-        if known.size * 2 >= len(self.meters):
+        if known.size * 2 > len(self.meters):
             self._reference = float(np.median(known))
 
     # ------------------------------------------------------------ bookkeeping

@@ -1,0 +1,99 @@
+"""burstloc.live.loop: bad data never stops the live loop; silent meters, clocks, health."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from burstloc.experiments.calibrate import calibrate
+from burstloc.live.monitor import BurstMonitor
+from burstloc.live.parse import BadReading
+from burstloc.localize.config import Calibration
+from burstloc.readings import Reading
+from live_feed import Collected, burst_steps, readings
+
+PIPE = "C"
+
+
+@pytest.fixture(scope="module")
+def config(tiny: Path) -> Calibration:
+    return calibrate(tiny, capture_intervals=(0.2,), noise_sigma=0.01)
+
+
+@pytest.fixture(scope="module")
+def feed(tiny: Path, config: Calibration) -> list[Reading]:
+    return readings(burst_steps(tiny, config.meters, PIPE, sigma=0.002), config.meters)
+
+
+def _run(tiny: Path, config: Calibration, items, **options) -> Collected:
+    monitor = BurstMonitor(tiny, config, capture_interval=0.2)
+    return Collected(monitor, **options).run(items)
+
+
+def test_a_clean_feed_gives_one_decision_that_tells_the_truth(tiny, config, feed) -> None:
+    done = _run(tiny, config, feed)
+    (decision,) = done.decisions
+    assert decision["pipes"][0]["pipe"] == PIPE
+    assert decision["meters"] == list(config.meters) and decision["excluded"] == []
+    assert set(decision["alarmed"]) <= set(config.meters) and len(decision["alarmed"]) >= 2
+    delay = decision["time"] - decision["first_alarm"]
+    assert decision["decision_delay_s"] == pytest.approx(delay)
+    cal = config.for_interval(0.2)
+    assert decision["waited"] == (delay > cal.arrival_decision_delay + 0.2 + 1e-9)
+    assert decision["health"]["meters"]["J1"]["readings"] > 0
+    assert done.health_records and not done.messages
+
+
+def test_bad_data_is_reported_and_skipped_and_the_decision_is_unchanged(
+    tiny, config, feed
+) -> None:
+    clean = _run(tiny, config, feed).decisions
+    burst_at = clean[0]["first_alarm"]
+    k = next(i for i, r in enumerate(feed) if r.timestamp >= burst_at - 30.0)
+    garbage: list[Reading | BadReading] = [
+        BadReading("line 7", "value is not a finite number: '1,J1,abc'", "J1"),
+        Reading(feed[k].timestamp, "nowhere", 50.0),
+        Reading(feed[k].timestamp, "J2", 1e6),  # implausible: would alarm and hide the burst
+        Reading(feed[k].timestamp, "J3", -500.0),
+    ]
+    dirty = _run(tiny, config, [*feed[:k], *garbage, *feed[k:]])
+    assert [d["pipes"] for d in dirty.decisions] == [d["pipes"] for d in clean]
+    assert dirty.decisions[0]["time"] == clean[0]["time"]
+    text = "\n".join(dirty.messages)
+    assert "line 7: value is not a finite number" in text
+    assert "unknown meter 'nowhere'" in text
+    assert "implausible value 1e+06 m from meter 'J2'" in text
+    assert "implausible value -500 m from meter 'J3'" in text
+    meters = dirty.health.record()["meters"]
+    assert meters["J1"]["bad"] == 1 and meters["J2"]["implausible"] == 1
+    assert dirty.health.bad_unknown == 1
+
+
+def test_a_silent_meter_is_excluded_and_included_again(tiny, config, feed) -> None:
+    gone = "J4"
+    burst_at = _run(tiny, config, feed).decisions[0]["first_alarm"]
+    back_at = burst_at + 200.0
+    items = [r for r in feed if r.meter != gone or r.timestamp >= back_at]
+    done = _run(tiny, config, items, silent_after=5.0)
+    (decision,) = done.decisions
+    assert decision["excluded"] == [gone] and gone not in decision["meters"]
+    assert decision["health"]["meters"][gone]["silent"] is True
+    assert decision["pipes"], "the other meters still localize"
+    text = "\n".join(done.messages)
+    assert f"meter {gone!r} silent ever: excluded from localization" in text
+    assert f"meter {gone!r} reports again: included" in text
+    assert done.health.meter[gone].silent is False
+
+
+@pytest.mark.parametrize("offset", [2.0, -3600.0, 3600.0])
+def test_a_meter_clock_offset_is_found_and_corrected(tiny, config, feed, offset: float) -> None:
+    clean = _run(tiny, config, feed).decisions
+    shifted = [
+        Reading(r.timestamp + offset, r.meter, r.value) if r.meter == "J2" else r for r in feed
+    ]
+    done = _run(tiny, config, shifted)
+    assert done.health.meter["J2"].clock_offset == pytest.approx(offset)
+    assert [d["pipes"][0]["pipe"] for d in done.decisions] == [clean[0]["pipes"][0]["pipe"]]
+    assert f"meter 'J2': clock offset {offset:+g} s found" in "\n".join(done.messages)
+    assert done.health.record()["clock_corrected"] == {"J2": pytest.approx(offset)}

@@ -1,0 +1,59 @@
+"""burstloc.live.parse: CSV lines and MQTT payloads to readings; bad input named, never raised."""
+
+from __future__ import annotations
+
+import json
+
+from burstloc.live.parse import BadReading, parse_lines, parse_payload
+from burstloc.readings import Reading
+
+
+def test_csv_lines_header_bom_quotes_and_comments() -> None:
+    lines = ["\ufefftimestamp,meter,value", "# note", "", '0.2,"N2",181.5', "0.4, N3 ,180"]
+    assert list(parse_lines(lines)) == [Reading(0.2, "N2", 181.5), Reading(0.4, "N3", 180.0)]
+
+
+def test_every_kind_of_bad_line_is_named_with_its_line_and_skipped() -> None:
+    lines = [
+        "0.2,N2,abc",
+        "0.2,N2,nan",
+        "2026-01-01T00:00:00,N2,1.0",
+        "0.2,N2",
+        "0.2,,1.0",
+        b"\xff\xfe0.2,N2,1.0",
+        "0.2,N2\x00,1.0",
+        "0.4,N2,1.5",
+    ]
+    items = list(parse_lines(lines))
+    bad = [i for i in items if isinstance(i, BadReading)]
+    assert [b.where for b in bad] == [f"line {k}" for k in range(1, 8)]
+    assert "value is not a finite number" in bad[0].reason and bad[0].meter == "N2"
+    assert "timestamp is not a finite number" in bad[2].reason
+    assert "want 'timestamp,meter,value'" in bad[3].reason
+    assert "no meter name" in bad[4].reason
+    assert bad[5].reason == "not UTF-8 text" and "binary" in bad[6].reason
+    assert items[-1] == Reading(0.4, "N2", 1.5)
+
+
+def test_json_payloads_single_batch_and_csv_form() -> None:
+    one = json.dumps({"t": 1.0, "meter": "N2", "value": 180.0}).encode()
+    assert parse_payload(one, "message 1") == [Reading(1.0, "N2", 180.0)]
+    batch = json.dumps({"readings": [{"t": 1.0, "meter": 2, "value": 3}, {"t": "x"}]}).encode()
+    got = parse_payload(batch, "message 2")
+    assert got[0] == Reading(1.0, "2", 3.0)
+    assert isinstance(got[1], BadReading) and got[1].where == "message 2 item 1"
+    listed = json.dumps([{"timestamp": 2.0, "meter": "N3", "value": 1e400}]).encode()
+    assert isinstance(parse_payload(listed, "m")[0], BadReading)
+    assert parse_payload(b"1.0,N2,180\n1.2,N2,181", "m") == [
+        Reading(1.0, "N2", 180.0),
+        Reading(1.2, "N2", 181.0),
+    ]
+    for payload, reason in [
+        (b"{not json", "not valid JSON"),
+        (b"\xff", "not UTF-8"),
+        (b"", "empty payload"),
+        (b'{"t": true, "meter": "N2", "value": 1}', "'t' must be"),
+        (b'{"readings": 3}', "'readings' must be a list"),
+    ]:
+        (item,) = parse_payload(payload, "message 9")
+        assert isinstance(item, BadReading) and reason in item.reason, (payload, item)
