@@ -77,4 +77,8 @@ def burst_steps(
 
 def readings(steps: list[Step], meters: tuple[str, ...]) -> list[Reading]:
     """Every step as per-meter readings, meter order within a step."""
-    return [Reading(s.timestamp, m, float(x)) for s in steps for m, x in zip(meters, s.values)]
+    return [
+        Reading(s.timestamp, m, float(x))
+        for s in steps
+        for m, x in zip(meters, s.values, strict=True)
+    ]

@@ -5,13 +5,13 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from live_feed import Collected, burst_steps, readings
 
 from burstloc.experiments.calibrate import calibrate
 from burstloc.live.monitor import BurstMonitor
 from burstloc.live.parse import BadReading
 from burstloc.localize.config import Calibration
 from burstloc.readings import Reading
-from live_feed import Collected, burst_steps, readings
 
 PIPE = "C"
 
@@ -45,9 +45,7 @@ def test_a_clean_feed_gives_one_decision_that_tells_the_truth(tiny, config, feed
     assert done.health_records and not done.messages
 
 
-def test_bad_data_is_reported_and_skipped_and_the_decision_is_unchanged(
-    tiny, config, feed
-) -> None:
+def test_bad_data_is_reported_and_skipped_and_the_decision_is_unchanged(tiny, config, feed) -> None:
     clean = _run(tiny, config, feed).decisions
     burst_at = clean[0]["first_alarm"]
     k = next(i for i, r in enumerate(feed) if r.timestamp >= burst_at - 30.0)

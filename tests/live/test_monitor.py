@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from live_feed import Collected
 
 from burstloc.cli import main
 from burstloc.exceptions import ConfigError, InputError
@@ -25,7 +26,6 @@ from burstloc.localize.config import Calibration
 from burstloc.localize.detection import DetectorConfig
 from burstloc.readings import Step
 from conftest import write_tiny
-from live_feed import Collected
 
 SHORT = paper.ScenarioConfig(burst_start=2.0)
 

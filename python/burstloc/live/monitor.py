@@ -14,9 +14,10 @@ signature delay, 150 s): a burst rings through the network for minutes; the read
 the history, alarms are ignored. Then the bank starts afresh from the current level and
 *re-arms*: it must run ``rearm`` steps in a row without an alarm (any alarm restarts the bank
 and the count) before an alarm may start a new decision, so the tail of the ringing never
-becomes a phantom second burst. A second burst within the hold-off is not reported separately. A decision needs alarms
-from at least ``corroborate`` meters (default 2): a single meter's alarm (the calibrated false
-alarms of a noisy meter, the tail of the ringing after the hold-off) is dismissed and counted.
+becomes a phantom second burst. A second burst within the hold-off is not reported
+separately. A decision needs alarms from at least ``corroborate`` meters (default 2): a single
+meter's alarm (the calibrated false alarms of a noisy meter, the tail of the ringing after the
+hold-off) is dismissed and counted.
 
 **Meters that do not report.** :attr:`BurstMonitor.excluded` (kept by the live loop from
 :mod:`burstloc.live.health`: silent meters) take no part: their alarms are ignored and the
