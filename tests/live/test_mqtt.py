@@ -1,0 +1,84 @@
+"""burstloc.live.mqtt: ``burstloc monitor --mqtt`` against a real Mosquitto broker."""
+
+from __future__ import annotations
+
+import json
+import queue
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import paho.mqtt.client as mqtt
+import pytest
+from live_feed import burst_steps
+from paho.mqtt.enums import CallbackAPIVersion
+
+from burstloc.exceptions import ConfigError
+from burstloc.experiments.calibrate import calibrate
+from burstloc.live.mqtt import parse_address
+
+PIPE = "C"
+
+
+def _client(port: int, name: str) -> mqtt.Client:
+    client = mqtt.Client(CallbackAPIVersion.VERSION2, client_id=name)
+    client.connect("127.0.0.1", port)
+    client.loop_start()
+    return client
+
+
+def test_readings_in_and_decisions_out_through_the_broker(
+    tiny: Path, tmp_path: Path, mqtt_port: int
+) -> None:
+    config = calibrate(tiny, capture_intervals=(0.2,), noise_sigma=0.01)
+    cfg = config.save(tmp_path / "tiny.json")
+    steps = burst_steps(tiny, config.meters, PIPE, sigma=0.002, after=200.0)
+    got: queue.Queue[tuple[str, dict]] = queue.Queue()
+    listener = _client(mqtt_port, "listener")
+    listener.on_message = lambda c, u, m: got.put((m.topic, json.loads(m.payload)))
+    listener.subscribe("burstloc/decisions", qos=1)
+    listener.subscribe("burstloc/health", qos=1)
+    argv = [sys.executable, "-m", "burstloc", "monitor", str(tiny), "--config", str(cfg)]
+    argv += ["--capture-interval", "0.2", "--mqtt", f"127.0.0.1:{mqtt_port}"]
+    argv += ["--topic", "plant/readings/#", "--health-every", "30"]
+    monitor = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        time.sleep(2.0)  # let it subscribe
+        sender = _client(mqtt_port, "sender")
+        infos = [sender.publish("plant/readings/x", b"{broken", qos=1)]
+        infos.append(sender.publish("plant/readings/x", b"1.0,J1,not-a-number", qos=1))
+        for s in steps:
+            batch = [
+                {"t": s.timestamp, "meter": m, "value": float(v)}
+                for m, v in zip(config.meters, s.values, strict=True)
+            ]
+            infos.append(sender.publish("plant/readings/all", json.dumps(batch), qos=1))
+        for info in infos:
+            info.wait_for_publish(10)
+        deadline = time.monotonic() + 60
+        decisions, health = [], []
+        while not decisions or not health:
+            assert time.monotonic() < deadline, "no decision on the broker"
+            try:
+                topic, record = got.get(timeout=1)
+            except queue.Empty:
+                continue
+            (decisions if topic == "burstloc/decisions" else health).append(record)
+        assert decisions[0]["type"] == "decision" and decisions[0]["pipes"][0]["pipe"] == PIPE
+        assert health[0]["type"] == "health"
+    finally:
+        monitor.send_signal(signal.SIGTERM)
+        _, err = monitor.communicate(timeout=30)
+        listener.loop_stop()
+    assert monitor.returncode == 0, err
+    assert "payload is not valid JSON" in err and "value is not a finite number" in err
+
+
+def test_broker_address_is_checked() -> None:
+    assert parse_address("localhost") == ("localhost", 1883)
+    assert parse_address("10.0.0.2:1884") == ("10.0.0.2", 1884)
+    for bad in ("host:0", ":1883", "host:x", "host:70000"):
+        with pytest.raises(ConfigError, match="HOST:PORT"):
+            parse_address(bad)
