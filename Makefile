@@ -24,6 +24,7 @@ BUILD_INPUTS := pyproject.toml Cargo.toml $(wildcard Cargo.lock) \
 EXT_RUSTFLAGS ?= -C target-cpu=native
 
 setup: $(EXT) networks/todini6.inp
+	scripts/install-mosquitto.sh
 
 # A byte copy of one of WNTR's example networks, used by `burstloc study`: generated from the
 # installed WNTR rather than shipped (it is a third-party file; see networks/README.md).
