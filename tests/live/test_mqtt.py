@@ -8,11 +8,13 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import paho.mqtt.client as mqtt
 import pytest
 from live_feed import burst_steps
+from mosquitto import broker
 from paho.mqtt.enums import CallbackAPIVersion
 
 from burstloc.exceptions import ConfigError
@@ -20,6 +22,13 @@ from burstloc.experiments.calibrate import calibrate
 from burstloc.live.mqtt import parse_address
 
 PIPE = "C"
+
+
+@pytest.fixture(scope="module")
+def mqtt_port(tmp_path_factory: pytest.TempPathFactory) -> Iterator[int]:
+    """The port of a real Mosquitto broker on 127.0.0.1, running for this module's tests."""
+    with broker(tmp_path_factory.mktemp("mosquitto")) as port:
+        yield port
 
 
 def _client(port: int, name: str) -> mqtt.Client:
