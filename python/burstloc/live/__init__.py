@@ -1,8 +1,14 @@
-"""The live loop: readings in, burst decisions out. Never imports :mod:`burstloc.sim`, WNTR
-or TSNet.
+"""The live loop: readings in, burst decisions and health out. Never imports
+:mod:`burstloc.sim`, WNTR or TSNet.
 
+* :mod:`~burstloc.live.parse`: CSV lines and MQTT payloads to readings, bad input named;
+* :mod:`~burstloc.live.health`: per-meter health, plausible range, clock offsets, silence;
 * :mod:`~burstloc.live.stream`: raw readings assembled into complete time steps;
+* :mod:`~burstloc.live.subset`: the localizers restricted to the meters that report;
 * :mod:`~burstloc.live.monitor`: the detector bank, history and localizer over those steps,
   built from the stored configuration (no hydraulic model runs);
+* :mod:`~burstloc.live.loop`: the loop that wires them and never stops on bad data;
+* :mod:`~burstloc.live.state`: the saved state (atomic, versioned, bound to its setup);
+* :mod:`~burstloc.live.mqtt`: readings from a broker, decisions and health to it;
 * :mod:`~burstloc.live.paper_locator`: the paper's real-time loop (windows, detector, rules).
 """

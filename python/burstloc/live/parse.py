@@ -94,22 +94,44 @@ def parse_lines(lines: Iterable[str | bytes]) -> Iterator[Reading | BadReading]:
             yield item
 
 
+_NUMBER = (int, float)
+
+
 def _from_object(obj: Any, where: str) -> Reading | BadReading:
+    if type(obj) is dict:  # the common case first: {"t": float, "meter": str, "value": float}
+        meter, raw_t, raw_v = obj.get("meter"), obj.get("t"), obj.get("value")
+        if type(meter) is str and meter and type(raw_t) in _NUMBER and type(raw_v) in _NUMBER:
+            try:
+                t, value = float(raw_t), float(raw_v)
+            except OverflowError:  # an integer beyond the float range
+                return _checked(obj, where)
+            if math.isfinite(t) and math.isfinite(value):
+                return Reading(t, meter, value)
+    return _checked(obj, where)
+
+
+def _short(x: Any) -> str:
+    text = repr(x)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _checked(obj: Any, where: str) -> Reading | BadReading:
     if not isinstance(obj, dict):
         return BadReading(where, f"a reading must be a JSON object, got {type(obj).__name__}")
     meter = obj.get("meter")
     if isinstance(meter, (int, float)) and not isinstance(meter, bool):
         meter = str(meter)
     if not isinstance(meter, str) or not meter:
-        return BadReading(where, f"'meter' must be a non-empty string, got {meter!r}")
+        return BadReading(where, f"'meter' must be a non-empty string, got {_short(meter)}")
     raw_t, raw_v = obj.get("t", obj.get("timestamp")), obj.get("value")
     ok = all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in (raw_t, raw_v))
     t = _number(raw_t) if ok else None
     value = _number(raw_v) if ok else None
     if t is None:
-        return BadReading(where, f"'t' must be a finite number of seconds, got {raw_t!r}", meter)
+        reason = f"'t' must be a finite number of seconds, got {_short(raw_t)}"
+        return BadReading(where, reason, meter)
     if value is None:
-        return BadReading(where, f"'value' must be a finite number, got {raw_v!r}", meter)
+        return BadReading(where, f"'value' must be a finite number, got {_short(raw_v)}", meter)
     return Reading(t, meter, value)
 
 
