@@ -13,8 +13,10 @@ After a decision the monitor holds off for ``holdoff`` seconds (default: the cal
 signature delay, 150 s): a burst rings through the network for minutes; the readings still fill
 the history, alarms are ignored. Then the bank starts afresh from the current level and
 *re-arms*: it must run ``rearm`` steps in a row without an alarm (any alarm restarts the bank
-and the count) before an alarm may start a new decision, so the tail of the ringing never
-becomes a phantom second burst. A second burst within the hold-off is not reported
+and the count) and the ringing must have died down (the step-to-step changes of the last
+:data:`QUIET_WINDOW` seconds back within :data:`QUIET_FACTOR` of the calibrated noise's, or one
+more hold-off gone by) before an alarm may start a new decision, so the tail of the ringing
+never becomes a phantom second burst. A second burst within the hold-off is not reported
 separately. A decision needs alarms from at least ``corroborate`` meters (default 2): a single
 meter's alarm (the calibrated false alarms of a noisy meter, the tail of the ringing after the
 hold-off) is dismissed and counted.
@@ -64,10 +66,16 @@ from burstloc.localize.decide import (
 from burstloc.localize.evidence import IndexedAlarm, Localizer, Ranking
 from burstloc.readings import Step
 
-__all__ = ["HISTORY_BEFORE_ONSET", "BurstMonitor", "LiveDecision"]
+__all__ = ["HISTORY_BEFORE_ONSET", "QUIET_FACTOR", "QUIET_WINDOW", "BurstMonitor", "LiveDecision"]
 
 #: Seconds of readings kept before a burst's onset (the baseline of the signature localizer).
 HISTORY_BEFORE_ONSET = 60.0
+
+#: Re-arming waits until the step-to-step changes of the last QUIET_WINDOW seconds are back to
+#: within QUIET_FACTOR of the calibrated noise's (the ringing has died down), at most one more
+#: hold-off.
+QUIET_WINDOW = 30.0
+QUIET_FACTOR = 1.3
 
 
 @dataclass(frozen=True)
@@ -154,6 +162,9 @@ class BurstMonitor:
     rearm:
         Alarm-free steps needed after the hold-off before an alarm counts again (default: two
         localization intervals).
+    settle:
+        Whether re-arming also waits for the ringing to die down (default: yes; module
+        docstring).
     corroborate:
         Meters that must have alarmed by the decision time (default 2; fewer when fewer meters
         report). Alarms of fewer meters are dismissed (counted in :attr:`dismissed`): a burst
@@ -179,6 +190,7 @@ class BurstMonitor:
         holdoff: float | None = None,
         rearm: int | None = None,
         corroborate: int = 2,
+        settle: bool = True,
     ) -> None:
         if localizer not in RANKING_LOCALIZERS:
             raise ConfigError(f"localizer must be one of {RANKING_LOCALIZERS}, got {localizer!r}")
@@ -208,6 +220,7 @@ class BurstMonitor:
         if isinstance(corroborate, bool) or not isinstance(corroborate, int) or corroborate < 1:
             raise ConfigError(f"corroborate must be a whole number >= 1, got {corroborate!r}")
         self.corroborate = corroborate
+        self.settle = bool(settle)
         self.dismissed = 0  # alarms not corroborated by enough meters
         self.steady = np.asarray(config.model.signature_sets[0].baseline, dtype=np.float64)
         span = HISTORY_BEFORE_ONSET + cal.decision_delay + cal.arrival_decision_delay
@@ -221,6 +234,9 @@ class BurstMonitor:
         self._due: float | None = None
         self._quiet_until: float | None = None  # end of the hold-off after a decision
         self._arming = 0  # alarm-free steps still needed after the hold-off
+        self._arm_by: float | None = None  # re-arming; re-armed by then even if still ringing
+        self._noise = np.array([max(config.noise_sigma.get(m, 0.0), 1e-3) for m in self.meters])
+        self._quiet_steps = max(math.ceil(QUIET_WINDOW / cal.capture_interval), 5)
         self._grace: dict[str, int] = {}  # meter back from silence -> step it counts again
         self.excluded: set[str] = set()
 
@@ -237,7 +253,7 @@ class BurstMonitor:
     @property
     def arming(self) -> bool:
         """Whether the monitor is re-arming after a hold-off (see ``rearm``)."""
-        return self._arming > 0
+        return self._arm_by is not None
 
     def exclude(self, meter: str) -> None:
         """Leave ``meter`` out (silent) until :meth:`include`."""
@@ -283,6 +299,7 @@ class BurstMonitor:
             self._restart_bank()  # the hold-off is over: start afresh from the current level
             self._quiet_until = None
             self._arming = self.rearm
+            self._arm_by = t + self.holdoff
         alarms = self.bank.step(values)
         self._times.append(t)
         self._values.append(values)
@@ -290,12 +307,15 @@ class BurstMonitor:
         self._steps += 1
         if self._quiet_until is not None:
             return None
-        if self._arming > 0:
+        if self._arm_by is not None:
             if alarms:
                 self._restart_bank()
                 self._arming = self.rearm
-            else:
+            elif self._arming > 0:
                 self._arming -= 1
+            settled = not self.settle or t + 1e-9 >= self._arm_by or self._settled()
+            if self._arming == 0 and settled:
+                self._arm_by = None
             return None
         self._alarms += [
             IndexedAlarm(int(a.channel or 0), a.index, a.start, a.amplitude)
@@ -325,6 +345,17 @@ class BurstMonitor:
 
     def _counts(self, meter: str, absent: set[str]) -> bool:
         return meter not in absent and self._grace.get(meter, -1) <= self._steps
+
+    def _settled(self) -> bool:
+        """Whether the ringing has died down: over the last :data:`QUIET_WINDOW` seconds, every
+        reporting meter's step-to-step RMS change is within :data:`QUIET_FACTOR` of its noise's."""
+        w = self._quiet_steps
+        if len(self._values) <= w:
+            return False
+        recent = np.array([self._values[-k] for k in range(w + 1, 0, -1)])
+        rms = np.sqrt(np.mean(np.diff(recent, axis=0) ** 2, axis=0))
+        quiet = rms <= QUIET_FACTOR * math.sqrt(2.0) * self._noise
+        return all(q or m in self.excluded for q, m in zip(quiet, self.meters, strict=True))
 
     def _restart_bank(self) -> None:
         self.bank.reset()
@@ -403,6 +434,7 @@ class BurstMonitor:
             "due": self._due,
             "quiet_until": self._quiet_until,
             "arming": self._arming,
+            "arm_by": self._arm_by,
             "dismissed": self.dismissed,
             "grace": dict(self._grace),
             "excluded": sorted(self.excluded),
@@ -433,6 +465,7 @@ class BurstMonitor:
         self._due = state["due"]
         self._quiet_until = state["quiet_until"]
         self._arming = int(state["arming"])
+        self._arm_by = state["arm_by"]
         self.dismissed = int(state["dismissed"])
         self._grace = {str(m): int(k) for m, k in state["grace"].items()}
         self.excluded = set(state["excluded"])
