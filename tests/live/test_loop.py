@@ -8,6 +8,7 @@ import pytest
 from live_feed import Collected, burst_steps, readings
 
 from burstloc.experiments.calibrate import calibrate
+from burstloc.live.loop import Reporter
 from burstloc.live.monitor import BurstMonitor
 from burstloc.live.parse import BadReading
 from burstloc.localize.config import Calibration
@@ -95,3 +96,19 @@ def test_a_meter_clock_offset_is_found_and_corrected(tiny, config, feed, offset:
     assert [d["pipes"][0]["pipe"] for d in done.decisions] == [clean[0]["pipes"][0]["pipe"]]
     assert f"meter 'J2': clock offset {offset:+g} s found" in "\n".join(done.messages)
     assert done.health.record()["clock_corrected"] == {"J2": pytest.approx(offset)}
+
+
+def test_reports_are_rate_limited_per_kind_and_nothing_is_silent() -> None:
+    said: list[str] = []
+    report = Reporter(said.append, burst=2, every=1000.0)
+    for k in range(5):
+        report("late", f"late {k}")
+    report("clock-offset", "offset found")
+    assert said == [
+        "burstloc monitor: late 0",
+        "burstloc monitor: late 1",
+        "burstloc monitor: offset found",
+    ]
+    report.close()
+    assert said[-1] == "burstloc monitor: 3 more late messages not shown"
+    assert report.counts == {"late": 5, "clock-offset": 1}

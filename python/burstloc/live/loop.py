@@ -122,7 +122,7 @@ class LiveLoop:
         admitted = self.health.admit(reading, where)
         if h is not None and h.clock_offset != offset:
             self.report(
-                "clock",
+                "clock-offset",
                 f"meter {reading.meter!r}: clock offset {h.clock_offset:+g} s found; its "
                 "timestamps are corrected by it",
             )

@@ -1,0 +1,80 @@
+"""`burstloc monitor`: bad input of every kind is reported and skipped, never fatal; bad
+options and foreign state files stop it with a message naming them."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from burstloc.experiments.calibrate import calibrate
+
+
+@pytest.fixture(scope="module")
+def cfg(tiny: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    config = calibrate(tiny, capture_intervals=(0.2,), noise_sigma=0.01)
+    return config.save(tmp_path_factory.mktemp("cfg") / "tiny.json")
+
+
+def _monitor(tiny: Path, cfg: Path, *extra: str, stdin: bytes = b"") -> subprocess.CompletedProcess:
+    argv = [sys.executable, "-m", "burstloc", "monitor", str(tiny), "--config", str(cfg)]
+    argv += ["--capture-interval", "0.2", *extra]
+    return subprocess.run(argv, input=stdin, capture_output=True, check=False)
+
+
+def _steady(steps: int) -> bytes:
+    rows = [f"{0.2 * k:.1f},J{j},{59.8 - 0.01 * j}" for k in range(steps) for j in range(1, 5)]
+    return ("\n".join(rows) + "\n").encode()
+
+
+def test_garbage_of_every_kind_is_reported_and_skipped(tiny: Path, cfg: Path) -> None:
+    garbage = (
+        b"\xef\xbb\xbftimestamp,meter,value\n"
+        b"0.0,J1,abc\n"
+        b"0.0,J1,nan\n"
+        b"2026-01-01T00:00:00,J1,59.8\n"
+        b"0.0,J1\n"
+        b'0.0,"J9",59.8\n'
+        b"\x00\x01\x02\xff\xfe\n"
+        b"0.0,J2,1000000\n"
+    )
+    done = _monitor(tiny, cfg, "--health-every", "10", stdin=garbage + _steady(200))
+    assert done.returncode == 0, done.stderr
+    err = done.stderr.decode()
+    for text in [
+        "line 2: value is not a finite number",
+        "line 3: value is not a finite number",
+        "line 4: timestamp is not a finite number",
+        "line 5: want 'timestamp,meter,value'",
+        "unknown meter 'J9'",
+        "line 7: not UTF-8 text",
+        "implausible value 1e+06 m from meter 'J2'",
+    ]:
+        assert text in err, (text, err)
+    assert "Traceback" not in err
+    records = [json.loads(line) for line in done.stdout.decode().splitlines()]
+    health = [r for r in records if r["type"] == "health"]
+    assert health and not [r for r in records if r["type"] == "decision"]
+    last = health[-1]
+    assert last["meters"]["J1"]["bad"] == 3 and last["meters"]["J2"]["implausible"] == 1
+
+
+def test_bad_options_and_a_foreign_state_stop_it_by_name(
+    tiny: Path, cfg: Path, tmp_path: Path
+) -> None:
+    done = _monitor(tiny, cfg, "--readings", str(tmp_path / "missing.csv"))
+    assert done.returncode == 2 and b"cannot read readings" in done.stderr
+    done = _monitor(tiny, cfg, "--plausible", "J1=5")
+    assert done.returncode == 2 and b"want [METER=]LOW:HIGH" in done.stderr
+    done = _monitor(tiny, cfg, "--plausible", "J7=0:10")
+    assert done.returncode == 2 and b"plausible range for unknown meter 'J7'" in done.stderr
+    done = _monitor(tiny, cfg, "--mqtt", "host:0")
+    assert done.returncode == 2 and b"--mqtt wants HOST:PORT" in done.stderr
+    state = tmp_path / "state.json"
+    assert _monitor(tiny, cfg, "--state", str(state), stdin=_steady(50)).returncode == 0
+    done = _monitor(tiny, cfg, "--state", str(state), "--detector", "shewhart")
+    assert done.returncode == 2
+    assert b"belongs to another network or configuration (detector" in done.stderr
