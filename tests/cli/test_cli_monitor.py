@@ -78,3 +78,12 @@ def test_bad_options_and_a_foreign_state_stop_it_by_name(
     done = _monitor(tiny, cfg, "--state", str(state), "--detector", "shewhart")
     assert done.returncode == 2
     assert b"belongs to another network or configuration (detector" in done.stderr
+    doc = json.loads(state.read_text())
+    doc["state"]["monitor"] = {}
+    state.write_text(json.dumps(doc))
+    done = _monitor(tiny, cfg, "--state", str(state))
+    assert done.returncode == 2 and b"is malformed" in done.stderr
+    done = _monitor(tiny, cfg, "--queue-size", "0")
+    assert done.returncode == 2 and b"--queue-size must be >= 1" in done.stderr
+    done = _monitor(tiny, cfg, "--save-every", "nan")
+    assert done.returncode == 2 and b"--save-every must be a finite number" in done.stderr

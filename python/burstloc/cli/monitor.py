@@ -11,7 +11,7 @@ from collections.abc import Iterator
 from typing import Any
 
 from burstloc.constants import DETECTORS, METER_MODELS, RANKING_LOCALIZERS
-from burstloc.exceptions import InputError
+from burstloc.exceptions import ConfigError, InputError
 
 __all__ = ["add_parser", "run"]
 
@@ -108,6 +108,11 @@ def run(args: argparse.Namespace) -> int:
     from burstloc.live.state import StateFile, identity
     from burstloc.localize.config import Calibration
 
+    if args.queue_size < 1:
+        raise ConfigError(f"--queue-size must be >= 1, got {args.queue_size}")
+    for option, value in [("--save-every", args.save_every), ("--health-every", args.health_every)]:
+        if not 0 <= value < float("inf"):
+            raise ConfigError(f"{option} must be a finite number >= 0, got {value}")
     config = Calibration.load(args.config)
     monitor = BurstMonitor(
         args.network,
@@ -168,7 +173,12 @@ def run(args: argparse.Namespace) -> int:
     )
     saved = None if state is None else state.load()
     if saved is not None:
-        loop.restore(saved)
+        try:
+            loop.restore(saved)
+        except ConfigError:
+            raise
+        except (KeyError, TypeError, ValueError, AttributeError, IndexError) as exc:
+            raise ConfigError(f"state file {args.state!r} is malformed: {exc!r}") from exc
         report("state", f"resumed from state file {args.state}")
     flags = {"waiting": False, "stop": False}
 

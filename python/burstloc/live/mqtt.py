@@ -79,6 +79,7 @@ class MqttLink:
         self._client.max_queued_messages_set(queue_size)
         self._client.on_connect = self._on_connect
         self._client.on_disconnect = self._on_disconnect
+        self._client.on_connect_fail = self._on_connect_fail
         self._client.on_message = self._on_message
         self._client.connect_async(host, port, keepalive=keepalive)
         self._client.loop_start()
@@ -92,6 +93,9 @@ class MqttLink:
             return
         client.subscribe(self.topic, qos=1)
         self.connected.set()
+
+    def _on_connect_fail(self, client: Any, userdata: Any) -> None:
+        self.report("mqtt", f"cannot reach broker {self._address}; retrying")
 
     def _on_disconnect(
         self, client: Any, userdata: Any, flags: Any, reason: Any, props: Any

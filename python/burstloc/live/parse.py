@@ -99,7 +99,9 @@ _NUMBER = (int, float)
 
 def _from_object(obj: Any, where: str) -> Reading | BadReading:
     if type(obj) is dict:  # the common case first: {"t": float, "meter": str, "value": float}
-        meter, raw_t, raw_v = obj.get("meter"), obj.get("t"), obj.get("value")
+        meter: Any = obj.get("meter")
+        raw_t: Any = obj.get("t")
+        raw_v: Any = obj.get("value")
         if type(meter) is str and meter and type(raw_t) in _NUMBER and type(raw_v) in _NUMBER:
             try:
                 t, value = float(raw_t), float(raw_v)
