@@ -104,7 +104,7 @@ def run(args: argparse.Namespace) -> int:
     from burstloc.live.health import Health, PlausibleRange
     from burstloc.live.loop import LiveLoop, Reporter
     from burstloc.live.monitor import BurstMonitor
-    from burstloc.live.parse import parse_lines, parse_payload
+    from burstloc.live.parse import located_lines, parse_payload
     from burstloc.live.state import StateFile, identity
     from burstloc.localize.config import Calibration
 
@@ -192,7 +192,7 @@ def run(args: argparse.Namespace) -> int:
         if link is not None:
             items: Iterator[Any] = _from_broker(link, flags, parse_payload)
         else:
-            items = _from_file(args.readings, flags, parse_lines)
+            items = _from_file(args.readings, flags, located_lines)
         loop.run(items)
     except _StopError:
         loop.finish()
@@ -214,7 +214,9 @@ def _from_broker(link: Any, flags: dict[str, bool], parse: Any) -> Iterator[Any]
             yield None
             continue
         number, payload = message
-        yield from parse(payload, f"message {number}")
+        where = f"message {number}"
+        for item in parse(payload, where):
+            yield where, item
 
 
 def _from_file(path: str, flags: dict[str, bool], parse: Any) -> Iterator[Any]:

@@ -35,6 +35,7 @@ from burstloc.readings import Reading, Step
 __all__ = ["LiveLoop", "Reporter"]
 
 Record = dict[str, Any]
+Item = Reading | BadReading | tuple[str, Reading | BadReading] | None
 
 
 class Reporter:
@@ -106,14 +107,15 @@ class LiveLoop:
         self._items = 0
         self.decisions = 0
 
-    def feed(self, item: Reading | BadReading) -> None:
-        """One parsed input item (module docstring)."""
+    def feed(self, item: Reading | BadReading, where: str | None = None) -> None:
+        """One parsed input item (module docstring); ``where`` names it in reports (default:
+        ``"reading N"``, counting the items fed)."""
         self._items += 1
         if isinstance(item, BadReading):
             self.health.bad(item)
             self.report("bad-input", f"bad reading skipped: {item}")
             return
-        self.feed_reading(item, f"reading {self._items}")
+        self.feed_reading(item, f"reading {self._items}" if where is None else where)
 
     def feed_reading(self, reading: Reading, where: str) -> None:
         """One reading (``where`` names it in reports)."""
@@ -188,11 +190,14 @@ class LiveLoop:
         """Periodic work without input (silence, health, state save): call when idle."""
         self._tick()
 
-    def run(self, items: Iterable[Reading | BadReading | None]) -> None:
-        """Feed every item (``None``: an idle tick), then :meth:`finish`."""
+    def run(self, items: Iterable[Item]) -> None:
+        """Feed every item, or ``(where, item)`` pair (``None``: an idle tick), then
+        :meth:`finish`."""
         for item in items:
             if item is None:
                 self._tick()
+            elif isinstance(item, tuple):
+                self.feed(item[1], item[0])
             else:
                 self.feed(item)
         self.finish()

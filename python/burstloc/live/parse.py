@@ -26,7 +26,7 @@ from typing import Any
 
 from burstloc.readings import Reading
 
-__all__ = ["BadReading", "parse_csv_line", "parse_lines", "parse_payload"]
+__all__ = ["BadReading", "located_lines", "parse_csv_line", "parse_lines", "parse_payload"]
 
 _HEADER = ("timestamp", "meter", "value")
 
@@ -78,20 +78,26 @@ def parse_csv_line(text: str, where: str) -> Reading | BadReading | None:
 def parse_lines(lines: Iterable[str | bytes]) -> Iterator[Reading | BadReading]:
     """Readings (and bad readings) from CSV lines, numbered from 1; undecodable bytes are bad
     readings too."""
+    for _, item in located_lines(lines):
+        yield item
+
+
+def located_lines(lines: Iterable[str | bytes]) -> Iterator[tuple[str, Reading | BadReading]]:
+    """:func:`parse_lines` with where each item comes from (``"line 12"``)."""
     for number, line in enumerate(lines, start=1):
         where = f"line {number}"
         if isinstance(line, bytes):
             try:
                 line = line.decode("utf-8")
             except UnicodeDecodeError:
-                yield BadReading(where, "not UTF-8 text")
+                yield where, BadReading(where, "not UTF-8 text")
                 continue
         if "\x00" in line:
-            yield BadReading(where, "binary data (NUL byte)")
+            yield where, BadReading(where, "binary data (NUL byte)")
             continue
         item = parse_csv_line(line, where)
         if item is not None:
-            yield item
+            yield where, item
 
 
 _NUMBER = (int, float)
