@@ -212,7 +212,7 @@ def main() -> int:
     decisions = [(w, r) for w, r in received if r.get("type") == "decision"]
     matched, top1, false, latency = 0, 0, 0, []
     for wall, r in decisions:
-        k = round(r["time"] / DT)
+        k = int(np.ceil(r["time"] / DT - 1e-6))  # the step that completed the decision
         latency.append(1000 * (wall - published[k]))
         hit = [(s, p) for s, p in truth if s - 1.0 <= r["first_alarm"] <= s + 200.0]
         if hit:

@@ -5,6 +5,7 @@
 * :mod:`~burstloc.live.health`: per-meter health, plausible range, clock offsets, silence;
 * :mod:`~burstloc.live.stream`: raw readings assembled into complete time steps;
 * :mod:`~burstloc.live.subset`: the localizers restricted to the meters that report;
+* :mod:`~burstloc.live.decision`: a decision as the monitor reports it;
 * :mod:`~burstloc.live.monitor`: the detector bank, history and localizer over those steps,
   built from the stored configuration (no hydraulic model runs);
 * :mod:`~burstloc.live.loop`: the loop that wires them and never stops on bad data;

@@ -32,8 +32,9 @@ Bad input (a step with the wrong number of values, a non-finite value of a meter
 a timestamp that does not advance) raises :class:`~burstloc.exceptions.InputError` naming it
 and leaves the monitor exactly as it was. A configuration for another network or other meters
 is refused by name; the network file is only hashed (:func:`burstloc.inp.network_hash`). Each
-decision is a :class:`LiveDecision`. :meth:`BurstMonitor.to_state` / :meth:`~BurstMonitor.restore`
-carry the whole state (bank snapshot, history, pending decision, hold-off) across a restart.
+decision is a :class:`~burstloc.live.decision.LiveDecision`. :meth:`BurstMonitor.to_state` and
+:meth:`~BurstMonitor.restore` carry the whole state (bank snapshot, history, pending decision,
+hold-off) across a restart.
 
 Nothing here runs a hydraulic model: this module imports neither WNTR, EPANET, TSNet nor
 :mod:`burstloc.sim` or :mod:`burstloc.experiments`.
@@ -46,7 +47,6 @@ import math
 import os
 from collections import deque
 from collections.abc import Iterable, Iterator, Mapping
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -54,19 +54,19 @@ import numpy as np
 from burstloc import _core
 from burstloc.constants import METER_MODELS, RANKING_LOCALIZERS, MeterModel
 from burstloc.exceptions import ConfigError, InputError
+from burstloc.live.decision import LiveDecision
 from burstloc.live.subset import SubsetLocalizers
 from burstloc.localize.config import Calibration, calibrated_bank
 from burstloc.localize.decide import (
-    Decision,
     RankingLocalizers,
     decision_time,
     fused_of,
     rank_alarms,
 )
-from burstloc.localize.evidence import IndexedAlarm, Localizer, Ranking
+from burstloc.localize.evidence import IndexedAlarm, Localizer
 from burstloc.readings import Step
 
-__all__ = ["HISTORY_BEFORE_ONSET", "QUIET_FACTOR", "QUIET_WINDOW", "BurstMonitor", "LiveDecision"]
+__all__ = ["HISTORY_BEFORE_ONSET", "QUIET_FACTOR", "QUIET_WINDOW", "BurstMonitor"]
 
 #: Seconds of readings kept before a burst's onset (the baseline of the signature localizer).
 HISTORY_BEFORE_ONSET = 60.0
@@ -76,63 +76,6 @@ HISTORY_BEFORE_ONSET = 60.0
 #: hold-off.
 QUIET_WINDOW = 30.0
 QUIET_FACTOR = 1.3
-
-
-@dataclass(frozen=True)
-class LiveDecision:
-    """A decision as the monitor reports it: the localizer's :class:`Decision`, which meters
-    took part (``meters``), which were excluded and which alarmed, and how long it waited after
-    the first alarm. ``waited`` is true when the answer came later than the arrival localizer's
-    own delay (plus one capture interval): the monitor waited for settled readings.
-    ``health``: the health record at decision time (set by the live loop)."""
-
-    decision: Decision
-    localizer: str
-    meters: tuple[str, ...]
-    excluded: tuple[str, ...]
-    alarmed: tuple[str, ...]
-    waited: bool
-    health: Mapping[str, Any] | None = field(default=None, compare=False)
-
-    @property
-    def pipe(self) -> str | None:
-        """The best-ranked pipe."""
-        return self.decision.pipe
-
-    @property
-    def ranking(self) -> Ranking:
-        """The ranking."""
-        return self.decision.ranking
-
-    @property
-    def time(self) -> float:
-        """Reading time of the decision (s)."""
-        return self.decision.time
-
-    @property
-    def first_alarm(self) -> float:
-        """Reading time of the first alarm (s)."""
-        return self.decision.first_alarm
-
-    @property
-    def delay(self) -> float:
-        """Seconds from the first alarm to the decision."""
-        return self.decision.time - self.decision.first_alarm
-
-    def to_json(self, top: int = 3) -> dict[str, Any]:
-        """The decision record (``"type": "decision"``) that ``burstloc monitor`` prints."""
-        doc: dict[str, Any] = {"type": "decision", **self.decision.to_json(top)}
-        doc.update(
-            waited=self.waited,
-            decision_delay_s=self.delay,
-            localizer=self.localizer,
-            meters=list(self.meters),
-            excluded=list(self.excluded),
-            alarmed=list(self.alarmed),
-        )
-        if self.health is not None:
-            doc["health"] = dict(self.health)
-        return doc
 
 
 class BurstMonitor:
