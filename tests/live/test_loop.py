@@ -112,3 +112,18 @@ def test_reports_are_rate_limited_per_kind_and_nothing_is_silent() -> None:
     report.close()
     assert said[-1] == "burstloc monitor: 3 more late messages not shown"
     assert report.counts == {"late": 5, "clock-offset": 1}
+
+
+def test_a_gap_in_the_whole_feed_is_not_a_clock_offset(tiny, config, feed) -> None:
+    clean = _run(tiny, config, feed).decisions
+    burst_at = clean[0]["first_alarm"]
+    gap = 600.0  # ten minutes of readings lost (a broker that dropped them, a network outage)
+    items = [r for r in feed if not burst_at - 620.0 <= r.timestamp < burst_at - 20.0]
+    shifted = [
+        Reading(r.timestamp + (gap if r.timestamp >= burst_at - 20.0 else 0.0), r.meter, r.value)
+        for r in items
+    ]
+    done = _run(tiny, config, shifted)
+    assert all(h.clock_offset == 0.0 for h in done.health.meter.values())
+    assert [d["pipes"][0]["pipe"] for d in done.decisions] == [clean[0]["pipes"][0]["pipe"]]
+    assert done.decisions[0]["first_alarm"] == pytest.approx(burst_at + gap)

@@ -11,10 +11,12 @@ meter's clock is off). The rules:
   -10 m or above twice the highest steady head at the meters) is a bad reading: counted
   (``implausible``), reported, skipped. It never reaches the detectors, so it never starts an
   alarm.
-* **Clock.** The reference time is the median of the meters' newest timestamps. A reading more
+* **Clock.** The reference time is the median of the meters' newest timestamps (every reading
+  counts, so a gap in the whole feed moves it, a single skewed meter does not). A reading more
   than ``clock_tolerance`` seconds from it is held back (counted ``off_clock``). Once the last
   :data:`CLOCK_WINDOW` readings of a meter agree on an offset (at least 80 % within the
-  tolerance of their median), the offset, rounded to the capture interval, is **corrected**: the
+  tolerance of their median), the offset, rounded to the whole second (to the capture interval if
+  longer: the arrival order within a step blurs it by one interval), is **corrected**: the
   meter's later timestamps are shifted by it, and the offset is reported in the health record.
   A meter's data is worth more than its clock; correcting keeps it in the localization.
 * **Silence.** A meter with no reading for ``silent_after`` seconds of reference time is
@@ -132,7 +134,7 @@ class Health:
         self._newest = np.full(len(self.meters), np.nan)
         self._index = {m: j for j, m in enumerate(self.meters)}
         self._reference: float | None = None
-        self._bias = 0.0
+        self._lead: deque[float] = deque(maxlen=8 * CLOCK_WINDOW)
         self._since = 0
         self.bad_unknown = 0  # bad input naming no meter of the configuration
 
@@ -165,21 +167,23 @@ class Health:
                 r.meter,
             )
         h.counts["readings"] += 1
-        ref = self._reference
         t = r.timestamp - h.clock_offset
+        j = self._index[r.meter]
+        if not t <= self._newest[j]:  # NaN at first; every reading moves the reference, so a
+            self._newest[j] = t  # gap in the whole feed moves it too (one skewed meter cannot)
+        self._since += 1
+        if self._reference is None or self._since >= len(self.meters):
+            self._update_reference()
+        ref = self._reference
         if ref is not None:
             h.deviations.append(r.timestamp - ref)
             if abs(t - ref) > self.clock_tolerance and not self._settle_clock(h, ref):
                 h.counts["off_clock"] += 1
                 return None
             t = r.timestamp - h.clock_offset
-            self._bias += 0.01 * (t - ref - self._bias)  # how far on-time readings lead ref
+            self._lead.append(t - ref)  # how far on-time readings lead the reference
         if h.last is None or t > h.last:
             h.last = t
-            self._newest[self._index[r.meter]] = t
-        self._since += 1
-        if ref is None or self._since >= len(self.meters):
-            self._update_reference()
         return r if t == r.timestamp else Reading(t, r.meter, r.value)
 
     def _settle_clock(self, h: MeterHealth, ref: float) -> bool:
@@ -190,8 +194,9 @@ class Health:
         agree = sum(abs(d - mid) <= self.clock_tolerance for d in h.deviations)
         if agree < 0.8 * len(h.deviations):
             return False
-        steps = round((mid - self._bias) / self.capture_interval)
-        h.clock_offset = round(steps * self.capture_interval, 9)
+        lead = statistics.median(self._lead) if self._lead else 0.0
+        unit = max(self.capture_interval, 1.0)  # clocks slip by whole seconds (or hours)
+        h.clock_offset = round(round((mid - lead) / unit) * unit, 9)
         h.deviations.clear()
         return True
 
