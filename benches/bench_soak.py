@@ -130,7 +130,7 @@ def in_process(config, values, dropped, meters):  # type: ignore[no-untyped-def]
     rust = time.perf_counter() - start
     m = len(meters)
     return {
-        "readings": readings,
+        "in_process_readings": readings,
         "loop_readings_per_s": readings / whole,
         "parse_readings_per_s": readings / parse,
         "bank_step_readings_per_s": n * m / rust,
