@@ -27,7 +27,7 @@ BIN313  := $(VENV313)/bin
 # `PYTHONPATH=python .venv/bin/python` runs the sources in place.
 WHEEL_DIR    := target/wheels
 WHEEL_STAMP  := $(WHEEL_DIR)/.built
-WHEEL         = $(firstword $(wildcard $(WHEEL_DIR)/burstloc-*-abi3-*.whl))
+WHEEL         = $(firstword $(wildcard $(WHEEL_DIR)/burstloc-*-abi3-*.whl))  # after it is built
 EXT          := python/burstloc/_core.abi3.so
 BUILD_INPUTS := pyproject.toml Cargo.toml $(wildcard Cargo.lock) README.md \
                 $(shell find crates -path '*/src/*.rs' -o -name Cargo.toml -o -name build.rs 2>/dev/null) \
@@ -65,7 +65,7 @@ $(WHEEL_STAMP): $(BIN)/python $(BUILD_INPUTS)
 	rm -f $(WHEEL_DIR)/burstloc-*.whl
 	RUSTFLAGS="$(EXT_RUSTFLAGS)" $(BIN)/maturin build --release --quiet --out $(WHEEL_DIR) \
 	    --interpreter $(BIN)/python
-	unzip -o -q -j $(WHEEL) 'burstloc/_core.abi3.so' -d python/burstloc/
+	unzip -o -q -j $(WHEEL_DIR)/burstloc-*-abi3-*.whl 'burstloc/_core.abi3.so' -d python/burstloc/
 	@touch $@
 
 # The wheel with its extras (their dependencies), then the wheel itself again: its version does

@@ -49,9 +49,11 @@ class SimulatorMissingError(SimulationError):
         cause: the ``ImportError`` raised importing it; its message is kept in this one.
     """
 
+    #: How to install the simulator (the end of every message).
+    INSTALL = "pip install 'burstloc[sim]'"
+
     def __init__(self, cause: ImportError) -> None:
         super().__init__(
-            f"this command needs the simulator, which is not installed ({cause}): "
-            "pip install 'burstloc[sim]'"
+            f"this command needs the simulator, which is not installed ({cause}): {self.INSTALL}"
         )
         self.package = cause.name
