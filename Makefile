@@ -27,7 +27,8 @@ BIN313  := $(VENV313)/bin
 # `PYTHONPATH=python .venv/bin/python` runs the sources in place.
 WHEEL_DIR    := target/wheels
 WHEEL_STAMP  := $(WHEEL_DIR)/.built
-WHEEL         = $(firstword $(wildcard $(WHEEL_DIR)/burstloc-*-abi3-*.whl))  # after it is built
+# (recipes that run after the wheel is built)
+WHEEL         = $(firstword $(wildcard $(WHEEL_DIR)/burstloc-*-abi3-*.whl))
 EXT          := python/burstloc/_core.abi3.so
 BUILD_INPUTS := pyproject.toml Cargo.toml $(wildcard Cargo.lock) README.md \
                 $(shell find crates -path '*/src/*.rs' -o -name Cargo.toml -o -name build.rs 2>/dev/null) \
