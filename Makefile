@@ -79,7 +79,7 @@ $(VENV)/.installed: $(WHEEL_STAMP)
 $(VENV313)/.installed: $(BIN313)/python $(WHEEL_STAMP)
 	$(BIN313)/python -m pip install -q "$(WHEEL)[$(EXTRAS)]"
 	$(BIN313)/python -m pip install -q --no-deps --force-reinstall "$(WHEEL)"
-	$(BIN313)/python -c 'import numpy, sys; assert numpy.__version__ >= "2", numpy.__version__; \
+	$(BIN313)/python -c 'import numpy, sys; assert int(numpy.__version__.split(".")[0]) >= 2; \
 	    print("Python", sys.version.split()[0], "numpy", numpy.__version__)'
 	@touch $@
 
