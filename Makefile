@@ -5,38 +5,83 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 export PYO3_PYTHON := $(abspath $(BIN)/python)
 
-.PHONY: setup paper study test test-rust test-python lint bench bench-rust clean
+# The second Python the suite runs on: 3.13 with numpy 2. Found as a user's CI would: `python3.13`
+# on PATH (e.g. a pyenv shim, if it runs), else the newest 3.13 among pyenv's versions.
+# `make test PYTHON313=/path/to/python3.13` names one.
+PYENV_ROOT ?= $(HOME)/.pyenv
+PYTHON313  ?= $(shell for p in "$$(command -v python3.13)" \
+                $$(ls -d $(PYENV_ROOT)/versions/3.13*/bin/python3.13 2>/dev/null | sort -rV); do \
+                  [ -n "$$p" ] && "$$p" -c 'import sys; assert sys.version_info[:2] == (3, 13)' \
+                    2>/dev/null && echo "$$p" && break; done)
+VENV313 := .venv313
+BIN313  := $(VENV313)/bin
 
-## setup: create .venv, install burstloc (building the Rust extension) with its dev/bench extras
-# `pip install -e` runs maturin's PEP 660 editable build: the extension is compiled in release
-# mode into python/burstloc/ and the Python sources are used in place. It reruns only when the
-# Rust sources, a manifest or pyproject.toml changed (or the extension is missing), so a second
-# `make setup` is instant; Python edits never need it.
-PY_FOR_SUFFIX := $(shell test -x $(BIN)/python && echo $(BIN)/python || echo $(PYTHON))
-EXT          := python/burstloc/_core$(shell $(PY_FOR_SUFFIX) -c 'import sysconfig; print(sysconfig.get_config_var("EXT_SUFFIX"))')
-BUILD_INPUTS := pyproject.toml Cargo.toml $(wildcard Cargo.lock) \
-                $(shell find crates -path '*/src/*.rs' -o -name Cargo.toml -o -name build.rs 2>/dev/null)
+.PHONY: setup setup313 paper study test test-rust test-python test-python313 lint bench bench-rust clean
+
+## setup: create .venv (the default Python), build burstloc's wheel, install it with its
+## sim/dev/bench extras
+# One wheel for every Python: the extension uses CPython's stable ABI (abi3, Python >= 3.10), so
+# maturin builds it once, here, and the same file is installed in .venv and in .venv313. The
+# wheel is rebuilt when the Rust or Python sources, a manifest or pyproject.toml change (cargo
+# recompiles only on Rust changes). The extension is also unpacked into python/burstloc/, so
+# `PYTHONPATH=python .venv/bin/python` runs the sources in place.
+WHEEL_DIR    := target/wheels
+WHEEL_STAMP  := $(WHEEL_DIR)/.built
+# (recipes that run after the wheel is built)
+WHEEL         = $(firstword $(wildcard $(WHEEL_DIR)/burstloc-*-abi3-*.whl))
+EXT          := python/burstloc/_core.abi3.so
+BUILD_INPUTS := pyproject.toml Cargo.toml $(wildcard Cargo.lock) README.md \
+                $(shell find crates -path '*/src/*.rs' -o -name Cargo.toml -o -name build.rs 2>/dev/null) \
+                $(shell find python -name '*.py' -o -name '*.pyi' -o -name py.typed 2>/dev/null)
+EXTRAS       := sim,dev,bench,river
 
 # The extension is compiled for the CPU of the machine that runs `make setup` (it is built
 # where it runs): the vectorized bank and Shewhart loops run 2-5x faster than in a generic
 # x86-64 build. Results are bit-identical (Rust neither fuses nor reorders float operations).
-# `make setup EXT_RUSTFLAGS=` builds a portable extension.
+# `make setup EXT_RUSTFLAGS=` builds a portable wheel.
 EXT_RUSTFLAGS ?= -C target-cpu=native
 
-setup: $(EXT) networks/todini6.inp
+setup: $(VENV)/.installed networks/todini6.inp
 	scripts/install-mosquitto.sh
+
+## setup313: create .venv313 (Python 3.13, numpy 2) and install the same wheel there
+setup313: $(VENV313)/.installed
 
 # A byte copy of one of WNTR's example networks, used by `burstloc study`: generated from the
 # installed WNTR rather than shipped (it is a third-party file; see networks/README.md).
-networks/todini6.inp: networks/build_wntr_examples.py $(EXT)
+networks/todini6.inp: networks/build_wntr_examples.py $(VENV)/.installed
 	$(BIN)/python networks/build_wntr_examples.py > /dev/null
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install -q --upgrade pip "maturin>=1.9.4,<2"
 
-$(EXT): $(BIN)/python $(BUILD_INPUTS)
-	$(BIN)/python -m pip install -q --upgrade pip
-	RUSTFLAGS="$(EXT_RUSTFLAGS)" $(BIN)/python -m pip install -q -e ".[dev,bench]"
+$(BIN313)/python:
+	@test -n "$(PYTHON313)" || { echo "make: no Python 3.13 found: neither python3.13 on PATH \
+	nor $(PYENV_ROOT)/versions/3.13*; install one (e.g. pyenv install 3.13) or run \
+	make test PYTHON313=/path/to/python3.13" >&2; exit 1; }
+	$(PYTHON313) -m venv $(VENV313)
+	$(BIN313)/python -m pip install -q --upgrade pip
+
+$(WHEEL_STAMP): $(BIN)/python $(BUILD_INPUTS)
+	rm -f $(WHEEL_DIR)/burstloc-*.whl
+	RUSTFLAGS="$(EXT_RUSTFLAGS)" $(BIN)/maturin build --release --quiet --out $(WHEEL_DIR) \
+	    --interpreter $(BIN)/python
+	unzip -o -q -j $(WHEEL_DIR)/burstloc-*-abi3-*.whl 'burstloc/_core.abi3.so' -d python/burstloc/
+	@touch $@
+
+# The wheel with its extras (their dependencies), then the wheel itself again: its version does
+# not change between builds, so pip would keep a previous build.
+$(VENV)/.installed: $(WHEEL_STAMP)
+	$(BIN)/python -m pip install -q "$(WHEEL)[$(EXTRAS)]"
+	$(BIN)/python -m pip install -q --no-deps --force-reinstall "$(WHEEL)"
+	@touch $@
+
+$(VENV313)/.installed: $(BIN313)/python $(WHEEL_STAMP)
+	$(BIN313)/python -m pip install -q "$(WHEEL)[$(EXTRAS)]"
+	$(BIN313)/python -m pip install -q --no-deps --force-reinstall "$(WHEEL)"
+	$(BIN313)/python -c 'import numpy, sys; assert int(numpy.__version__.split(".")[0]) >= 2; \
+	    print("Python", sys.version.split()[0], "numpy", numpy.__version__)'
 	@touch $@
 
 ## paper: the main job, the paper's experiment on the shipped network, with the paper's rules
@@ -49,8 +94,9 @@ paper: setup
 study: setup
 	$(BIN)/burstloc study --out docs/study --workers 2
 
-## test: every test and lint (Rust and Python)
-test: setup lint test-rust test-python
+## test: every test and lint (Rust and Python); the Python suite on the default Python and on
+## Python 3.13 with numpy 2
+test: setup setup313 lint test-rust test-python test-python313
 
 lint:
 	cargo fmt --all --check
@@ -70,6 +116,10 @@ test-rust:
 test-python:
 	$(BIN)/python -m pytest -q
 
+# The installed wheel, not the sources, on Python 3.13 (the tests' own helpers come from tests/).
+test-python313: setup313 networks/todini6.inp
+	$(BIN313)/python -m pytest -q
+
 ## bench: Python-side benchmarks on fresh data (bindings vs pure Python vs River vs TSNet), then
 ## burstloc.river beside River's PageHinkley on River's annotated change-point datasets
 bench: setup
@@ -82,4 +132,4 @@ bench-rust:
 	RUSTFLAGS="$(EXT_RUSTFLAGS)" CARGO_TARGET_DIR=target-bench cargo bench -p cpd-core -- --warm-up-time 1 --measurement-time 2
 
 clean:
-	rm -rf $(VENV) target
+	rm -rf $(VENV) $(VENV313) target $(EXT)

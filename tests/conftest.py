@@ -16,6 +16,9 @@ from pathlib import Path
 import pytest
 from hypothesis import HealthCheck, settings
 
+# Where the simulator (the sim extra) is missing, tests that need it are skipped, naming it.
+pytest_plugins = ("simulator_guard",)
+
 settings.register_profile(
     "ci", max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow]
 )

@@ -11,6 +11,8 @@ Every error is a typed subclass of a built-in exception, so callers can catch pr
 * :class:`NetworkError` (``ValueError``): an unknown node or pipe, or a malformed INP file
   (with the file and line).
 * :class:`SimulationError` (``RuntimeError``): the transient simulation (TSNet) failed.
+* :class:`SimulatorMissingError` (``SimulationError``): a command needs the simulator (TSNet,
+  WNTR: the ``sim`` extra), which is not installed; the message says how to install it.
 
 ``ConfigError`` and ``InputError`` are defined by the native module (so the Rust code raises
 them directly); the others are plain Python.
@@ -23,6 +25,7 @@ __all__ = [
     "InputError",
     "NetworkError",
     "SimulationError",
+    "SimulatorMissingError",
     "StreamError",
 ]
 
@@ -37,3 +40,20 @@ class NetworkError(ValueError):
 
 class SimulationError(RuntimeError):
     """The transient simulation (TSNet) failed for a scenario."""
+
+
+class SimulatorMissingError(SimulationError):
+    """The simulator (TSNet, WNTR: the ``sim`` extra) is not installed or cannot be imported.
+
+    Args:
+        cause: the ``ImportError`` raised importing it; its message is kept in this one.
+    """
+
+    #: How to install the simulator (the end of every message).
+    INSTALL = "pip install 'burstloc[sim]'"
+
+    def __init__(self, cause: ImportError) -> None:
+        super().__init__(
+            f"this command needs the simulator, which is not installed ({cause}): {self.INSTALL}"
+        )
+        self.package = cause.name

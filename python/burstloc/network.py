@@ -31,7 +31,7 @@ import networkx as nx
 import numpy as np
 
 from burstloc._diagnostics import capture_diagnostics
-from burstloc.exceptions import ConfigError, NetworkError
+from burstloc.exceptions import ConfigError, NetworkError, SimulatorMissingError
 from burstloc.inp import pipe_names_in_file
 
 if TYPE_CHECKING:
@@ -55,10 +55,17 @@ _WNTR_LINE = re.compile(r"at line (\d+)")
 
 
 def _wntr() -> Any:
-    """Import WNTR without its import-time deprecation noise (pkg_resources)."""
+    """Import WNTR without its import-time deprecation noise (pkg_resources).
+
+    Raises:
+        SimulatorMissingError: WNTR is not installed (it comes with the ``sim`` extra).
+    """
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DeprecationWarning)
-        import wntr
+        try:
+            import wntr
+        except ImportError as exc:
+            raise SimulatorMissingError(exc) from exc
     return wntr
 
 

@@ -28,6 +28,7 @@ import numpy as np
 from burstloc import network
 from burstloc._diagnostics import capture_diagnostics
 from burstloc.exceptions import ConfigError, NetworkError, SimulationError
+from burstloc.sim import _tsnet_compat
 from burstloc.sim.cache import DiskCache, file_sha256, package_versions
 from burstloc.sim.scenario import SCHEMA, BurstScenario, ScenarioResult
 from burstloc.sim.sweep import SweepReport, sweep
@@ -84,6 +85,7 @@ def simulate_burst(
         ConfigError: ``time_step`` above TSNet's stability limit for this network, or a
             ``duration`` shorter than TSNet's minimum of 10 time steps.
         SimulationError: TSNet failed, or produced non-finite heads.
+        SimulatorMissingError: the simulator (the ``sim`` extra) is not installed.
     """
     store = _resolve_cache(cache)
     if store is None:
@@ -184,8 +186,8 @@ def expected_time_step(scenario: BurstScenario) -> float:
 
 
 def _run_tsnet(scenario: BurstScenario, split: network.SplitPipe, inp: str) -> Any:
-    import tsnet
-    import wntr
+    tsnet = _tsnet_compat.load()
+    import wntr  # loaded with the network (burstloc.network), so known to be installed
     from tsnet.network.discretize import max_time_step
 
     # TSNet's Initializer sets this too; setting it first writes the INP's pressure-driven
@@ -265,6 +267,8 @@ def simulate_many(
         for s, key in zip(todo, keys, strict=True)
     ]
     missing = [i for i, result in enumerate(results) if result is None]
+    if missing:
+        _tsnet_compat.load()  # no simulator: one error here, not one failure per scenario
 
     def store_result(sub: int, scenario: BurstScenario, result: ScenarioResult) -> None:
         index = missing[sub]
