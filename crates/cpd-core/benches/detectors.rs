@@ -284,6 +284,21 @@ fn banks(c: &mut Criterion<CpuTime>) {
                     BatchSize::LargeInput,
                 )
             });
+            // The same fresh matrix in one call: the time-blocked kernel.
+            group.bench_function(
+                BenchmarkId::new(format!("{name}_step_many"), channels),
+                |b| {
+                    b.iter_batched_ref(
+                        || traces.matrix(steps, channels),
+                        |m| {
+                            out.clear();
+                            bank.step_many(black_box(m), &mut out).unwrap();
+                            out.len()
+                        },
+                        BatchSize::LargeInput,
+                    )
+                },
+            );
         }
         let mut bank = ShewhartBank::new(channels, shewhart_config(50)).unwrap();
         group.bench_function(BenchmarkId::new("shewhart_w50", channels), |b| {

@@ -112,6 +112,21 @@ impl CusumLane {
     /// Written with selects so that the bank loop vectorizes.
     #[inline(always)]
     pub(crate) fn step(&mut self, x: f64, i: u64, threshold: f64, drift: f64) -> u8 {
+        self.step_sums(x, i, drift);
+        let up = self.gp_real > threshold;
+        let down = self.gn_real > threshold;
+        let alarm = up | down;
+        self.gp = if alarm { 0.0 } else { self.gp };
+        self.gn = if alarm { 0.0 } else { self.gn };
+        self.gp_real = if alarm { 0.0 } else { self.gp_real };
+        self.gn_real = if alarm { 0.0 } else { self.gn_real };
+        (up as u8 * RISE) | (down as u8 * DROP)
+    }
+
+    /// The sums, resets and starts of [`CusumLane::step`], without the alarm test and its
+    /// resets (the time-blocked bank does those on its slow path).
+    #[inline(always)]
+    pub(crate) fn step_sums(&mut self, x: f64, i: u64, drift: f64) {
         let s = x - self.x_prev;
         self.x_prev = x;
         // Same operation order as TSNet: (g + s) - drift.
@@ -121,22 +136,14 @@ impl CusumLane {
         let gn_real = self.gn_real - s;
         let reset_p = gp < 0.0;
         let reset_n = gn < 0.0;
-        let gp = if reset_p { 0.0 } else { gp };
-        let gp_real = if reset_p { 0.0 } else { gp_real };
+        self.gp = if reset_p { 0.0 } else { gp };
+        self.gp_real = if reset_p { 0.0 } else { gp_real };
         self.tap = if reset_p { i } else { self.tap };
         self.x_tap = if reset_p { x } else { self.x_tap };
-        let gn = if reset_n { 0.0 } else { gn };
-        let gn_real = if reset_n { 0.0 } else { gn_real };
+        self.gn = if reset_n { 0.0 } else { gn };
+        self.gn_real = if reset_n { 0.0 } else { gn_real };
         self.tan = if reset_n { i } else { self.tan };
         self.x_tan = if reset_n { x } else { self.x_tan };
-        let up = gp_real > threshold;
-        let down = gn_real > threshold;
-        let alarm = up | down;
-        self.gp = if alarm { 0.0 } else { gp };
-        self.gn = if alarm { 0.0 } else { gn };
-        self.gp_real = if alarm { 0.0 } else { gp_real };
-        self.gn_real = if alarm { 0.0 } else { gn_real };
-        (up as u8 * RISE) | (down as u8 * DROP)
     }
 
     /// The sums and starts of [`CusumLane::step`] for one channel, without the start values

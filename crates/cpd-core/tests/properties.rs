@@ -234,6 +234,29 @@ proptest! {
     }
 
     #[test]
+    fn cusum_bank_many_rows_equals_row_by_row(
+        channels in 1usize..20, steps in 0usize..1300, split in 0usize..1300,
+        seed in any::<u64>(), (thr, drift) in cusum_params()
+    ) {
+        // Crosses the chunk of rows and the tile of channels of the time-blocked kernel, and
+        // splits the feed in two calls (the second starting mid-chunk).
+        let m = matrix(channels, steps, seed);
+        let cfg = CusumConfig::new(thr, drift).unwrap();
+        let mut by_row = CusumBank::new(channels, cfg).unwrap();
+        let mut want = Vec::new();
+        for row in m.chunks_exact(channels) {
+            by_row.step(row, &mut want).unwrap();
+        }
+        let (head, tail) = m.split_at(split.min(steps) * channels);
+        let mut many = CusumBank::new(channels, cfg).unwrap();
+        let mut got = Vec::new();
+        many.step_many(head, &mut got).unwrap();
+        many.step_many(tail, &mut got).unwrap();
+        prop_assert_eq!(&got, &want);
+        prop_assert_eq!(&many, &by_row);
+    }
+
+    #[test]
     fn shewhart_bank_equals_independent_detectors(
         channels in channel_counts(), steps in 0usize..1200, seed in any::<u64>(),
         (w, sigma, thr) in shewhart_params()

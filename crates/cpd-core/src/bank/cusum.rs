@@ -1,74 +1,29 @@
-//! The CUSUM bank: structure-of-arrays state, one branch-free kernel per block of channels.
+//! The CUSUM bank: structure-of-arrays state; its kernel is in `cusum_tiles`.
 
 use alloc::vec::Vec;
 
 #[cfg(feature = "serde")]
 use serde::{Deserialize, Serialize};
 
-use super::{check_channels, checked_step, checked_step_many, Kernel, BLOCK};
+use super::{check_channels, check_matrix, checked_step, Kernel};
 use crate::alarm::ChannelAlarm;
-use crate::cusum::{CusumConfig, CusumLane};
+use crate::cusum::CusumConfig;
+#[cfg(feature = "serde")]
+use crate::cusum::CusumLane;
 use crate::error::{filled, Error};
 
-/// The state of a block of channels, borrowed for one step. Separate `&mut` slices tell the
-/// compiler they do not alias, so the kernel's loop vectorizes.
-struct Block<'a> {
-    x_prev: &'a mut [f64],
-    gp: &'a mut [f64],
-    gn: &'a mut [f64],
-    gp_real: &'a mut [f64],
-    gn_real: &'a mut [f64],
-    tap: &'a mut [u64],
-    tan: &'a mut [u64],
-    x_tap: &'a mut [f64],
-    x_tan: &'a mut [f64],
-}
-
-/// What one step needs besides the state: the step index and the config.
-#[derive(Clone, Copy)]
-struct Step {
-    i: u64,
-    threshold: f64,
-    drift: f64,
-}
-
-/// One CUSUM step for the block's channels (readings `xs`); writes each channel's alarm flags
-/// to `flags` and returns their OR.
-#[inline(never)]
-fn kernel(xs: &[f64], s: Block<'_>, flags: &mut [u8], p: Step) -> u8 {
-    let m = xs.len();
-    let (x_prev, gp, gn) = (&mut s.x_prev[..m], &mut s.gp[..m], &mut s.gn[..m]);
-    let (gp_real, gn_real) = (&mut s.gp_real[..m], &mut s.gn_real[..m]);
-    let (tap, tan) = (&mut s.tap[..m], &mut s.tan[..m]);
-    let (x_tap, x_tan) = (&mut s.x_tap[..m], &mut s.x_tan[..m]);
-    let flags = &mut flags[..m];
-    let mut any = 0u8;
-    for k in 0..m {
-        let mut lane = CusumLane {
-            x_prev: x_prev[k],
-            gp: gp[k],
-            gn: gn[k],
-            gp_real: gp_real[k],
-            gn_real: gn_real[k],
-            tap: tap[k],
-            tan: tan[k],
-            x_tap: x_tap[k],
-            x_tan: x_tan[k],
-        };
-        let f = lane.step(xs[k], p.i, p.threshold, p.drift);
-        x_prev[k] = lane.x_prev;
-        gp[k] = lane.gp;
-        gn[k] = lane.gn;
-        gp_real[k] = lane.gp_real;
-        gn_real[k] = lane.gn_real;
-        tap[k] = lane.tap;
-        tan[k] = lane.tan;
-        x_tap[k] = lane.x_tap;
-        x_tan[k] = lane.x_tan;
-        flags[k] = f;
-        any |= f;
-    }
-    any
+/// The state of a block of channels, borrowed for one step (or one chunk of steps). Separate
+/// `&mut` slices tell the compiler they do not alias, so the kernels' loops vectorize.
+pub(super) struct Block<'a> {
+    pub x_prev: &'a mut [f64],
+    pub gp: &'a mut [f64],
+    pub gn: &'a mut [f64],
+    pub gp_real: &'a mut [f64],
+    pub gn_real: &'a mut [f64],
+    pub tap: &'a mut [u64],
+    pub tan: &'a mut [u64],
+    pub x_tap: &'a mut [f64],
+    pub x_tan: &'a mut [f64],
 }
 
 /// `N` independent [`crate::Cusum`] detectors with one config, stepped together.
@@ -166,7 +121,7 @@ impl Kernel for CusumBank {
     }
     #[inline]
     fn step_unchecked(&mut self, readings: &[f64], out: &mut Vec<ChannelAlarm>) {
-        self.advance(readings, out);
+        self.advance_many(readings, out);
     }
 }
 
@@ -203,13 +158,17 @@ impl CusumBank {
     }
 
     /// Feeds a row-major `T x channels` matrix (one row per time step), appending the alarms
-    /// step by step. The whole matrix is validated first; on error the bank is unchanged.
+    /// in step order (then channel order), exactly as `T` calls of [`CusumBank::step`] would.
+    /// The whole matrix is validated first; on error the bank is unchanged. Faster than
+    /// stepping row by row: each channel's state stays in registers over a chunk of rows.
     pub fn step_many(&mut self, matrix: &[f64], out: &mut Vec<ChannelAlarm>) -> Result<(), Error> {
-        checked_step_many(self, matrix, out)
+        check_matrix(matrix, self.channels)?;
+        self.advance_many(matrix, out);
+        Ok(())
     }
 
     /// The state of channels `b..e`.
-    fn block(&mut self, b: usize, e: usize) -> Block<'_> {
+    pub(super) fn block(&mut self, b: usize, e: usize) -> Block<'_> {
         Block {
             x_prev: &mut self.x_prev[b..e],
             gp: &mut self.gp[b..e],
@@ -223,46 +182,15 @@ impl CusumBank {
         }
     }
 
-    fn advance(&mut self, readings: &[f64], out: &mut Vec<ChannelAlarm>) {
-        let i = self.steps;
+    /// Sample 0 of every channel: only primes the previous and start values.
+    pub(super) fn prime(&mut self, readings: &[f64]) {
         self.steps += 1;
-        if i == 0 {
-            self.x_prev.copy_from_slice(readings);
-            self.x_tap.copy_from_slice(readings);
-            self.x_tan.copy_from_slice(readings);
-            return;
-        }
-        let p = Step {
-            i,
-            threshold: self.config.threshold(),
-            drift: self.config.drift(),
-        };
-        let mut flags = [0u8; BLOCK];
-        let mut b = 0;
-        while b < self.channels {
-            let e = (b + BLOCK).min(self.channels);
-            let flags = &mut flags[..e - b];
-            if kernel(&readings[b..e], self.block(b, e), flags, p) != 0 {
-                self.collect(b, flags, &readings[b..e], i, out);
-            }
-            b = e;
-        }
+        self.x_prev.copy_from_slice(readings);
+        self.x_tap.copy_from_slice(readings);
+        self.x_tan.copy_from_slice(readings);
     }
 
-    #[cold]
-    #[inline(never)]
-    fn collect(&self, b: usize, flags: &[u8], xs: &[f64], i: u64, out: &mut Vec<ChannelAlarm>) {
-        for (k, &f) in flags.iter().enumerate() {
-            if f != 0 {
-                let c = b + k;
-                out.push(ChannelAlarm {
-                    channel: c,
-                    alarm: self.lane(c).alarm(f, i, xs[k]),
-                });
-            }
-        }
-    }
-
+    #[cfg(feature = "serde")]
     fn lane(&self, c: usize) -> CusumLane {
         CusumLane {
             x_prev: self.x_prev[c],
@@ -303,6 +231,11 @@ impl CusumBank {
     /// Number of steps consumed so far.
     pub fn steps_seen(&self) -> u64 {
         self.steps
+    }
+
+    /// Counts `k` steps run by a chunked kernel.
+    pub(super) fn add_steps(&mut self, k: u64) {
+        self.steps += k;
     }
 
     /// The shared config.
