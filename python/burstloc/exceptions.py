@@ -11,6 +11,9 @@ Every error is a typed subclass of a built-in exception, so callers can catch pr
 * :class:`NetworkError` (``ValueError``): an unknown node or pipe, or a malformed INP file
   (with the file and line).
 * :class:`SimulationError` (``RuntimeError``): the transient simulation (TSNet) failed.
+* :class:`OutputError` (``ValueError``): an output file or directory cannot be written (a
+  missing or read-only directory, a directory where a file is expected, a full disk, a value
+  JSON cannot hold); the message is ``cannot write PATH: reason``.
 
 ``ConfigError`` and ``InputError`` are defined by the native module (so the Rust code raises
 them directly); the others are plain Python.
@@ -22,6 +25,7 @@ __all__ = [
     "ConfigError",
     "InputError",
     "NetworkError",
+    "OutputError",
     "SimulationError",
     "StreamError",
 ]
@@ -37,3 +41,7 @@ class NetworkError(ValueError):
 
 class SimulationError(RuntimeError):
     """The transient simulation (TSNet) failed for a scenario."""
+
+
+class OutputError(ValueError):
+    """An output cannot be written: ``cannot write PATH: reason`` (nothing was replaced)."""

@@ -96,7 +96,7 @@ def test_a_configuration_of_the_previous_format_asks_to_recalibrate(
         Calibration.load(path)
     doc["format"] = CALIBRATION_FORMAT  # the current format without a model is malformed
     path.write_text(json.dumps(doc))
-    with pytest.raises(ConfigError, match="malformed configuration"):
+    with pytest.raises(ConfigError, match=r"old\.json: field model is missing"):
         Calibration.load(path)
 
 
