@@ -156,7 +156,6 @@ def write_json(path: str | os.PathLike[str], document: Any, *, indent: int | Non
     return write_text(path, text + "\n")
 
 
-
 def write_npz(path: str | os.PathLike[str], arrays: Mapping[str, np.ndarray]) -> Path:
     """Write ``arrays`` to an ``.npz`` file atomically."""
     return atomic_write(path, lambda f: np.savez(f, **arrays))

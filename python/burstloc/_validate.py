@@ -26,10 +26,10 @@ from burstloc.exceptions import ConfigError
 
 __all__ = [
     "MAX_JSON_BYTES",
+    "FieldError",
     "Fields",
     "check_count",
     "check_names",
-    "FieldError",
     "check_number",
     "check_string",
     "find_non_finite",
@@ -250,7 +250,9 @@ class Fields:
                 f"{self.source}: field {self.name(key)} must be a list of 1 to {high} objects, "
                 f"got {got}"
             )
-        return [Fields(item, self.source, self.name(key) + f"[{i}]") for i, item in enumerate(items)]
+        return [
+            Fields(item, self.source, self.name(key) + f"[{i}]") for i, item in enumerate(items)
+        ]
 
     def optional_object(self, key: str) -> dict[str, Any]:
         """An optional nested object as a dictionary (``{}`` when absent)."""

@@ -311,7 +311,9 @@ def calibrate(
         if meters is not None and tuple(meters) != baseline.meters:
             raise ConfigError("meters differ from the baseline's meters")
     else:
-        meter_list = list(junctions if meters is None else check_names(meters, "meters", high=MAX_METERS))
+        meter_list = list(
+            junctions if meters is None else check_names(meters, "meters", high=MAX_METERS)
+        )
     unknown = [m for m in meter_list if m not in junctions]
     if unknown:
         raise ConfigError(f"meter(s) {unknown} are not junctions of {os.fspath(network)}")

@@ -200,7 +200,9 @@ class Calibration:
         check_string(self.name, "name", max_length=256)
         check_string(self.network, "network")
         if not isinstance(self.network_hash, str) or not _HASH.fullmatch(self.network_hash):
-            raise FieldError("network_hash", f"must be 'sha256:' and 64 hex digits, got {self.network_hash!r}")
+            raise FieldError(
+                "network_hash", f"must be 'sha256:' and 64 hex digits, got {self.network_hash!r}"
+            )
         meters = check_names(self.meters, "meters", high=MAX_METERS)
         object.__setattr__(self, "meters", meters)
         self.model.check(self.network_hash, meters)
@@ -225,7 +227,8 @@ class Calibration:
         for i, item in enumerate(intervals):
             if set(item.cusum_threshold) != set(meters):
                 raise FieldError(
-                    f"intervals[{i}].cusum.threshold", f"must have one value per meter {list(meters)}"
+                    f"intervals[{i}].cusum.threshold",
+                    f"must have one value per meter {list(meters)}",
                 )
             if any(math.isclose(item.capture_interval, c, rel_tol=1e-9) for c in seen):
                 raise FieldError(
@@ -289,9 +292,10 @@ class Calibration:
         found = data.get("format")
         if found in _EARLIER_FORMATS:
             raise ConfigError(
-                f"{source}: configuration {data.get('name')!r} was written by an earlier burstloc (format "
-                f"{found!r}) and holds no localization model; re-run `burstloc calibrate "
-                f"{data.get('network', 'NETWORK.inp')} --out PATH` to write a new one"
+                f"{source}: configuration {data.get('name')!r} was written by an earlier "
+                f"burstloc (format {found!r}) and holds no localization model; re-run "
+                f"`burstloc calibrate {data.get('network', 'NETWORK.inp')} --out PATH` to write "
+                "a new one"
             )
         if found != CALIBRATION_FORMAT:
             raise ConfigError(
