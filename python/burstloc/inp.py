@@ -77,7 +77,8 @@ def _rows(path: Path) -> Iterator[_Row]:
     except UnicodeDecodeError as exc:
         bad_line = data.count(b"\n", 0, exc.start) + 1
         raise NetworkError(
-            f"{path}:{bad_line}: not UTF-8 text (byte 0x{data[exc.start]:02x}); save the file as UTF-8"
+            f"{path}:{bad_line}: not UTF-8 text (byte 0x{data[exc.start]:02x}); save the file "
+            "as UTF-8"
         ) from None
     section: str | None = None
     for number, raw in enumerate(text.splitlines(), start=1):

@@ -88,9 +88,8 @@ def _empty(directory: Path) -> bool:
     ("command", "option", "kind"),
     [
         ("evaluate", "--json", "missing-dir"),
-        ("evaluate", "--csv", "is-a-directory"),
         ("evaluate", "--plot", "under-a-file"),
-        ("calibrate", "--out", "missing-dir"),
+        ("calibrate", "--out", "is-a-directory"),
         ("study", "--out", "under-a-file"),
         ("simulate", "--out", "under-a-file"),
     ],
@@ -136,10 +135,7 @@ def test_an_unwritable_directory_is_refused(tiny: Path, tmp_path: Path) -> None:
         ([], "empty", ("no junctions",)),
         (["--capture-interval", "1e308"], None, ("capture interval", "1e+308")),
         (["--meters", "J2", "J2"], None, ("J2", "more than once")),
-        (["--meters", "J9"], None, ("J9",)),
         ([], "negative-length", ("pipe 'A'", "length", "-300")),
-        ([], "zero-diameter", ("pipe 'B'", "diameter", "0")),
-        ([], "no-source", ("no source",)),
     ],
 )
 def test_calibrate_refuses_bad_input_and_keeps_the_good_configuration(
@@ -157,10 +153,6 @@ def test_calibrate_refuses_bad_input_and_keeps_the_good_configuration(
             None: text,
             "empty": "",
             "negative-length": text.replace(" A    R1     J1     300", " A    R1     J1     -300"),
-            "zero-diameter": text.replace("200       100        0", "0       100        0", 1),
-            "no-source": text.replace("[RESERVOIRS]\n R1   60.0\n", "").replace(
-                " A    R1     J1     300     300       100        0          Open\n", ""
-            ),
         }[inp_edit]
     )
     out = tmp_path / "config.json"
@@ -193,18 +185,11 @@ def _edited(good: Path, tmp_path: Path, edit) -> Path:  # type: ignore[no-untype
             lambda d: d["intervals"][0].update(decision_delay_s=float("nan")),
             ("NaN",),
         ),
-        (
-            lambda d: d["intervals"][0].update(capture_interval=-1),
-            ("intervals[0].capture_interval", "-1"),
-        ),
         (lambda d: d.update(meters=["J1", "J1", "J2", "J3"]), ("meters", "'J1'", "more than once")),
-        (lambda d: d.update(meters="J1"), ("meters", "list")),
         (
             lambda d: d["intervals"][0]["cusum"]["threshold"].update(J1="high"),
             ("intervals[0].cusum.threshold.J1", "number"),
         ),
-        (lambda d: d.pop("noise_sigma") and None, ("noise_sigma", "missing")),
-        (lambda d: d["model"].update(wave_speed=1e300), ("model.wave_speed",)),
     ],
 )
 def test_a_bad_configuration_is_refused_naming_file_and_field(
@@ -227,7 +212,7 @@ def test_the_monitor_refuses_a_huge_localization_interval(
     refused(proc, str(path), "localization_interval")
 
 
-@pytest.mark.parametrize("content", [b"\xff\xfe{", b"", b'{"format": "burstloc-calibration/2",'])
+@pytest.mark.parametrize("content", [b"\xff\xfe{", b'{"format": "burstloc-calibration/2",'])
 def test_an_unreadable_configuration_is_refused(tiny: Path, tmp_path: Path, content: bytes) -> None:
     path = tmp_path / "bad.json"
     path.write_bytes(content)
