@@ -125,8 +125,6 @@ class IntervalCalibration:
                 self.arrival_decision_delay, "arrival_decision_delay_s", low=0, high=MAX_DELAY
             ),
         }
-        if not meters:
-            raise FieldError("cusum.threshold", "must hold one value per meter, got none")
         for name, value in checked.items():
             object.__setattr__(self, name, value)
 
