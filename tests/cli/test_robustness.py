@@ -110,7 +110,7 @@ def test_an_unwritable_output_is_refused_before_any_work(
     elif command == "simulate":
         args += ["--pipe", "A", *SHORT]
     elif command == "study":
-        args += ["--factors", "noise", "--pipes", "A", "--quiet", "--workers", "1"]
+        args += ["--factors", "noise_sigma", "--pipes", "A", "--quiet", "--workers", "1"]
     elif command == "calibrate":
         args += ["--capture-interval", "1"]
     cache = tmp_path / "cache"
