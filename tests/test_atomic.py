@@ -2,14 +2,18 @@
 
 from __future__ import annotations
 
+import errno
 import json
 import math
+import re
 from pathlib import Path
+from typing import IO
 
 import numpy as np
 import pytest
 
-from burstloc._atomic import write_json, write_npz, write_text
+from burstloc._atomic import atomic_write, check_output, write_json, write_npz, write_text
+from burstloc.exceptions import OutputError
 
 
 def test_interrupted_write_leaves_no_entry_and_no_temporary(
@@ -37,9 +41,11 @@ def test_json_refuses_nan_and_infinity_and_keeps_the_old_file(tmp_path: Path) ->
     write_json(target, {"threshold": 0.5})
     before = target.read_bytes()
     for bad in (math.nan, math.inf, -math.inf):
-        with pytest.raises(ValueError):
+        with pytest.raises(OutputError, match=r"config\.json: field threshold is (NaN|-?Infinity)"):
             write_json(target, {"threshold": bad})
         assert target.read_bytes() == before
+    with pytest.raises(OutputError, match=r"field runs\[1\]\.delays\.J2 is NaN"):
+        write_json(target, {"runs": [{"a": 1.0}, {"delays": {"J1": 2.0, "J2": math.nan}}]})
     assert json.loads(before) == {"threshold": 0.5}
     assert sorted(p.name for p in tmp_path.iterdir()) == ["config.json"]
 
@@ -65,3 +71,38 @@ def test_permissions_are_an_ordinary_files_or_the_old_ones(tmp_path: Path) -> No
         assert kept.stat().st_mode & 0o777 == 0o640
     finally:
         os.umask(mask)
+
+
+def test_check_output_names_the_path_and_the_reason(tmp_path: Path) -> None:
+    (tmp_path / "afile").write_text("x")
+    (tmp_path / "adir").mkdir()
+    assert check_output(tmp_path / "new.json") == tmp_path / "new.json"
+    assert check_output(tmp_path / "a" / "b", directory=True) == tmp_path / "a" / "b"
+    assert check_output(tmp_path / "adir", directory=True) == tmp_path / "adir"
+    cases = [
+        (tmp_path / "missing" / "x.json", False, "directory .*missing does not exist"),
+        (tmp_path / "adir", False, "is a directory"),
+        (tmp_path / "afile" / "x.json", False, ".*afile is not a directory"),
+        (tmp_path / "afile" / "sub", True, ".*afile is not a directory"),
+        (tmp_path / "afile", True, ".*afile is not a directory"),
+        (Path("/proc/x.json"), False, "directory /proc is not writable"),
+        (Path("/proc/new/dir"), True, "directory /proc is not writable"),
+    ]
+    for path, directory, reason in cases:
+        with pytest.raises(OutputError, match=f"cannot write {re.escape(str(path))}: {reason}"):
+            check_output(path, directory=directory)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["adir", "afile"]  # nothing left
+
+
+def test_a_failing_write_is_an_output_error_and_keeps_the_old_file(tmp_path: Path) -> None:
+    target = tmp_path / "r.txt"
+    write_text(target, "good\n")
+
+    def full_disk(f: IO[bytes]) -> None:
+        f.write(b"partial")
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    with pytest.raises(OutputError, match=r"cannot write .*r\.txt: No space left on device"):
+        atomic_write(target, full_disk)
+    assert target.read_text() == "good\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.txt"]

@@ -44,3 +44,44 @@ def test_reading_a_file_as_text_loads_no_wntr() -> None:
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.split("\n")[:2] == ["25", "[]"]
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (lambda t: "", r"no junctions"),
+        (lambda t: "[JUNCTIONS]\n[RESERVOIRS]\n R1 60\n[END]\n", r"no junctions"),
+        (
+            lambda t: t.replace("[RESERVOIRS]\n R1   60.0\n", "").replace(
+                " A    R1     J1     300     300       100        0          Open\n", ""
+            ),
+            r"no source: the network needs a reservoir or a tank",
+        ),
+        (
+            lambda t: t.replace(" A    R1     J1     300", " A    R1     J1     -300"),
+            r"tiny\.inp:16: pipe 'A' has length -300 \(must be > 0\)",
+        ),
+        (
+            lambda t: t.replace(" B    J1     J2     200     200", " B    J1     J2     200     0"),
+            r"tiny\.inp:17: pipe 'B' has diameter 0 \(must be > 0\)",
+        ),
+        (
+            lambda t: t.replace(" C    J1     J3     250", " C    J1     J3     nan"),
+            r"tiny\.inp:18: pipe 'C' has length nan \(must be > 0\)",
+        ),
+    ],
+)
+def test_a_network_without_junctions_or_source_or_with_bad_pipes_is_refused(
+    tmp_path: Path, edit, message: str
+) -> None:  # type: ignore[no-untyped-def]
+    path = write_tiny(tmp_path / "tiny.inp")
+    path.write_text(edit(path.read_text()))
+    with pytest.raises(NetworkError, match=message):
+        inp.pipe_names_in_file(path)
+
+
+def test_a_file_that_is_not_utf8_is_named_with_its_line(tmp_path: Path) -> None:
+    path = write_tiny(tmp_path / "tiny.inp")
+    path.write_bytes(path.read_bytes().replace(b" J3   0      5", b" J\xe93   0      5"))
+    with pytest.raises(NetworkError, match=r"tiny\.inp:8: not UTF-8 text \(byte 0xe9\)"):
+        inp.pipe_names_in_file(path)

@@ -4,8 +4,13 @@ A file is written to a temporary file in the target's directory, flushed to disk
 over the target with ``os.replace``: a reader sees the old file or the new one, never a partial
 one, and a failed or interrupted write leaves the old file untouched. The new file keeps the
 old one's permissions, or gets those of an ordinary new file (``0o666`` less the umask).
-JSON is written with ``allow_nan=False``: a NaN or an infinity is refused (a ``ValueError``),
-never written.
+JSON is written with ``allow_nan=False``: a NaN or an infinity is refused, naming the field,
+never written. Every failure is an :class:`~burstloc.exceptions.OutputError`
+(``cannot write PATH: reason``).
+
+:func:`check_output` checks an output path before any work is done (the directory exists and
+is writable, no directory where a file is expected), so a long run never ends in an unwritable
+path.
 """
 
 from __future__ import annotations
@@ -20,7 +25,62 @@ from typing import IO, Any
 
 import numpy as np
 
-__all__ = ["atomic_write", "write_bytes", "write_json", "write_npz", "write_text"]
+from burstloc._validate import find_non_finite
+from burstloc.exceptions import OutputError
+
+__all__ = [
+    "atomic_write",
+    "check_output",
+    "write_bytes",
+    "write_json",
+    "write_npz",
+    "write_text",
+]
+
+
+def _probe(directory: Path) -> None:
+    """Create and remove a file in ``directory`` (OSError if that is not possible)."""
+    fd, tmp = tempfile.mkstemp(dir=directory, prefix=".burstloc-probe.", suffix=".tmp")
+    os.close(fd)
+    os.unlink(tmp)
+
+
+def check_output(path: str | os.PathLike[str], *, directory: bool = False) -> Path:
+    """Check, before any work, that ``path`` can be written; return it.
+
+    A file (``directory=False``): its directory exists and is writable, and ``path`` is not a
+    directory. A directory: it is a writable directory, or it can be created (its nearest
+    existing ancestor is a writable directory). Nothing is left behind.
+
+    Raises:
+        OutputError: ``cannot write PATH: reason``.
+    """
+    target = Path(path)
+
+    def refuse(reason: str) -> OutputError:
+        return OutputError(f"cannot write {os.fspath(path)}: {reason}")
+
+    if directory:
+        existing = target
+        while not existing.exists() and existing != existing.parent:
+            if existing.is_symlink():
+                raise refuse(f"{existing} is a broken link")
+            existing = existing.parent
+        if not existing.is_dir():
+            raise refuse(f"{existing} is not a directory")
+    else:
+        if target.is_dir():
+            raise refuse("is a directory")
+        existing = target.parent
+        if not existing.exists():
+            raise refuse(f"directory {existing} does not exist")
+        if not existing.is_dir():
+            raise refuse(f"{existing} is not a directory")
+    try:
+        _probe(existing)
+    except OSError as exc:
+        raise refuse(f"directory {existing} is not writable ({exc.strerror or exc})") from None
+    return target
 
 
 def atomic_write(path: str | os.PathLike[str], write: Callable[[IO[bytes]], None]) -> Path:
@@ -28,10 +88,16 @@ def atomic_write(path: str | os.PathLike[str], write: Callable[[IO[bytes]], None
 
     The parent directory is created if missing. On any error (or interruption) the temporary
     file is removed and ``path`` is left as it was.
+
+    Raises:
+        OutputError: the file cannot be written (``cannot write PATH: reason``).
     """
     target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
+    except OSError as exc:
+        raise OutputError(f"cannot write {target}: {exc.strerror or exc}") from None
     try:
         with os.fdopen(fd, "wb") as f:
             write(f)
@@ -39,6 +105,9 @@ def atomic_write(path: str | os.PathLike[str], write: Callable[[IO[bytes]], None
             os.fsync(f.fileno())
         os.chmod(tmp, _mode_for(target))
         os.replace(tmp, target)
+    except OSError as exc:
+        Path(tmp).unlink(missing_ok=True)
+        raise OutputError(f"cannot write {target}: {exc.strerror or exc}") from None
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
@@ -73,9 +142,17 @@ def write_json(path: str | os.PathLike[str], document: Any, *, indent: int | Non
     """Write ``document`` as JSON to ``path`` atomically.
 
     Raises:
-        ValueError: the document holds a NaN or an infinity (nothing is written).
+        OutputError: the document holds a NaN or an infinity (the message names the field;
+            nothing is written), or the file cannot be written.
     """
-    text = json.dumps(document, indent=indent, allow_nan=False)
+    try:
+        text = json.dumps(document, indent=indent, allow_nan=False)
+    except ValueError:
+        field, value = find_non_finite(document)
+        raise OutputError(
+            f"cannot write {os.fspath(path)}: field {field} is {value} (JSON holds finite "
+            "numbers only)"
+        ) from None
     return write_text(path, text + "\n")
 
 

@@ -13,6 +13,9 @@ Every error is a typed subclass of a built-in exception, so callers can catch pr
 * :class:`SimulationError` (``RuntimeError``): the transient simulation (TSNet) failed.
 * :class:`SimulatorMissingError` (``SimulationError``): a command needs the simulator (TSNet,
   WNTR: the ``sim`` extra), which is not installed; the message says how to install it.
+* :class:`OutputError` (``ValueError``): an output file or directory cannot be written (a
+  missing or read-only directory, a directory where a file is expected, a full disk, a value
+  JSON cannot hold); the message is ``cannot write PATH: reason``.
 
 ``ConfigError`` and ``InputError`` are defined by the native module (so the Rust code raises
 them directly); the others are plain Python.
@@ -24,6 +27,7 @@ __all__ = [
     "ConfigError",
     "InputError",
     "NetworkError",
+    "OutputError",
     "SimulationError",
     "SimulatorMissingError",
     "StreamError",
@@ -57,3 +61,7 @@ class SimulatorMissingError(SimulationError):
             f"this command needs the simulator, which is not installed ({cause}): {self.INSTALL}"
         )
         self.package = cause.name
+
+
+class OutputError(ValueError):
+    """An output cannot be written: ``cannot write PATH: reason`` (nothing was replaced)."""

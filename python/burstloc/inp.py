@@ -1,7 +1,8 @@
 """EPANET INP files read as text, without WNTR: structure checks, pipe IDs, a fingerprint.
 
-* :func:`pipe_names_in_file` checks a file's structure (sections, field counts, numbers, IDs,
-  node references) and returns its pipe IDs, cheaply; :func:`burstloc.network.load_network`
+* :func:`pipe_names_in_file` checks a file's structure (UTF-8 text, sections, field counts,
+  numbers, IDs, node references, at least one junction and one source, positive pipe lengths
+  and diameters) and returns its pipe IDs, cheaply; :func:`burstloc.network.load_network`
   runs the same checks before WNTR reads the file, so a malformed file is named with its line.
 * :func:`network_hash` fingerprints a network file (its bytes): what a stored configuration
   is bound to.
@@ -11,6 +12,7 @@
 from __future__ import annotations
 
 import hashlib
+import math
 import os
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
@@ -65,11 +67,19 @@ def _section_name(header: str) -> str:
 def _rows(path: Path) -> Iterator[_Row]:
     """Yield the data lines of an INP file with their section and 1-based line number."""
     try:
-        text = path.read_text(encoding="utf-8", errors="replace")
+        data = path.read_bytes()
     except FileNotFoundError:
         raise NetworkError(f"network file not found: {path}") from None
     except OSError as exc:
         raise NetworkError(f"cannot read network file {path}: {exc.strerror}") from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        bad_line = data.count(b"\n", 0, exc.start) + 1
+        raise NetworkError(
+            f"{path}:{bad_line}: not UTF-8 text (byte 0x{data[exc.start]:02x}); save the file "
+            "as UTF-8"
+        ) from None
     section: str | None = None
     for number, raw in enumerate(text.splitlines(), start=1):
         line = raw.split(";", 1)[0].strip()
@@ -94,6 +104,7 @@ def _lint(path: Path) -> list[str]:
     pipes: list[str] = []
     links: dict[str, int] = {}
     refs: list[tuple[_Row, str]] = []
+    sources = 0
     for row in _rows(path):
         spec = _FIELDS.get(row.section)
         if spec is None:
@@ -124,7 +135,9 @@ def _lint(path: Path) -> list[str]:
             table[name] = row.line
         if row.section in _LINK_SECTIONS:
             refs.extend((row, node) for node in row.fields[1:3])
+        sources += row.section in ("[RESERVOIRS]", "[TANKS]")
         if row.section == "[PIPES]":
+            _check_pipe_size(row, where)
             pipes.append(name)
             if len(row.fields) >= 8 and row.fields[7].upper() not in _PIPE_STATUS:
                 raise NetworkError(f"{where}: pipe {name!r} has unknown status {row.fields[7]!r}")
@@ -133,7 +146,21 @@ def _lint(path: Path) -> list[str]:
             raise NetworkError(
                 f"{path}:{row.line}: link {row.fields[0]!r} refers to unknown node {node!r}"
             )
+    if len(nodes) == sources:
+        raise NetworkError(f"{path}: no junctions: the network needs at least one junction")
+    if sources == 0:
+        raise NetworkError(f"{path}: no source: the network needs a reservoir or a tank")
     return pipes
+
+
+def _check_pipe_size(row: _Row, where: str) -> None:
+    """A pipe's length and diameter are positive finite numbers."""
+    for index, what in ((3, "length"), (4, "diameter")):
+        value = float(row.fields[index])
+        if not (math.isfinite(value) and value > 0):
+            raise NetworkError(
+                f"{where}: pipe {row.fields[0]!r} has {what} {row.fields[index]} (must be > 0)"
+            )
 
 
 def pipe_names_in_file(path: str | os.PathLike[str]) -> list[str]:

@@ -83,10 +83,13 @@ def test_evaluate_writes_tables_json_csv_and_plots(tmp_path: Path, capsys) -> No
     ("args", "message"),
     [
         (["--pipes", "P99"], "unknown pipe"),
-        (["--localization-interval", "0", "--pipes", "P4"], "localization interval must be >= 1"),
+        (
+            ["--localization-interval", "0", "--pipes", "P4"],
+            "localization_interval must be an integer in [1, 100000], got 0",
+        ),
         (["--capture-interval", "-1", "--pipes", "P4"], "capture interval must be > 0"),
         (["--capture-interval", "3"], "not one of the paper's"),
-        (["--phases", "0"], "phases must be an integer >= 1"),
+        (["--phases", "0"], "phases must be an integer in [1, 1000], got 0"),
         (["--detector", "cusum", "--sigma", "2"], "Shewhart chart only"),
         (
             [

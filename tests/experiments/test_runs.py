@@ -22,10 +22,12 @@ def test_run_spec_validation_and_params() -> None:
     }
     assert spec.paper_run() == paper.TABLE_I[0]
     assert RunSpec(CUSUM, 0.2, 6).paper_run() is None
-    with pytest.raises(ConfigError, match="capture interval must be > 0"):
+    with pytest.raises(ConfigError, match=r"capture interval \(s\) must be .* in \(0, 3600\]"):
         RunSpec(CUSUM, 0.0, 5)
-    with pytest.raises(ConfigError, match="localization interval must be >= 1"):
+    with pytest.raises(ConfigError, match=r"localization_interval must be .* \[1, 100000\]"):
         RunSpec(CUSUM, 0.2, 0)
+    with pytest.raises(ConfigError, match=r"localization_interval must be .* got 1844"):
+        RunSpec(CUSUM, 0.2, 2**64)
     with pytest.raises(ValueError):
         RunSpec(CUSUM, 0.2, 5, mode="guess")  # type: ignore[arg-type]
 
@@ -63,6 +65,8 @@ def test_phase_offsets_and_required_duration() -> None:
     assert phase_offsets(spec, 2, "window") == pytest.approx([0.0, 0.5])
     with pytest.raises(ConfigError, match="phases"):
         phase_offsets(spec, 0)
+    with pytest.raises(ConfigError, match=r"phases must be an integer in \[1, 1000\], got 1844"):
+        phase_offsets(spec, 2**64)  # refused, not a list of 2**64 offsets
     with pytest.raises(ConfigError, match="phase span"):
         phase_offsets(spec, 2, "day")
     ten = RunSpec(CUSUM, 10.0, 10)

@@ -3,7 +3,10 @@ localization model it carries."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
+import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -96,7 +99,7 @@ def test_a_configuration_of_the_previous_format_asks_to_recalibrate(
         Calibration.load(path)
     doc["format"] = CALIBRATION_FORMAT  # the current format without a model is malformed
     path.write_text(json.dumps(doc))
-    with pytest.raises(ConfigError, match="malformed configuration"):
+    with pytest.raises(ConfigError, match=r"old\.json: field model is missing"):
         Calibration.load(path)
 
 
@@ -116,3 +119,55 @@ def test_calibrated_bank_uses_the_interval_settings(stored: Calibration) -> None
         assert {channel for channel, _ in alarms} == {2}
     with pytest.raises(ConfigError, match="unknown detector"):
         calibrated_bank("ewma", 4, cal)
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (
+            lambda d: d["intervals"][0].update(localization_interval=10**12),
+            r"intervals\[0\]\.localization_interval must be an integer in \[1, 100000\], "
+            r"got 1000000000000",
+        ),
+        (
+            lambda d: d["intervals"][0].update(decision_delay_s=-1.0),
+            r"intervals\[0\]\.decision_delay_s must be a finite number in \[0, 86400\]",
+        ),
+        (
+            lambda d: d["intervals"][0]["shewhart"]["threshold"].pop("J2"),
+            r"intervals\[0\]\.shewhart\.threshold must have one value per meter "
+            r"\(missing \['J2'\]",
+        ),
+        (
+            lambda d: d["intervals"].append(dict(d["intervals"][0])),
+            r"intervals\[1\]\.capture_interval lists 0\.2 s a second time",
+        ),
+        (lambda d: d.update(intervals=[]), r"field intervals must be a list of 1 to 64"),
+        (lambda d: d.update(network_hash="sha256:xyz"), r"network_hash must be 'sha256:'"),
+        (lambda d: d.update(false_alarm_rate_per_hour=0), r"false_alarm_rate_per_hour must be"),
+        (lambda d: d["noise_sigma"].update(J1=-0.1), r"noise_sigma\.J1 must be a finite"),
+        (lambda d: d.update(provenance=[1]), r"field provenance must be a JSON object"),
+        (lambda d: d["model"].update(wave_speed="fast"), r"model: malformed localization model"),
+    ],
+)
+def test_every_field_is_checked_on_load_naming_file_and_field(
+    stored: Calibration, tmp_path: Path, edit, message: str
+) -> None:  # type: ignore[no-untyped-def]
+    doc = stored.to_json()
+    edit(doc)
+    path = tmp_path / "c.json"
+    path.write_text(json.dumps(doc))
+    with pytest.raises(ConfigError, match=rf"^configuration {re.escape(str(path))}: .*{message}"):
+        Calibration.load(path)
+
+
+def test_a_configuration_built_in_code_is_checked_too(stored: Calibration) -> None:
+    item = stored.intervals[0]
+    with pytest.raises(
+        ConfigError, match=r"^capture_interval must be a finite number in \(0, 3600\]"
+    ):
+        dataclasses.replace(item, capture_interval=math.inf)
+    with pytest.raises(ConfigError, match=r"^cusum\.drift\.J1 must be a number, got null"):
+        dataclasses.replace(item, cusum_drift={**item.cusum_drift, "J1": None})
+    with pytest.raises(ConfigError, match=r"^meters lists 'J1' more than once"):
+        dataclasses.replace(stored, meters=("J1", "J1", "J2", "J3"))

@@ -105,7 +105,7 @@ def test_the_model_refuses_another_network_or_other_meters_by_name() -> None:
 def test_parts_that_do_not_fit_are_refused() -> None:
     with pytest.raises(ConfigError, match="no distances from node 'm3'"):
         _line_model(node_distances={"m0": np.zeros(4), "m1": np.zeros(4), "m2": np.zeros(4)})
-    with pytest.raises(ConfigError, match="distances from node 'm0' must be 4 lengths"):
+    with pytest.raises(ConfigError, match=r"node_distances\.m0 must be 4 lengths"):
         _line_model(node_distances={n: np.zeros(3) for n in METERS})
     with pytest.raises(ConfigError, match="another network or other meters"):
         _line_model(signature_sets=_sets(network_hash="sha256:other"))
@@ -113,11 +113,13 @@ def test_parts_that_do_not_fit_are_refused() -> None:
         _line_model(signature_sets=_sets(meters=METERS[:3]))
     with pytest.raises(ConfigError, match="at least one signature set"):
         _line_model(signature_sets=())
-    with pytest.raises(ConfigError, match="at least one pipe"):
+    with pytest.raises(ConfigError, match="pipes must hold 1 to"):
         _line_model(pipes=())
     with pytest.raises(ConfigError, match="wave_speed"):
         _line_model(wave_speed=0.0)
-    with pytest.raises(ConfigError, match="distinct meters"):
+    with pytest.raises(ConfigError, match=r"wave_speed must be a finite number in \(0, 10000\]"):
+        _line_model(wave_speed=1e300)
+    with pytest.raises(ConfigError, match="meters lists 'm0' more than once"):
         _line_model(meters=("m0", "m0", "m2", "m3"))
 
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from burstloc.sim import cache as cache_mod
-from burstloc.sim.cache import DiskCache, cache_key, default_cache_dir
+from burstloc.sim.cache import DiskCache, arrays_sha256, cache_key, default_cache_dir
 from burstloc.sim.scenario import BurstScenario
 from burstloc.sim.tsnet import simulate_burst
 
@@ -77,12 +77,14 @@ def test_put_get_round_trip(cache_dir: Path) -> None:
         np.testing.assert_array_equal(got[name], value)
 
 
-def test_unreadable_entry_is_a_miss(cache_dir: Path) -> None:
+def test_unreadable_entry_is_a_miss(cache_dir: Path, capsys: pytest.CaptureFixture[str]) -> None:
     store = DiskCache(cache_dir)
     key = "cd" + "1" * 62
     store.path_for(key).parent.mkdir(parents=True)
     store.path_for(key).write_bytes(b"PK\x03\x04 truncated")
     assert store.get(key) is None
+    assert f"cache entry {store.path_for(key)} is corrupt (unreadable" in capsys.readouterr().err
+    assert not store.path_for(key).exists()
     store.put(key, {"x": np.ones(2)})
     got = store.get(key)
     assert got is not None
@@ -125,3 +127,42 @@ def test_cache_false_stores_nothing(
     monkeypatch.setenv("BURSTLOC_CACHE_DIR", str(cache_dir))
     simulate_burst(BurstScenario(tiny_network, "B", burst_start=0.2, duration=1.5), cache=False)
     assert not cache_dir.exists()
+
+
+@pytest.mark.parametrize(
+    ("damage", "reason"),
+    [
+        ("nan", "its checksum does not match"),
+        ("nan-resummed", "array 'x' holds NaN or infinite values"),
+        ("reshaped", "its checksum does not match"),
+        ("no-checksum", "its checksum does not match"),
+    ],
+)
+def test_a_corrupt_entry_is_reported_deleted_and_missed(
+    cache_dir: Path, capsys: pytest.CaptureFixture[str], damage: str, reason: str
+) -> None:
+    store = DiskCache(cache_dir)
+    key = "ef" + "2" * 62
+    path = store.put(key, {"x": np.arange(6.0), "meta": np.asarray("{}")})
+    with np.load(path, allow_pickle=False) as data:
+        arrays = {name: data[name] for name in data.files}
+    if damage.startswith("nan"):
+        arrays["x"] = np.full(6, np.nan)
+    if damage == "nan-resummed":  # a checksum that fits: the NaN itself is refused
+        arrays[DiskCache.CHECKSUM] = np.asarray(
+            arrays_sha256({k: v for k, v in arrays.items() if k != DiskCache.CHECKSUM})
+        )
+    if damage == "reshaped":
+        arrays["x"] = arrays["x"].reshape(2, 3)
+    if damage == "no-checksum":
+        del arrays[DiskCache.CHECKSUM]
+    np.savez(path, **arrays)
+    assert store.get(key) is None
+    err = capsys.readouterr().err
+    assert f"burstloc: warning: cache entry {path} is corrupt ({reason}" in err
+    assert "dropped, recomputing" in err and not path.exists()
+
+
+def test_put_refuses_non_finite_values(cache_dir: Path) -> None:
+    with pytest.raises(ValueError, match="array 'x' holds NaN"):
+        DiskCache(cache_dir).put("ab" + "3" * 62, {"x": np.asarray([1.0, np.inf])})

@@ -8,17 +8,30 @@ when its parser is built, and ``burstloc COMMAND ...`` builds only that command'
 ``burstloc monitor`` imports neither the simulator nor the experiments. Nothing in the library
 imports this package.
 
-Exit status: 0 success, 1 some scenarios failed (reported on stderr), 2 bad input.
+Every output path is checked before any work (:func:`burstloc._atomic.check_output`) and every
+file is written atomically, so a failed or interrupted run never replaces a good file.
+
+Exit status: 0 success, 1 some scenarios failed (reported on stderr), 2 bad input or an
+output that cannot be written (one ``burstloc: error: ...`` line), 130 interrupted (Ctrl-C:
+one ``burstloc: interrupted`` line), 141 stdout closed by the reader (``burstloc ... | head``:
+nothing more is printed).
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 from collections.abc import Sequence
 
-from burstloc.exceptions import ConfigError, InputError, NetworkError, SimulationError
+from burstloc.exceptions import (
+    ConfigError,
+    InputError,
+    NetworkError,
+    OutputError,
+    SimulationError,
+)
 
 __all__ = ["build_parser", "main"]
 
@@ -38,13 +51,39 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+#: Exit status after Ctrl-C (128 + SIGINT) and after the reader closed stdout (128 + SIGPIPE).
+INTERRUPTED, CLOSED_STDOUT = 130, 141
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; return the exit status."""
-    args_list = list(sys.argv[1:] if argv is None else argv)
-    command = args_list[0] if args_list and args_list[0] in SUBCOMMANDS else None
-    args = build_parser(command).parse_args(args_list)
+    """Run the command line; return the exit status (module docstring)."""
     try:
-        return int(args.handler(args))
-    except (ConfigError, InputError, NetworkError, SimulationError) as exc:
+        args_list = list(sys.argv[1:] if argv is None else argv)
+        command = args_list[0] if args_list and args_list[0] in SUBCOMMANDS else None
+        args = build_parser(command).parse_args(args_list)
+        status = int(args.handler(args))
+        sys.stdout.flush()  # a closed stdout is found here, not at interpreter exit
+        return status
+    except KeyboardInterrupt:
+        print("burstloc: interrupted", file=sys.stderr)
+        return INTERRUPTED
+    except BrokenPipeError:
+        _silence_stdout()
+        return CLOSED_STDOUT
+    except (ConfigError, InputError, NetworkError, SimulationError, OutputError) as exc:
         print(f"burstloc: error: {exc}", file=sys.stderr)
         return 2
+    except OSError as exc:  # a file the library did not name: name it here
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"burstloc: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        return 2
+
+
+def _silence_stdout() -> None:
+    """Point stdout at /dev/null so the interpreter's last flush does not fail again."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError):
+        pass

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from burstloc.sim.cache import DiskCache
 
-__all__ = ["add_run_options", "cache_of"]
+__all__ = ["add_run_options", "cache_of", "check_run_options"]
 
 
 def add_run_options(parser: argparse.ArgumentParser, *, cache: bool = True) -> None:
@@ -27,3 +27,12 @@ def cache_of(args: argparse.Namespace) -> DiskCache | bool:
     from burstloc.sim.cache import DiskCache
 
     return False if args.no_cache else DiskCache(args.cache_dir)
+
+
+def check_run_options(args: argparse.Namespace) -> None:
+    """Check before any work that ``--scheduler`` is reachable (ConfigError otherwise), even
+    when every result will come from the cache."""
+    if args.scheduler is not None:
+        from burstloc.sim.sweep import check_scheduler
+
+        check_scheduler(args.scheduler)

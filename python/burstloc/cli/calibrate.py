@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from burstloc._atomic import check_output
 from burstloc.constants import CAPTURE_INTERVALS
 
 __all__ = ["add_parser", "run"]
@@ -56,6 +57,7 @@ def run(args: argparse.Namespace) -> int:
     """Handle ``burstloc calibrate``."""
     from burstloc.experiments.calibrate import calibrate
 
+    check_output(args.out)
     config = calibrate(
         args.network,
         capture_intervals=args.capture_interval,

@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from burstloc.cli._options import add_run_options, cache_of
+from burstloc._atomic import check_output
+from burstloc.cli._options import add_run_options, cache_of, check_run_options
 from burstloc.constants import DETECTORS, LOCALIZERS, METER_MODELS
 from burstloc.experiments.evaluate import DEFAULT_LOCALIZER
 
@@ -118,6 +119,12 @@ def run(args: argparse.Namespace) -> int:
     from burstloc.experiments.evaluate import evaluate
     from burstloc.experiments.runs import plan_runs
 
+    for path in (args.json, args.csv):
+        if path:
+            check_output(path)
+    if args.plot:
+        check_output(args.plot, directory=True)
+    check_run_options(args)
     runs = plan_runs(
         localizers=args.localizer,
         detectors=DETECTORS if args.detector == "both" else (args.detector,),

@@ -6,7 +6,8 @@ import argparse
 import sys
 from typing import Any
 
-from burstloc.cli._options import add_run_options, cache_of
+from burstloc._atomic import check_output
+from burstloc.cli._options import add_run_options, cache_of, check_run_options
 from burstloc.constants import SCENARIO_DURATION, WAVE_SPEED
 
 __all__ = ["add_parser", "run"]
@@ -63,6 +64,8 @@ def run(args: argparse.Namespace) -> int:
     from burstloc.sim import scenario
     from burstloc.sim.tsnet import simulate_many
 
+    check_output(args.out, directory=True)
+    check_run_options(args)
     scenarios = scenario.burst_scenarios(
         args.network,
         None if args.all else args.pipe,

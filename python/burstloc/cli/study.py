@@ -6,7 +6,8 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from burstloc.cli._options import add_run_options
+from burstloc._atomic import check_output
+from burstloc.cli._options import add_run_options, check_run_options
 from burstloc.constants import CAPTURE_INTERVALS, DETECTORS, RANKING_LOCALIZERS, SCENARIO_DURATION
 from burstloc.exceptions import ConfigError
 from burstloc.experiments.grid import DEFAULT_LEVELS, DEFAULT_NETWORKS, StudySettings, study_grid
@@ -63,6 +64,8 @@ def run(args: argparse.Namespace) -> int:
     Raises:
         ConfigError: an unknown factor or bad settings.
     """
+    check_output(args.out, directory=True)
+    check_run_options(args)
     unknown = [f for f in args.factors if f not in DEFAULT_LEVELS]
     if unknown:
         raise ConfigError(f"unknown factor(s) {unknown}; known: {list(DEFAULT_LEVELS)}")

@@ -59,10 +59,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from burstloc import _core
+from burstloc._validate import check_names, check_number
 from burstloc.constants import CAPTURE_INTERVALS, SIGNATURE_DECISION_DELAY, WAVE_SPEED
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.inp import network_hash
 from burstloc.localize.config import (
+    MAX_CAPTURE_INTERVAL,
+    MAX_METERS,
     Calibration,
     IntervalCalibration,
 )
@@ -293,9 +296,12 @@ def calibrate(
 
     if not (math.isfinite(false_alarm_rate) and false_alarm_rate > 0):
         raise ConfigError(f"false_alarm_rate must be > 0 per hour, got {false_alarm_rate}")
-    intervals = [float(c) for c in capture_intervals]
-    if not intervals or any(not (math.isfinite(c) and c > 0) for c in intervals):
-        raise ConfigError(f"capture intervals must be > 0 s, got {list(capture_intervals)}")
+    intervals = [
+        check_number(c, "capture interval", low=0, low_open=True, high=MAX_CAPTURE_INTERVAL)
+        for c in capture_intervals
+    ]
+    if not intervals:
+        raise ConfigError("at least one capture interval is needed")
     if baseline is not None and noise_sigma is not None:
         raise ConfigError("give either a recorded baseline or noise_sigma, not both")
     wn = load_network(network)
@@ -305,7 +311,9 @@ def calibrate(
         if meters is not None and tuple(meters) != baseline.meters:
             raise ConfigError("meters differ from the baseline's meters")
     else:
-        meter_list = list(junctions if meters is None else meters)
+        meter_list = list(
+            junctions if meters is None else check_names(meters, "meters", high=MAX_METERS)
+        )
     unknown = [m for m in meter_list if m not in junctions]
     if unknown:
         raise ConfigError(f"meter(s) {unknown} are not junctions of {os.fspath(network)}")

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from burstloc._validate import check_count, check_number
 from burstloc.constants import (
     CAPTURE_INTERVALS,
     DETECTORS,
@@ -27,6 +28,7 @@ from burstloc.constants import (
 )
 from burstloc.exceptions import ConfigError
 from burstloc.experiments import paper
+from burstloc.localize.config import MAX_CAPTURE_INTERVAL, MAX_LOCALIZATION_INTERVAL
 from burstloc.localize.detection import DetectorConfig, Mode
 
 __all__ = [
@@ -65,17 +67,18 @@ class RunSpec:
     meter_model: str = "instantaneous"
 
     def __post_init__(self) -> None:
-        ci = self.capture_interval
-        if isinstance(ci, bool) or not isinstance(ci, (int, float)) or not math.isfinite(ci):
-            raise ConfigError(f"capture interval must be a number of seconds, got {ci!r}")
-        if ci <= 0:
-            raise ConfigError(f"capture interval must be > 0 s, got {ci}")
-        li = self.localization_interval
-        if isinstance(li, bool) or not isinstance(li, int):
-            raise ConfigError(f"localization interval must be an integer, got {li!r}")
-        if li < 1:
-            raise ConfigError(f"localization interval must be >= 1, got {li}")
-        object.__setattr__(self, "capture_interval", float(ci))
+        ci = check_number(
+            self.capture_interval,
+            "capture interval (s)",
+            low=0,
+            low_open=True,
+            high=MAX_CAPTURE_INTERVAL,
+        )
+        li = check_count(
+            self.localization_interval, "localization_interval", high=MAX_LOCALIZATION_INTERVAL
+        )
+        object.__setattr__(self, "localization_interval", li)
+        object.__setattr__(self, "capture_interval", ci)
         object.__setattr__(self, "mode", Mode(self.mode))
         if self.localizer not in LOCALIZERS:
             raise ConfigError(f"localizer must be one of {LOCALIZERS}, got {self.localizer!r}")
@@ -269,10 +272,13 @@ def plan_runs(
     return runs
 
 
+#: Clock phases per burst are at most this.
+MAX_PHASES = 1000
+
+
 def phase_offsets(spec: RunSpec, phases: int, span: str = "capture") -> list[float]:
     """The clock offsets (s) of the ``phases`` attempts of a run, evenly spread."""
-    if isinstance(phases, bool) or not isinstance(phases, int) or phases < 1:
-        raise ConfigError(f"phases must be an integer >= 1, got {phases!r}")
+    check_count(phases, "phases", high=MAX_PHASES)
     if span not in PHASE_SPANS:
         raise ConfigError(f"phase span must be one of {PHASE_SPANS}, got {span!r}")
     period = spec.capture_interval

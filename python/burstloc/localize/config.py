@@ -22,9 +22,9 @@ the live path.
 
 from __future__ import annotations
 
-import json
 import math
 import os
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -32,6 +32,15 @@ from typing import Any
 
 from burstloc import _core
 from burstloc._atomic import write_json
+from burstloc._validate import (
+    FieldError,
+    Fields,
+    check_count,
+    check_names,
+    check_number,
+    check_string,
+    read_json,
+)
 from burstloc.exceptions import ConfigError
 from burstloc.inp import network_hash
 from burstloc.localize.model import LocalizationModel
@@ -42,6 +51,34 @@ CALIBRATION_FORMAT = "burstloc-calibration/2"
 """Format tag of a configuration file (2: with the localization model)."""
 
 _EARLIER_FORMATS = frozenset({"burstloc-calibration/1"})
+
+#: Limits every configuration is checked against on load and at construction.
+MAX_METERS = 10_000
+MAX_INTERVALS = 64
+#: Capture intervals (s) in ``(0, MAX_CAPTURE_INTERVAL]``: a transient needs readings this often.
+MAX_CAPTURE_INTERVAL = 3600.0
+#: New readings per localization window (the Shewhart reference window is twice this).
+MAX_LOCALIZATION_INTERVAL = 100_000
+#: Thresholds, drifts, noise levels (m) and the Shewhart multiplier are at most this.
+MAX_LEVEL = 1e6
+#: Decision delays (s) are at most a day.
+MAX_DELAY = 86_400.0
+MAX_FALSE_ALARM_RATE = 1e6
+_HASH = re.compile(r"sha256:[0-9a-f]{64}")
+
+
+def _levels(values: Any, field: str, meters: Sequence[str], *, positive: bool) -> dict[str, float]:
+    """One finite level (m) per meter: exactly the keys ``meters``, each in range."""
+    if not isinstance(values, Mapping):
+        raise FieldError(field, f"must be an object of one value per meter, got {values!r}")
+    if set(values) != set(meters):
+        missing = sorted(set(meters) - set(values))
+        extra = sorted(set(values) - set(meters))
+        raise FieldError(field, f"must have one value per meter (missing {missing}, extra {extra})")
+    return {
+        m: check_number(values[m], f"{field}.{m}", low=0, low_open=positive, high=MAX_LEVEL)
+        for m in meters
+    }
 
 
 @dataclass(frozen=True)
@@ -56,6 +93,40 @@ class IntervalCalibration:
     shewhart_sigma: float
     decision_delay: float
     arrival_decision_delay: float
+
+    def __post_init__(self) -> None:
+        """Check every field (a FieldError names it by its JSON name)."""
+        meters = tuple(self.cusum_threshold) if isinstance(self.cusum_threshold, Mapping) else ()
+        checked = {
+            "capture_interval": check_number(
+                self.capture_interval,
+                "capture_interval",
+                low=0,
+                low_open=True,
+                high=MAX_CAPTURE_INTERVAL,
+            ),
+            "localization_interval": check_count(
+                self.localization_interval, "localization_interval", high=MAX_LOCALIZATION_INTERVAL
+            ),
+            "cusum_threshold": _levels(
+                self.cusum_threshold, "cusum.threshold", meters, positive=True
+            ),
+            "cusum_drift": _levels(self.cusum_drift, "cusum.drift", meters, positive=False),
+            "shewhart_threshold": _levels(
+                self.shewhart_threshold, "shewhart.threshold", meters, positive=True
+            ),
+            "shewhart_sigma": check_number(
+                self.shewhart_sigma, "shewhart.sigma", low=0, low_open=True, high=MAX_LEVEL
+            ),
+            "decision_delay": check_number(
+                self.decision_delay, "decision_delay_s", low=0, high=MAX_DELAY
+            ),
+            "arrival_decision_delay": check_number(
+                self.arrival_decision_delay, "arrival_decision_delay_s", low=0, high=MAX_DELAY
+            ),
+        }
+        for name, value in checked.items():
+            object.__setattr__(self, name, value)
 
     def uniform(self, detector: str) -> dict[str, float]:
         """One parameter set for a whole detector bank (the largest per-meter thresholds)."""
@@ -83,18 +154,24 @@ class IntervalCalibration:
         }
 
     @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> IntervalCalibration:
-        """Inverse of :meth:`to_json`."""
-        return cls(
-            capture_interval=float(data["capture_interval"]),
-            localization_interval=int(data["localization_interval"]),
-            cusum_threshold={k: float(v) for k, v in data["cusum"]["threshold"].items()},
-            cusum_drift={k: float(v) for k, v in data["cusum"]["drift"].items()},
-            shewhart_threshold={k: float(v) for k, v in data["shewhart"]["threshold"].items()},
-            shewhart_sigma=float(data["shewhart"]["sigma"]),
-            decision_delay=float(data["decision_delay_s"]),
-            arrival_decision_delay=float(data["arrival_decision_delay_s"]),
-        )
+    def from_json(
+        cls, data: Mapping[str, Any] | Fields, source: str = "configuration"
+    ) -> IntervalCalibration:
+        """Inverse of :meth:`to_json`; every field is checked (ConfigError naming ``source``
+        and the field)."""
+        fields = data if isinstance(data, Fields) else Fields(data, source)
+        cusum, shewhart = fields.obj("cusum"), fields.obj("shewhart")
+        with fields.checking():
+            return cls(
+                capture_interval=fields.get("capture_interval"),
+                localization_interval=fields.get("localization_interval"),
+                cusum_threshold=cusum.get("threshold"),
+                cusum_drift=cusum.get("drift"),
+                shewhart_threshold=shewhart.get("threshold"),
+                shewhart_sigma=shewhart.get("sigma"),
+                decision_delay=fields.get("decision_delay_s"),
+                arrival_decision_delay=fields.get("arrival_decision_delay_s"),
+            )
 
 
 @dataclass(frozen=True)
@@ -117,8 +194,49 @@ class Calibration:
     provenance: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "meters", tuple(self.meters))
-        self.model.check(self.network_hash, self.meters)
+        """Check every field (a FieldError names it by its JSON name) and the model's fit."""
+        check_string(self.name, "name", max_length=256)
+        check_string(self.network, "network")
+        if not isinstance(self.network_hash, str) or not _HASH.fullmatch(self.network_hash):
+            raise FieldError(
+                "network_hash", f"must be 'sha256:' and 64 hex digits, got {self.network_hash!r}"
+            )
+        meters = check_names(self.meters, "meters", high=MAX_METERS)
+        object.__setattr__(self, "meters", meters)
+        self.model.check(self.network_hash, meters)
+        object.__setattr__(
+            self, "noise_sigma", _levels(self.noise_sigma, "noise_sigma", meters, positive=False)
+        )
+        object.__setattr__(
+            self,
+            "false_alarm_rate",
+            check_number(
+                self.false_alarm_rate,
+                "false_alarm_rate_per_hour",
+                low=0,
+                low_open=True,
+                high=MAX_FALSE_ALARM_RATE,
+            ),
+        )
+        intervals = tuple(self.intervals)
+        if not 1 <= len(intervals) <= MAX_INTERVALS:
+            raise FieldError("intervals", f"must hold 1 to {MAX_INTERVALS}, got {len(intervals)}")
+        seen: list[float] = []
+        for i, item in enumerate(intervals):
+            if set(item.cusum_threshold) != set(meters):
+                raise FieldError(
+                    f"intervals[{i}].cusum.threshold",
+                    f"must have one value per meter {list(meters)}",
+                )
+            if any(math.isclose(item.capture_interval, c, rel_tol=1e-9) for c in seen):
+                raise FieldError(
+                    f"intervals[{i}].capture_interval",
+                    f"lists {item.capture_interval:g} s a second time",
+                )
+            seen.append(item.capture_interval)
+        object.__setattr__(self, "intervals", intervals)
+        if not isinstance(self.provenance, Mapping):
+            raise FieldError("provenance", f"must be an object, got {self.provenance!r}")
 
     def for_interval(self, capture_interval: float) -> IntervalCalibration:
         """The settings calibrated for ``capture_interval`` (ConfigError if there are none)."""
@@ -163,36 +281,44 @@ class Calibration:
         }
 
     @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> Calibration:
-        """Inverse of :meth:`to_json`; a malformed document raises ConfigError, and so does one
-        written by an earlier version (no localization model: re-run ``burstloc calibrate``)."""
-        found = data.get("format") if isinstance(data, Mapping) else None
+    def from_json(cls, data: Mapping[str, Any], source: str = "configuration") -> Calibration:
+        """Inverse of :meth:`to_json`: every field type- and range-checked; a malformed document
+        raises ConfigError naming ``source`` and the field, and so does one written by an
+        earlier version (no localization model: re-run ``burstloc calibrate``)."""
+        if not isinstance(data, Mapping):
+            Fields(data, source)  # raises: not a JSON object
+        found = data.get("format")
         if found in _EARLIER_FORMATS:
             raise ConfigError(
-                f"configuration {data.get('name')!r} was written by an earlier burstloc (format "
-                f"{found!r}) and holds no localization model; re-run `burstloc calibrate "
-                f"{data.get('network', 'NETWORK.inp')} --out PATH` to write a new one"
+                f"{source}: configuration {data.get('name')!r} was written by an earlier "
+                f"burstloc (format {found!r}) and holds no localization model; re-run "
+                f"`burstloc calibrate {data.get('network', 'NETWORK.inp')} --out PATH` to write "
+                "a new one"
             )
         if found != CALIBRATION_FORMAT:
             raise ConfigError(
-                f"not a burstloc configuration (format {found!r}, want {CALIBRATION_FORMAT!r})"
+                f"{source}: not a burstloc configuration (format {found!r}, want "
+                f"{CALIBRATION_FORMAT!r})"
             )
-        try:
+        fields = Fields(data, source)
+        intervals = []
+        for item in fields.objects("intervals", high=MAX_INTERVALS):
+            intervals.append(IntervalCalibration.from_json(item))
+        model = fields.obj("model")
+        with model.checking():
+            stored_model = LocalizationModel.from_json(model.data)
+        with fields.checking():
             return cls(
-                name=str(data["name"]),
-                network=str(data["network"]),
-                network_hash=str(data["network_hash"]),
-                meters=tuple(data["meters"]),
-                noise_sigma={k: float(v) for k, v in data["noise_sigma"].items()},
-                false_alarm_rate=float(data["false_alarm_rate_per_hour"]),
-                intervals=tuple(IntervalCalibration.from_json(i) for i in data["intervals"]),
-                model=LocalizationModel.from_json(data["model"]),
-                provenance=dict(data.get("provenance", {})),
+                name=fields.get("name"),
+                network=fields.get("network"),
+                network_hash=fields.get("network_hash"),
+                meters=fields.get("meters"),
+                noise_sigma=fields.get("noise_sigma"),
+                false_alarm_rate=fields.get("false_alarm_rate_per_hour"),
+                intervals=tuple(intervals),
+                model=stored_model,
+                provenance=fields.optional_object("provenance"),
             )
-        except ConfigError:
-            raise
-        except (KeyError, TypeError, ValueError, AttributeError) as exc:
-            raise ConfigError(f"malformed configuration: {exc!r}") from exc
 
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the configuration as JSON (atomically); returns the path."""
@@ -207,12 +333,8 @@ class Calibration:
         meters: Sequence[str] | None = None,
     ) -> Calibration:
         """Read a configuration; with ``network`` (and ``meters``) it is also :meth:`check` ed."""
-        try:
-            with open(path) as fh:
-                data = json.load(fh)
-        except (OSError, json.JSONDecodeError) as exc:
-            raise ConfigError(f"cannot read configuration {os.fspath(path)!r}: {exc}") from exc
-        config = cls.from_json(data)
+        data = read_json(path, "configuration")
+        config = cls.from_json(data, f"configuration {os.fspath(path)}")
         if network is not None:
             config.check(network, meters)
         return config

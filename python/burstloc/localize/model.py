@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from burstloc._validate import FieldError, check_names, check_number
 from burstloc.constants import WAVE_SPEED
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.localize.arrival import PipeGeometry
@@ -34,6 +35,15 @@ __all__ = ["MODEL_FORMAT", "LocalizationModel"]
 
 MODEL_FORMAT = "burstloc-localization-model/1"
 """Format tag of a stored localization model."""
+
+#: Limits a model is checked against: meters, candidate pipes, signature sets (positions).
+MAX_METERS = 10_000
+MAX_PIPES = 100_000
+MAX_SIGNATURE_SETS = 64
+#: Pressure waves in water pipes travel at most about 1500 m/s; this leaves room for any unit.
+MAX_WAVE_SPEED = 10_000.0
+#: Pipe lengths and path lengths (m) are at most this.
+MAX_LENGTH = 1e8
 
 
 @dataclass(frozen=True, eq=False)
@@ -59,19 +69,20 @@ class LocalizationModel:
     wave_speed: float = WAVE_SPEED
 
     def __post_init__(self) -> None:
-        meters = tuple(str(m) for m in self.meters)
-        if not meters or len(set(meters)) != len(meters):
-            raise ConfigError(f"a localization model needs distinct meters, got {list(meters)}")
-        if not self.pipes:
-            raise ConfigError("a localization model needs at least one pipe")
-        if not (math.isfinite(self.wave_speed) and self.wave_speed > 0):
-            raise ConfigError(f"wave_speed must be > 0 m/s, got {self.wave_speed}")
+        meters = check_names(self.meters, "meters", high=MAX_METERS)
+        if not 1 <= len(self.pipes) <= MAX_PIPES:
+            raise FieldError("pipes", f"must hold 1 to {MAX_PIPES} pipes, got {len(self.pipes)}")
+        for i, p in enumerate(self.pipes):
+            check_number(p.length, f"pipes[{i}].length", low=0, low_open=True, high=MAX_LENGTH)
+        check_number(self.wave_speed, "wave_speed", low=0, low_open=True, high=MAX_WAVE_SPEED)
+        if len(self.signature_sets) > MAX_SIGNATURE_SETS:
+            raise FieldError("signature_sets", f"must hold at most {MAX_SIGNATURE_SETS} sets")
         distances: dict[str, NDArray[np.float64]] = {}
         for node, row in self.node_distances.items():
             values = np.array(row, dtype=np.float64)
             if values.shape != (len(meters),) or np.any(np.isnan(values)) or np.any(values < 0):
-                raise ConfigError(
-                    f"distances from node {node!r} must be {len(meters)} lengths >= 0 (m)"
+                raise FieldError(
+                    f"node_distances.{node}", f"must be {len(meters)} lengths >= 0 (m) or null"
                 )
             values.setflags(write=False)
             distances[str(node)] = values

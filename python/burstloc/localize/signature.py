@@ -19,7 +19,6 @@ imports neither WNTR nor the simulator.
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from collections.abc import Mapping, Sequence
@@ -30,6 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from burstloc._atomic import write_json
+from burstloc._validate import read_json
 from burstloc.constants import SIGNATURE_DECISION_DELAY
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.localize.evidence import BurstEvidence, RankedPipe, Ranking
@@ -166,10 +166,9 @@ class SignatureSet:
     def load(cls, path: str | os.PathLike[str]) -> SignatureSet:
         """Read a file written by :meth:`save`."""
         try:
-            with open(path) as fh:
-                data = json.load(fh)
-        except (OSError, json.JSONDecodeError) as exc:
-            raise InputError(f"cannot read signature file {path}: {exc}") from exc
+            data = read_json(path, "signature file")
+        except ConfigError as exc:
+            raise InputError(str(exc)) from None
         return cls.from_json(data)
 
 

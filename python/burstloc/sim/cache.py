@@ -4,7 +4,13 @@ An entry's key is the SHA-256 of everything that determines it: a namespace, the
 the bytes of the input files and the versions of burstloc, TSNet, WNTR and NumPy
 (:func:`cache_key`). Entries are ``.npz`` files written atomically (a temporary file in the
 same directory, then ``os.replace``): a killed run never leaves a partial entry, and readers
-never see one. An unreadable entry counts as a miss and is rewritten.
+never see one.
+
+Entries are verified on read: each holds the SHA-256 of its arrays (names, dtypes, shapes and
+bytes, :func:`arrays_sha256`) and only finite floating-point values. An entry that cannot be
+read, whose checksum does not match or that holds a NaN or an infinity is corrupt: it is
+reported on stderr (:func:`drop_corrupt`), deleted, and counts as a miss, so the caller
+recomputes and stores it again.
 
 Location: the ``directory`` argument, else ``$BURSTLOC_CACHE_DIR``, else the user's cache
 directory (``platformdirs.user_cache_dir("burstloc")``, e.g. ``~/.cache/burstloc`` on Linux).
@@ -16,6 +22,7 @@ import functools
 import hashlib
 import json
 import os
+import sys
 import zipfile
 from collections.abc import Iterable, Mapping
 from importlib import metadata
@@ -30,8 +37,10 @@ from burstloc._atomic import write_npz
 __all__ = [
     "ENV_VAR",
     "DiskCache",
+    "arrays_sha256",
     "cache_key",
     "default_cache_dir",
+    "drop_corrupt",
     "file_sha256",
     "package_versions",
 ]
@@ -98,6 +107,32 @@ def cache_key(
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
+def arrays_sha256(arrays: Mapping[str, np.ndarray]) -> str:
+    """The SHA-256 of named arrays: names, dtypes, shapes and bytes, in name order."""
+    digest = hashlib.sha256()
+    for name in sorted(arrays):
+        values = np.ascontiguousarray(arrays[name])
+        header = json.dumps([name, values.dtype.str, list(values.shape)])
+        digest.update(header.encode("utf-8"))
+        digest.update(values.tobytes())
+    return digest.hexdigest()
+
+
+def drop_corrupt(path: str | os.PathLike[str], reason: str) -> None:
+    """Report a corrupt cache entry on stderr and delete it (it is then recomputed)."""
+    print(
+        f"burstloc: warning: cache entry {os.fspath(path)} is corrupt ({reason}); dropped, "
+        "recomputing",
+        file=sys.stderr,
+    )
+    try:
+        Path(path).unlink(missing_ok=True)
+    except OSError as exc:
+        print(
+            f"burstloc: warning: cannot delete {os.fspath(path)}: {exc.strerror}", file=sys.stderr
+        )
+
+
 class DiskCache:
     """Arrays stored under content-addressed keys in a directory.
 
@@ -105,8 +140,10 @@ class DiskCache:
         directory: where entries live; default :func:`default_cache_dir`.
     """
 
-    #: Bumped when the on-disk layout changes.
-    LAYOUT = "v1"
+    #: Bumped when the on-disk layout changes (v2: entries carry a checksum).
+    LAYOUT = "v2"
+    #: The array holding an entry's checksum.
+    CHECKSUM = "__sha256__"
 
     def __init__(self, directory: str | os.PathLike[str] | None = None) -> None:
         base = Path(directory).expanduser() if directory is not None else default_cache_dir()
@@ -120,19 +157,41 @@ class DiskCache:
         return self.directory / self.LAYOUT / key[:2] / f"{key}.npz"
 
     def get(self, key: str) -> dict[str, np.ndarray] | None:
-        """Return the entry's arrays, or ``None`` if absent or unreadable."""
+        """Return the entry's arrays, or ``None`` if absent or corrupt (a corrupt entry is
+        reported on stderr and deleted: module docstring)."""
         path = self.path_for(key)
         try:
             with np.load(path, allow_pickle=False) as data:
-                return {name: data[name] for name in data.files}
+                arrays = {name: data[name] for name in data.files}
         except FileNotFoundError:
             return None
-        except (OSError, ValueError, EOFError, zipfile.BadZipFile):
+        except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+            drop_corrupt(path, f"unreadable: {exc}")
             return None
+        stored = arrays.pop(self.CHECKSUM, None)
+        if stored is None or str(stored[()]) != arrays_sha256(arrays):
+            drop_corrupt(path, "its checksum does not match its arrays")
+            return None
+        for name, array in arrays.items():
+            if array.dtype.kind in "fc" and not np.isfinite(array).all():
+                drop_corrupt(path, f"array {name!r} holds NaN or infinite values")
+                return None
+        return arrays
 
     def put(self, key: str, arrays: Mapping[str, np.ndarray]) -> Path:
-        """Store an entry atomically and return its path."""
-        return write_npz(self.path_for(key), arrays)
+        """Store an entry (with its checksum) atomically and return its path.
+
+        Raises:
+            ValueError: an array named like the checksum, or holding NaN or infinite values.
+        """
+        if self.CHECKSUM in arrays:
+            raise ValueError(f"{self.CHECKSUM!r} is reserved for the entry's checksum")
+        for name, array in arrays.items():
+            values = np.asarray(array)
+            if values.dtype.kind in "fc" and not np.isfinite(values).all():
+                raise ValueError(f"array {name!r} holds NaN or infinite values; not cached")
+        checksum = np.asarray(arrays_sha256(arrays))
+        return write_npz(self.path_for(key), {**arrays, self.CHECKSUM: checksum})
 
     def __contains__(self, key: object) -> bool:
         return isinstance(key, str) and self.path_for(key).is_file()

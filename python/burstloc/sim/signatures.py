@@ -27,7 +27,7 @@ from burstloc.exceptions import ConfigError, InputError, NetworkError
 from burstloc.inp import network_hash
 from burstloc.localize.signature import SIGNATURE_FORMAT, SignatureSet
 from burstloc.network import load_network, split_pipe, steady_state
-from burstloc.sim.cache import cache_key, default_cache_dir
+from burstloc.sim.cache import cache_key, default_cache_dir, drop_corrupt
 
 __all__ = [
     "DEFAULT_BURST_COEFF",
@@ -141,8 +141,9 @@ def cached_signatures(
     if path.exists():
         try:
             full = SignatureSet.load(path)
-        except InputError:
-            full = None  # a damaged cache entry is recomputed
+        except InputError as exc:
+            drop_corrupt(path, str(exc))  # reported, deleted, recomputed
+            full = None
     if full is None:
         full = compute_signatures(
             network, burst_coeff=burst_coeff, position=position, demand_model=demand_model

@@ -22,13 +22,13 @@ from collections.abc import Callable, Iterable
 from concurrent.futures import Future, ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from multiprocessing import get_context
-from typing import Generic, TypeVar
+from typing import Any, Generic, TypeVar
 
 from tqdm.auto import tqdm
 
 from burstloc.exceptions import ConfigError
 
-__all__ = ["ItemFailure", "SweepReport", "sweep"]
+__all__ = ["ItemFailure", "SweepReport", "check_scheduler", "sweep"]
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -167,14 +167,30 @@ def _run_processes(func: Callable[[T], R], todo: list[T], workers: int, done: _D
             done(futures[future], None if exc else future.result(), exc)
 
 
-def _run_dask(func: Callable[[T], R], todo: list[T], scheduler: str, done: _Done) -> None:
+def _connect(scheduler: str) -> Any:
+    """A Dask client of ``scheduler`` (ConfigError when it cannot be reached)."""
     from dask.distributed import Client
-    from dask.distributed import as_completed as dask_completed
 
     try:
-        client = Client(scheduler, timeout=DASK_CONNECT_TIMEOUT, set_as_default=False)
-    except (OSError, TimeoutError, ValueError) as exc:
+        return Client(scheduler, timeout=DASK_CONNECT_TIMEOUT, set_as_default=False)
+    except (OSError, TimeoutError, ValueError, TypeError) as exc:
         raise ConfigError(f"cannot reach the Dask scheduler {scheduler!r}: {exc}") from exc
+
+
+def check_scheduler(scheduler: str) -> None:
+    """Connect to the Dask scheduler at ``scheduler`` and disconnect: a command checks the
+    address before any work, even when nothing will run there (every result cached).
+
+    Raises:
+        ConfigError: the scheduler cannot be reached within :data:`DASK_CONNECT_TIMEOUT` s.
+    """
+    _connect(scheduler).close()
+
+
+def _run_dask(func: Callable[[T], R], todo: list[T], scheduler: str, done: _Done) -> None:
+    from dask.distributed import as_completed as dask_completed
+
+    client = _connect(scheduler)
     try:
         run = uuid.uuid4().hex[:8]
         futures = [

@@ -1,0 +1,259 @@
+"""Checked reading of the JSON documents burstloc reads (configurations, localization models,
+signature sets): one reader, errors that name the file and the field.
+
+* :func:`read_json` reads a file as strict JSON: at most :data:`MAX_JSON_BYTES`, UTF-8, no
+  ``NaN``/``Infinity`` (a :class:`~burstloc.exceptions.ConfigError` naming the file and, for a
+  non-finite number, the field: :func:`find_non_finite`, which the writer uses too).
+* :class:`Fields` walks one JSON object: required fields, nested objects and lists of objects,
+  each error naming the file and the field's path (``intervals[0].cusum.threshold``), and
+  :meth:`Fields.checking` names them in the errors of the checks a constructor runs.
+* :func:`check_number`, :func:`check_count`, :func:`check_names`, :func:`check_string`: the
+  type and range checks themselves (a :class:`FieldError` naming the field), used by the classes
+  that validate at construction, so each range is written once, where the class is.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import math
+import numbers
+import os
+from collections.abc import Iterator, Mapping, Sequence
+from typing import Any
+
+from burstloc.exceptions import ConfigError
+
+__all__ = [
+    "MAX_JSON_BYTES",
+    "FieldError",
+    "Fields",
+    "check_count",
+    "check_names",
+    "check_number",
+    "check_string",
+    "find_non_finite",
+    "read_json",
+]
+
+#: The largest JSON file burstloc reads (bytes): far above any configuration it writes.
+MAX_JSON_BYTES = 256 * 1024 * 1024
+
+
+def read_json(path: str | os.PathLike[str], what: str) -> Any:
+    """Read ``path`` as strict JSON (UTF-8, no NaN or infinity, at most :data:`MAX_JSON_BYTES`).
+
+    Raises:
+        ConfigError: the file cannot be read, is too large, is not UTF-8 or not strict JSON;
+            the message names ``what`` and the file.
+    """
+    where = f"{what} {os.fspath(path)}"
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read(MAX_JSON_BYTES + 1)
+    except OSError as exc:
+        raise ConfigError(f"cannot read {where}: {exc.strerror or exc}") from None
+    if len(data) > MAX_JSON_BYTES:
+        raise ConfigError(f"cannot read {where}: larger than {MAX_JSON_BYTES} bytes")
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"cannot read {where}: not UTF-8 text (byte {exc.start})") from None
+
+    try:
+        document = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise ConfigError(f"cannot read {where}: not JSON: {exc}") from None
+    except (ValueError, RecursionError) as exc:  # e.g. an integer of more than 4300 digits
+        raise ConfigError(f"cannot read {where}: {exc}") from None
+    field, value = find_non_finite(document)
+    if field:
+        raise ConfigError(f"{where}: field {field} is {value} (numbers must be finite)")
+    return document
+
+
+def find_non_finite(document: Any, where: str = "") -> tuple[str, str]:
+    """The path (``a.b[2]``) and JSON spelling (``NaN``, ``Infinity``, ``-Infinity``) of the
+    first non-finite number in a JSON-like document; ``("", "")`` when there is none."""
+    if isinstance(document, float) and not math.isfinite(document):
+        spelling = "NaN" if math.isnan(document) else ("Infinity" if document > 0 else "-Infinity")
+        return where or "(the document)", spelling
+    children: Any = ()
+    if isinstance(document, Mapping):
+        children = ((f"{where}.{k}" if where else str(k), v) for k, v in document.items())
+    elif isinstance(document, (list, tuple)):
+        children = ((f"{where}[{i}]", v) for i, v in enumerate(document))
+    for name, value in children:
+        found = find_non_finite(value, name)
+        if found[0]:
+            return found
+    return "", ""
+
+
+def _kind(value: Any) -> str:
+    names = {dict: "an object", list: "a list", str: "a string", bool: "a boolean"}
+    if value is None:
+        return "null"
+    for cls, name in names.items():
+        if isinstance(value, cls):
+            return name
+    return repr(value)
+
+
+class FieldError(ConfigError):
+    """A :class:`~burstloc.exceptions.ConfigError` about one field: ``field`` (its path inside
+    the object checked) and ``detail`` (what is wrong), so a reader can prefix the file and the
+    path of the object."""
+
+    def __init__(self, field: str, detail: str) -> None:
+        super().__init__(f"{field} {detail}")
+        self.field = field
+        self.detail = detail
+
+
+def check_number(
+    value: Any,
+    field: str,
+    *,
+    low: float = -math.inf,
+    high: float = math.inf,
+    low_open: bool = False,
+) -> float:
+    """``value`` as a finite float within ``[low, high]`` (``(low, high]`` with ``low_open``).
+
+    Raises:
+        FieldError: not a number, not finite, or out of range (naming ``field``).
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise FieldError(field, f"must be a number, got {_kind(value)}")
+    try:
+        number = float(value)
+    except OverflowError:
+        number = math.inf
+    below = number <= low if low_open else number < low
+    if not math.isfinite(number) or below or number > high:
+        opening = "(" if low_open else "["
+        raise FieldError(
+            field, f"must be a finite number in {opening}{low:g}, {high:g}], got {value!r}"
+        )
+    return number
+
+
+def check_count(value: Any, field: str, *, low: int = 1, high: int) -> int:
+    """``value`` as an integer within ``[low, high]`` (an integral float is accepted).
+
+    Raises:
+        FieldError: not an integer or out of range (naming ``field``).
+    """
+    if isinstance(value, float) and value.is_integer():
+        value = int(value)
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise FieldError(field, f"must be an integer, got {_kind(value)}")
+    value = int(value)
+    if not low <= value <= high:
+        raise FieldError(field, f"must be an integer in [{low}, {high}], got {value}")
+    return value
+
+
+def check_names(
+    values: Any, field: str, *, high: int, low: int = 1, max_length: int = 256
+) -> tuple[str, ...]:
+    """``values`` as a tuple of ``low`` to ``high`` distinct non-empty strings.
+
+    Raises:
+        FieldError: not a list of strings, a name listed more than once, too few or too many
+            (naming ``field`` and the name).
+    """
+    if isinstance(values, (str, bytes)) or not isinstance(values, Sequence):
+        raise FieldError(field, f"must be a list of names, got {_kind(values)}")
+    if not low <= len(values) <= high:
+        raise FieldError(field, f"must hold {low} to {high} names, got {len(values)}")
+    seen: set[str] = set()
+    for value in values:
+        if not isinstance(value, str) or not value or len(value) > max_length:
+            raise FieldError(
+                field, f"must hold names of 1 to {max_length} characters, got {_kind(value)}"
+            )
+        if value in seen:
+            raise FieldError(field, f"lists {value!r} more than once")
+        seen.add(value)
+    return tuple(values)
+
+
+def check_string(value: Any, field: str, *, max_length: int = 4096) -> str:
+    """``value`` as a string of at most ``max_length`` characters.
+
+    Raises:
+        FieldError: not such a string (naming ``field``).
+    """
+    if not isinstance(value, str) or len(value) > max_length:
+        raise FieldError(
+            field, f"must be a string of at most {max_length} characters, got {_kind(value)}"
+        )
+    return value
+
+
+class Fields:
+    """One JSON object of a file, read field by field; errors name the file and the field.
+
+    ``source`` names the file; ``path`` is the object's place in the document (``""`` for the
+    document itself, else e.g. ``intervals[0]``).
+
+    Raises:
+        ConfigError: ``data`` is not a JSON object.
+    """
+
+    def __init__(self, data: Any, source: str, path: str = "") -> None:
+        self.source = source
+        self.path = path
+        if not isinstance(data, Mapping):
+            where = f"field {path}" if path else "the document"
+            raise ConfigError(f"{source}: {where} must be a JSON object, got {_kind(data)}")
+        self.data: Mapping[str, Any] = data
+
+    def name(self, key: str | int) -> str:
+        """The path of ``key`` inside this object (``a.b``, ``a[0]``)."""
+        if isinstance(key, int):
+            return f"{self.path}[{key}]"
+        return f"{self.path}.{key}" if self.path else key
+
+    @contextlib.contextmanager
+    def checking(self) -> Iterator[None]:
+        """Name the file and this object's path in a ConfigError raised inside (a
+        :class:`FieldError`'s field is read as relative to this object)."""
+        try:
+            yield
+        except FieldError as exc:
+            raise ConfigError(f"{self.source}: {self.name(exc.field)} {exc.detail}") from None
+        except ConfigError as exc:
+            if str(exc).startswith(f"{self.source}: "):
+                raise
+            where = f"{self.path}: " if self.path else ""
+            raise ConfigError(f"{self.source}: {where}{exc}") from None
+
+    def get(self, key: str) -> Any:
+        """The raw value of a required field."""
+        if key not in self.data:
+            raise ConfigError(f"{self.source}: field {self.name(key)} is missing")
+        return self.data[key]
+
+    def obj(self, key: str) -> Fields:
+        """A nested object."""
+        return Fields(self.get(key), self.source, self.name(key))
+
+    def objects(self, key: str, *, high: int) -> list[Fields]:
+        """A list of 1 to ``high`` objects."""
+        items = self.get(key)
+        if not isinstance(items, list) or not 1 <= len(items) <= high:
+            got = len(items) if isinstance(items, list) else _kind(items)
+            raise ConfigError(
+                f"{self.source}: field {self.name(key)} must be a list of 1 to {high} objects, "
+                f"got {got}"
+            )
+        return [
+            Fields(item, self.source, self.name(key) + f"[{i}]") for i, item in enumerate(items)
+        ]
+
+    def optional_object(self, key: str) -> dict[str, Any]:
+        """An optional nested object as a dictionary (``{}`` when absent)."""
+        return dict(self.obj(key).data) if key in self.data else {}
