@@ -11,6 +11,7 @@ from burstloc.experiments.calibrate import calibrate
 from burstloc.live.loop import Reporter
 from burstloc.live.monitor import BurstMonitor
 from burstloc.live.parse import BadReading
+from burstloc.live.state import StateFile, identity
 from burstloc.localize.config import Calibration
 from burstloc.readings import Reading
 
@@ -127,3 +128,24 @@ def test_a_gap_in_the_whole_feed_is_not_a_clock_offset(tiny, config, feed) -> No
     assert all(h.clock_offset == 0.0 for h in done.health.meter.values())
     assert [d["pipes"][0]["pipe"] for d in done.decisions] == [clean[0]["pipes"][0]["pipe"]]
     assert done.decisions[0]["first_alarm"] == pytest.approx(burst_at + gap)
+
+
+def test_a_state_file_that_cannot_be_written_is_reported_and_the_loop_goes_on(
+    tiny, config, feed, tmp_path: Path
+) -> None:
+    clean = _run(tiny, config, feed).decisions
+    # A file where the state's directory should be: every save fails.
+    blocker = tmp_path / "blocker"
+    blocker.write_text("not a directory")
+    ident = identity(
+        config,
+        capture_interval=0.2,
+        detector="cusum",
+        localizer="fused",
+        meter_model="instantaneous",
+    )
+    done = _run(tiny, config, feed, state=StateFile(blocker / "state.json", ident), save_every=0.0)
+    assert [d["pipes"] for d in done.decisions] == [d["pipes"] for d in clean]
+    assert done.loop.failed_saves > 0
+    assert any("state not saved" in m for m in done.messages)
+    assert blocker.read_text() == "not a directory"

@@ -24,7 +24,7 @@ import time
 from collections.abc import Callable, Iterable
 from typing import Any
 
-from burstloc.exceptions import InputError, StreamError
+from burstloc.exceptions import InputError, OutputError, StreamError
 from burstloc.live.health import Health
 from burstloc.live.monitor import BurstMonitor
 from burstloc.live.parse import BadReading
@@ -95,6 +95,8 @@ class LiveLoop:
         self.health = health
         self.emit = emit
         self.report = report
+        #: State saves that failed (reported; the previous state file is kept).
+        self.failed_saves = 0
         period = monitor.calibration.capture_interval
         self.stream = ReadingStream(
             monitor.meters, 1, timeout=timeout, missing=missing, period=period
@@ -225,10 +227,19 @@ class LiveLoop:
 
     # ------------------------------------------------------------------ state
     def save(self) -> None:
-        """Write the whole state to the state file (if any), atomically."""
+        """Write the whole state to the state file (if any), atomically.
+
+        A write that fails (a full disk, a directory gone) keeps the previous state file, is
+        counted in :attr:`failed_saves` and reported, and the loop goes on: monitoring matters
+        more than its checkpoint.
+        """
         self._last_save = time.monotonic()
         if self.state is not None:
-            self.state.save(self.to_state())
+            try:
+                self.state.save(self.to_state())
+            except (OutputError, OSError) as exc:
+                self.failed_saves += 1
+                self.report("state", f"state not saved ({self.failed_saves} so far): {exc}")
 
     def to_state(self) -> Record:
         """Monitor, stream, health and loop state, JSON-ready."""
