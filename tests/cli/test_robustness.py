@@ -261,34 +261,42 @@ def test_a_corrupt_cache_entry_is_reported_dropped_and_recomputed(
 
 
 #: evaluate in this process with its progress bar on, then ``--json PATH``.
-INTERRUPTIBLE = ["--capture-interval", "1", "--workers", "1", "--json"]
+INTERRUPTIBLE = ["--capture-interval", "1", "--json"]
 
 
+@pytest.mark.parametrize("workers", ["1", "2"])
 def test_ctrl_c_prints_one_line_exits_130_and_keeps_the_output(
-    tiny: Path, good_config: Path, tmp_path: Path
+    tiny: Path, good_config: Path, tmp_path: Path, workers: str
 ) -> None:
     out = tmp_path / "results.json"
     out.write_text('{"kept": true}\n')
     err = tmp_path / "stderr.txt"
+    cache = tmp_path / "cache"
     with err.open("w") as stderr:
+        # Its own process group, interrupted as a terminal does it: SIGINT to the whole group,
+        # the worker processes included.
+        command = [*BURSTLOC, "evaluate", str(tiny), "--pipes", "A", "B", "--workers", workers]
         proc = subprocess.Popen(
-            [*BURSTLOC, "evaluate", str(tiny), "--pipes", "A", "B", *INTERRUPTIBLE, str(out)],
+            [*command, *INTERRUPTIBLE, str(out)],
             stdout=subprocess.DEVNULL,
             stderr=stderr,
-            env=_env(tmp_path / "cache"),
+            env=_env(cache),
+            start_new_session=True,
         )
         deadline = time.monotonic() + 120
         while "simulating" not in err.read_text() and proc.poll() is None:
             assert time.monotonic() < deadline, "the run never started simulating"
             time.sleep(0.05)
-        proc.send_signal(signal.SIGINT)
+        os.killpg(proc.pid, signal.SIGINT)
         status = proc.wait()
     text = err.read_text()
     assert status == 130, text
-    assert "Traceback" not in text and "KeyboardInterrupt" not in text
+    assert "Traceback" not in text and "KeyboardInterrupt" not in text, text
     assert text.rstrip().splitlines()[-1] == "burstloc: interrupted"
     assert out.read_text() == '{"kept": true}\n'
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".results")] == []
+    # The work stops: the simulations under way are not finished (nor cached) after Ctrl-C.
+    assert len(list(cache.rglob("*.npz"))) < 2
 
 
 def test_a_closed_stdout_ends_quietly(tiny: Path, tmp_path: Path) -> None:

@@ -15,13 +15,16 @@ items must be picklable for the parallel modes (a module-level function, plain d
 from __future__ import annotations
 
 import os
+import signal
 import sys
+import threading
 import traceback
 import uuid
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import Future, ProcessPoolExecutor, as_completed
+from contextlib import contextmanager
 from dataclasses import dataclass, field
-from multiprocessing import get_context
+from multiprocessing import active_children, get_context
 from typing import Any, Generic, TypeVar
 
 from tqdm.auto import tqdm
@@ -159,12 +162,65 @@ def sweep(
 _Done = Callable[[int, R | None, BaseException | None], None]
 
 
+def _ignore_interrupts() -> None:
+    """Worker initializer: Ctrl-C (SIGINT to the whole process group) is the parent's to handle.
+
+    A worker starts with SIGINT blocked (see :func:`_run_processes`): one that arrived while it
+    started stays pending, and is discarded here, once ignored.
+    """
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
+@contextmanager
+def _sigint_deferred() -> Iterator[None]:
+    """Hold Ctrl-C back for the ``with`` block, then raise it (``KeyboardInterrupt``) at its end.
+
+    SIGINT is blocked in this thread, so the processes started in the block inherit a blocked
+    SIGINT; and one delivered meanwhile (to another thread) is only recorded, so that no process
+    is left half-started by an interrupt.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield  # signals are the main thread's: nothing to hold back here
+        return
+    interrupted: list[int] = []
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: interrupted.append(signum))
+    blockable = hasattr(signal, "pthread_sigmask")
+    if blockable:
+        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        if blockable:
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+        signal.signal(signal.SIGINT, previous)
+    if interrupted:
+        raise KeyboardInterrupt
+
+
 def _run_processes(func: Callable[[T], R], todo: list[T], workers: int, done: _Done) -> None:
-    with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn")) as pool:
-        futures: dict[Future[R], int] = {pool.submit(func, item): i for i, item in enumerate(todo)}
+    """Run ``todo`` on ``workers`` spawned processes. On Ctrl-C (or any error of the parent) the
+    pending items are cancelled and the workers stopped at once, then the error goes on."""
+    pool = ProcessPoolExecutor(
+        max_workers=workers, mp_context=get_context("spawn"), initializer=_ignore_interrupts
+    )
+    try:
+        # The workers start while the items are submitted: a Ctrl-C then waits for the end of
+        # the submissions here, and for their initializer (which ignores it) in the workers.
+        with _sigint_deferred():
+            futures: dict[Future[R], int] = {
+                pool.submit(func, item): i for i, item in enumerate(todo)
+            }
         for future in as_completed(futures):
             exc = future.exception()
             done(futures[future], None if exc else future.result(), exc)
+    except BaseException:
+        pool.shutdown(wait=False, cancel_futures=True)
+        for child in active_children():
+            child.terminate()
+        raise
+    pool.shutdown()
 
 
 def _connect(scheduler: str) -> Any:
