@@ -62,6 +62,19 @@ def test_garbage_of_every_kind_is_reported_and_skipped(tiny: Path, cfg: Path) ->
     assert last["bad_unknown_meter"] == 3  # the short line, J9 and the binary line
 
 
+def test_an_overlong_line_is_one_bad_reading_and_the_lines_after_it_count(
+    tiny: Path, cfg: Path
+) -> None:
+    feed = b"0.0,J1," + b"9" * 200_000 + b"\n0.0,J1,abc\n" + _steady(50)
+    done = _monitor(tiny, cfg, "--health-every", "1", stdin=feed)
+    assert done.returncode == 0, done.stderr
+    err = done.stderr.decode()
+    assert "line 1: line longer than 65536 bytes" in err, err
+    assert "line 2: value is not a finite number" in err, err
+    health = [json.loads(line) for line in done.stdout.decode().splitlines()]
+    assert health[-1]["meters"]["J1"]["bad"] == 1 and health[-1]["steps"] >= 45
+
+
 def test_bad_options_and_a_foreign_state_stop_it_by_name(
     tiny: Path, cfg: Path, tmp_path: Path
 ) -> None:

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import hashlib
 import json
+import os
+import select
 import signal
 import sys
 from collections.abc import Iterator
@@ -104,7 +106,7 @@ def run(args: argparse.Namespace) -> int:
     from burstloc.live.health import Health, PlausibleRange
     from burstloc.live.loop import LiveLoop, Reporter
     from burstloc.live.monitor import BurstMonitor
-    from burstloc.live.parse import located_lines, parse_payload
+    from burstloc.live.parse import parse_payload
     from burstloc.live.state import StateFile, identity
     from burstloc.localize.config import Calibration
 
@@ -192,7 +194,8 @@ def run(args: argparse.Namespace) -> int:
         if link is not None:
             items: Iterator[Any] = _from_broker(link, flags, parse_payload)
         else:
-            items = _from_file(args.readings, flags, located_lines)
+            idle = min(max(args.save_every, 0.05), 1.0)
+            items = _from_file(args.readings, flags, idle)
         loop.run(items)
     except _StopError:
         loop.finish()
@@ -219,26 +222,76 @@ def _from_broker(link: Any, flags: dict[str, bool], parse: Any) -> Iterator[Any]
             yield where, item
 
 
-def _from_file(path: str, flags: dict[str, bool], parse: Any) -> Iterator[Any]:
+def _from_file(path: str, flags: dict[str, bool], idle: float) -> Iterator[Any]:
+    """``(where, item)`` per CSV line of ``path`` (``-``: stdin) and ``None`` after ``idle``
+    seconds without input (the loop then saves its state and checks silence while it waits)."""
+    from burstloc.live.parse import BadReading, parse_line
+
     try:
         source = sys.stdin.buffer if path == "-" else open(path, "rb")  # noqa: SIM115
     except OSError as exc:
         raise InputError(f"cannot read readings {path!r}: {exc.strerror}") from exc
-
-    def lines() -> Iterator[bytes]:
-        it = iter(source)
-        while not flags["stop"]:
-            flags["waiting"] = True
-            try:
-                line = next(it)
-            except StopIteration:
-                return
-            finally:
-                flags["waiting"] = False
-            yield line
-
+    number = 0
     try:
-        yield from parse(lines())
+        for line in _raw_lines(source, flags, idle):
+            if line is None:
+                yield None
+                continue
+            number += 1
+            where = f"line {number}"
+            if len(line) > _LONGEST:
+                yield where, BadReading(where, f"line longer than {_LONGEST} bytes")
+                continue
+            item = parse_line(line, where)
+            if item is not None:
+                yield where, item
     finally:
         if source is not sys.stdin.buffer:
             source.close()
+
+
+_LONGEST = 1 << 16  # bytes in one CSV line; a longer one is bad input, not a reason to stop
+_CHUNK = 1 << 16
+
+
+def _raw_lines(source: Any, flags: dict[str, bool], idle: float) -> Iterator[bytes | None]:
+    """Lines of ``source`` as bytes, read unbuffered from its file descriptor so that a pipe
+    with nothing to read gives ``None`` every ``idle`` seconds instead of blocking; an
+    overlong line is cut short (the caller reports it) and the rest of it skipped."""
+    fd = source.fileno()
+    pending = b""
+    skipping = False
+    while not flags["stop"]:
+        flags["waiting"] = True
+        try:
+            data = os.read(fd, _CHUNK) if _readable(fd, idle) else None
+        finally:
+            flags["waiting"] = False
+        if data is None:
+            yield None
+            continue
+        if not data:
+            break
+        pending += data
+        *complete, pending = pending.split(b"\n")
+        for line in complete:
+            if skipping:
+                skipping = False
+                continue
+            yield line
+        if len(pending) > _LONGEST and not skipping:
+            yield pending[: _LONGEST + 1]
+            pending, skipping = b"", True
+        elif skipping:
+            pending = b""
+    if pending and not skipping and not flags["stop"]:
+        yield pending
+
+
+def _readable(fd: int, timeout: float) -> bool:
+    """Whether ``fd`` has input (or end of file) within ``timeout`` seconds; a descriptor
+    ``select`` cannot watch (a Windows pipe) counts as readable, and the read then blocks."""
+    try:
+        return bool(select.select([fd], [], [], timeout)[0])
+    except (OSError, ValueError):
+        return True

@@ -26,7 +26,14 @@ from typing import Any
 
 from burstloc.readings import Reading
 
-__all__ = ["BadReading", "located_lines", "parse_csv_line", "parse_lines", "parse_payload"]
+__all__ = [
+    "BadReading",
+    "located_lines",
+    "parse_csv_line",
+    "parse_line",
+    "parse_lines",
+    "parse_payload",
+]
 
 _HEADER = ("timestamp", "meter", "value")
 
@@ -86,18 +93,22 @@ def located_lines(lines: Iterable[str | bytes]) -> Iterator[tuple[str, Reading |
     """:func:`parse_lines` with where each item comes from (``"line 12"``)."""
     for number, line in enumerate(lines, start=1):
         where = f"line {number}"
-        if isinstance(line, bytes):
-            try:
-                line = line.decode("utf-8")
-            except UnicodeDecodeError:
-                yield where, BadReading(where, "not UTF-8 text")
-                continue
-        if "\x00" in line:
-            yield where, BadReading(where, "binary data (NUL byte)")
-            continue
-        item = parse_csv_line(line, where)
+        item = parse_line(line, where)
         if item is not None:
             yield where, item
+
+
+def parse_line(line: str | bytes, where: str) -> Reading | BadReading | None:
+    """One CSV line, text or bytes (``None``: a blank line, a comment or a header); bytes that
+    are not UTF-8, or a NUL byte, make a bad reading."""
+    if isinstance(line, bytes):
+        try:
+            line = line.decode("utf-8")
+        except UnicodeDecodeError:
+            return BadReading(where, "not UTF-8 text")
+    if "\x00" in line:
+        return BadReading(where, "binary data (NUL byte)")
+    return parse_csv_line(line, where)
 
 
 _NUMBER = (int, float)
