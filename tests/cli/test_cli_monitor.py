@@ -75,6 +75,14 @@ def test_an_overlong_line_is_one_bad_reading_and_the_lines_after_it_count(
     assert health[-1]["meters"]["J1"]["bad"] == 1 and health[-1]["steps"] >= 45
 
 
+@pytest.mark.parametrize("feed", [b"", b"timestamp,meter,value\n", b"# only a comment\n\n"])
+def test_an_empty_feed_is_said(tiny: Path, cfg: Path, feed: bytes) -> None:
+    done = _monitor(tiny, cfg, stdin=feed)
+    assert done.returncode == 0, done.stderr
+    assert "the feed held no readings: nothing was monitored" in done.stderr.decode()
+    assert done.stdout == b""
+
+
 def test_bad_options_and_a_foreign_state_stop_it_by_name(
     tiny: Path, cfg: Path, tmp_path: Path
 ) -> None:

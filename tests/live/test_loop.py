@@ -81,9 +81,20 @@ def test_a_silent_meter_is_excluded_and_included_again(tiny, config, feed) -> No
     assert decision["health"]["meters"][gone]["silent"] is True
     assert decision["pipes"], "the other meters still localize"
     text = "\n".join(done.messages)
-    assert f"meter {gone!r} silent ever: excluded from localization" in text
+    assert f"meter {gone!r} never heard from: excluded from localization" in text
     assert f"meter {gone!r} reports again: included" in text
     assert done.health.meter[gone].silent is False
+
+
+def test_a_meter_that_starts_late_within_the_silence_time_is_not_excluded(
+    tiny, config, feed
+) -> None:
+    clean = _run(tiny, config, feed).decisions
+    items = [r for r in feed if r.meter != "J4" or r.timestamp >= feed[0].timestamp + 2.0]
+    done = _run(tiny, config, items, silent_after=5.0)
+    assert not [m for m in done.messages if "J4" in m and "excluded" in m], done.messages
+    assert done.health.meter["J4"].counts["late"] == 0
+    assert [d["pipes"][0]["pipe"] for d in done.decisions] == [clean[0]["pipes"][0]["pipe"]]
 
 
 @pytest.mark.parametrize("offset", [2.0, -3600.0, 3600.0])

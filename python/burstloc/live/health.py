@@ -134,6 +134,8 @@ class Health:
         self._newest = np.full(len(self.meters), np.nan)
         self._index = {m: j for j, m in enumerate(self.meters)}
         self._reference: float | None = None
+        #: The first reference time: a meter never heard from is silent ``silent_after`` s later.
+        self._start: float | None = None
         self._lead: deque[float] = deque(maxlen=8 * CLOCK_WINDOW)
         self._since = 0
         self.bad_unknown = 0  # bad input naming no meter of the configuration
@@ -205,6 +207,8 @@ class Health:
         known = self._newest[~np.isnan(self._newest)]
         if known.size * 2 > len(self.meters):
             self._reference = float(np.median(known))
+            if self._start is None:
+                self._start = self._reference
 
     # ------------------------------------------------------------ bookkeeping
     def late(self, meter: str, count: int = 1) -> None:
@@ -225,7 +229,8 @@ class Health:
         if ref is None:
             return gone, back
         for m, h in self.meter.items():
-            silent = h.last is None or ref - h.last > self.silent_after
+            since = h.last if h.last is not None else self._start
+            silent = since is None or ref - since > self.silent_after
             if silent and not h.silent:
                 gone.append(m)
             elif h.silent and not silent:
@@ -256,6 +261,7 @@ class Health:
         """Everything needed to carry on after a restart (JSON-ready)."""
         return {
             "reference": self._reference,
+            "start": self._start,
             "bad_unknown": self.bad_unknown,
             "meters": {
                 m: {**h.to_json(), "deviations": list(h.deviations)} for m, h in self.meter.items()
@@ -265,6 +271,7 @@ class Health:
     def restore(self, state: Mapping[str, Any]) -> None:
         """Inverse of :meth:`to_state` (same meters)."""
         self._reference = state["reference"]
+        self._start = state.get("start", self._reference)
         self.bad_unknown = int(state["bad_unknown"])
         for m, doc in state["meters"].items():
             h = self.meter[m]

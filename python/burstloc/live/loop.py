@@ -172,8 +172,8 @@ class LiveLoop:
             self.monitor.exclude(m)
             self.stream.excluded.add(m)
             last = self.health.meter[m].last
-            since = "ever" if last is None else f"since t = {last:g} s"
-            self.report("silence", f"meter {m!r} silent {since}: excluded from localization")
+            what = "never heard from" if last is None else f"silent since t = {last:g} s"
+            self.report("silence", f"meter {m!r} {what}: excluded from localization")
         for m in back:
             self.monitor.include(m)
             self.stream.excluded.discard(m)
@@ -205,9 +205,12 @@ class LiveLoop:
         self.finish()
 
     def finish(self) -> None:
-        """End of feed: resolve pending steps, say what was held back, save the state."""
+        """End of feed: resolve pending steps, say what was held back (and that the feed was empty,
+        if it was), save the state."""
         for w in self.stream.flush():
             self._step(Step(float(w.times[-1]), w.values[-1], w.filled[-1]))
+        if self._items == 0:
+            self.report("input", "the feed held no readings: nothing was monitored")
         self.report.close()
         self.save()
 
