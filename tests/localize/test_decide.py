@@ -185,10 +185,19 @@ def test_a_decision_knows_its_first_alarm_and_prints_as_json() -> None:
     assert decision.first_alarm <= decision.time
     assert decision.pipe == decision.ranking[0].pipe == "p01"
     doc = decision.to_json(top=2)
-    assert list(doc) == ["time", "first_alarm", "waited", "pipes"]
+    assert list(doc) == ["time", "first_alarm", "waited", "position", "pipes"]
     assert (doc["time"], doc["first_alarm"], doc["waited"]) == (decision.time, first, False)
+    # the burst is 300 m from m0 along p01; alarms are stamped to 0.05 s = 60 m of travel
+    assert doc["position"]["from"] == "m0"
+    assert abs(doc["position"]["metres"] - 300.0) <= 30.0 + 1.0
+    assert doc["position"]["low"] <= 300.0 <= doc["position"]["high"]
     assert doc["pipes"] == [
         {"pipe": r.pipe, "start": r.start, "end": r.end, "score": r.score}
         for r in decision.ranking.top(2)
     ]
     assert Decision(Ranking([]), 1.0, 0.5).pipe is None
+    fused, _, _ = _decide("fused", 1100.0, MATRIX[1])
+    assert fused.position is not None and fused.position.pipe == fused.pipe == "p12"
+    assert abs(fused.position.metres - 500.0) <= 31.0
+    signature, _, _ = _decide("signature", 300.0, MATRIX[0])
+    assert signature.position is None and signature.to_json()["position"] is None

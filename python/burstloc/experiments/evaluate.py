@@ -31,7 +31,10 @@ configuration (:mod:`burstloc.experiments.calibrate`; computed for the network w
 given: no hand tuning), build the evidence from its alarms at the localizer's decision time
 (:func:`burstloc.localize.decide.rank_alarms`) and rank every pipe; the prediction is the
 best-ranked pipe, and top-1 / top-3 accuracy are reported (for the paper's rules, which name
-one pipe, top-3 equals top-1). ``RunSpec.meter_model`` chooses instantaneous samples (the
+one pipe, top-3 equals top-1). The arrival and fused localizers also give the burst's position on
+the named pipe; its error is the network distance to the simulated burst point
+(:mod:`burstloc.experiments.position`), reported as mean and 90th percentile over every attempt.
+``RunSpec.meter_model`` chooses instantaneous samples (the
 paper's) or interval-averaged readings (:func:`burstloc.sim.capture.capture`).
 """
 
@@ -55,6 +58,13 @@ from burstloc.experiments.harness import (
     rank_attempts,
     readings_at_offset,
 )
+from burstloc.experiments.position import (
+    NetworkDistance,
+    PipePoint,
+    PositionErrors,
+    score_position,
+    true_point,
+)
 from burstloc.experiments.runs import (
     RunSpec,
     phase_offsets,
@@ -63,6 +73,7 @@ from burstloc.experiments.runs import (
 )
 
 if TYPE_CHECKING:
+    from burstloc.localize.arrival import PipePosition
     from burstloc.localize.config import Calibration
     from burstloc.sim.scenario import ScenarioResult
 
@@ -87,6 +98,10 @@ class RunResult:
     truth: dict[str, tuple[str, str]]
     offsets: list[float]
     attempts: dict[str, list[Attempt]]
+    points: dict[str, PipePoint] = field(default_factory=dict)
+    positions: dict[str, list[tuple[float | None, bool | None]]] = field(default_factory=dict)
+    """Per pipe and offset: the position error (m) and whether the interval held the true point
+    (:func:`burstloc.experiments.position.score_position`)."""
 
     def phase_accuracies(self, k: int = 1) -> list[float]:
         """Top-``k`` accuracy (fraction) at each clock offset (``k = 1``: eq. 4)."""
@@ -115,6 +130,10 @@ class RunResult:
         """Every attempt of the run (all pipes, all phases) counted by the harness."""
         return Tally.of(a for p in self.pipes for a in self.attempts[p])
 
+    def position_errors(self) -> PositionErrors:
+        """Position errors (m) over every attempt of the run (all pipes, all phases)."""
+        return PositionErrors.of(o for p in self.pipes for o in self.positions.get(p, []))
+
     def median_time_to_localize(self) -> float | None:
         """Median seconds from burst to decision over every located attempt (all phases)."""
         return self.tally().median_time()
@@ -127,6 +146,8 @@ class RunResult:
         for p in self.pipes:
             a = self.attempts[p][0]
             loc = a.localization
+            at = None if a.decision is None else a.decision.position
+            truth = self.points.get(p)
             pipes.append(
                 {
                     "pipe": p,
@@ -139,6 +160,11 @@ class RunResult:
                     "rule": loc.rule.value if loc else (self.spec.localizer if a.located else None),
                     "trigger_node": loc.trigger_node if loc else None,
                     "phases_correct": sum(x.correct for x in self.attempts[p]),
+                    "position": None if at is None else at.to_json(),
+                    "true_position": None
+                    if truth is None
+                    else {"pipe": p, "from": truth.node, "metres": truth.metres},
+                    "position_error_m": (self.positions.get(p) or [(None, None)])[0][0],
                 }
             )
         run = self.spec.paper_run()
@@ -169,6 +195,7 @@ class RunResult:
             "accuracy_per_phase": acc,
             "phase_offsets_s": list(self.offsets),
             "median_time_to_localize_s": tally.median_time(),
+            "position_error_m": self.position_errors().to_json(),
             "paper": published,
             "pipes": pipes,
         }
@@ -293,8 +320,21 @@ def evaluate(
         intervals = sorted({spec.capture_interval for spec in ranked})
         setup = RankingSetup.build(path, meters, intervals, config)
     attempts = _score(runs, results, chosen, graph, setup, phases, phase_span)
+    distance = NetworkDistance(wn)
+    points = {p: true_point(results[p], wn) for p in chosen}
     out = [
-        RunResult(spec, chosen, truth, phase_offsets(spec, phases, phase_span), attempts[spec])
+        RunResult(
+            spec,
+            chosen,
+            truth,
+            phase_offsets(spec, phases, phase_span),
+            attempts[spec],
+            points,
+            {
+                p: [score_position(distance, points[p], _position(a)) for a in attempts[spec][p]]
+                for p in chosen
+            },
+        )
         for spec in runs
     ]
     return Evaluation(path, out, params, phase_span, warnings, results, graph)
@@ -354,3 +394,8 @@ def _readings_key(spec: RunSpec) -> tuple[Any, ...]:
         spec.mode,
         spec.meter_model,
     )
+
+
+def _position(attempt: Attempt) -> PipePosition | None:
+    """The position a ranking localizer's decision gave, if any."""
+    return None if attempt.decision is None else attempt.decision.position
