@@ -7,7 +7,13 @@ from dataclasses import replace
 from typing import Any
 
 from burstloc._atomic import check_output
-from burstloc.cli._options import add_run_options, cache_of, check_run_options
+from burstloc.cli._options import (
+    add_meters_file_option,
+    add_run_options,
+    cache_of,
+    check_run_options,
+    meters_of,
+)
 from burstloc.constants import DETECTORS, LOCALIZERS, METER_MODELS
 from burstloc.exceptions import ConfigError
 from burstloc.experiments.evaluate import DEFAULT_LOCALIZER
@@ -119,6 +125,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="write PNGs: per run, a map of every burst's true and named pipe, and the meters' "
         "traces with their alarms for the first pipe of --pipes",
     )
+    add_meters_file_option(parser)
     add_run_options(parser)
     parser.set_defaults(handler=run)
     return parser
@@ -147,6 +154,7 @@ def run(args: argparse.Namespace) -> int:
         sigma=args.sigma,
         localization_interval=args.localization_interval,
     )
+    meters = meters_of(args, args.network)
     config = None
     if args.config:
         from burstloc.localize.config import Calibration
@@ -170,6 +178,7 @@ def run(args: argparse.Namespace) -> int:
         scheduler=args.scheduler,
         progress=not args.quiet,
         config=config,
+        meters=meters,
     )
     print(report.format_tables(ev), end="")
     if args.json:

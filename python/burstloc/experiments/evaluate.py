@@ -58,13 +58,7 @@ from burstloc.experiments.harness import (
     rank_attempts,
     readings_at_offset,
 )
-from burstloc.experiments.position import (
-    NetworkDistance,
-    PipePoint,
-    PositionErrors,
-    score_position,
-    true_point,
-)
+from burstloc.experiments.position import PipePoint, PositionErrors, PositionScorer
 from burstloc.experiments.runs import (
     RunSpec,
     phase_offsets,
@@ -73,7 +67,6 @@ from burstloc.experiments.runs import (
 )
 
 if TYPE_CHECKING:
-    from burstloc.localize.arrival import PipePosition
     from burstloc.localize.config import Calibration
     from burstloc.sim.scenario import ScenarioResult
 
@@ -212,6 +205,8 @@ class Evaluation:
     warnings: list[str] = field(default_factory=list)
     results: dict[str, ScenarioResult] = field(default_factory=dict, repr=False)
     graph: Any = field(default=None, repr=False)
+    meters: list[str] = field(default_factory=list)
+    """The junctions the ranking localizers read (empty: only the paper's rules ran)."""
 
     def to_json(self) -> dict[str, Any]:
         """The CLI's JSON document (see tests/evaluate_schema.json)."""
@@ -220,6 +215,7 @@ class Evaluation:
             "scenario": dict(self.scenario),
             "phase_span": self.phase_span,
             "warnings": list(self.warnings),
+            "meters": list(self.meters),
             "runs": [r.to_json() for r in self.runs],
         }
 
@@ -237,11 +233,15 @@ def evaluate(
     scheduler: str | None = None,
     progress: bool = True,
     config: Calibration | None = None,
+    meters: Sequence[str] | None = None,
 ) -> Evaluation:
     """Run the experiment: simulate (cached), stream, localize and score every run.
 
     ``config`` is the calibration the ranking localizers' detector bank uses (runs with
-    ``localizer != "paper"``); without one the network is calibrated here.
+    ``localizer != "paper"``); without one the network is calibrated here. ``meters`` are the
+    junctions that carry meters for the ranking localizers (default: every junction; e.g. a
+    meter file's, :class:`burstloc.sim.placement.MeterSet`); the paper's rules read every
+    junction, as in the paper.
 
     Raises:
         NetworkError: missing or malformed network, unknown pipe.
@@ -316,12 +316,15 @@ def evaluate(
     ranked = [spec for spec in runs if spec.localizer != "paper"]
     setup = None
     if ranked:
-        meters = list(next(iter(results.values())).junctions)
+        junctions = list(next(iter(results.values())).junctions)
+        unknown = [m for m in meters or () if m not in junctions]
+        if unknown:
+            raise NetworkError(f"meter(s) {unknown} are not junctions of {path}")
+        metered = list(meters) if meters else junctions
         intervals = sorted({spec.capture_interval for spec in ranked})
-        setup = RankingSetup.build(path, meters, intervals, config)
+        setup = RankingSetup.build(path, metered, intervals, config)
     attempts = _score(runs, results, chosen, graph, setup, phases, phase_span)
-    distance = NetworkDistance(wn)
-    points = {p: true_point(results[p], wn) for p in chosen}
+    scorer = PositionScorer(wn, {p: results[p] for p in chosen})
     out = [
         RunResult(
             spec,
@@ -329,15 +332,13 @@ def evaluate(
             truth,
             phase_offsets(spec, phases, phase_span),
             attempts[spec],
-            points,
-            {
-                p: [score_position(distance, points[p], _position(a)) for a in attempts[spec][p]]
-                for p in chosen
-            },
+            scorer.points,
+            scorer.score(attempts[spec]),
         )
         for spec in runs
     ]
-    return Evaluation(path, out, params, phase_span, warnings, results, graph)
+    meters_used = [] if setup is None else list(setup.meters)
+    return Evaluation(path, out, params, phase_span, warnings, results, graph, meters_used)
 
 
 def _score(
@@ -370,7 +371,7 @@ def _score(
             for o in offsets:
                 ranked = rank_attempts(
                     results[p],
-                    readings_at_offset(results[p], spec, o),
+                    readings_at_offset(results[p], spec, o, setup.meters),
                     setup,
                     detector=spec.detector.kind,
                     capture_interval=spec.capture_interval,
@@ -394,8 +395,3 @@ def _readings_key(spec: RunSpec) -> tuple[Any, ...]:
         spec.mode,
         spec.meter_model,
     )
-
-
-def _position(attempt: Attempt) -> PipePosition | None:
-    """The position a ranking localizer's decision gave, if any."""
-    return None if attempt.decision is None else attempt.decision.position

@@ -14,7 +14,7 @@ point lay inside the reported interval (counted only when the named pipe is the 
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -27,6 +27,7 @@ from burstloc.sim.prepare import length_graph
 if TYPE_CHECKING:
     from wntr.network import WaterNetworkModel
 
+    from burstloc.experiments.harness import Attempt
     from burstloc.localize.arrival import PipePosition
     from burstloc.sim.scenario import ScenarioResult
 
@@ -34,6 +35,7 @@ __all__ = [
     "NetworkDistance",
     "PipePoint",
     "PositionErrors",
+    "PositionScorer",
     "estimated_point",
     "score_position",
     "true_point",
@@ -100,6 +102,10 @@ class NetworkDistance:
             raise NetworkError(f"node {point.node!r} is not an end of pipe {point.pipe!r}")
         other = end if point.node == start else start
         return [(point.node, point.metres), (other, float(length) - point.metres)]
+
+    def to_node(self, point: PipePoint, node: str) -> float:
+        """Network distance (m) from ``point`` to the node ``node`` (``inf`` without a path)."""
+        return min(to + self._node(end).get(node, math.inf) for end, to in self._legs(point))
 
     def between(self, a: PipePoint, b: PipePoint) -> float:
         """Network distance (m) from ``a`` to ``b`` (``inf`` when no path joins them)."""
@@ -170,3 +176,29 @@ def score_position(
         return error, None
     along = truth.metres if truth.node == position.start else position.length - truth.metres
     return error, bool(position.low - 1e-6 <= along <= position.high + 1e-6)
+
+
+class PositionScorer:
+    """The true burst points of simulated bursts on one network, and the scoring of attempts'
+    positions against them (:func:`score_position`)."""
+
+    def __init__(self, wn: WaterNetworkModel, results: Mapping[str, ScenarioResult]) -> None:
+        self.distance = NetworkDistance(wn)
+        self.points = {p: true_point(r, wn) for p, r in results.items()}
+        """Pipe -> where its burst opened."""
+
+    def score(
+        self, attempts: Mapping[str, Sequence[Attempt]]
+    ) -> dict[str, list[tuple[float | None, bool | None]]]:
+        """Per pipe, ``(error, inside)`` of each attempt (``attempts[pipe][k]``)."""
+        return {
+            p: [
+                score_position(
+                    self.distance,
+                    self.points[p],
+                    None if a.decision is None else a.decision.position,
+                )
+                for a in runs
+            ]
+            for p, runs in attempts.items()
+        }
