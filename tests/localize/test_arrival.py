@@ -166,3 +166,12 @@ def test_position_interval_is_the_whole_pipe_when_meters_are_beyond_one_end() ->
     assert at.metres == pytest.approx(300.0)
     with pytest.raises(InputError, match="not a candidate"):
         loc.position(evidence, "nope")
+
+
+def test_position_tolerance_is_the_quantisation_noise_of_the_rms() -> None:
+    from burstloc.localize.arrival import position_tolerance
+
+    assert position_tolerance(3) == pytest.approx(1 / 6)  # 1 / sqrt(12 x 3)
+    assert position_tolerance(12) < position_tolerance(3)
+    with pytest.raises(InputError, match="at least one alarm"):
+        position_tolerance(0)

@@ -46,10 +46,10 @@ from burstloc.localize.evidence import BurstEvidence, RankedPipe, Ranking
 
 __all__ = [
     "POSITION_STEP",
-    "POSITION_TOLERANCE",
     "ArrivalLocalizer",
     "PipeGeometry",
     "PipePosition",
+    "position_tolerance",
 ]
 
 DEFAULT_POSITIONS = CANDIDATE_POSITIONS
@@ -67,10 +67,16 @@ class PipeGeometry:
     length: float
 
 
-POSITION_TOLERANCE = 0.5
-"""Extra RMS misfit (capture intervals) that a point inside the position interval may have over
-the best point: half a capture interval, the quantisation noise of an alarm start (the unit of
-the fused localizer's arrival log-likelihood, :data:`burstloc.localize.fused.ARRIVAL_SCALE`)."""
+def position_tolerance(alarms: int) -> float:
+    """Extra RMS misfit (capture intervals) a point inside the position interval may have over
+    the best point, with ``alarms`` alarmed meters: the quantisation noise of an RMS over that
+    many alarm starts, ``1 / sqrt(12 alarms)`` (each start is known to one capture interval,
+    uniform noise of standard deviation ``1 / sqrt(12)``; the same noise sets the fused
+    localizer's decisive margin, :func:`burstloc.localize.fused.quantisation_margin`)."""
+    if alarms < 1:
+        raise InputError(f"a position needs at least one alarm, got {alarms}")
+    return 1.0 / math.sqrt(12.0 * alarms)
+
 
 POSITION_STEP = 1.0
 """Spacing (m) of the points tried along the named pipe when estimating the burst position (at
@@ -230,7 +236,7 @@ class ArrivalLocalizer:
         :meth:`misfit`. The estimate is the middle of the best-fitting stretch (the points whose
         misfit equals the smallest one: with alarm starts known to one capture interval ``dt``,
         a stretch about ``wave_speed x dt`` long where meters lie beyond both ends); the interval
-        spans the points within :data:`POSITION_TOLERANCE` capture intervals of the best misfit
+        spans the points within :func:`position_tolerance` capture intervals of the best misfit
         (the whole pipe when the meters cannot tell its points apart).
 
         Raises:
@@ -252,7 +258,8 @@ class ArrivalLocalizer:
                 pipe, geo.start, geo.end, geo.length, geo.length / 2, 0.0, geo.length
             )
         flat = along[rms <= best + 1e-6 * dt]
-        near = along[rms <= best + POSITION_TOLERANCE * dt]
+        alarmed = sum(m in evidence.alarms for m in self.meters)
+        near = along[rms <= best + position_tolerance(alarmed) * dt]
         return PipePosition(
             pipe,
             geo.start,
