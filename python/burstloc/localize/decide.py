@@ -16,8 +16,9 @@ live caller holding the readings so far):
   coarse intervals it answers at the signature's time.
 
 Every answer of the arrival and fused localizers carries the burst's position on the named pipe
-(metres from its flow-direction start node, with an interval) from the arrival fit at the early
-decision time (:meth:`burstloc.localize.arrival.ArrivalLocalizer.position`).
+(metres from its flow-direction start node, with an interval) from the arrival fit at the arrival
+localizer's decision time, whenever the answer comes
+(:meth:`burstloc.localize.arrival.ArrivalLocalizer.position`).
 
 The localizers come as a :class:`RankingLocalizers` (built from a stored
 :class:`burstloc.localize.model.LocalizationModel` by :meth:`RankingLocalizers.from_model`, or any
@@ -220,9 +221,11 @@ def rank_alarms(
         at = _position(chosen if isinstance(chosen, ArrivalLocalizer) else None, early, ranking)
         return Decision(ranking, min(decided, last), first, position=at)
     if not _arrival_first(localizer, calibration, fused):
-        # at the signature's own decision time
+        # at the signature's own decision time; the position from the arrivals at theirs (by
+        # the signature's time every meter's wave has come: none would count as silent)
         ranking = fused.rank(early, signature_ranking=signature_ranking)
-        at = _position(fused.arrival, early, ranking)
+        arrived = evidence(min(first + calibration.arrival_decision_delay, last))
+        at = _position(fused.arrival, arrived, ranking)
         return Decision(ranking, min(decided, last), first, position=at)
     arrivals = fused.arrival.rank(early)
     later = onset + calibration.decision_delay
