@@ -125,6 +125,7 @@ test-python313: setup313 networks/todini6.inp
 bench: setup
 	$(BIN)/python benches/bench_detectors.py
 	$(BIN)/python -m burstloc.river
+	$(BIN)/python benches/bench_position.py
 
 ## bench-rust: criterion on fresh seeded traces, built for this CPU like the extension (in its
 ## own target dir, so the test builds are not invalidated)

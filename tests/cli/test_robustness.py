@@ -92,6 +92,7 @@ def _empty(directory: Path) -> bool:
         ("calibrate", "--out", "is-a-directory"),
         ("study", "--out", "under-a-file"),
         ("simulate", "--out", "under-a-file"),
+        ("place", "--out", "missing-dir"),
     ],
 )
 def test_an_unwritable_output_is_refused_before_any_work(
@@ -113,6 +114,8 @@ def test_an_unwritable_output_is_refused_before_any_work(
         args += ["--factors", "noise_sigma", "--pipes", "A", "--quiet", "--workers", "1"]
     elif command == "calibrate":
         args += ["--capture-interval", "1"]
+    elif command == "place":
+        args += ["--meters", "2", "--method", "coverage"]
     cache = tmp_path / "cache"
     proc = burstloc(*args, option, target, cache=cache)
     refused(proc, f"cannot write {target}: ")

@@ -1,4 +1,4 @@
-"""burstloc.experiments.study: meter placement, scoring through the harness and a tiny end-to-end
+"""burstloc.experiments.study: scoring through the harness and a tiny end-to-end
 study (the grid itself: test_grid.py)."""
 
 from __future__ import annotations
@@ -6,51 +6,13 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 from burstloc.cli import main
 from burstloc.exceptions import ConfigError
 from burstloc.experiments.grid import StudyPoint, StudySettings, study_grid
 from burstloc.experiments.report import write_study_report as write_report
-from burstloc.experiments.study import greedy_meters, run_study
-from burstloc.localize.signature import SignatureSet
-
-
-def _signatures(matrix: list[list[float]]) -> SignatureSet:
-    pipes = tuple(f"P{i}" for i in range(len(matrix)))
-    meters = tuple(f"M{j}" for j in range(len(matrix[0])))
-    return SignatureSet(
-        network_hash="x",
-        meters=meters,
-        pipes=pipes,
-        endpoints={p: ("a", "b") for p in pipes},
-        matrix=np.array(matrix),
-        baseline=np.zeros(len(meters)),
-        params={},
-    )
-
-
-def test_greedy_meters_pick_the_meters_that_tell_pipes_apart() -> None:
-    # M0 sees every burst alike (large but useless alone); M1 and M2 separate the pipes.
-    sig = _signatures([[5.0, 1.0, 0.0], [5.0, 0.0, 1.0], [5.0, 1.0, 1.0]])
-    assert greedy_meters(sig, 1) == ("M0",)  # one meter separates nothing: the strongest
-    two = greedy_meters(sig, 2)
-    assert "M0" in two and len(two) == 2
-    assert greedy_meters(sig, 3) == ("M0", "M1", "M2")
-    # With a meter that alone tells P0 from P1, it comes first.
-    sig2 = _signatures([[1.0, 0.0], [0.0, 1.0]])
-    assert greedy_meters(sig2, 2) == ("M0", "M1")
-    with pytest.raises(ConfigError, match="count"):
-        greedy_meters(sig, 4)
-
-
-def test_greedy_meters_prefer_separation_over_signal_strength() -> None:
-    # M1 carries the largest drops but M2 alone tells P0 from P1; then M0 separates them more
-    # (unit-vector gap 0.32) than M1 would (0.20).
-    sig = _signatures([[3.0, 5.0, 0.0], [3.0, 5.0, 1.0]])
-    assert greedy_meters(sig, 1) == ("M2",)
-    assert greedy_meters(sig, 2) == ("M0", "M2")
+from burstloc.experiments.study import run_study
 
 
 def test_tiny_study_end_to_end(tiny_network: Path, tmp_path: Path) -> None:
@@ -146,3 +108,30 @@ def test_cli_study_and_calibrate_commands(
     assert status == 0
     assert "## Summary (arrival localizer, shewhart)" in (out / "report.md").read_text()
     assert "wrote" in capsys.readouterr().out
+
+
+def test_study_takes_a_meter_file_and_a_placement_method(tiny_network: Path) -> None:
+    from burstloc.sim.placement import place_meters
+
+    meter_set = place_meters(tiny_network, 3, method="arrival")
+    settings = StudySettings(
+        capture_intervals=(0.2,),
+        detectors=("cusum",),
+        localizers=("arrival",),
+        meter_models=("instantaneous",),
+        phases=1,
+        duration=90.0,
+        pipes=("B",),
+        placement="arrival",
+        meter_sets=(meter_set,),
+    )
+    assert settings.meters_for(tiny_network) == meter_set.meters
+    points = study_grid([tiny_network], {"meter_fraction": (1.0, 0.5)})
+    rows, problems = run_study(points, settings, workers=1, progress=False)
+    assert problems == []
+    meters = {r["point"]: r["meters"] for r in rows}
+    name = tiny_network.stem
+    # the meter file at full coverage; the placement method below it
+    assert meters == {f"{name}: default": 3, f"{name}: meter_fraction=0.5": 2}
+    with pytest.raises(ConfigError, match="placement must be one of"):
+        StudySettings(placement="random")

@@ -45,6 +45,11 @@ def test_a_clean_feed_gives_one_decision_that_tells_the_truth(tiny, config, feed
     assert decision["waited"] == (delay > cal.arrival_decision_delay + 0.2 + 1e-9)
     assert decision["health"]["meters"]["J1"]["readings"] > 0
     assert done.health_records and not done.messages
+    # where on C (250 m, burst at its middle): within half a capture step of wave travel
+    where = decision["position"]
+    assert where["pipe"] == PIPE and where["from"] == decision["pipes"][0]["start"]
+    assert abs(where["metres"] - 125.0) <= 0.5 * 0.2 * 1200.0
+    assert where["low"] <= where["metres"] <= where["high"] <= where["length"] == 250.0
 
 
 def test_bad_data_is_reported_and_skipped_and_the_decision_is_unchanged(tiny, config, feed) -> None:

@@ -123,3 +123,55 @@ def test_bad_configuration_is_refused(tiny_network: Path) -> None:
         arrival_localizer(tiny_network, ["R1"])
     with pytest.raises(ConfigError, match="no distances"):
         ArrivalLocalizer([PipeGeometry("x", "a", "b", 10.0)], ["m"], {"a": np.zeros(1)})
+
+
+def _line_evidence(loc: ArrivalLocalizer, where: float, dt: float, t0: float) -> BurstEvidence:
+    """Alarm starts of a burst ``where`` metres along the line m0 - m1 - m2 - m3 (600 m apart)."""
+    spots = {m: 600.0 * i for i, m in enumerate(loc.meters)}
+    return _evidence({m: t0 + abs(where - x) / loc.wave_speed for m, x in spots.items()}, dt)
+
+
+@pytest.mark.parametrize(("where", "dt"), [(700.0, 0.01), (1130.0, 0.01), (900.0, 0.2)])
+def test_position_is_the_burst_point_within_one_capture_step(where: float, dt: float) -> None:
+    from line_network import line_arrival
+
+    loc = line_arrival()
+    evidence = _line_evidence(loc, where, dt, t0=1.0013)
+    pipe = loc.rank(evidence).best
+    assert pipe is not None and pipe.pipe == "p12"
+    at = loc.position(evidence, "p12")
+    assert (at.pipe, at.start, at.end, at.length) == ("p12", "m1", "m2", 600.0)
+    # one capture step of timing error is wave speed x dt metres of travel (both ways: half)
+    step = loc.wave_speed * dt
+    assert abs(at.metres - (where - 600.0)) <= step / 2 + 1.0
+    assert at.low <= where - 600.0 <= at.high
+    assert at.high - at.low <= 2 * step + 2.0
+    record = at.to_json()
+    assert record["from"] == "m1" and record["metres"] == at.metres
+
+
+def test_position_interval_is_the_whole_pipe_when_meters_are_beyond_one_end() -> None:
+    # Meters only at m2 and m3: every point of p01 reaches them through m1, so the arrivals
+    # cannot tell p01's points apart.
+    distances = {
+        "m0": np.array([1200.0, 1800.0]),
+        "m1": np.array([600.0, 1200.0]),
+        "m2": np.array([0.0, 600.0]),
+    }
+    pipes = [PipeGeometry("p01", "m0", "m1", 600.0), PipeGeometry("p12", "m1", "m2", 600.0)]
+    loc = ArrivalLocalizer(pipes, ("m2", "m3"), distances, wave_speed=1200.0)
+    evidence = _evidence({"m2": 1.5, "m3": 2.0}, 0.01)
+    at = loc.position(evidence, "p01")
+    assert (at.low, at.high) == (0.0, 600.0)
+    assert at.metres == pytest.approx(300.0)
+    with pytest.raises(InputError, match="not a candidate"):
+        loc.position(evidence, "nope")
+
+
+def test_position_tolerance_is_the_quantisation_noise_of_the_rms() -> None:
+    from burstloc.localize.arrival import position_tolerance
+
+    assert position_tolerance(3) == pytest.approx(1 / 6)  # 1 / sqrt(12 x 3)
+    assert position_tolerance(12) < position_tolerance(3)
+    with pytest.raises(InputError, match="at least one alarm"):
+        position_tolerance(0)

@@ -185,10 +185,34 @@ def test_a_decision_knows_its_first_alarm_and_prints_as_json() -> None:
     assert decision.first_alarm <= decision.time
     assert decision.pipe == decision.ranking[0].pipe == "p01"
     doc = decision.to_json(top=2)
-    assert list(doc) == ["time", "first_alarm", "waited", "pipes"]
+    assert list(doc) == ["time", "first_alarm", "waited", "position", "pipes"]
     assert (doc["time"], doc["first_alarm"], doc["waited"]) == (decision.time, first, False)
+    # the burst is 300 m from m0 along p01; alarms are stamped to 0.05 s = 60 m of travel
+    assert doc["position"]["from"] == "m0"
+    assert abs(doc["position"]["metres"] - 300.0) <= 30.0 + 1.0
+    assert doc["position"]["low"] <= 300.0 <= doc["position"]["high"]
     assert doc["pipes"] == [
         {"pipe": r.pipe, "start": r.start, "end": r.end, "score": r.score}
         for r in decision.ranking.top(2)
     ]
     assert Decision(Ranking([]), 1.0, 0.5).pipe is None
+    fused, _, _ = _decide("fused", 1100.0, MATRIX[1])
+    assert fused.position is not None and fused.position.pipe == fused.pipe == "p12"
+    assert abs(fused.position.metres - 500.0) <= 31.0
+    signature, _, _ = _decide("signature", 300.0, MATRIX[0])
+    assert signature.position is None and signature.to_json()["position"] is None
+
+
+def test_a_late_fused_answer_takes_its_position_from_the_arrivals_at_their_time() -> None:
+    # With a tiny tau the arrivals weigh nothing at 0.05 s: the fused localizer answers at the
+    # signature's time (60 s). The burst is 100 m along p01: m3's wave comes 1.33 s after the
+    # first alarm, after the arrivals' 1 s window; at 60 s it would count as silent (no wave
+    # before 59.9 s) and no point would fit. The position comes from the arrivals at 1 s.
+    localizers = _localizers(tau=0.01)
+    assert localizers.fused.weights(0.05)[0] < 0.5
+    decision, _, _ = _decide("fused", 100.0, MATRIX[0], localizers)
+    assert decision.time > 50.0 and decision.pipe == "p01"
+    at = decision.position
+    assert at is not None and at.pipe == "p01" and at.start == "m0"
+    assert abs(at.metres - 100.0) <= 31.0
+    assert at.low <= 100.0 <= at.high and at.high - at.low < 300.0

@@ -8,7 +8,13 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from burstloc.sim.cache import DiskCache
 
-__all__ = ["add_run_options", "cache_of", "check_run_options"]
+__all__ = [
+    "add_meters_file_option",
+    "add_run_options",
+    "cache_of",
+    "check_run_options",
+    "meters_of",
+]
 
 
 def add_run_options(parser: argparse.ArgumentParser, *, cache: bool = True) -> None:
@@ -20,6 +26,27 @@ def add_run_options(parser: argparse.ArgumentParser, *, cache: bool = True) -> N
         parser.add_argument("--cache-dir", default=None, metavar="DIR")
         parser.add_argument("--no-cache", action="store_true", help="simulate; store nothing")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def add_meters_file_option(parser: argparse.ArgumentParser) -> None:
+    """``--meters-file FILE``: the meters a ``burstloc place`` meter file names."""
+    parser.add_argument(
+        "--meters-file",
+        default=None,
+        metavar="FILE",
+        help="meters from a meter file written by `burstloc place` (format burstloc-meters/1); "
+        "refused if it was made for another network",
+    )
+
+
+def meters_of(args: argparse.Namespace, network: str) -> tuple[str, ...] | None:
+    """The meters of ``--meters-file`` for ``network`` (ConfigError: another network or a bad
+    file), or ``None`` without the option."""
+    if args.meters_file is None:
+        return None
+    from burstloc.sim.placement import MeterSet
+
+    return MeterSet.load(args.meters_file).check(network)
 
 
 def cache_of(args: argparse.Namespace) -> DiskCache | bool:

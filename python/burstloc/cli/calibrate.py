@@ -6,6 +6,7 @@ import argparse
 from typing import Any
 
 from burstloc._atomic import check_output
+from burstloc.cli._options import add_meters_file_option, meters_of
 from burstloc.constants import CAPTURE_INTERVALS
 
 __all__ = ["add_parser", "run"]
@@ -47,7 +48,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         metavar="R",
         help="target false alarms per meter per hour",
     )
-    parser.add_argument("--meters", nargs="+", default=None, help="metered junctions (default all)")
+    meters = parser.add_mutually_exclusive_group()
+    meters.add_argument("--meters", nargs="+", default=None, help="metered junctions (default all)")
+    add_meters_file_option(meters)  # type: ignore[arg-type]
     parser.add_argument("--name", default=None, help="the configuration's name")
     parser.set_defaults(handler=run)
     return parser
@@ -63,7 +66,7 @@ def run(args: argparse.Namespace) -> int:
         capture_intervals=args.capture_interval,
         noise_sigma=args.noise,
         false_alarm_rate=args.false_alarm_rate,
-        meters=args.meters,
+        meters=args.meters if args.meters_file is None else meters_of(args, args.network),
         name=args.name,
     )
     print(f"wrote {config.save(args.out)}")

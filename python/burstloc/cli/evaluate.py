@@ -3,11 +3,19 @@
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 from typing import Any
 
 from burstloc._atomic import check_output
-from burstloc.cli._options import add_run_options, cache_of, check_run_options
+from burstloc.cli._options import (
+    add_meters_file_option,
+    add_run_options,
+    cache_of,
+    check_run_options,
+    meters_of,
+)
 from burstloc.constants import DETECTORS, LOCALIZERS, METER_MODELS
+from burstloc.exceptions import ConfigError
 from burstloc.experiments.evaluate import DEFAULT_LOCALIZER
 
 __all__ = ["add_parser", "run"]
@@ -91,6 +99,15 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     parser.add_argument("--pipes", nargs="+", default=None, metavar="ID", help="default: all")
     parser.add_argument(
+        "--position",
+        type=float,
+        default=None,
+        metavar="F",
+        help="where each burst opens, as a fraction of its pipe's length from the pipe's INP "
+        "start node, strictly between 0 and 1 (default 0.5, mid-pipe); position errors are "
+        "measured against this point",
+    )
+    parser.add_argument(
         "--phases", type=int, default=5, metavar="N", help="clock phases per burst (default 5)"
     )
     parser.add_argument(
@@ -108,6 +125,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="write PNGs: per run, a map of every burst's true and named pipe, and the meters' "
         "traces with their alarms for the first pipe of --pipes",
     )
+    add_meters_file_option(parser)
     add_run_options(parser)
     parser.set_defaults(handler=run)
     return parser
@@ -115,7 +133,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Handle ``burstloc evaluate``."""
-    from burstloc.experiments import report
+    from burstloc.experiments import paper, report
     from burstloc.experiments.evaluate import evaluate
     from burstloc.experiments.runs import plan_runs
 
@@ -136,23 +154,31 @@ def run(args: argparse.Namespace) -> int:
         sigma=args.sigma,
         localization_interval=args.localization_interval,
     )
+    meters = meters_of(args, args.network)
     config = None
     if args.config:
         from burstloc.localize.config import Calibration
 
         config = Calibration.load(args.config)
     cache = cache_of(args)
+    scenario = paper.SCENARIO
+    if args.position is not None:
+        if not 0.0 < args.position < 1.0:
+            raise ConfigError(f"--position must be strictly between 0 and 1, got {args.position}")
+        scenario = replace(scenario, position=args.position)
     ev = evaluate(
         args.network,
         runs,
         pipes=args.pipes,
         phases=args.phases,
         phase_span=args.phase_span,
+        scenario=scenario,
         cache=cache,
         workers=args.workers,
         scheduler=args.scheduler,
         progress=not args.quiet,
         config=config,
+        meters=meters,
     )
     print(report.format_tables(ev), end="")
     if args.json:

@@ -13,6 +13,8 @@ from burstloc.exceptions import ConfigError
 from burstloc.experiments.grid import DEFAULT_LEVELS, DEFAULT_NETWORKS, StudySettings, study_grid
 from burstloc.experiments.report import write_study_report as write_report
 from burstloc.experiments.study import run_study
+from burstloc.inp import network_hash
+from burstloc.sim.placement import PLACEMENT_METHODS, MeterSet
 
 __all__ = ["add_parser", "run"]
 
@@ -53,6 +55,20 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         default=None,
         help="TSNet time step, s (default: TSNet's, or half the finest capture if coarser)",
     )
+    parser.add_argument(
+        "--placement",
+        choices=PLACEMENT_METHODS,
+        default="coverage",
+        help="how meters are placed for a meter fraction below 1 (default: coverage)",
+    )
+    parser.add_argument(
+        "--meters-file",
+        nargs="+",
+        default=[],
+        metavar="FILE",
+        help="meter files from `burstloc place`: a network with one uses its meters instead of "
+        "every junction at full coverage; a file for none of the networks is refused",
+    )
     add_run_options(parser, cache=False)
     parser.set_defaults(handler=run)
     return parser
@@ -69,6 +85,10 @@ def run(args: argparse.Namespace) -> int:
     unknown = [f for f in args.factors if f not in DEFAULT_LEVELS]
     if unknown:
         raise ConfigError(f"unknown factor(s) {unknown}; known: {list(DEFAULT_LEVELS)}")
+    meter_sets = tuple(MeterSet.load(path) for path in args.meters_file)
+    for path, meter_set in zip(args.meters_file, meter_sets, strict=True):
+        if not any(network_hash(n) == meter_set.network_hash for n in args.networks):
+            raise ConfigError(f"meter file {path} is for none of the study's networks")
     settings = StudySettings(
         capture_intervals=tuple(args.capture_interval),
         detectors=tuple(args.detector),
@@ -77,6 +97,8 @@ def run(args: argparse.Namespace) -> int:
         duration=args.duration,
         pipes=tuple(args.pipes) if args.pipes else None,
         time_step=args.time_step,
+        placement=args.placement,
+        meter_sets=meter_sets,
     )
     points = study_grid(args.networks, {f: DEFAULT_LEVELS[f] for f in args.factors})
     rows, problems = run_study(

@@ -31,7 +31,10 @@ configuration (:mod:`burstloc.experiments.calibrate`; computed for the network w
 given: no hand tuning), build the evidence from its alarms at the localizer's decision time
 (:func:`burstloc.localize.decide.rank_alarms`) and rank every pipe; the prediction is the
 best-ranked pipe, and top-1 / top-3 accuracy are reported (for the paper's rules, which name
-one pipe, top-3 equals top-1). ``RunSpec.meter_model`` chooses instantaneous samples (the
+one pipe, top-3 equals top-1). The arrival and fused localizers also give the burst's position on
+the named pipe; its error is the network distance to the simulated burst point
+(:mod:`burstloc.experiments.position`), reported as mean and 90th percentile over every attempt.
+``RunSpec.meter_model`` chooses instantaneous samples (the
 paper's) or interval-averaged readings (:func:`burstloc.sim.capture.capture`).
 """
 
@@ -55,6 +58,7 @@ from burstloc.experiments.harness import (
     rank_attempts,
     readings_at_offset,
 )
+from burstloc.experiments.position import PipePoint, PositionErrors, PositionScorer
 from burstloc.experiments.runs import (
     RunSpec,
     phase_offsets,
@@ -87,6 +91,10 @@ class RunResult:
     truth: dict[str, tuple[str, str]]
     offsets: list[float]
     attempts: dict[str, list[Attempt]]
+    points: dict[str, PipePoint] = field(default_factory=dict)
+    positions: dict[str, list[tuple[float | None, bool | None]]] = field(default_factory=dict)
+    """Per pipe and offset: the position error (m) and whether the interval held the true point
+    (:func:`burstloc.experiments.position.score_position`)."""
 
     def phase_accuracies(self, k: int = 1) -> list[float]:
         """Top-``k`` accuracy (fraction) at each clock offset (``k = 1``: eq. 4)."""
@@ -115,6 +123,10 @@ class RunResult:
         """Every attempt of the run (all pipes, all phases) counted by the harness."""
         return Tally.of(a for p in self.pipes for a in self.attempts[p])
 
+    def position_errors(self) -> PositionErrors:
+        """Position errors (m) over every attempt of the run (all pipes, all phases)."""
+        return PositionErrors.of(o for p in self.pipes for o in self.positions.get(p, []))
+
     def median_time_to_localize(self) -> float | None:
         """Median seconds from burst to decision over every located attempt (all phases)."""
         return self.tally().median_time()
@@ -127,6 +139,8 @@ class RunResult:
         for p in self.pipes:
             a = self.attempts[p][0]
             loc = a.localization
+            at = None if a.decision is None else a.decision.position
+            truth = self.points.get(p)
             pipes.append(
                 {
                     "pipe": p,
@@ -139,6 +153,11 @@ class RunResult:
                     "rule": loc.rule.value if loc else (self.spec.localizer if a.located else None),
                     "trigger_node": loc.trigger_node if loc else None,
                     "phases_correct": sum(x.correct for x in self.attempts[p]),
+                    "position": None if at is None else at.to_json(),
+                    "true_position": None
+                    if truth is None
+                    else {"pipe": p, "from": truth.node, "metres": truth.metres},
+                    "position_error_m": (self.positions.get(p) or [(None, None)])[0][0],
                 }
             )
         run = self.spec.paper_run()
@@ -169,6 +188,7 @@ class RunResult:
             "accuracy_per_phase": acc,
             "phase_offsets_s": list(self.offsets),
             "median_time_to_localize_s": tally.median_time(),
+            "position_error_m": self.position_errors().to_json(),
             "paper": published,
             "pipes": pipes,
         }
@@ -185,6 +205,8 @@ class Evaluation:
     warnings: list[str] = field(default_factory=list)
     results: dict[str, ScenarioResult] = field(default_factory=dict, repr=False)
     graph: Any = field(default=None, repr=False)
+    meters: list[str] = field(default_factory=list)
+    """The junctions the ranking localizers read (empty: only the paper's rules ran)."""
 
     def to_json(self) -> dict[str, Any]:
         """The CLI's JSON document (see tests/evaluate_schema.json)."""
@@ -193,6 +215,7 @@ class Evaluation:
             "scenario": dict(self.scenario),
             "phase_span": self.phase_span,
             "warnings": list(self.warnings),
+            "meters": list(self.meters),
             "runs": [r.to_json() for r in self.runs],
         }
 
@@ -210,11 +233,15 @@ def evaluate(
     scheduler: str | None = None,
     progress: bool = True,
     config: Calibration | None = None,
+    meters: Sequence[str] | None = None,
 ) -> Evaluation:
     """Run the experiment: simulate (cached), stream, localize and score every run.
 
     ``config`` is the calibration the ranking localizers' detector bank uses (runs with
-    ``localizer != "paper"``); without one the network is calibrated here.
+    ``localizer != "paper"``); without one the network is calibrated here. ``meters`` are the
+    junctions that carry meters for the ranking localizers (default: every junction; e.g. a
+    meter file's, :class:`burstloc.sim.placement.MeterSet`); the paper's rules read every
+    junction, as in the paper.
 
     Raises:
         NetworkError: missing or malformed network, unknown pipe.
@@ -289,15 +316,29 @@ def evaluate(
     ranked = [spec for spec in runs if spec.localizer != "paper"]
     setup = None
     if ranked:
-        meters = list(next(iter(results.values())).junctions)
+        junctions = list(next(iter(results.values())).junctions)
+        unknown = [m for m in meters or () if m not in junctions]
+        if unknown:
+            raise NetworkError(f"meter(s) {unknown} are not junctions of {path}")
+        metered = list(meters) if meters else junctions
         intervals = sorted({spec.capture_interval for spec in ranked})
-        setup = RankingSetup.build(path, meters, intervals, config)
+        setup = RankingSetup.build(path, metered, intervals, config)
     attempts = _score(runs, results, chosen, graph, setup, phases, phase_span)
+    scorer = PositionScorer(wn, {p: results[p] for p in chosen})
     out = [
-        RunResult(spec, chosen, truth, phase_offsets(spec, phases, phase_span), attempts[spec])
+        RunResult(
+            spec,
+            chosen,
+            truth,
+            phase_offsets(spec, phases, phase_span),
+            attempts[spec],
+            scorer.points,
+            scorer.score(attempts[spec]),
+        )
         for spec in runs
     ]
-    return Evaluation(path, out, params, phase_span, warnings, results, graph)
+    meters_used = [] if setup is None else list(setup.meters)
+    return Evaluation(path, out, params, phase_span, warnings, results, graph, meters_used)
 
 
 def _score(
@@ -330,7 +371,7 @@ def _score(
             for o in offsets:
                 ranked = rank_attempts(
                     results[p],
-                    readings_at_offset(results[p], spec, o),
+                    readings_at_offset(results[p], spec, o, setup.meters),
                     setup,
                     detector=spec.detector.kind,
                     capture_interval=spec.capture_interval,

@@ -21,6 +21,8 @@ from burstloc.constants import (
     SCENARIO_DURATION,
 )
 from burstloc.exceptions import ConfigError, NetworkError
+from burstloc.inp import network_hash
+from burstloc.sim.placement import PLACEMENT_METHODS, MeterSet
 
 if TYPE_CHECKING:
     from burstloc.localize.evidence import MeterModel
@@ -57,7 +59,7 @@ class Factors:
     Attributes:
         noise_sigma: additive Gaussian noise per reading, m.
         meter_fraction: fraction of junctions with meters, in (0, 1] (placed by
-            :func:`greedy_meters`).
+            :func:`burstloc.sim.placement.place_meters`, ``StudySettings.placement``).
         position: burst position along the pipe, fraction of its length.
         burst_coeff: the burst's emitter coefficient (TSNet's ``final_burst_coeff``).
         friction: TSNet's friction model (:data:`burstloc.sim.scenario.FRICTION_MODELS`).
@@ -111,6 +113,10 @@ class StudySettings:
         time_step: TSNet's requested time step, s (``None``: the rule of
             :func:`study_time_step`, TSNet's own step unless it is coarser than the finest
             capture interval).
+        placement: how meters are placed for a meter fraction below 1, one of
+            :data:`burstloc.sim.placement.PLACEMENT_METHODS` (default ``"coverage"``).
+        meter_sets: meter files (:class:`burstloc.sim.placement.MeterSet`); a network with one
+            uses its meters instead of every junction at full coverage.
     """
 
     capture_intervals: tuple[float, ...] = CAPTURE_INTERVALS
@@ -123,8 +129,22 @@ class StudySettings:
     pipes: tuple[str, ...] | None = None
     seed: int = 0
     time_step: float | None = None
+    placement: str = "coverage"
+    meter_sets: tuple[MeterSet, ...] = ()
+
+    def meters_for(self, network: str | os.PathLike[str]) -> tuple[str, ...] | None:
+        """The meters of ``network``'s meter file among :attr:`meter_sets`, or ``None``."""
+        fingerprint = network_hash(network)
+        for meter_set in self.meter_sets:
+            if meter_set.network_hash == fingerprint:
+                return meter_set.meters
+        return None
 
     def __post_init__(self) -> None:
+        if self.placement not in PLACEMENT_METHODS:
+            raise ConfigError(
+                f"placement must be one of {PLACEMENT_METHODS}, got {self.placement!r}"
+            )
         for name, values, allowed in (
             ("detectors", self.detectors, DETECTORS),
             ("localizers", self.localizers, RANKING_LOCALIZERS),

@@ -156,8 +156,13 @@ def capture_readings(
     return times, values
 
 
-def readings_at_offset(result: ScenarioResult, spec: RunSpec, offset: float) -> Readings:
-    """The readings of one run at a clock offset (s): every junction, on
+def readings_at_offset(
+    result: ScenarioResult,
+    spec: RunSpec,
+    offset: float,
+    meters: Sequence[str] | None = None,
+) -> Readings:
+    """The readings of one run at a clock offset (s): ``meters`` (default every junction), on
     :meth:`Clock.at_offset` with ``2 x interval`` readings of warm-up.
 
     The capture clock ticks at ``t0 - offset - 2 x interval x capture_interval + k x
@@ -166,7 +171,7 @@ def readings_at_offset(result: ScenarioResult, spec: RunSpec, offset: float) -> 
     ``t0`` on sample the simulation (sample-and-hold).
     """
     clock = Clock.at_offset(spec.capture_interval, offset, 2 * spec.localization_interval)
-    return capture_readings(result, clock, spec.meter_model)
+    return capture_readings(result, clock, spec.meter_model, meters=meters)
 
 
 @dataclass(frozen=True)

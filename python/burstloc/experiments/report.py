@@ -28,6 +28,7 @@ from burstloc import _atomic as atomic
 from burstloc.constants import CAPTURE_INTERVALS
 from burstloc.experiments import paper
 from burstloc.experiments.evaluate import Evaluation, RunResult
+from burstloc.experiments.position import PositionErrors
 
 if TYPE_CHECKING:
     from burstloc.experiments.grid import StudySettings
@@ -54,6 +55,9 @@ CSV_FIELDS: tuple[str, ...] = (
     "trigger_node",
     "phases_correct",
     "phases",
+    "position_m",
+    "position_from",
+    "position_error_m",
 )
 
 _TABLE_NAMES = {"cusum": ("III", "CUSUM"), "shewhart": ("IV", "Shewhart")}
@@ -149,7 +153,8 @@ def format_tables(ev: Evaluation) -> str:
         f"Table V: accuracy (eq. 4) at phase 0, and mean [min-max] over "
         f"{len(ev.runs[0].offsets)} phase(s) spread over one "
         f"{'capture interval' if ev.phase_span == 'capture' else 'localization window'}; "
-        "paper = Table V; time = median time to localize"
+        "paper = Table V; time = median time to localize; position error = network distance "
+        "from the true burst point to the named position, over every attempt"
     )
     header = [
         "detector",
@@ -162,6 +167,7 @@ def format_tables(ev: Evaluation) -> str:
         "median time",
         "localizer",
         "top-1 / top-3",
+        "position error mean / p90",
     ]
     rows = []
     for kind, mode, runs in _groups(ev):
@@ -192,12 +198,20 @@ def format_tables(ev: Evaluation) -> str:
                     "-" if ttl is None else f"{ttl:.2f} s",
                     f"{r.spec.localizer} ({r.spec.meter_model})",
                     f"{_pct(tally.top1_fraction)} / {_pct(tally.top3_fraction)}",
+                    _metres(r.position_errors()),
                 ]
             )
     out += _render(rows, header)
     for w in ev.warnings:
         out.append(f"warning: {w}")
     return "\n".join(out).lstrip("\n") + "\n"
+
+
+def _metres(errors: PositionErrors) -> str:
+    """``mean / p90 m`` of a run's position errors, or ``-`` without any."""
+    if errors.mean is None or errors.p90 is None:
+        return "-"
+    return f"{errors.mean:.0f} / {errors.p90:.0f} m"
 
 
 def write_json(ev: Evaluation, path: str | os.PathLike[str]) -> Path:
@@ -212,6 +226,7 @@ def _csv_rows(ev: Evaluation) -> list[dict[str, Any]]:
         for p in r.pipes:
             a = r.attempts[p][0]
             loc = a.localization
+            at = None if a.decision is None else a.decision.position
             rows.append(
                 {
                     "detector": r.spec.detector.kind,
@@ -232,9 +247,16 @@ def _csv_rows(ev: Evaluation) -> list[dict[str, Any]]:
                     "trigger_node": loc.trigger_node if loc else "",
                     "phases_correct": sum(x.correct for x in r.attempts[p]),
                     "phases": len(r.offsets),
+                    "position_m": "" if at is None else at.metres,
+                    "position_from": "" if at is None else at.start,
+                    "position_error_m": _blank(r.positions.get(p, [(None, None)])[0][0]),
                 }
             )
     return rows
+
+
+def _blank(value: float | None) -> float | str:
+    return "" if value is None else value
 
 
 def write_csv(ev: Evaluation, path: str | os.PathLike[str]) -> Path:

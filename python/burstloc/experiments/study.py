@@ -20,11 +20,11 @@ same executor, one task per point, and through the same harness as ``burstloc ev
 ``report.md``, ``results.json`` and PNG plots (top-1 accuracy vs capture interval per detector
 and localizer).
 
-Meter placement for a fraction ``f < 1`` (:func:`greedy_meters`): greedy coverage of the burst
-signatures. Starting from no meter, add the junction that most increases the smallest distance
-between any two pipes' unit-normalised signatures restricted to the chosen meters (ties: the
-larger total signature); so every added meter separates the pair of pipes that is hardest to
-tell apart so far. Deterministic, computed from the network model alone.
+Meter placement for a fraction ``f < 1``: the greedy coverage of the burst signatures
+(:func:`burstloc.sim.placement.coverage_meters`), or the settings' placement method
+(``StudySettings.placement``). A meter file (``StudySettings.meters``, ``burstloc study
+--meters-file``) replaces every junction as the meters of its network's points at full
+coverage.
 
 History: every captured stream is preceded by 2N + 1 readings of the initial steady state
 (N = the calibrated localization interval), as a live meter's would be (TSNet starts from that
@@ -40,9 +40,6 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from burstloc.exceptions import ConfigError
 from burstloc.experiments.calibrate import DEFAULT_NOISE_SIGMA, calibrate
 from burstloc.experiments.grid import (
     StudyPoint,
@@ -52,45 +49,9 @@ from burstloc.experiments.grid import (
 from burstloc.experiments.harness import Clock, RankingSetup, Tally, capture_readings, rank_attempts
 
 __all__ = [
-    "greedy_meters",
     "run_study",
     "score_point",
 ]
-
-
-def greedy_meters(signatures: Any, count: int) -> tuple[str, ...]:
-    """Choose ``count`` meters by greedy coverage of burst signatures (see the module doc).
-
-    Args:
-        signatures: a :class:`burstloc.localize.signature.SignatureSet` over the candidate
-        junctions.
-        count: how many meters, 1..number of candidates.
-
-    Returns:
-        The chosen junctions, in the signature set's meter order.
-
-    Raises:
-        ConfigError: ``count`` out of range.
-    """
-    meters = list(signatures.meters)
-    if not (isinstance(count, int) and 1 <= count <= len(meters)):
-        raise ConfigError(f"count must be between 1 and {len(meters)}, got {count!r}")
-    matrix = np.abs(np.asarray(signatures.matrix, dtype=np.float64))
-    strength = matrix.sum(axis=0)
-    chosen: list[int] = []
-    pairs = np.triu_indices(matrix.shape[0], k=1)
-    for _ in range(count):
-        keys = []
-        for j in range(len(meters)):
-            if j in chosen:
-                continue
-            sub = matrix[:, [*chosen, j]]
-            norm = np.linalg.norm(sub, axis=1, keepdims=True)
-            unit = np.divide(sub, norm, out=np.zeros_like(sub), where=norm > 0)
-            gaps = np.linalg.norm(unit[pairs[0]] - unit[pairs[1]], axis=1)
-            keys.append((float(gaps.min()) if gaps.size else 0.0, float(strength[j]), -j))
-        chosen.append(-max(keys)[2])
-    return tuple(meters[j] for j in sorted(chosen))
 
 
 def score_point(task: tuple[StudyPoint, StudySettings]) -> list[dict[str, Any]]:
@@ -110,19 +71,22 @@ def score_point(task: tuple[StudyPoint, StudySettings]) -> list[dict[str, Any]]:
     from burstloc.localize.fused import FusedLocalizer
     from burstloc.localize.signature import SignatureLocalizer
     from burstloc.network import load_network
+    from burstloc.sim.placement import place_meters
     from burstloc.sim.prepare import arrival_localizer
     from burstloc.sim.sensors import SensorModel
-    from burstloc.sim.signatures import cached_signature_sets, cached_signatures
+    from burstloc.sim.signatures import cached_signature_sets
     from burstloc.sim.tsnet import simulate_burst
 
     point, settings = task
     f = point.factors
     results = [simulate_burst(s) for s in point_scenarios(point, settings)]
     junctions = list(results[0].junctions)
-    all_signatures = cached_signatures(point.network, junctions)
     signature_sets = cached_signature_sets(point.network, junctions)
     count = max(1, round(f.meter_fraction * len(junctions)))
-    meters = list(greedy_meters(all_signatures, count)) if count < len(junctions) else junctions
+    if count < len(junctions):
+        meters = list(place_meters(point.network, count, method=settings.placement).meters)
+    else:
+        meters = list(settings.meters_for(point.network) or junctions)
     arrival = arrival_localizer(load_network(point.network), meters)
     signature = SignatureLocalizer([s.for_meters(meters) for s in signature_sets])
     config = calibrate(

@@ -18,6 +18,12 @@ is the mean absolute alarm amplitude at the pipe's two end nodes relative to the
 amplitude: amplitudes only break (near) ties, e.g. at coarse capture intervals where many pipes
 fit the arrival pattern equally well.
 
+Position along the named pipe (:meth:`ArrivalLocalizer.position`): the same fit on points every
+metre along that pipe gives the burst's distance from the pipe's start node (flow direction) with
+an interval. One capture interval of timing error is ``wave_speed x dt`` metres of wave travel
+(240 m at 0.2 s and 1200 m/s), so at best the interval is that long; where every meter lies beyond
+one end of the pipe the arrivals cannot tell its points apart and the interval is the whole pipe.
+
 The geometry (flow-direction end nodes and length of every pipe, shortest path lengths from the
 pipes' end nodes to the meters) is computed offline (:func:`burstloc.sim.prepare.arrival_geometry`)
 and stored with the calibrated configuration (:class:`burstloc.localize.model.LocalizationModel`);
@@ -29,6 +35,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -37,7 +44,13 @@ from burstloc.constants import CANDIDATE_POSITIONS, WAVE_SPEED
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.localize.evidence import BurstEvidence, RankedPipe, Ranking
 
-__all__ = ["ArrivalLocalizer", "PipeGeometry"]
+__all__ = [
+    "POSITION_STEP",
+    "ArrivalLocalizer",
+    "PipeGeometry",
+    "PipePosition",
+    "position_tolerance",
+]
 
 DEFAULT_POSITIONS = CANDIDATE_POSITIONS
 """Candidate burst positions along each pipe
@@ -52,6 +65,48 @@ class PipeGeometry:
     start: str
     end: str
     length: float
+
+
+def position_tolerance(alarms: int) -> float:
+    """Extra RMS misfit (capture intervals) a point inside the position interval may have over
+    the best point, with ``alarms`` alarmed meters: the quantisation noise of an RMS over that
+    many alarm starts, ``1 / sqrt(12 alarms)`` (each start is known to one capture interval,
+    uniform noise of standard deviation ``1 / sqrt(12)``; the same noise sets the fused
+    localizer's decisive margin, :func:`burstloc.localize.fused.quantisation_margin`)."""
+    if alarms < 1:
+        raise InputError(f"a position needs at least one alarm, got {alarms}")
+    return 1.0 / math.sqrt(12.0 * alarms)
+
+
+POSITION_STEP = 1.0
+"""Spacing (m) of the points tried along the named pipe when estimating the burst position (at
+least 50 and at most 2,000 points per pipe)."""
+
+
+@dataclass(frozen=True)
+class PipePosition:
+    """Where on a pipe the burst is: ``metres`` from its ``start`` node (the flow-direction start
+    node, as in the ranking), within ``[low, high]``; ``length`` is the pipe's length (m)."""
+
+    pipe: str
+    start: str
+    end: str
+    length: float
+    metres: float
+    low: float
+    high: float
+
+    def to_json(self) -> dict[str, Any]:
+        """JSON-ready record: ``pipe``, ``from`` (the start node), ``metres``, ``low``,
+        ``high``, ``length``."""
+        return {
+            "pipe": self.pipe,
+            "from": self.start,
+            "metres": self.metres,
+            "low": self.low,
+            "high": self.high,
+            "length": self.length,
+        }
 
 
 class ArrivalLocalizer:
@@ -100,6 +155,7 @@ class ArrivalLocalizer:
         d_start = np.array([node_distances[p.start] for p in self.pipes], dtype=np.float64)
         d_end = np.array([node_distances[p.end] for p in self.pipes], dtype=np.float64)
         length = np.array([p.length for p in self.pipes], dtype=np.float64)
+        self._ends = list(zip(d_start, d_end, strict=True))
         along = pos[None, :, None] * length[:, None, None]
         self._dist = np.minimum(
             along + d_start[:, None, :], (length[:, None, None] - along) + d_end[:, None, :]
@@ -121,12 +177,17 @@ class ArrivalLocalizer:
         candidate whose wave would have arrived earlier pays the difference. Needs at least
         one alarm among the meters.
         """
+        return np.asarray(self._rms(self._dist, evidence).min(axis=1), dtype=np.float64)
+
+    def _rms(self, dist: NDArray[np.float64], evidence: BurstEvidence) -> NDArray[np.float64]:
+        """RMS misfit (s) of candidate points whose path lengths to the meters are ``dist``
+        (shape ``(pipes, points, meters)``), shape ``(pipes, points)`` (see :meth:`misfit`)."""
         alarmed = [j for j, m in enumerate(self.meters) if m in evidence.alarms]
         if not alarmed:
             raise InputError("no meter of the arrival model has alarmed: nothing to localize")
         dt = evidence.capture_interval
         tau = np.array([evidence.alarms[self.meters[j]].start for j in alarmed])
-        lo_parts = [tau[None, None, :] - self._dist[:, :, alarmed] / self.wave_speed]
+        lo_parts = [tau[None, None, :] - dist[:, :, alarmed] / self.wave_speed]
         hi_parts = [lo_parts[0] + dt]
         if self.silence:
             reading = set(evidence.meters)
@@ -135,7 +196,7 @@ class ArrivalLocalizer:
             ]
             if silent:
                 bound = evidence.decision_time - 2 * dt
-                lo_parts.append(bound - self._dist[:, :, silent] / self.wave_speed)
+                lo_parts.append(bound - dist[:, :, silent] / self.wave_speed)
                 hi_parts.append(np.full_like(lo_parts[-1], np.inf))
         lo = np.concatenate(lo_parts, axis=2)  # t0 values that put each arrival in its window
         hi = np.concatenate(hi_parts, axis=2)
@@ -166,7 +227,48 @@ class ArrivalLocalizer:
         count = np.maximum(finite.sum(axis=2), 1)
         rms = np.sqrt(np.sum(gap**2, axis=2) / count)
         rms = np.where(first.any(axis=2), rms, np.inf)
-        return np.asarray(rms.min(axis=1), dtype=np.float64)
+        return np.asarray(rms, dtype=np.float64)
+
+    def position(self, evidence: BurstEvidence, pipe: str) -> PipePosition:
+        """Where on ``pipe`` the burst is, from the arrival fit (module docstring).
+
+        Points every :data:`POSITION_STEP` metres along the pipe, ends included, are fitted as in
+        :meth:`misfit`. The estimate is the middle of the best-fitting stretch (the points whose
+        misfit equals the smallest one: with alarm starts known to one capture interval ``dt``,
+        a stretch about ``wave_speed x dt`` long where meters lie beyond both ends); the interval
+        spans the points within :func:`position_tolerance` capture intervals of the best misfit
+        (the whole pipe when the meters cannot tell its points apart).
+
+        Raises:
+            InputError: ``pipe`` is not a candidate, or no meter of the model has alarmed.
+        """
+        index = {p.pipe: i for i, p in enumerate(self.pipes)}
+        if pipe not in index:
+            raise InputError(f"pipe {pipe!r} is not a candidate of the arrival localizer")
+        geo = self.pipes[index[pipe]]
+        count = int(np.clip(math.ceil(geo.length / POSITION_STEP), 49, 1999)) + 1
+        along = np.linspace(0.0, geo.length, count)
+        d_start, d_end = self._ends[index[pipe]]
+        dist = np.minimum(along[:, None] + d_start, (geo.length - along)[:, None] + d_end)
+        rms = self._rms(dist[None], evidence)[0]
+        best = float(rms.min())
+        dt = evidence.capture_interval
+        if not math.isfinite(best):
+            return PipePosition(
+                pipe, geo.start, geo.end, geo.length, geo.length / 2, 0.0, geo.length
+            )
+        flat = along[rms <= best + 1e-6 * dt]
+        alarmed = sum(m in evidence.alarms for m in self.meters)
+        near = along[rms <= best + position_tolerance(alarmed) * dt]
+        return PipePosition(
+            pipe,
+            geo.start,
+            geo.end,
+            geo.length,
+            float(0.5 * (flat.min() + flat.max())),
+            float(near.min()),
+            float(near.max()),
+        )
 
     def amplitude_term(self, evidence: BurstEvidence) -> NDArray[np.float64]:
         """Per pipe, the mean absolute alarm amplitude at its end nodes over the largest one."""

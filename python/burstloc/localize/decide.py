@@ -15,6 +15,11 @@ live caller holding the readings so far):
   equally well in time) it waits for the signature's decision time and answers with both. At
   coarse intervals it answers at the signature's time.
 
+Every answer of the arrival and fused localizers carries the burst's position on the named pipe
+(metres from its flow-direction start node, with an interval) from the arrival fit at the arrival
+localizer's decision time, whenever the answer comes
+(:meth:`burstloc.localize.arrival.ArrivalLocalizer.position`).
+
 The localizers come as a :class:`RankingLocalizers` (built from a stored
 :class:`burstloc.localize.model.LocalizationModel` by :meth:`RankingLocalizers.from_model`, or any
 mapping of names to :class:`burstloc.localize.evidence.Localizer`); every answer is a
@@ -31,7 +36,7 @@ import numpy as np
 
 from burstloc.constants import RANKING_LOCALIZERS, MeterModel
 from burstloc.exceptions import ConfigError, InputError
-from burstloc.localize.arrival import ArrivalLocalizer
+from burstloc.localize.arrival import ArrivalLocalizer, PipePosition
 from burstloc.localize.evidence import BurstEvidence, Localizer, Ranking, evidence_from_alarms
 from burstloc.localize.fused import FusedLocalizer
 from burstloc.localize.signature import SignatureLocalizer
@@ -46,13 +51,16 @@ __all__ = ["Decision", "RankingLocalizers", "decision_time", "fused_of", "rank_a
 @dataclass(frozen=True)
 class Decision:
     """A ranking localizer's answer: the ranking, the reading time it was given at, the reading
-    time of the first alarm, and whether the fused localizer waited for the signature (its
-    arrivals were not decisive)."""
+    time of the first alarm, whether the fused localizer waited for the signature (its
+    arrivals were not decisive), and where on the best pipe the burst is (from the arrival fit,
+    :meth:`burstloc.localize.arrival.ArrivalLocalizer.position`; ``None`` for the signature
+    localizer)."""
 
     ranking: Ranking
     time: float
     first_alarm: float
     waited: bool = False
+    position: PipePosition | None = None
 
     @property
     def pipe(self) -> str | None:
@@ -61,11 +69,13 @@ class Decision:
         return None if best is None else best.pipe
 
     def to_json(self, top: int = 3) -> dict[str, Any]:
-        """JSON-ready summary: time, first alarm, waited, and the ``top`` best pipes."""
+        """JSON-ready summary: time, first alarm, waited, the ``top`` best pipes and the
+        position on the best one (``None`` when the localizer gives none)."""
         return {
             "time": self.time,
             "first_alarm": self.first_alarm,
             "waited": self.waited,
+            "position": None if self.position is None else self.position.to_json(),
             "pipes": [
                 {"pipe": r.pipe, "start": r.start, "end": r.end, "score": r.score}
                 for r in self.ranking.top(top)
@@ -207,16 +217,38 @@ def rank_alarms(
     first, onset = _first_and_onset(alarms, times)
     early = evidence(decided)
     if fused is None or localizer != "fused":
-        return Decision(chosen.rank(early), min(decided, last), first)
+        ranking = chosen.rank(early)
+        at = _position(chosen if isinstance(chosen, ArrivalLocalizer) else None, early, ranking)
+        return Decision(ranking, min(decided, last), first, position=at)
     if not _arrival_first(localizer, calibration, fused):
-        # at the signature's own decision time
+        # at the signature's own decision time; the position from the arrivals at theirs (by
+        # the signature's time every meter's wave has come: none would count as silent)
         ranking = fused.rank(early, signature_ranking=signature_ranking)
-        return Decision(ranking, min(decided, last), first)
+        arrived = evidence(min(first + calibration.arrival_decision_delay, last))
+        at = _position(fused.arrival, arrived, ranking)
+        return Decision(ranking, min(decided, last), first, position=at)
     arrivals = fused.arrival.rank(early)
     later = onset + calibration.decision_delay
     if fused.decisive(arrivals) or later <= decided:
-        return Decision(fused.rank(early, arrival_ranking=arrivals), min(decided, last), first)
+        ranking = fused.rank(early, arrival_ranking=arrivals)
+        at = _position(fused.arrival, early, ranking)
+        return Decision(ranking, min(decided, last), first, position=at)
     ranking = fused.rank(
         evidence(later), arrival_ranking=arrivals, signature_ranking=signature_ranking
     )
-    return Decision(ranking, min(later, last), first, waited=True)
+    at = _position(fused.arrival, early, ranking)
+    return Decision(ranking, min(later, last), first, waited=True, position=at)
+
+
+def _position(
+    arrival: ArrivalLocalizer | None, evidence: BurstEvidence, ranking: Ranking
+) -> PipePosition | None:
+    """The burst's position on ``ranking``'s best pipe from the arrival fit of ``evidence``
+    (``None`` without an arrival localizer, a best pipe, or an alarm it knows)."""
+    best = ranking.best
+    if arrival is None or best is None:
+        return None
+    try:
+        return arrival.position(evidence, best.pipe)
+    except InputError:
+        return None

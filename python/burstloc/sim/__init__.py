@@ -12,5 +12,7 @@ Nothing on the live path imports this package (it pulls in TSNet and WNTR).
 * :mod:`~burstloc.sim.prepare`: the localization model the ranking localizers are built from
   (pipe flow directions and lengths, path lengths to the meters, signatures), prepared offline
   for ``burstloc calibrate`` to store;
+* :mod:`~burstloc.sim.placement`: meter placement (signature coverage or arrival-time
+  separation) and the meter file;
 * :mod:`~burstloc.sim.sweep`: many scenarios on local processes or a Dask cluster.
 """

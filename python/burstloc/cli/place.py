@@ -1,0 +1,103 @@
+"""``burstloc place``: choose the junctions that carry meters; write a meter file."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from burstloc._atomic import check_output
+from burstloc.cli._options import add_run_options, check_run_options
+from burstloc.constants import WAVE_SPEED
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Register ``burstloc place``."""
+    from burstloc.sim.placement import PLACEMENT_METHODS
+
+    parser = subparsers.add_parser(
+        "place",
+        help="place K meters on a network's junctions; write a meter file",
+        description="Choose K junctions for pressure meters from the network model alone (no "
+        "burst is simulated). 'arrival' (default): greedy separation of the wave arrival-time "
+        "patterns of bursts on different pipes, for the arrival and fused localizers; "
+        "'coverage': greedy separation of the steady-state burst signatures. The meter file "
+        "(JSON, format burstloc-meters/1) is accepted by `evaluate`, `calibrate` and `study` "
+        "with --meters-file.",
+    )
+    parser.add_argument("network", metavar="NETWORK.inp", help="EPANET INP file")
+    parser.add_argument("--meters", type=int, required=True, metavar="K", help="how many meters")
+    parser.add_argument(
+        "--method", choices=PLACEMENT_METHODS, default="arrival", help="default: arrival"
+    )
+    parser.add_argument(
+        "--capture-interval",
+        type=float,
+        default=0.2,
+        metavar="S",
+        help="arrival: the capture interval the meters will report at (default 0.2 s); arrival "
+        "times closer than that count as alike",
+    )
+    parser.add_argument(
+        "--wave-speed", type=float, default=WAVE_SPEED, metavar="A", help="arrival: m/s"
+    )
+    parser.add_argument("--out", default=None, metavar="FILE", help="write the meter file")
+    parser.add_argument(
+        "--compare",
+        action="store_true",
+        help="also place K meters by every method and evaluate each placement (every pipe "
+        "bursts, simulated once and cached; calibrated; arrival and fused localizers at "
+        "--capture-interval): top-1 / top-3 and position errors side by side",
+    )
+    parser.add_argument(
+        "--position",
+        type=float,
+        default=0.5,
+        metavar="F",
+        help="--compare: where each burst opens along its pipe (fraction, default 0.5)",
+    )
+    parser.add_argument(
+        "--phases", type=int, default=5, metavar="N", help="--compare: clock phases per burst"
+    )
+    add_run_options(parser, cache=False)
+    parser.set_defaults(handler=run)
+    return parser
+
+
+def run(args: argparse.Namespace) -> int:
+    """Handle ``burstloc place``: print the meters; write the file with ``--out``."""
+    from burstloc.sim.placement import place_meters
+
+    if args.out:
+        check_output(args.out)
+    if args.compare:
+        check_run_options(args)
+    placed = place_meters(
+        args.network,
+        args.meters,
+        method=args.method,
+        wave_speed=args.wave_speed,
+        resolution=args.capture_interval,
+    )
+    print(
+        f"{len(placed.meters)} of {placed.junctions} junctions ({placed.method}): "
+        + " ".join(placed.meters)
+    )
+    if args.out:
+        print(f"wrote {placed.save(args.out)}")
+    if args.compare:
+        from burstloc.experiments.placements import compare_placements, format_comparison
+
+        rows = compare_placements(
+            args.network,
+            args.meters,
+            capture_interval=args.capture_interval,
+            phases=args.phases,
+            position=args.position,
+            workers=args.workers,
+            scheduler=args.scheduler,
+            progress=not args.quiet,
+        )
+        print(format_comparison(rows), end="")
+    return 0

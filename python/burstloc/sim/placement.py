@@ -1,0 +1,291 @@
+"""Meter placement: which junctions should carry pressure meters, and the meter file.
+
+Two methods, both deterministic and computed from the network model alone (no burst is
+simulated), both greedy: starting from no meter, add one junction at a time.
+
+* ``coverage`` (:func:`coverage_meters`): separation of the steady-state burst signatures. Add
+  the junction that most increases the smallest distance between any two pipes' unit-normalised
+  signatures (:mod:`burstloc.sim.signatures`) restricted to the chosen meters (ties: the larger
+  total signature); every added meter separates the pair of pipes hardest to tell apart so far.
+  It serves the signature localizer, which reads the lasting drop.
+* ``arrival`` (:func:`arrival_meters`): separation of wave arrival-time patterns. A burst at a
+  point ``x`` reaches meter ``j`` after ``d(x, j) / a`` (path length along the pipes over the wave
+  speed); the burst time is unknown, so two points ``x`` and ``y`` look alike to the meters ``S``
+  when the differences ``d(x, j) / a - d(y, j) / a`` are nearly the same for every ``j`` in
+  ``S``: their *separation* is the RMS of those differences about their mean. Two pipes are as
+  separated as their closest pair of candidate points (:data:`ARRIVAL_POINTS` along each);
+  the method adds the junction that most increases ``sum over pipe pairs of min(separation,
+  resolution)``, a count of pipe pairs told apart within the capture interval ``resolution``
+  (default 0.2 s), saturating so that no single pair dominates. One meter separates nothing (the
+  burst time is free): the first is the junction whose travel times to the candidate points
+  spread most, a peripheral one. It serves the arrival and fused localizers, which answer from
+  arrival times at fine capture intervals.
+
+:func:`place_meters` runs either on a network file and returns a :class:`MeterSet`, which saves
+as the documented JSON meter file (:data:`METERS_FORMAT`, read by ``burstloc evaluate``,
+``calibrate`` and ``study`` with ``--meters-file``)::
+
+    {
+      "format": "burstloc-meters/1",
+      "network": "networks/paper15.inp",      # informative
+      "network_hash": "sha256:...",           # the INP file's SHA-256: checked on use
+      "method": "arrival",                    # or "coverage", or "manual"
+      "meters": ["2", "7", "11", "14"],       # junction IDs, in the network's order
+      "junctions": 15                         # junctions the network has
+    }
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from burstloc._atomic import write_json
+from burstloc._validate import Fields, check_count, check_names, check_string, read_json
+from burstloc.constants import WAVE_SPEED
+from burstloc.exceptions import ConfigError
+from burstloc.inp import network_hash
+from burstloc.localize.arrival import PipeGeometry
+
+__all__ = [
+    "ARRIVAL_POINTS",
+    "METERS_FORMAT",
+    "PLACEMENT_METHODS",
+    "MeterSet",
+    "arrival_meters",
+    "coverage_meters",
+    "place_meters",
+]
+
+METERS_FORMAT = "burstloc-meters/1"
+"""Format tag of a meter file."""
+
+PLACEMENT_METHODS: tuple[str, ...] = ("coverage", "arrival")
+"""The placement methods of :func:`place_meters`."""
+
+ARRIVAL_POINTS: tuple[float, ...] = (0.1, 0.5, 0.9)
+"""Candidate burst points along each pipe (fractions) the ``arrival`` method separates."""
+
+#: Limit on the junctions of a meter file (the localization model's).
+MAX_METERS = 10_000
+
+
+def _check_count(count: Any, available: int) -> int:
+    if isinstance(count, bool) or not isinstance(count, int) or not 1 <= count <= available:
+        raise ConfigError(f"the meter count must be between 1 and {available}, got {count!r}")
+    return count
+
+
+def coverage_meters(signatures: Any, count: int) -> tuple[str, ...]:
+    """Choose ``count`` meters by greedy coverage of burst signatures (module docstring).
+
+    Args:
+        signatures: a :class:`burstloc.localize.signature.SignatureSet` over the candidate
+            junctions.
+        count: how many meters, 1..number of candidates.
+
+    Returns:
+        The chosen junctions, in the signature set's meter order.
+
+    Raises:
+        ConfigError: ``count`` out of range.
+    """
+    meters = list(signatures.meters)
+    _check_count(count, len(meters))
+    matrix = np.abs(np.asarray(signatures.matrix, dtype=np.float64))
+    strength = matrix.sum(axis=0)
+    chosen: list[int] = []
+    pairs = np.triu_indices(matrix.shape[0], k=1)
+    for _ in range(count):
+        keys = []
+        for j in range(len(meters)):
+            if j in chosen:
+                continue
+            sub = matrix[:, [*chosen, j]]
+            norm = np.linalg.norm(sub, axis=1, keepdims=True)
+            unit = np.divide(sub, norm, out=np.zeros_like(sub), where=norm > 0)
+            gaps = np.linalg.norm(unit[pairs[0]] - unit[pairs[1]], axis=1)
+            keys.append((float(gaps.min()) if gaps.size else 0.0, float(strength[j]), -j))
+        chosen.append(-max(keys)[2])
+    return tuple(meters[j] for j in sorted(chosen))
+
+
+def arrival_meters(
+    pipes: Sequence[PipeGeometry],
+    junctions: Sequence[str],
+    node_distances: dict[str, NDArray[np.float64]],
+    count: int,
+    *,
+    wave_speed: float = WAVE_SPEED,
+    resolution: float = 0.2,
+) -> tuple[str, ...]:
+    """Choose ``count`` of ``junctions`` by greedy separation of arrival patterns (module
+    docstring).
+
+    ``node_distances[n][j]`` is the path length (m) from pipe end node ``n`` to
+    ``junctions[j]`` (:func:`burstloc.sim.prepare.arrival_geometry` over every junction).
+
+    Returns:
+        The chosen junctions, in ``junctions`` order.
+
+    Raises:
+        ConfigError: ``count`` out of range, or a bad wave speed or resolution.
+    """
+    _check_count(count, len(junctions))
+    if not (math.isfinite(wave_speed) and wave_speed > 0):
+        raise ConfigError(f"wave_speed must be > 0 m/s, got {wave_speed}")
+    if not (math.isfinite(resolution) and resolution > 0):
+        raise ConfigError(f"resolution must be > 0 s, got {resolution}")
+    frac = np.array(ARRIVAL_POINTS)
+    length = np.array([p.length for p in pipes])[:, None, None]
+    d_start = np.array([node_distances[p.start] for p in pipes])[:, None, :]
+    d_end = np.array([node_distances[p.end] for p in pipes])[:, None, :]
+    along = frac[None, :, None] * length
+    travel = np.minimum(along + d_start, length - along + d_end) / wave_speed
+    n_pipes, n_points = len(pipes), frac.size
+    travel = travel.reshape(n_pipes * n_points, len(junctions))
+    travel = np.where(np.isfinite(travel), travel, np.nanmax(travel[np.isfinite(travel)]) * 10)
+    owner = np.repeat(np.arange(n_pipes), n_points)
+    other_pipe = owner[:, None] != owner[None, :]
+    upper = np.triu(np.ones((n_pipes, n_pipes), dtype=bool), k=1)
+    sum1 = np.zeros((owner.size, owner.size))
+    sum2 = np.zeros_like(sum1)
+
+    def objective(s1: NDArray[np.float64], s2: NDArray[np.float64], k: int) -> float:
+        spread = np.sqrt(np.maximum(s2 / k - (s1 / k) ** 2, 0.0))
+        spread = np.where(other_pipe, spread, np.inf)
+        per_pair = spread.reshape(n_pipes, n_points, n_pipes, n_points).min(axis=(1, 3))
+        return float(np.minimum(per_pair[upper], resolution).sum())
+
+    spread_of = travel.std(axis=0)
+    chosen = [int(np.argmax(spread_of))]  # peripheral: one meter separates nothing alone
+    diff = travel[:, chosen[0]][:, None] - travel[:, chosen[0]][None, :]
+    sum1 += diff
+    sum2 += diff**2
+    while len(chosen) < count:
+        best: tuple[float, float, int] | None = None
+        for j in range(len(junctions)):
+            if j in chosen:
+                continue
+            diff = travel[:, j][:, None] - travel[:, j][None, :]
+            key = (objective(sum1 + diff, sum2 + diff**2, len(chosen) + 1), spread_of[j], -j)
+            if best is None or key > best:
+                best = key
+        assert best is not None
+        j = -best[2]
+        diff = travel[:, j][:, None] - travel[:, j][None, :]
+        sum1 += diff
+        sum2 += diff**2
+        chosen.append(j)
+    return tuple(junctions[j] for j in sorted(chosen))
+
+
+@dataclass(frozen=True)
+class MeterSet:
+    """Meters chosen for one network: the junction IDs, how they were chosen, and the network's
+    fingerprint (:data:`METERS_FORMAT`).
+
+    Raises:
+        ConfigError: a bad field (named).
+    """
+
+    network: str
+    network_hash: str
+    method: str
+    meters: tuple[str, ...]
+    junctions: int
+
+    def __post_init__(self) -> None:
+        check_string(self.network, "network")
+        check_string(self.network_hash, "network_hash", max_length=128)
+        if self.method not in (*PLACEMENT_METHODS, "manual"):
+            raise ConfigError(
+                f"method must be one of {[*PLACEMENT_METHODS, 'manual']}, got {self.method!r}"
+            )
+        object.__setattr__(self, "meters", check_names(self.meters, "meters", high=MAX_METERS))
+        check_count(self.junctions, "junctions", high=MAX_METERS)
+
+    def check(self, network: str | os.PathLike[str]) -> tuple[str, ...]:
+        """The meters, once the file is known to be for ``network`` (ConfigError otherwise)."""
+        found = network_hash(network)
+        if found != self.network_hash:
+            raise ConfigError(
+                f"the meter file was made for network {self.network} ({self.network_hash}), "
+                f"not for {os.fspath(network)} ({found}); run `burstloc place` for it"
+            )
+        return self.meters
+
+    def to_json(self) -> dict[str, Any]:
+        """The meter file's document."""
+        return {
+            "format": METERS_FORMAT,
+            "network": self.network,
+            "network_hash": self.network_hash,
+            "method": self.method,
+            "meters": list(self.meters),
+            "junctions": self.junctions,
+        }
+
+    def save(self, path: str | os.PathLike[str]) -> Path:
+        """Write the meter file (atomically)."""
+        return write_json(path, self.to_json())
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str]) -> MeterSet:
+        """Read a meter file; every field is checked (ConfigError naming the file and field)."""
+        source = f"meter file {os.fspath(path)}"
+        fields = Fields(read_json(path, "meter file"), source)
+        if fields.data.get("format") != METERS_FORMAT:
+            raise ConfigError(
+                f"{source}: not a burstloc meter file (format {fields.data.get('format')!r}, "
+                f"want {METERS_FORMAT!r}); write one with `burstloc place`"
+            )
+        with fields.checking():
+            return cls(
+                network=fields.get("network"),
+                network_hash=fields.get("network_hash"),
+                method=fields.get("method"),
+                meters=fields.get("meters"),
+                junctions=fields.get("junctions"),
+            )
+
+
+def place_meters(
+    network: str | os.PathLike[str],
+    count: int,
+    *,
+    method: str = "arrival",
+    wave_speed: float = WAVE_SPEED,
+    resolution: float = 0.2,
+) -> MeterSet:
+    """Place ``count`` meters on the junctions of the INP file ``network`` by ``method``
+    (module docstring); ``resolution`` (s) is the ``arrival`` method's capture interval.
+
+    Raises:
+        NetworkError: missing or malformed network.
+        ConfigError: unknown method, ``count`` out of range.
+    """
+    from burstloc.network import load_network
+    from burstloc.sim.prepare import arrival_geometry
+    from burstloc.sim.signatures import cached_signatures
+
+    if method not in PLACEMENT_METHODS:
+        raise ConfigError(f"unknown placement method {method!r}; use one of {PLACEMENT_METHODS}")
+    wn = load_network(network)
+    junctions = list(wn.junction_name_list)
+    _check_count(count, len(junctions))
+    if method == "coverage":
+        meters = coverage_meters(cached_signatures(network, junctions), count)
+    else:
+        pipes, distances = arrival_geometry(wn, junctions)
+        meters = arrival_meters(
+            pipes, junctions, distances, count, wave_speed=wave_speed, resolution=resolution
+        )
+    return MeterSet(os.fspath(network), network_hash(network), method, meters, len(junctions))

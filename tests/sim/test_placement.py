@@ -1,0 +1,137 @@
+"""burstloc.sim.placement: the coverage and arrival placements, the meter file, place_meters on
+the tiny network."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from burstloc.exceptions import ConfigError
+from burstloc.localize.arrival import PipeGeometry
+from burstloc.localize.signature import SignatureSet
+from burstloc.sim.placement import (
+    METERS_FORMAT,
+    MeterSet,
+    arrival_meters,
+    coverage_meters,
+    place_meters,
+)
+from conftest import write_tiny
+
+
+def _signatures(matrix: list[list[float]]) -> SignatureSet:
+    pipes = tuple(f"P{i}" for i in range(len(matrix)))
+    meters = tuple(f"M{j}" for j in range(len(matrix[0])))
+    return SignatureSet(
+        network_hash="x",
+        meters=meters,
+        pipes=pipes,
+        endpoints={p: ("a", "b") for p in pipes},
+        matrix=np.array(matrix),
+        baseline=np.zeros(len(meters)),
+        params={},
+    )
+
+
+def test_coverage_meters_pick_the_meters_that_tell_pipes_apart() -> None:
+    # M0 sees every burst alike (large but useless alone); M1 and M2 separate the pipes.
+    sig = _signatures([[5.0, 1.0, 0.0], [5.0, 0.0, 1.0], [5.0, 1.0, 1.0]])
+    assert coverage_meters(sig, 1) == ("M0",)  # one meter separates nothing: the strongest
+    two = coverage_meters(sig, 2)
+    assert "M0" in two and len(two) == 2
+    assert coverage_meters(sig, 3) == ("M0", "M1", "M2")
+    # With a meter that alone tells P0 from P1, it comes first.
+    sig2 = _signatures([[1.0, 0.0], [0.0, 1.0]])
+    assert coverage_meters(sig2, 2) == ("M0", "M1")
+    with pytest.raises(ConfigError, match="meter count"):
+        coverage_meters(sig, 4)
+
+
+def test_coverage_meters_prefer_separation_over_signal_strength() -> None:
+    # M1 carries the largest drops but M2 alone tells P0 from P1; then M0 separates them more
+    # (unit-vector gap 0.32) than M1 would (0.20).
+    sig = _signatures([[3.0, 5.0, 0.0], [3.0, 5.0, 1.0]])
+    assert coverage_meters(sig, 1) == ("M2",)
+    assert coverage_meters(sig, 2) == ("M0", "M2")
+
+
+def _line(nodes: int, spacing: float = 500.0) -> tuple[list[PipeGeometry], list[str], dict]:
+    """A line n0 - n1 - ... with every node a candidate junction."""
+    names = [f"n{i}" for i in range(nodes)]
+    pipes = [PipeGeometry(f"p{i}", names[i], names[i + 1], spacing) for i in range(nodes - 1)]
+    distances = {
+        a: np.array([spacing * abs(i - j) for j in range(nodes)], dtype=np.float64)
+        for i, a in enumerate(names)
+    }
+    return pipes, names, distances
+
+
+def test_arrival_placement_puts_two_meters_at_the_ends_of_a_line() -> None:
+    # With meters at both ends the difference of arrival times changes along the whole line, so
+    # every pair of pipes is told apart; any inner meter leaves the pipes beyond it alike.
+    pipes, names, distances = _line(5)
+    assert arrival_meters(pipes, names, distances, 2) == ("n0", "n4")
+    # one meter separates nothing (the burst time is free): a peripheral junction
+    assert arrival_meters(pipes, names, distances, 1) == ("n0",)
+    three = arrival_meters(pipes, names, distances, 3)
+    assert {"n0", "n4"} <= set(three) and len(three) == 3
+    with pytest.raises(ConfigError, match="meter count"):
+        arrival_meters(pipes, names, distances, 6)
+    with pytest.raises(ConfigError, match="resolution"):
+        arrival_meters(pipes, names, distances, 2, resolution=0.0)
+
+
+def test_arrival_placement_covers_both_branches_of_a_tee() -> None:
+    # A tee: c is the centre; arms to a, b and d. Two arm ends leave the third arm's pipes
+    # alike to the meters only if they are on the same side; three arm ends separate them all.
+    length = 400.0
+    pipes = [
+        PipeGeometry("ca", "c", "a", length),
+        PipeGeometry("cb", "c", "b", length),
+        PipeGeometry("cd", "c", "d", length),
+    ]
+    names = ["a", "b", "c", "d"]
+    pos = {"a": 1, "b": 1, "d": 1, "c": 0}
+
+    def dist(u: str, v: str) -> float:
+        return 0.0 if u == v else length * (pos[u] + pos[v])
+
+    distances = {u: np.array([dist(u, v) for v in names]) for u in names}
+    chosen = arrival_meters(pipes, names, distances, 3)
+    assert chosen == ("a", "b", "d")
+
+
+def test_meter_file_round_trip_and_checks(tmp_path: Path) -> None:
+    tiny = write_tiny(tmp_path / "tiny.inp")
+    placed = place_meters(tiny, 2, method="arrival")
+    assert placed.method == "arrival" and placed.junctions == 4 and len(placed.meters) == 2
+    assert set(placed.meters) <= {"J1", "J2", "J3", "J4"}
+    path = placed.save(tmp_path / "meters.json")
+    doc = json.loads(path.read_text())
+    assert doc["format"] == METERS_FORMAT and doc["meters"] == list(placed.meters)
+    loaded = MeterSet.load(path)
+    assert loaded == placed
+    assert loaded.check(tiny) == placed.meters
+    other = write_tiny(tmp_path / "other.inp", head=70.0)
+    with pytest.raises(ConfigError, match=r"made for network .*run `burstloc place`"):
+        loaded.check(other)
+    doc["meters"] = ["J1", "J1"]
+    path.write_text(json.dumps(doc))
+    with pytest.raises(ConfigError, match=r"meters.json: meters lists 'J1' more than once"):
+        MeterSet.load(path)
+    path.write_text(json.dumps({"format": "something/1"}))
+    with pytest.raises(ConfigError, match="not a burstloc meter file"):
+        MeterSet.load(path)
+    with pytest.raises(ConfigError, match="unknown placement method"):
+        place_meters(tiny, 2, method="random")
+
+
+def test_coverage_placement_on_a_network_file(tmp_path: Path) -> None:
+    tiny = write_tiny(tmp_path / "tiny.inp")
+    placed = place_meters(tiny, 3, method="coverage")
+    assert placed.method == "coverage" and len(placed.meters) == 3
+    with pytest.raises(ConfigError, match="meter count must be between 1 and 4"):
+        place_meters(tiny, 5, method="coverage")
