@@ -3,7 +3,8 @@
 
 * :mod:`~burstloc.live.parse`: CSV lines and MQTT payloads to readings, bad input named;
 * :mod:`~burstloc.live.health`: per-meter health, plausible range, clock offsets, silence;
-* :mod:`~burstloc.live.stream`: raw readings assembled into complete time steps;
+* :mod:`~burstloc.live.feeds`: raw readings assembled into complete time steps;
+* :mod:`~burstloc.live.windows`: complete steps into the localization windows of the paper's loop;
 * :mod:`~burstloc.live.subset`: the localizers restricted to the meters that report;
 * :mod:`~burstloc.live.decision`: a decision as the monitor reports it;
 * :mod:`~burstloc.live.monitor`: the detector bank, history and localizer over those steps,

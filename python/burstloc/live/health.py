@@ -2,7 +2,7 @@
 on time.
 
 A :class:`Health` stands between the parsed readings and the
-:class:`~burstloc.live.stream.ReadingStream`. Every reading passes :meth:`Health.admit`, which
+:class:`~burstloc.live.feeds.StepFeed`. Every reading passes :meth:`Health.admit`, which
 answers the reading to feed (its timestamp corrected for a known clock offset), a
 :class:`~burstloc.live.parse.BadReading` (to report and skip) or ``None`` (held back while the
 meter's clock is off). The rules:

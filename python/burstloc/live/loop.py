@@ -1,7 +1,7 @@
 """The live loop: parsed readings in, decision and health records out; bad data never stops it.
 
 :class:`LiveLoop` wires :class:`~burstloc.live.health.Health` (plausible range, clock, silence),
-:class:`~burstloc.live.stream.ReadingStream` (complete steps; silent meters excluded) and
+:class:`~burstloc.live.feeds.StepFeed` (complete steps; silent meters excluded) and
 :class:`~burstloc.live.monitor.BurstMonitor`. For every input item:
 
 * a :class:`~burstloc.live.parse.BadReading`, an implausible reading, a reading from an unknown
@@ -25,11 +25,11 @@ from collections.abc import Callable, Iterable
 from typing import Any
 
 from burstloc.exceptions import InputError, OutputError, StreamError
+from burstloc.live.feeds import StepFeed
 from burstloc.live.health import Health
 from burstloc.live.monitor import BurstMonitor
 from burstloc.live.parse import BadReading
 from burstloc.live.state import StateFile
-from burstloc.live.stream import ReadingStream
 from burstloc.readings import Reading, Step
 
 __all__ = ["LiveLoop", "Reporter"]
@@ -98,9 +98,7 @@ class LiveLoop:
         #: State saves that failed (reported; the previous state file is kept).
         self.failed_saves = 0
         period = monitor.calibration.capture_interval
-        self.stream = ReadingStream(
-            monitor.meters, 1, timeout=timeout, missing=missing, period=period
-        )
+        self.stream = StepFeed(monitor.meters, timeout=timeout, missing=missing, period=period)
         self.health_every = health_every
         self.state = state
         self.save_every = save_every
@@ -140,15 +138,15 @@ class LiveLoop:
             return
         late = self.stream.stats.late
         try:
-            windows = self.stream.push(admitted)
+            steps = self.stream.push(admitted)
         except StreamError as exc:
             self.report("bad-input", f"{where}: {exc}")
             return
         if self.stream.stats.late > late:
             self.health.late(admitted.meter)
             self.report("late", f"{where}: late reading from meter {admitted.meter!r} dropped")
-        for w in windows:
-            self._step(Step(float(w.times[-1]), w.values[-1], w.filled[-1]))
+        for step in steps:
+            self._step(step)
         if self._items % len(self.monitor.meters) == 0:
             self._tick()
 
@@ -206,8 +204,8 @@ class LiveLoop:
 
     def finish(self) -> None:
         """End of feed: resolve pending steps, say what was held back, save the state."""
-        for w in self.stream.flush():
-            self._step(Step(float(w.times[-1]), w.values[-1], w.filled[-1]))
+        for step in self.stream.flush():
+            self._step(step)
         self.report.close()
         self.save()
 
