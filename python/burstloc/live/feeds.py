@@ -205,29 +205,36 @@ class StepFeed:
             for t, v in zip(times, values, strict=True):
                 if not (math.isfinite(t) and math.isfinite(v)):
                     raise StreamError(f"a row has a non-finite timestamp or value ({t}, {v})")
-        stats, pending, m = self.stats, self._pending, len(self.meters)
+        stats, pending, m, excluded = self.stats, self._pending, len(self.meters), self.excluded
         period, origin = self.period, self.origin
+        keys = times if period is None else [float(round((t - origin) / period)) for t in times]
         steps: list[tuple[int, Step]] = []
         late: list[int] = []
-        for position in range(n):
-            t = times[position]
-            key = t if period is None else float(round((t - origin) / period))
-            stats.readings += 1
-            if key <= self._newest:
-                stats.late += 1
+        newest = self._newest
+        for position, key in enumerate(keys):
+            if key <= newest:
                 late.append(position)
                 continue
+            j = columns[position]
             step = pending.get(key)
             if step is None:
-                step = pending[key] = _Pending(key, {})
-            elif columns[position] in step.values:
-                stats.duplicates += 1
-                continue
-            step.values[columns[position]] = values[position]
-            # Only a new step (the timeout counts steps), a complete one, or (with meters
-            # excluded) any reading can let the oldest pending step go.
-            if len(step.values) == 1 or len(step.values) == m or self.excluded:
-                steps.extend((position, s) for s in self._drain())
+                pending[key] = _Pending(key, {j: values[position]})
+                if len(pending) <= self.timeout and m > 1 and not excluded:
+                    continue  # a new step lets the oldest go only past the timeout
+            else:
+                got = step.values
+                if j in got:
+                    stats.duplicates += 1
+                    continue
+                got[j] = values[position]
+                # Only a complete step or (with meters excluded) any reading can let the
+                # oldest pending step go.
+                if len(got) != m and not excluded:
+                    continue
+            steps.extend((position, s) for s in self._drain())
+            newest = self._newest
+        stats.readings += n
+        stats.late += len(late)
         return steps, late
 
     def flush(self) -> list[Step]:
@@ -301,7 +308,8 @@ class StepFeed:
         m = len(self.meters)
         if len(head.values) == m:
             del self._pending[key]
-            values = np.array([head.values[j] for j in range(m)], dtype=np.float64)
+            got = head.values
+            values = np.array([got[j] for j in range(m)], dtype=np.float64)
             return [self._emit(key, values, ())]
         if self.excluded and all(
             self.meters[j] in self.excluded for j in range(m) if j not in head.values

@@ -225,18 +225,20 @@ class BurstMonitor:
             )
         if not math.isfinite(t):
             raise InputError(f"step timestamp {t!r} is not finite")
-        absent = set(step.filled) | self.excluded
-        bad = np.flatnonzero(~np.isfinite(values))
-        for j in bad:
-            if self.meters[j] not in absent:
-                raise InputError(
-                    f"non-finite reading {values[j]} from meter {self.meters[j]!r} at t = {t:g} s"
-                )
+        absent = set(step.filled) | self.excluded if step.filled or self.excluded else set()
+        if not math.isfinite(values.sum()):  # one sum: NaN and infinities propagate
+            bad = np.flatnonzero(~np.isfinite(values))
+            for j in bad:
+                if self.meters[j] not in absent:
+                    raise InputError(
+                        f"non-finite reading {values[j]} from meter {self.meters[j]!r} "
+                        f"at t = {t:g} s"
+                    )
+            values[bad] = self._fill[bad]
         if self._times and t <= self._times[-1]:
             raise InputError(
                 f"step at t = {t:g} s is not after the previous one (t = {self._times[-1]:g} s)"
             )
-        values[bad] = self._fill[bad]
         self._fill = values
         if self._quiet_until is not None and t + 1e-9 >= self._quiet_until:
             self._restart_bank()  # the hold-off is over: start afresh from the current level
@@ -260,11 +262,13 @@ class BurstMonitor:
             if self._arming == 0 and settled:
                 self._arm_by = None
             return None
-        self._alarms += [
-            IndexedAlarm(int(a.channel or 0), a.index, a.start, a.amplitude)
-            for a in alarms
-            if self._counts(self.meters[int(a.channel or 0)], absent)
-        ]
+        if alarms:  # each meter's first alarm only: the localizers use first arrivals
+            alarmed = {a.channel for a in self._alarms}
+            for a in alarms:
+                channel = int(a.channel or 0)
+                if channel not in alarmed and self._counts(self.meters[channel], absent):
+                    self._alarms.append(IndexedAlarm(channel, a.index, a.start, a.amplitude))
+                    alarmed.add(channel)
         if self._alarms and self._due is None:
             times = np.fromiter(self._times, dtype=np.float64)
             self._due = decision_time(
