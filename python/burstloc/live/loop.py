@@ -29,6 +29,7 @@ from burstloc.exceptions import InputError, OutputError, StreamError
 from burstloc.live.feeds import StepFeed
 from burstloc.live.health import AdmittedRow, Health
 from burstloc.live.monitor import BurstMonitor
+from burstloc.live.monitor_state import monitor_state, restore_monitor
 from burstloc.live.parse import BadReading, Row, parse_row, unknown_meter
 from burstloc.live.state import StateFile
 from burstloc.readings import Reading, Step
@@ -320,7 +321,7 @@ class LiveLoop:
     def to_state(self) -> Record:
         """Monitor, stream, health and loop state, JSON-ready."""
         return {
-            "monitor": self.monitor.to_state(),
+            "monitor": monitor_state(self.monitor),
             "stream": self.stream.to_state(),
             "health": self.health.to_state(),
             "loop": {"next_health": self._next_health, "decisions": self.decisions},
@@ -328,7 +329,7 @@ class LiveLoop:
 
     def restore(self, state: Record) -> None:
         """Carry on from :meth:`to_state`."""
-        self.monitor.restore(state["monitor"])
+        restore_monitor(self.monitor, state["monitor"])
         self.stream.restore(state["stream"])
         self.health.restore(state["health"])
         nxt = state["loop"]["next_health"]
