@@ -22,8 +22,13 @@ meter's clock is off). The rules:
 * **Silence.** A meter with no reading for ``silent_after`` seconds of reference time is
   *silent*: it is excluded (the stream completes steps without it; the localizers run on the
   meters that report) until its next reading, when it is included again.
+* **Replay after a restart.** A feed may send again what it sent before the monitor stopped (a
+  broker's persistent session, a historian replaying the last minutes). After
+  :meth:`Health.restore`, a meter's readings up to its last timestamp before the restart are
+  *replayed*: counted (``replayed``), not fed again and taken neither for a clock offset nor
+  for late readings; the meter's first newer reading ends its replay.
 * **Counts.** Per meter: readings, bad, implausible, late (dropped by the stream), off-clock,
-  filled, and the newest timestamp; :meth:`Health.record` is the JSON health record.
+  filled, replayed, and the newest timestamp; :meth:`Health.record` is the JSON health record.
 """
 
 from __future__ import annotations
@@ -44,7 +49,7 @@ __all__ = ["CLOCK_WINDOW", "AdmittedRow", "Health", "MeterHealth", "PlausibleRan
 #: Readings of one meter that must agree before its clock offset is corrected.
 CLOCK_WINDOW = 25
 
-_COUNTS = ("readings", "bad", "implausible", "late", "off_clock", "filled")
+_COUNTS = ("readings", "bad", "implausible", "late", "off_clock", "filled", "replayed")
 
 
 @dataclass(frozen=True)
@@ -81,7 +86,9 @@ class AdmittedRow(NamedTuple):
     """What :meth:`Health.admit_row` answers: the readings to feed (their ``positions`` in the
     row, clock-corrected ``times``, meter ``columns``, ``values``); the ``refused`` ones (a
     :class:`~burstloc.live.parse.BadReading`, or ``None``: held back, off the clock) as
-    (position, column, what); and the clock offsets found, as (position, column, offset)."""
+    (position, column, what); the clock offsets found, as (position, column, offset); the
+    replays that ended, as (position of the meter's first newer reading, column, readings
+    replayed)."""
 
     positions: list[int]
     times: list[float]
@@ -89,6 +96,7 @@ class AdmittedRow(NamedTuple):
     values: list[float]
     refused: list[tuple[int, int, BadReading | None]]
     offsets: list[tuple[int, int, float]]
+    replayed: list[tuple[int, int, int]]
 
 
 @dataclass
@@ -148,6 +156,8 @@ class Health:
         self._health = [self.meter[m] for m in self.meters]  # by column
         self._lows = [self._low[m] for m in self.meters]
         self._highs = [self._high[m] for m in self.meters]
+        self._replay: list[float | None] = [None] * len(self.meters)  # replayed up to (restart)
+        self._replayed = [0] * len(self.meters)  # readings replayed since the restart
         self._reference: float | None = None
         self._lead: deque[float] = deque(maxlen=8 * CLOCK_WINDOW)
         self._since = 0
@@ -190,13 +200,24 @@ class Health:
         """:meth:`admit` for a row of readings of known meters (columns into :attr:`meters`,
         finite timestamps and values, as :func:`~burstloc.live.parse.parse_row` gives), in
         order; ``positions`` name them in the answer (default: 0, 1, ...)."""
-        out = AdmittedRow([], [], [], [], [], [])
+        out = AdmittedRow([], [], [], [], [], [], [])
         meters, health, low, high = self.meters, self._health, self._lows, self._highs
         newest, tolerance, m = self._newest, self.clock_tolerance, len(meters)
         lead, corrected, refused = self._lead.append, out.times, out.refused
+        replay, skipped = self._replay, []
         for k in range(len(times)):
             j, ts, value = columns[k], times[k], values[k]
             h = health[j]
+            until = replay[j]
+            if until is not None:  # after a restart: readings seen before it come again
+                if ts - h.clock_offset <= until:
+                    h.counts["replayed"] += 1
+                    self._replayed[j] += 1
+                    skipped.append(k)
+                    continue
+                replay[j] = None  # the meter's first newer reading: its replay is over
+                if self._replayed[j]:
+                    out.replayed.append((k, j, self._replayed[j]))
             if not (low[j] <= value <= high[j]):
                 h.counts["implausible"] += 1
                 refused.append((k, j, self._implausible(where, meters[j], value)))
@@ -223,18 +244,19 @@ class Health:
                 h.last = t
             corrected.append(t)
         at = range(len(times)) if positions is None else positions
-        if not refused and not out.offsets:
+        if not refused and not skipped and not out.offsets and not out.replayed:
             out.positions.extend(at)
             out.columns.extend(columns)
             out.values.extend(values)
             return out
-        gone = {k for k, _, _ in refused}
+        gone = {k for k, _, _ in refused} | set(skipped)
         kept = [k for k in range(len(times)) if k not in gone]
         out.positions.extend(at[k] for k in kept)
         out.columns.extend(columns[k] for k in kept)
         out.values.extend(values[k] for k in kept)
         out.refused[:] = [(at[k], j, what) for k, j, what in refused]
         out.offsets[:] = [(at[k], j, offset) for k, j, offset in out.offsets]
+        out.replayed[:] = [(at[k], j, count) for k, j, count in out.replayed]
         return out
 
     def _implausible(self, where: str, meter: str, value: float) -> BadReading:
@@ -330,7 +352,9 @@ class Health:
             h.last = doc["last"]
             h.silent = bool(doc["silent"])
             h.clock_offset = float(doc["clock_offset"])
-            h.counts = {k: int(doc[k]) for k in _COUNTS}
+            h.counts = {k: int(doc.get(k, 0)) for k in _COUNTS}  # "replayed": newer
             h.deviations = deque(doc["deviations"], maxlen=CLOCK_WINDOW)
+            self._replay[self._index[m]] = h.last
+            self._replayed[self._index[m]] = 0
             if h.last is not None:
                 self._newest[self._index[m]] = h.last

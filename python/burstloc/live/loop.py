@@ -171,6 +171,12 @@ class LiveLoop:
                 "corrected by it"
             )
             events.append((position, 0, "clock-offset", message))
+        for position, j, count in ok.replayed:
+            message = (
+                f"meter {meters[j]!r}: {count} readings sent again after the restart (seen "
+                "before it) skipped"
+            )
+            events.append((position, 0, "replay", message))
         for position, j, refused in ok.refused:
             if refused is None:
                 message = f"{where}: meter {meters[j]!r} is off the clock; reading held back"
