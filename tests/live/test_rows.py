@@ -180,3 +180,15 @@ def test_health_admit_row_refuses_by_position() -> None:
     assert (position, column) == (7, 1) and isinstance(bad, BadReading)
     assert "implausible value 50 m from meter 'b'" in str(bad)
     assert health.meter["b"].counts["implausible"] == 1
+
+
+def test_a_reading_fed_with_a_non_finite_number_is_reported_and_skipped(tiny, tiny_config) -> None:
+    done = _loop(tiny, tiny_config)
+    good = Reading(0.0, "J1", 50.0)
+    done.run([Reading(float("nan"), "J1", 50.0), Reading(0.0, "J2", float("inf")), good])
+    assert done.loop.stream.stats.readings == 1
+    assert [m.split(": ", 1)[1] for m in done.messages[:2]] == [
+        "bad reading skipped: reading 1: not a finite reading (nan s, 50.0 m) from meter 'J1'",
+        "bad reading skipped: reading 2: not a finite reading (0.0 s, inf m) from meter 'J2'",
+    ]
+    assert done.health.meter["J1"].counts["bad"] == 1 and done.health.meter["J2"].counts["bad"] == 1

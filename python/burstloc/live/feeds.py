@@ -205,7 +205,16 @@ class StepFeed:
             for t, v in zip(times, values, strict=True):
                 if not (math.isfinite(t) and math.isfinite(v)):
                     raise StreamError(f"a row has a non-finite timestamp or value ({t}, {v})")
-        stats, pending, m, excluded = self.stats, self._pending, len(self.meters), self.excluded
+        return self.push_admitted(times, columns, values)
+
+    def push_admitted(
+        self, times: Sequence[float], columns: Sequence[int], values: Sequence[float]
+    ) -> tuple[list[tuple[int, Step]], list[int]]:
+        """:meth:`push_row` without its checks, for a row already checked: as many meter
+        columns (each ``0 <= j < len(meters)``) and finite values as finite timestamps (what
+        :meth:`burstloc.live.health.Health.admit_row` answers)."""
+        stats, pending, m = self.stats, self._pending, len(self.meters)
+        needed = m - len(self.excluded)  # readings a step needs before it can be let go
         period, origin = self.period, self.origin
         keys = times if period is None else [float(round((t - origin) / period)) for t in times]
         steps: list[tuple[int, Step]] = []
@@ -219,7 +228,7 @@ class StepFeed:
             step = pending.get(key)
             if step is None:
                 pending[key] = _Pending(key, {j: values[position]})
-                if len(pending) <= self.timeout and m > 1 and not excluded:
+                if len(pending) <= self.timeout and needed > 1:
                     continue  # a new step lets the oldest go only past the timeout
             else:
                 got = step.values
@@ -227,15 +236,20 @@ class StepFeed:
                     stats.duplicates += 1
                     continue
                 got[j] = values[position]
-                # Only a complete step or (with meters excluded) any reading can let the
-                # oldest pending step go.
-                if len(got) != m and not excluded:
+                # Only a step with a reading from every meter not excluded can let the oldest
+                # pending step go (a change of the excluded meters: :meth:`drain`).
+                if len(got) < needed:
                     continue
             steps.extend((position, s) for s in self._drain())
             newest = self._newest
-        stats.readings += n
+        stats.readings += len(keys)
         stats.late += len(late)
         return steps, late
+
+    def drain(self) -> list[Step]:
+        """The steps that can be let go now: call after changing :attr:`excluded` (a step that
+        waited only for meters now excluded is complete)."""
+        return self._drain()
 
     def flush(self) -> list[Step]:
         """End of feed: resolve every pending step by the missing policy; return the steps."""

@@ -25,7 +25,7 @@ import time
 from collections.abc import Callable, Iterable
 from typing import Any
 
-from burstloc.exceptions import InputError, OutputError, StreamError
+from burstloc.exceptions import InputError, OutputError
 from burstloc.live.feeds import StepFeed
 from burstloc.live.health import AdmittedRow, Health
 from burstloc.live.monitor import BurstMonitor
@@ -38,6 +38,13 @@ __all__ = ["LiveLoop", "Reporter"]
 
 Record = dict[str, Any]
 Item = Reading | BadReading | tuple[str, Reading | BadReading | bytes] | None
+
+
+def _finite(x: object) -> bool:
+    try:
+        return math.isfinite(x)  # type: ignore[arg-type]
+    except TypeError:
+        return False
 
 
 class Reporter:
@@ -122,10 +129,14 @@ class LiveLoop:
     def feed_reading(self, reading: Reading, where: str) -> None:
         """One reading (``where`` names it in reports)."""
         j = self._columns.get(reading.meter)
-        if j is None:
+        t, value = reading.timestamp, reading.value
+        if not (_finite(t) and _finite(value)):
+            what = f"not a finite reading ({t!r} s, {value!r} m) from meter {reading.meter!r}"
+            row = Row([], [], [], [], [(0, BadReading(where, what, reading.meter))], 1)
+        elif j is None:
             row = Row([], [], [], [], [(0, unknown_meter(where, reading.meter))], 1)
         else:
-            row = Row([0], [reading.timestamp], [j], [reading.value], [], 1)
+            row = Row([0], [float(t)], [j], [float(value)], [], 1)
         self._feed_row(row, where)
 
     def feed_payload(self, payload: bytes, where: str) -> None:
@@ -183,7 +194,8 @@ class LiveLoop:
                 events.append((position, 1, "clock", message))
             else:
                 events.append((position, 1, "bad-input", f"bad reading skipped: {refused}"))
-        events.sort()
+        if events:
+            events.sort()
         tick = (
             bool(ok.positions)
             and ok.positions[-1] == end
@@ -203,12 +215,7 @@ class LiveLoop:
         """Admitted readings to the step feed and their steps to the monitor, reports in the
         order of the items; then the periodic check after position ``tick``."""
         columns = ok.columns
-        try:
-            steps, late = self.stream.push_row(ok.times, columns, ok.values)
-        except StreamError as exc:
-            self._report_until(events, ok.positions[-1] + 1)
-            self.report("bad-input", f"{where}: {exc}")
-            return
+        steps, late = self.stream.push_admitted(ok.times, columns, ok.values)
         if late:
             for k in late:
                 meter = self.monitor.meters[columns[k]]
@@ -225,6 +232,8 @@ class LiveLoop:
 
     def _report_until(self, events: list[tuple[int, int, str, str]], end: int) -> None:
         """Report (and remove) the events of the items before position ``end``."""
+        if not events:
+            return
         done = 0
         while done < len(events) and events[done][0] < end:
             self.report(events[done][2], events[done][3])
@@ -257,6 +266,9 @@ class LiveLoop:
             self.monitor.include(m)
             self.stream.excluded.discard(m)
             self.report("silence", f"meter {m!r} reports again: included")
+        if gone:
+            for step in self.stream.drain():  # steps that waited only for the silent meters
+                self._step(step)
         ref = self.health.reference
         if ref is not None and self.health_every > 0:
             if self._next_health is None:
