@@ -276,6 +276,7 @@ def main() -> int:
         "rss_growth_mb": (rss[-1][1] - base) / 1024,
         "latency_p50_ms": float(np.percentile(latency, 50)) if latency else None,
         "latency_p99_ms": float(np.percentile(latency, 99)) if latency else None,
+        "latencies_ms": sorted(round(x, 1) for x in latency),
         "publish_rate_steps_per_s": args.rate,
         **speed,
         "monitor_said": [

@@ -205,6 +205,7 @@ class Health:
         newest, tolerance, m = self._newest, self.clock_tolerance, len(meters)
         lead, corrected, refused = self._lead.append, out.times, out.refused
         replay, skipped = self._replay, []
+        since, ref = self._since, self._reference
         for k in range(len(times)):
             j, ts, value = columns[k], times[k], values[k]
             h = health[j]
@@ -226,10 +227,10 @@ class Health:
             t = ts - h.clock_offset
             if not t <= newest[j]:  # NaN at first; every reading moves the reference, so a
                 newest[j] = t  # gap in the whole feed moves it too (one skewed meter cannot)
-            self._since += 1
-            if self._reference is None or self._since >= m:
-                self._update_reference()
-            ref = self._reference
+            since += 1
+            if ref is None or since >= m:
+                self._update_reference()  # (since: 0)
+                since, ref = 0, self._reference
             if ref is not None:
                 h.deviations.append(ts - ref)
                 if abs(t - ref) > tolerance:
@@ -243,6 +244,7 @@ class Health:
             if h.last is None or t > h.last:
                 h.last = t
             corrected.append(t)
+        self._since = since
         at = range(len(times)) if positions is None else positions
         if not refused and not skipped and not out.offsets and not out.replayed:
             out.positions.extend(at)

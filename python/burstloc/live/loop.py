@@ -40,6 +40,10 @@ Record = dict[str, Any]
 Item = Reading | BadReading | tuple[str, Reading | BadReading | bytes] | None
 
 
+def _position(item: tuple[int, BadReading]) -> int:
+    return item[0]
+
+
 def _finite(x: object) -> bool:
     try:
         return math.isfinite(x)  # type: ignore[arg-type]
@@ -159,7 +163,7 @@ class LiveLoop:
             if end < 0 or (good == len(row.positions) and bad == len(row.bad)):
                 break
             upto = bisect.bisect_right(row.positions, end)
-            stop = bisect.bisect_right(row.bad, end, key=lambda b: b[0])
+            stop = bisect.bisect_right(row.bad, end, key=_position) if row.bad else 0
             self._part(row, where, slice(good, upto), row.bad[bad:stop], end)
             good, bad = upto, stop
         self._items = first + row.size
