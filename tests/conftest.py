@@ -12,6 +12,7 @@ from __future__ import annotations
 import os
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 from hypothesis import HealthCheck, settings
@@ -103,6 +104,23 @@ def paper15() -> Path:
 def tiny(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """The tiny network, written once per test module."""
     return write_tiny(tmp_path_factory.mktemp("tiny") / "tiny.inp")
+
+
+@pytest.fixture(scope="module")
+def tiny_config(tiny: Path) -> Any:
+    """The tiny network calibrated at 0.2 s for noise sigma = 0.01 m."""
+    from burstloc.experiments.calibrate import calibrate
+
+    return calibrate(tiny, capture_intervals=(0.2,), noise_sigma=0.01)
+
+
+@pytest.fixture(scope="module")
+def tiny_feed(tiny: Path, tiny_config: Any) -> Any:
+    """A real TSNet burst on pipe ``C`` of the tiny network with noise sigma = 0.002 m, as
+    per-meter readings (tests/live/live_feed.py)."""
+    from live_feed import burst_steps, readings  # tests/live, on the path of its tests
+
+    return readings(burst_steps(tiny, tiny_config.meters, "C", sigma=0.002), tiny_config.meters)
 
 
 @pytest.fixture

@@ -45,7 +45,7 @@ if TYPE_CHECKING:
     from burstloc.experiments.calibrate import calibrate
     from burstloc.experiments.evaluate import evaluate
     from burstloc.live.monitor import BurstMonitor
-    from burstloc.live.stream import ReadingStream
+    from burstloc.live.windows import ReadingStream
     from burstloc.localize.config import Calibration
     from burstloc.localize.decide import Decision
     from burstloc.localize.evidence import BurstEvidence, RankedPipe, Ranking
@@ -57,7 +57,7 @@ if TYPE_CHECKING:
 #: Names imported on first use, and the module each comes from.
 _LAZY: dict[str, str] = {
     "BurstMonitor": "burstloc.live.monitor",
-    "ReadingStream": "burstloc.live.stream",
+    "ReadingStream": "burstloc.live.windows",
     "Reading": "burstloc.readings",
     "Step": "burstloc.readings",
     "Calibration": "burstloc.localize.config",

@@ -2,7 +2,7 @@
 
 :class:`Reading` is what a meter sends, :class:`Step` a complete time step (one value per
 meter), :class:`Window` what one localization attempt of the paper's rules sees.
-:mod:`burstloc.live.stream` assembles them from a feed; the localizers read them.
+:mod:`burstloc.live.feeds` assembles them from a feed; the localizers read them.
 """
 
 from __future__ import annotations

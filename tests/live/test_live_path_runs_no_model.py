@@ -20,7 +20,7 @@ import pytest
 from burstloc.cli import main
 from burstloc.experiments.harness import readings_at_offset
 from burstloc.experiments.runs import RunSpec
-from burstloc.live.stream import readings_of
+from burstloc.live.windows import readings_of
 from burstloc.localize.config import Calibration
 from burstloc.localize.detection import DetectorConfig
 from burstloc.readings import Step

@@ -5,9 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from live_feed import Collected, burst_steps, readings
+from live_feed import Collected
 
-from burstloc.experiments.calibrate import calibrate
 from burstloc.live.loop import Reporter
 from burstloc.live.monitor import BurstMonitor
 from burstloc.live.parse import BadReading
@@ -15,17 +14,17 @@ from burstloc.live.state import StateFile, identity
 from burstloc.localize.config import Calibration
 from burstloc.readings import Reading
 
-PIPE = "C"
+PIPE = "C"  # the burst pipe of the tiny_feed fixture
 
 
 @pytest.fixture(scope="module")
-def config(tiny: Path) -> Calibration:
-    return calibrate(tiny, capture_intervals=(0.2,), noise_sigma=0.01)
+def config(tiny_config: Calibration) -> Calibration:
+    return tiny_config
 
 
 @pytest.fixture(scope="module")
-def feed(tiny: Path, config: Calibration) -> list[Reading]:
-    return readings(burst_steps(tiny, config.meters, PIPE, sigma=0.002), config.meters)
+def feed(tiny_feed: list[Reading]) -> list[Reading]:
+    return tiny_feed
 
 
 def _run(tiny: Path, config: Calibration, items, **options) -> Collected:

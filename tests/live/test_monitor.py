@@ -21,7 +21,7 @@ from burstloc.experiments.evaluate import evaluate
 from burstloc.experiments.harness import readings_at_offset
 from burstloc.experiments.runs import RunSpec
 from burstloc.live.monitor import BurstMonitor
-from burstloc.live.stream import readings_of
+from burstloc.live.windows import readings_of
 from burstloc.localize.config import Calibration
 from burstloc.localize.detection import DetectorConfig
 from burstloc.readings import Step

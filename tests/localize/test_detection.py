@@ -8,7 +8,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from burstloc.exceptions import ConfigError, StreamError
-from burstloc.live.stream import ReadingStream
+from burstloc.live.windows import ReadingStream
 from burstloc.localize.detection import (
     BatchDetector,
     DetectorConfig,

@@ -106,7 +106,6 @@ def run(args: argparse.Namespace) -> int:
     from burstloc.live.health import Health, PlausibleRange
     from burstloc.live.loop import LiveLoop, Reporter
     from burstloc.live.monitor import BurstMonitor
-    from burstloc.live.parse import parse_payload
     from burstloc.live.state import StateFile, identity
     from burstloc.localize.config import Calibration
 
@@ -192,7 +191,7 @@ def run(args: argparse.Namespace) -> int:
     previous = signal.signal(signal.SIGTERM, on_term)
     try:
         if link is not None:
-            items: Iterator[Any] = _from_broker(link, flags, parse_payload)
+            items: Iterator[Any] = _from_broker(link, flags)
         else:
             idle = min(max(args.save_every, 0.05), 1.0)
             items = _from_file(args.readings, flags, idle)
@@ -209,7 +208,7 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _from_broker(link: Any, flags: dict[str, bool], parse: Any) -> Iterator[Any]:
+def _from_broker(link: Any, flags: dict[str, bool]) -> Iterator[Any]:
     for message in link.messages():
         if flags["stop"]:
             return
@@ -217,9 +216,7 @@ def _from_broker(link: Any, flags: dict[str, bool], parse: Any) -> Iterator[Any]
             yield None
             continue
         number, payload = message
-        where = f"message {number}"
-        for item in parse(payload, where):
-            yield where, item
+        yield f"message {number}", payload  # the loop parses it as one row
 
 
 def _from_file(path: str, flags: dict[str, bool], idle: float) -> Iterator[Any]:

@@ -43,7 +43,7 @@ from burstloc.exceptions import ConfigError, InputError, NetworkError
 from burstloc.experiments.calibrate import calibrate
 from burstloc.experiments.runs import RunSpec
 from burstloc.live.paper_locator import BurstLocator
-from burstloc.live.stream import replay
+from burstloc.live.windows import replay
 from burstloc.localize.config import Calibration, calibrated_bank
 from burstloc.localize.decide import Decision, rank_alarms
 from burstloc.localize.detection import make_detector

@@ -3,11 +3,13 @@
 
 * :mod:`~burstloc.live.parse`: CSV lines and MQTT payloads to readings, bad input named;
 * :mod:`~burstloc.live.health`: per-meter health, plausible range, clock offsets, silence;
-* :mod:`~burstloc.live.stream`: raw readings assembled into complete time steps;
+* :mod:`~burstloc.live.feeds`: raw readings assembled into complete time steps;
+* :mod:`~burstloc.live.windows`: complete steps into the localization windows of the paper's loop;
 * :mod:`~burstloc.live.subset`: the localizers restricted to the meters that report;
 * :mod:`~burstloc.live.decision`: a decision as the monitor reports it;
 * :mod:`~burstloc.live.monitor`: the detector bank, history and localizer over those steps,
   built from the stored configuration (no hydraulic model runs);
+* :mod:`~burstloc.live.monitor_state`: the monitor's state across a restart;
 * :mod:`~burstloc.live.loop`: the loop that wires them and never stops on bad data;
 * :mod:`~burstloc.live.state`: the saved state (atomic, versioned, bound to its setup);
 * :mod:`~burstloc.live.mqtt`: readings from a broker, decisions and health to it;

@@ -2,7 +2,7 @@
 on time.
 
 A :class:`Health` stands between the parsed readings and the
-:class:`~burstloc.live.stream.ReadingStream`. Every reading passes :meth:`Health.admit`, which
+:class:`~burstloc.live.feeds.StepFeed`. Every reading passes :meth:`Health.admit`, which
 answers the reading to feed (its timestamp corrected for a known clock offset), a
 :class:`~burstloc.live.parse.BadReading` (to report and skip) or ``None`` (held back while the
 meter's clock is off). The rules:
@@ -22,8 +22,13 @@ meter's clock is off). The rules:
 * **Silence.** A meter with no reading for ``silent_after`` seconds of reference time is
   *silent*: it is excluded (the stream completes steps without it; the localizers run on the
   meters that report) until its next reading, when it is included again.
+* **Replay after a restart.** A feed may send again what it sent before the monitor stopped (a
+  broker's persistent session, a historian replaying the last minutes). After
+  :meth:`Health.restore`, a meter's readings up to its last timestamp before the restart are
+  *replayed*: counted (``replayed``), not fed again and taken neither for a clock offset nor
+  for late readings; the meter's first newer reading ends its replay.
 * **Counts.** Per meter: readings, bad, implausible, late (dropped by the stream), off-clock,
-  filled, and the newest timestamp; :meth:`Health.record` is the JSON health record.
+  filled, replayed, and the newest timestamp; :meth:`Health.record` is the JSON health record.
 """
 
 from __future__ import annotations
@@ -33,20 +38,18 @@ import statistics
 from collections import deque
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
-
-import numpy as np
+from typing import Any, NamedTuple
 
 from burstloc.exceptions import ConfigError
-from burstloc.live.parse import BadReading
+from burstloc.live.parse import BadReading, unknown_meter
 from burstloc.readings import Reading
 
-__all__ = ["CLOCK_WINDOW", "Health", "MeterHealth", "PlausibleRange"]
+__all__ = ["CLOCK_WINDOW", "AdmittedRow", "Health", "MeterHealth", "PlausibleRange"]
 
 #: Readings of one meter that must agree before its clock offset is corrected.
 CLOCK_WINDOW = 25
 
-_COUNTS = ("readings", "bad", "implausible", "late", "off_clock", "filled")
+_COUNTS = ("readings", "bad", "implausible", "late", "off_clock", "filled", "replayed")
 
 
 @dataclass(frozen=True)
@@ -77,6 +80,23 @@ class PlausibleRange:
             for m in low if meter is None else (meter,):
                 low[m], high[m] = float(lo), float(hi)
         return PlausibleRange(low, high)
+
+
+class AdmittedRow(NamedTuple):
+    """What :meth:`Health.admit_row` answers: the readings to feed (their ``positions`` in the
+    row, clock-corrected ``times``, meter ``columns``, ``values``); the ``refused`` ones (a
+    :class:`~burstloc.live.parse.BadReading`, or ``None``: held back, off the clock) as
+    (position, column, what); the clock offsets found, as (position, column, offset); the
+    replays that ended, as (position of the meter's first newer reading, column, readings
+    replayed)."""
+
+    positions: list[int]
+    times: list[float]
+    columns: list[int]
+    values: list[float]
+    refused: list[tuple[int, int, BadReading | None]]
+    offsets: list[tuple[int, int, float]]
+    replayed: list[tuple[int, int, int]]
 
 
 @dataclass
@@ -131,8 +151,13 @@ class Health:
         self.plausible = plausible
         self._low = dict(plausible.low)
         self._high = dict(plausible.high)
-        self._newest = np.full(len(self.meters), np.nan)
+        self._newest = [math.nan] * len(self.meters)
         self._index = {m: j for j, m in enumerate(self.meters)}
+        self._health = [self.meter[m] for m in self.meters]  # by column
+        self._lows = [self._low[m] for m in self.meters]
+        self._highs = [self._high[m] for m in self.meters]
+        self._replay: list[float | None] = [None] * len(self.meters)  # replayed up to (restart)
+        self._replayed = [0] * len(self.meters)  # readings replayed since the restart
         self._reference: float | None = None
         #: The first reference time: a meter never heard from is silent ``silent_after`` s later.
         self._start: float | None = None
@@ -156,37 +181,95 @@ class Health:
 
     def admit(self, r: Reading, where: str) -> Reading | BadReading | None:
         """The reading to feed (clock-corrected), a bad reading, or None (held back)."""
-        h = self.meter.get(r.meter)
-        if h is None:
+        j = self._index.get(r.meter)
+        if j is None:
             self.bad_unknown += 1
-            return BadReading(where, f"unknown meter {r.meter!r}")
-        if not (self._low[r.meter] <= r.value <= self._high[r.meter]):
-            h.counts["implausible"] += 1
-            return BadReading(
-                where,
-                f"implausible value {r.value:g} m from meter {r.meter!r} (believable: "
-                f"{self._low[r.meter]:g} to {self._high[r.meter]:g} m)",
-                r.meter,
-            )
-        h.counts["readings"] += 1
-        t = r.timestamp - h.clock_offset
-        j = self._index[r.meter]
-        if not t <= self._newest[j]:  # NaN at first; every reading moves the reference, so a
-            self._newest[j] = t  # gap in the whole feed moves it too (one skewed meter cannot)
-        self._since += 1
-        if self._reference is None or self._since >= len(self.meters):
-            self._update_reference()
-        ref = self._reference
-        if ref is not None:
-            h.deviations.append(r.timestamp - ref)
-            if abs(t - ref) > self.clock_tolerance and not self._settle_clock(h, ref):
-                h.counts["off_clock"] += 1
-                return None
-            t = r.timestamp - h.clock_offset
-            self._lead.append(t - ref)  # how far on-time readings lead the reference
-        if h.last is None or t > h.last:
-            h.last = t
+            return unknown_meter(where, r.meter)
+        row = self.admit_row([r.timestamp], [j], [r.value], where)
+        if row.refused:
+            return row.refused[0][2]
+        t = row.times[0]
         return r if t == r.timestamp else Reading(t, r.meter, r.value)
+
+    def admit_row(
+        self,
+        times: Sequence[float],
+        columns: Sequence[int],
+        values: Sequence[float],
+        where: str,
+        positions: Sequence[int] | None = None,
+    ) -> AdmittedRow:
+        """:meth:`admit` for a row of readings of known meters (columns into :attr:`meters`,
+        finite timestamps and values, as :func:`~burstloc.live.parse.parse_row` gives), in
+        order; ``positions`` name them in the answer (default: 0, 1, ...)."""
+        out = AdmittedRow([], [], [], [], [], [], [])
+        meters, health, low, high = self.meters, self._health, self._lows, self._highs
+        newest, tolerance, m = self._newest, self.clock_tolerance, len(meters)
+        lead, corrected, refused = self._lead.append, out.times, out.refused
+        replay, skipped = self._replay, []
+        since, ref = self._since, self._reference
+        for k in range(len(times)):
+            j, ts, value = columns[k], times[k], values[k]
+            h = health[j]
+            until = replay[j]
+            if until is not None:  # after a restart: readings seen before it come again
+                if ts - h.clock_offset <= until:
+                    h.counts["replayed"] += 1
+                    self._replayed[j] += 1
+                    skipped.append(k)
+                    continue
+                replay[j] = None  # the meter's first newer reading: its replay is over
+                if self._replayed[j]:
+                    out.replayed.append((k, j, self._replayed[j]))
+            if not (low[j] <= value <= high[j]):
+                h.counts["implausible"] += 1
+                refused.append((k, j, self._implausible(where, meters[j], value)))
+                continue
+            h.counts["readings"] += 1
+            t = ts - h.clock_offset
+            if not t <= newest[j]:  # NaN at first; every reading moves the reference, so a
+                newest[j] = t  # gap in the whole feed moves it too (one skewed meter cannot)
+            since += 1
+            if ref is None or since >= m:
+                self._update_reference()  # (since: 0)
+                since, ref = 0, self._reference
+            if ref is not None:
+                h.deviations.append(ts - ref)
+                if abs(t - ref) > tolerance:
+                    if not self._settle_clock(h, ref):
+                        h.counts["off_clock"] += 1
+                        refused.append((k, j, None))
+                        continue
+                    out.offsets.append((k, j, h.clock_offset))
+                    t = ts - h.clock_offset
+                lead(t - ref)  # how far on-time readings lead the reference
+            if h.last is None or t > h.last:
+                h.last = t
+            corrected.append(t)
+        self._since = since
+        at = range(len(times)) if positions is None else positions
+        if not refused and not skipped and not out.offsets and not out.replayed:
+            out.positions.extend(at)
+            out.columns.extend(columns)
+            out.values.extend(values)
+            return out
+        gone = {k for k, _, _ in refused} | set(skipped)
+        kept = [k for k in range(len(times)) if k not in gone]
+        out.positions.extend(at[k] for k in kept)
+        out.columns.extend(columns[k] for k in kept)
+        out.values.extend(values[k] for k in kept)
+        out.refused[:] = [(at[k], j, what) for k, j, what in refused]
+        out.offsets[:] = [(at[k], j, offset) for k, j, offset in out.offsets]
+        out.replayed[:] = [(at[k], j, count) for k, j, count in out.replayed]
+        return out
+
+    def _implausible(self, where: str, meter: str, value: float) -> BadReading:
+        return BadReading(
+            where,
+            f"implausible value {value:g} m from meter {meter!r} (believable: "
+            f"{self._low[meter]:g} to {self._high[meter]:g} m)",
+            meter,
+        )
 
     def _settle_clock(self, h: MeterHealth, ref: float) -> bool:
         """Estimate the meter's clock offset from its recent deviations; True if now on time."""
@@ -204,9 +287,9 @@ class Health:
 
     def _update_reference(self) -> None:
         self._since = 0
-        known = self._newest[~np.isnan(self._newest)]
-        if known.size * 2 > len(self.meters):
-            self._reference = float(np.median(known))
+        known = [t for t in self._newest if t == t]  # not NaN
+        if len(known) * 2 > len(self.meters):
+            self._reference = float(statistics.median(known))
             if self._start is None:
                 self._start = self._reference
 
@@ -278,7 +361,9 @@ class Health:
             h.last = doc["last"]
             h.silent = bool(doc["silent"])
             h.clock_offset = float(doc["clock_offset"])
-            h.counts = {k: int(doc[k]) for k in _COUNTS}
+            h.counts = {k: int(doc.get(k, 0)) for k in _COUNTS}  # "replayed": newer
             h.deviations = deque(doc["deviations"], maxlen=CLOCK_WINDOW)
+            self._replay[self._index[m]] = h.last
+            self._replayed[self._index[m]] = 0
             if h.last is not None:
                 self._newest[self._index[m]] = h.last

@@ -1,7 +1,7 @@
 """The live loop: parsed readings in, decision and health records out; bad data never stops it.
 
 :class:`LiveLoop` wires :class:`~burstloc.live.health.Health` (plausible range, clock, silence),
-:class:`~burstloc.live.stream.ReadingStream` (complete steps; silent meters excluded) and
+:class:`~burstloc.live.feeds.StepFeed` (complete steps; silent meters excluded) and
 :class:`~burstloc.live.monitor.BurstMonitor`. For every input item:
 
 * a :class:`~burstloc.live.parse.BadReading`, an implausible reading, a reading from an unknown
@@ -19,23 +19,36 @@ saved every ``save_every`` seconds (wall clock) and by :meth:`LiveLoop.save`.
 
 from __future__ import annotations
 
+import bisect
 import math
 import time
 from collections.abc import Callable, Iterable
 from typing import Any
 
-from burstloc.exceptions import InputError, OutputError, StreamError
-from burstloc.live.health import Health
+from burstloc.exceptions import InputError, OutputError
+from burstloc.live.feeds import StepFeed
+from burstloc.live.health import AdmittedRow, Health
 from burstloc.live.monitor import BurstMonitor
-from burstloc.live.parse import BadReading
+from burstloc.live.monitor_state import monitor_state, restore_monitor
+from burstloc.live.parse import BadReading, Row, parse_row, unknown_meter
 from burstloc.live.state import StateFile
-from burstloc.live.stream import ReadingStream
 from burstloc.readings import Reading, Step
 
 __all__ = ["LiveLoop", "Reporter"]
 
 Record = dict[str, Any]
-Item = Reading | BadReading | tuple[str, Reading | BadReading] | None
+Item = Reading | BadReading | tuple[str, Reading | BadReading | bytes] | None
+
+
+def _position(item: tuple[int, BadReading]) -> int:
+    return item[0]
+
+
+def _finite(x: object) -> bool:
+    try:
+        return math.isfinite(x)  # type: ignore[arg-type]
+    except TypeError:
+        return False
 
 
 class Reporter:
@@ -98,59 +111,138 @@ class LiveLoop:
         #: State saves that failed (reported; the previous state file is kept).
         self.failed_saves = 0
         period = monitor.calibration.capture_interval
-        self.stream = ReadingStream(
-            monitor.meters, 1, timeout=timeout, missing=missing, period=period
-        )
+        self.stream = StepFeed(monitor.meters, timeout=timeout, missing=missing, period=period)
         self.health_every = health_every
         self.state = state
         self.save_every = save_every
         self._next_health: float | None = None
         self._last_save = time.monotonic()
         self._items = 0
+        self._columns = {m: j for j, m in enumerate(monitor.meters)}
         self.decisions = 0
 
     def feed(self, item: Reading | BadReading, where: str | None = None) -> None:
         """One parsed input item (module docstring); ``where`` names it in reports (default:
         ``"reading N"``, counting the items fed)."""
-        self._items += 1
+        where = f"reading {self._items + 1}" if where is None else where
         if isinstance(item, BadReading):
-            self.health.bad(item)
-            self.report("bad-input", f"bad reading skipped: {item}")
-            return
-        self.feed_reading(item, f"reading {self._items}" if where is None else where)
+            self._feed_row(Row([], [], [], [], [(0, item)], 1), where)
+        else:
+            self.feed_reading(item, where)
 
     def feed_reading(self, reading: Reading, where: str) -> None:
         """One reading (``where`` names it in reports)."""
-        h = self.health.meter.get(reading.meter)
-        offset = None if h is None else h.clock_offset
-        admitted = self.health.admit(reading, where)
-        if h is not None and h.clock_offset != offset:
-            self.report(
-                "clock-offset",
-                f"meter {reading.meter!r}: clock offset {h.clock_offset:+g} s found; its "
-                "timestamps are corrected by it",
+        j = self._columns.get(reading.meter)
+        t, value = reading.timestamp, reading.value
+        if not (_finite(t) and _finite(value)):
+            what = f"not a finite reading ({t!r} s, {value!r} m) from meter {reading.meter!r}"
+            row = Row([], [], [], [], [(0, BadReading(where, what, reading.meter))], 1)
+        elif j is None:
+            row = Row([], [], [], [], [(0, unknown_meter(where, reading.meter))], 1)
+        else:
+            row = Row([0], [float(t)], [j], [float(value)], [], 1)
+        self._feed_row(row, where)
+
+    def feed_payload(self, payload: bytes, where: str) -> None:
+        """One message (:func:`~burstloc.live.parse.parse_payload`: a JSON reading, a batch,
+        CSV lines), taken as a row (:func:`~burstloc.live.parse.parse_row`): the same
+        decisions, health and reports as its items fed one by one (:meth:`feed`), at a fraction
+        of the cost. The health in a decision record is the health after the readings of the
+        message up to the next periodic check (one by one: up to the reading that completed
+        the decision)."""
+        self._feed_row(parse_row(payload, where, self._columns), where)
+
+    def _feed_row(self, row: Row, where: str) -> None:
+        """The items of ``row`` in order, as one by one: the periodic check (:meth:`tick`)
+        follows every ``len(meters)``-th item when it is an admitted reading, so the row is
+        taken in parts that end there, each admitted by the health gate, assembled into steps
+        and the steps fed to the monitor."""
+        first, n = self._items, len(self.monitor.meters)
+        good = bad = 0
+        for end in [*range((-first - 1) % n, row.size, n), row.size - 1]:
+            if end < 0 or (good == len(row.positions) and bad == len(row.bad)):
+                break
+            upto = bisect.bisect_right(row.positions, end)
+            stop = bisect.bisect_right(row.bad, end, key=_position) if row.bad else 0
+            self._part(row, where, slice(good, upto), row.bad[bad:stop], end)
+            good, bad = upto, stop
+        self._items = first + row.size
+
+    def _part(
+        self, row: Row, where: str, part: slice, bad: list[tuple[int, BadReading]], end: int
+    ) -> None:
+        """Items of ``row`` up to position ``end``: its readings ``part`` and ``bad`` items."""
+        meters = self.monitor.meters
+        events: list[tuple[int, int, str, str]] = []  # (position, order, kind, message)
+        for position, item in bad:
+            self.health.bad(item)
+            events.append((position, 0, "bad-input", f"bad reading skipped: {item}"))
+        ok = self.health.admit_row(
+            row.times[part], row.columns[part], row.values[part], where, row.positions[part]
+        )
+        for position, j, offset in ok.offsets:
+            message = (
+                f"meter {meters[j]!r}: clock offset {offset:+g} s found; its timestamps are "
+                "corrected by it"
             )
-        if admitted is None:
-            self.report(
-                "clock", f"{where}: meter {reading.meter!r} is off the clock; reading held back"
+            events.append((position, 0, "clock-offset", message))
+        for position, j, count in ok.replayed:
+            message = (
+                f"meter {meters[j]!r}: {count} readings sent again after the restart (seen "
+                "before it) skipped"
             )
-            return
-        if isinstance(admitted, BadReading):
-            self.report("bad-input", f"bad reading skipped: {admitted}")
-            return
-        late = self.stream.stats.late
-        try:
-            windows = self.stream.push(admitted)
-        except StreamError as exc:
-            self.report("bad-input", f"{where}: {exc}")
-            return
-        if self.stream.stats.late > late:
-            self.health.late(admitted.meter)
-            self.report("late", f"{where}: late reading from meter {admitted.meter!r} dropped")
-        for w in windows:
-            self._step(Step(float(w.times[-1]), w.values[-1], w.filled[-1]))
-        if self._items % len(self.monitor.meters) == 0:
+            events.append((position, 0, "replay", message))
+        for position, j, refused in ok.refused:
+            if refused is None:
+                message = f"{where}: meter {meters[j]!r} is off the clock; reading held back"
+                events.append((position, 1, "clock", message))
+            else:
+                events.append((position, 1, "bad-input", f"bad reading skipped: {refused}"))
+        if events:
+            events.sort()
+        tick = (
+            bool(ok.positions)
+            and ok.positions[-1] == end
+            and (self._items + end + 1) % len(meters) == 0
+        )
+        if ok.positions:
+            self._segment(ok, where, events, end if tick else None)
+        self._report_until(events, end + 1)
+
+    def _segment(
+        self,
+        ok: AdmittedRow,
+        where: str,
+        events: list[tuple[int, int, str, str]],
+        tick: int | None,
+    ) -> None:
+        """Admitted readings to the step feed and their steps to the monitor, reports in the
+        order of the items; then the periodic check after position ``tick``."""
+        columns = ok.columns
+        steps, late = self.stream.push_admitted(ok.times, columns, ok.values)
+        if late:
+            for k in late:
+                meter = self.monitor.meters[columns[k]]
+                self.health.late(meter)
+                message = f"{where}: late reading from meter {meter!r} dropped"
+                events.append((ok.positions[k], 2, "late", message))
+            events.sort()
+        for position, step in steps:
+            self._report_until(events, position + 1)
+            self._step(step)
+        if tick is not None:
+            self._report_until(events, tick + 1)
             self._tick()
+
+    def _report_until(self, events: list[tuple[int, int, str, str]], end: int) -> None:
+        """Report (and remove) the events of the items before position ``end``."""
+        if not events:
+            return
+        done = 0
+        while done < len(events) and events[done][0] < end:
+            self.report(events[done][2], events[done][3])
+            done += 1
+        del events[:done]
 
     def _step(self, step: Step) -> None:
         if step.filled:
@@ -178,6 +270,9 @@ class LiveLoop:
             self.monitor.include(m)
             self.stream.excluded.discard(m)
             self.report("silence", f"meter {m!r} reports again: included")
+        if gone:
+            for step in self.stream.drain():  # steps that waited only for the silent meters
+                self._step(step)
         ref = self.health.reference
         if ref is not None and self.health_every > 0:
             if self._next_health is None:
@@ -193,13 +288,17 @@ class LiveLoop:
         self._tick()
 
     def run(self, items: Iterable[Item]) -> None:
-        """Feed every item, or ``(where, item)`` pair (``None``: an idle tick), then
-        :meth:`finish`."""
+        """Feed every item, or ``(where, item)`` pair (an item: a reading, a bad reading, or a
+        message's payload as bytes; ``None``: an idle tick), then :meth:`finish`."""
         for item in items:
             if item is None:
                 self._tick()
             elif isinstance(item, tuple):
-                self.feed(item[1], item[0])
+                where, what = item
+                if isinstance(what, bytes):
+                    self.feed_payload(what, where)
+                else:
+                    self.feed(what, where)
             else:
                 self.feed(item)
         self.finish()
@@ -207,8 +306,8 @@ class LiveLoop:
     def finish(self) -> None:
         """End of feed: resolve pending steps, say what was held back (and that the feed was empty,
         if it was), save the state."""
-        for w in self.stream.flush():
-            self._step(Step(float(w.times[-1]), w.values[-1], w.filled[-1]))
+        for step in self.stream.flush():
+            self._step(step)
         if self._items == 0:
             self.report("input", "the feed held no readings: nothing was monitored")
         self.report.close()
@@ -247,7 +346,7 @@ class LiveLoop:
     def to_state(self) -> Record:
         """Monitor, stream, health and loop state, JSON-ready."""
         return {
-            "monitor": self.monitor.to_state(),
+            "monitor": monitor_state(self.monitor),
             "stream": self.stream.to_state(),
             "health": self.health.to_state(),
             "loop": {"next_health": self._next_health, "decisions": self.decisions},
@@ -255,7 +354,7 @@ class LiveLoop:
 
     def restore(self, state: Record) -> None:
         """Carry on from :meth:`to_state`."""
-        self.monitor.restore(state["monitor"])
+        restore_monitor(self.monitor, state["monitor"])
         self.stream.restore(state["stream"])
         self.health.restore(state["health"])
         nxt = state["loop"]["next_health"]

@@ -32,9 +32,9 @@ Bad input (a step with the wrong number of values, a non-finite value of a meter
 a timestamp that does not advance) raises :class:`~burstloc.exceptions.InputError` naming it
 and leaves the monitor exactly as it was. A configuration for another network or other meters
 is refused by name; the network file is only hashed (:func:`burstloc.inp.network_hash`). Each
-decision is a :class:`~burstloc.live.decision.LiveDecision`. :meth:`BurstMonitor.to_state` and
-:meth:`~BurstMonitor.restore` carry the whole state (bank snapshot, history, pending decision,
-hold-off) across a restart.
+decision is a :class:`~burstloc.live.decision.LiveDecision`.
+:mod:`burstloc.live.monitor_state` carries the whole state (bank snapshot, history, pending
+decision, hold-off) across a restart.
 
 Nothing here runs a hydraulic model: this module imports neither WNTR, EPANET, TSNet nor
 :mod:`burstloc.sim` or :mod:`burstloc.experiments`.
@@ -42,16 +42,13 @@ Nothing here runs a hydraulic model: this module imports neither WNTR, EPANET, T
 
 from __future__ import annotations
 
-import base64
 import math
 import os
 from collections import deque
 from collections.abc import Iterable, Iterator, Mapping
-from typing import Any
 
 import numpy as np
 
-from burstloc import _core
 from burstloc.constants import METER_MODELS, RANKING_LOCALIZERS, MeterModel
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.live.decision import LiveDecision
@@ -225,18 +222,20 @@ class BurstMonitor:
             )
         if not math.isfinite(t):
             raise InputError(f"step timestamp {t!r} is not finite")
-        absent = set(step.filled) | self.excluded
-        bad = np.flatnonzero(~np.isfinite(values))
-        for j in bad:
-            if self.meters[j] not in absent:
-                raise InputError(
-                    f"non-finite reading {values[j]} from meter {self.meters[j]!r} at t = {t:g} s"
-                )
+        absent = set(step.filled) | self.excluded if step.filled or self.excluded else set()
+        if not math.isfinite(values.sum()):  # one sum: NaN and infinities propagate
+            bad = np.flatnonzero(~np.isfinite(values))
+            for j in bad:
+                if self.meters[j] not in absent:
+                    raise InputError(
+                        f"non-finite reading {values[j]} from meter {self.meters[j]!r} "
+                        f"at t = {t:g} s"
+                    )
+            values[bad] = self._fill[bad]
         if self._times and t <= self._times[-1]:
             raise InputError(
                 f"step at t = {t:g} s is not after the previous one (t = {self._times[-1]:g} s)"
             )
-        values[bad] = self._fill[bad]
         self._fill = values
         if self._quiet_until is not None and t + 1e-9 >= self._quiet_until:
             self._restart_bank()  # the hold-off is over: start afresh from the current level
@@ -260,11 +259,13 @@ class BurstMonitor:
             if self._arming == 0 and settled:
                 self._arm_by = None
             return None
-        self._alarms += [
-            IndexedAlarm(int(a.channel or 0), a.index, a.start, a.amplitude)
-            for a in alarms
-            if self._counts(self.meters[int(a.channel or 0)], absent)
-        ]
+        if alarms:  # each meter's first alarm only: the localizers use first arrivals
+            alarmed = {a.channel for a in self._alarms}
+            for a in alarms:
+                channel = int(a.channel or 0)
+                if channel not in alarmed and self._counts(self.meters[channel], absent):
+                    self._alarms.append(IndexedAlarm(channel, a.index, a.start, a.amplitude))
+                    alarmed.add(channel)
         if self._alarms and self._due is None:
             times = np.fromiter(self._times, dtype=np.float64)
             self._due = decision_time(
@@ -362,53 +363,3 @@ class BurstMonitor:
             alarmed,
             waited,
         )
-
-    # ------------------------------------------------------------------ state
-    def to_state(self) -> dict[str, Any]:
-        """The whole state (bank snapshot, history, pending decision, hold-off), JSON-ready."""
-        return {
-            "bank": base64.b64encode(self.bank.snapshot()).decode("ascii"),
-            "times": list(self._times),
-            "values": [v.tolist() for v in self._values],
-            "fill": self._fill.tolist(),
-            "seen": self._seen,
-            "steps": self._steps,
-            "alarms": [[a.channel, a.index, a.start, a.amplitude] for a in self._alarms],
-            "due": self._due,
-            "quiet_until": self._quiet_until,
-            "arming": self._arming,
-            "arm_by": self._arm_by,
-            "dismissed": self.dismissed,
-            "grace": dict(self._grace),
-            "excluded": sorted(self.excluded),
-        }
-
-    def restore(self, state: Mapping[str, Any]) -> None:
-        """Carry on from :meth:`to_state` of a monitor of the same configuration and options.
-
-        Raises:
-            ConfigError: the saved bank is not this monitor's kind and size.
-        """
-        bank = _core.DetectorBank.restore(base64.b64decode(state["bank"]))
-        if bank.kind != self.bank.kind or bank.channels != self.bank.channels:
-            raise ConfigError(
-                f"saved detector bank is {bank.kind} x {bank.channels}, "
-                f"not {self.bank.kind} x {self.bank.channels}"
-            )
-        self.bank = bank
-        self._times = deque((float(t) for t in state["times"]), maxlen=self._times.maxlen)
-        self._values = deque(
-            (np.array(v, dtype=np.float64) for v in state["values"]), maxlen=self._values.maxlen
-        )
-        self._fill = np.array(state["fill"], dtype=np.float64)
-        self._seen, self._steps = int(state["seen"]), int(state["steps"])
-        self._alarms = [
-            IndexedAlarm(int(c), int(i), int(s), float(a)) for c, i, s, a in state["alarms"]
-        ]
-        self._due = state["due"]
-        self._quiet_until = state["quiet_until"]
-        self._arming = int(state["arming"])
-        self._arm_by = state["arm_by"]
-        self.dismissed = int(state["dismissed"])
-        self._grace = {str(m): int(k) for m, k in state["grace"].items()}
-        self.excluded = set(state["excluded"])

@@ -1,7 +1,7 @@
 """The paper's real-time loop: readings -> complete steps -> windows -> detector -> rules.
 
 :class:`BurstLocator` assembles windows of readings with
-:class:`~burstloc.live.stream.ReadingStream`
+:class:`~burstloc.live.windows.ReadingStream`
 (paper IV.B, "Fetching data"), runs a window detector (:mod:`burstloc.localize.detection`) and
 the paper's rules (:func:`burstloc.localize.paper_rules.locate`) on each.
 """
@@ -14,7 +14,7 @@ from typing import Any
 import networkx as nx
 
 from burstloc.exceptions import StreamError
-from burstloc.live.stream import ReadingStream
+from burstloc.live.windows import ReadingStream
 from burstloc.localize.paper_rules import Localization, WindowDetector, WindowOutcome, locate
 from burstloc.readings import Item, Window
 
@@ -26,7 +26,7 @@ class BurstLocator:
 
     ``meters`` must all be nodes of ``graph`` (a :class:`~burstloc.exceptions.StreamError`
     names the first one that is not). Stream options (``timeout``, ``missing``, ``period``,
-    ``origin``) are passed to :class:`~burstloc.live.stream.ReadingStream`.
+    ``origin``) are passed to :class:`~burstloc.live.windows.ReadingStream`.
     """
 
     def __init__(

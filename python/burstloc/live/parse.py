@@ -20,9 +20,9 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 from burstloc.readings import Reading
 
@@ -33,6 +33,8 @@ __all__ = [
     "parse_line",
     "parse_lines",
     "parse_payload",
+    "parse_row",
+    "unknown_meter",
 ]
 
 _HEADER = ("timestamp", "meter", "value")
@@ -114,8 +116,10 @@ def parse_line(line: str | bytes, where: str) -> Reading | BadReading | None:
 _NUMBER = (int, float)
 
 
-def _from_object(obj: Any, where: str) -> Reading | BadReading:
-    if type(obj) is dict:  # the common case first: {"t": float, "meter": str, "value": float}
+def _plain(obj: Any) -> tuple[float, str, float] | None:
+    """The common case, fast: ``{"t": float, "meter": str, "value": float}`` with finite
+    numbers, as (t, meter, value); anything else is None (then :func:`_checked` says why)."""
+    if type(obj) is dict:
         meter: Any = obj.get("meter")
         raw_t: Any = obj.get("t")
         raw_v: Any = obj.get("value")
@@ -123,10 +127,15 @@ def _from_object(obj: Any, where: str) -> Reading | BadReading:
             try:
                 t, value = float(raw_t), float(raw_v)
             except OverflowError:  # an integer beyond the float range
-                return _checked(obj, where)
+                return None
             if math.isfinite(t) and math.isfinite(value):
-                return Reading(t, meter, value)
-    return _checked(obj, where)
+                return t, meter, value
+    return None
+
+
+def _from_object(obj: Any, where: str) -> Reading | BadReading:
+    plain = _plain(obj)
+    return _checked(obj, where) if plain is None else Reading(*plain)
 
 
 def _short(x: Any) -> str:
@@ -180,3 +189,78 @@ def parse_payload(payload: bytes, where: str) -> list[Reading | BadReading]:
     if not out:
         out.append(BadReading(where, "empty payload"))
     return out
+
+
+def unknown_meter(where: str, meter: str) -> BadReading:
+    """The bad reading of a meter the configuration does not have."""
+    return BadReading(where, f"unknown meter {meter!r}")
+
+
+class Row(NamedTuple):
+    """The readings of one payload as parallel lists: their ``positions`` among the payload's
+    items, ``times``, meter ``columns`` and ``values``; the ``bad`` items as (position, bad
+    reading); ``size``, the number of items (readings and bad ones)."""
+
+    positions: list[int]
+    times: list[float]
+    columns: list[int]
+    values: list[float]
+    bad: list[tuple[int, BadReading]]
+    size: int
+
+
+def parse_row(payload: bytes, where: str, columns: Mapping[str, int]) -> Row:
+    """:func:`parse_payload` as one :class:`Row` over the meters ``columns`` (name → column):
+    the same items in the same order, without an object per reading. A reading from a meter
+    not in ``columns`` is a bad item (:func:`unknown_meter`). Never raises."""
+    try:
+        text = payload.decode("utf-8")
+        items = json.loads(text) if text[:1] == "[" else None
+    except (UnicodeDecodeError, ValueError, RecursionError):
+        items = None
+    row = Row([], [], [], [], [], 0)
+    if not isinstance(items, list):  # not the common form: a JSON list of readings
+        parsed = parse_payload(payload, where)
+        for i, item in enumerate(parsed):
+            if isinstance(item, BadReading):
+                row.bad.append((i, item))
+            else:
+                _add(row, i, (item.timestamp, item.meter, item.value), where, columns)
+        return row._replace(size=len(parsed))
+    positions, times, cols, values = row.positions, row.times, row.columns, row.values
+    for i, obj in enumerate(items):
+        if type(obj) is dict:  # the commonest case inline: float t and value, a known meter
+            t: Any = obj.get("t")
+            value: Any = obj.get("value")
+            meter: Any = obj.get("meter")
+            j = columns.get(meter) if type(meter) is str else None
+            # t - t == 0.0: finite (NaN and infinities give NaN)
+            finite = type(t) is float and type(value) is float and t - t == value - value == 0.0
+            if j is not None and finite:
+                positions.append(i)
+                times.append(t)
+                cols.append(j)
+                values.append(value)
+                continue
+        plain = _plain(obj)
+        if plain is None:
+            item = _checked(obj, f"{where} item {i}")
+            if isinstance(item, BadReading):
+                row.bad.append((i, item))
+                continue
+            plain = (item.timestamp, item.meter, item.value)
+        _add(row, i, plain, where, columns)
+    return row._replace(size=len(items))
+
+
+def _add(
+    row: Row, i: int, plain: tuple[float, str, float], where: str, columns: Mapping[str, int]
+) -> None:
+    j = columns.get(plain[1])
+    if j is None:
+        row.bad.append((i, unknown_meter(where, plain[1])))
+        return
+    row.positions.append(i)
+    row.times.append(plain[0])
+    row.columns.append(j)
+    row.values.append(plain[2])

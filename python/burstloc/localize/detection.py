@@ -2,7 +2,7 @@
 
 The paper runs its detector once per window, per meter, on the *concatenated* window (previous
 ``interval`` steps + current ``interval`` steps). Two named modes map that call onto the Rust
-core; both take a :class:`~burstloc.live.stream.Window` and return the changes per meter
+core; both take a :class:`~burstloc.live.windows.Window` and return the changes per meter
 (:class:`~burstloc.localize.evidence.Change`):
 
 ``"window"`` (:class:`BatchDetector`, the paper's semantics)

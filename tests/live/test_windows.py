@@ -13,7 +13,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from burstloc.exceptions import ConfigError, InputError, StreamError
-from burstloc.live.stream import MissingPolicy, ReadingStream, readings_of, replay
+from burstloc.live.windows import MissingPolicy, ReadingStream, readings_of, replay
 from burstloc.readings import Reading, Step
 
 METERS = ("a", "b", "c")
@@ -195,10 +195,10 @@ def test_period_snaps_jittery_timestamps_to_one_step() -> None:
 def test_unknown_meter_is_an_error_and_leaves_state_unchanged() -> None:
     s = ReadingStream(METERS, 1)
     s.push(Reading(0.0, "a", 1.0))
-    before = (s.stats.readings, dict(s._pending[0.0].values))
+    before = (s.stats.readings, dict(s.feed._pending[0.0].values))
     with pytest.raises(StreamError, match="unknown meter 'zz'"):
         s.push(Reading(0.0, "zz", 1.0))
-    assert (s.stats.readings, dict(s._pending[0.0].values)) == before
+    assert (s.stats.readings, dict(s.feed._pending[0.0].values)) == before
     assert issubclass(StreamError, InputError) and issubclass(StreamError, ValueError)
 
 
@@ -216,7 +216,7 @@ def test_bad_readings_raise_stream_error(item, match: str) -> None:
     s = ReadingStream(METERS, 1)
     with pytest.raises(StreamError, match=match):
         s.push(item)
-    assert s.stats.readings == 0 and not s._pending
+    assert s.stats.readings == 0 and not s.feed._pending
 
 
 @pytest.mark.parametrize(
@@ -310,7 +310,7 @@ def test_live_path_does_not_import_the_simulator() -> None:
     code = textwrap.dedent(
         """
         import sys
-        import burstloc.live.stream, burstloc.localize.paper_rules, burstloc.localize.detection
+        import burstloc.live.windows, burstloc.localize.paper_rules, burstloc.localize.detection
         forbidden = ("burstloc.sim", "burstloc.experiments", "wntr", "tsnet")
         bad = sorted(m for m in sys.modules
                      if any(m == f or m.startswith(f + ".") for f in forbidden))

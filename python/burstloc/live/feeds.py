@@ -1,14 +1,9 @@
-"""The real-time feed: pressure readings in, localization windows out (paper IV.B, "Fetching data").
+"""Complete time steps from a feed of readings (paper IV.B, "Fetching data").
 
 Meters report readings ``(timestamp, meter, value)``, one per meter per capture interval. A
-*time step* is complete when every meter has reported it. The loop waits for ``interval`` new
-complete steps, then hands on a :class:`Window`: the previous ``interval`` steps concatenated
-with the current ``interval`` steps (the very first window has no previous part).
-
-One interface serves two sources: :func:`replay` turns arrays (a simulated scenario, already
-captured or sampled here at a capture interval) into :class:`Step` objects, and live readings
-come from any iterable or async iterator of :class:`Reading` (or :class:`Step`). Both go through
-:class:`ReadingStream`; this module imports nothing from the simulator.
+*time step* is complete when every meter has reported it. :class:`StepFeed` assembles them; the
+windows of the paper's loop are made from its steps by
+:class:`~burstloc.live.windows.ReadingStream`. This module imports nothing from the simulator.
 
 Rules for imperfect feeds (each case is counted in :class:`StreamStats`, never silently mixed):
 
@@ -24,48 +19,45 @@ Rules for imperfect feeds (each case is counted in :class:`StreamStats`, never s
 * **Missing.** The oldest pending step blocks emission until it is complete, or until readings
   for more than ``timeout`` newer steps have arrived (its *timeout*, measured in steps; with
   ``timeout=0`` any reading of a newer step gives up on it). Then the
-  ``missing`` policy decides: ``"skip"`` drops the step (counted in ``skipped_steps``; the
-  window simply lacks it, visible as a gap in :attr:`Window.times`), ``"hold"`` fills each
+  ``missing`` policy decides: ``"skip"`` drops the step (counted in ``skipped_steps``; a window
+  simply lacks it, visible as a gap in :attr:`Window.times`), ``"hold"`` fills each
   missing meter with its last emitted value (counted in ``filled_readings``; the step records
   which meters were filled in :attr:`Step.filled`). A step that cannot be held (a meter has
-  never reported) is skipped. Without a ``period`` the stream only knows the steps it has
+  never reported) is skipped. Without a ``period`` the feed only knows the steps it has
   heard of; with one, a step nobody reported (a gap on the clock) also waits for its timeout
-  and is then skipped, never filled. :meth:`ReadingStream.flush` applies the same policy to every
+  and is then skipped, never filled. :meth:`StepFeed.flush` applies the same policy to every
   pending step at the end of a feed.
-* **Excluded meters.** Meters in :attr:`ReadingStream.excluded` (e.g. silent ones, see
+* **Excluded meters.** Meters in :attr:`StepFeed.excluded` (e.g. silent ones, see
   :mod:`burstloc.live.health`) are not waited for: a step is complete when every other meter has
   reported; an excluded meter that did not report gets its last value (NaN if it never reported)
   and is named in :attr:`Step.filled`.
 * **Errors.** A reading from a meter that is not configured, or with a non-finite timestamp or
-  value, raises :class:`~burstloc.exceptions.StreamError` naming it; the stream's state is left
+  value, raises :class:`~burstloc.exceptions.StreamError` naming it; the feed's state is left
   unchanged.
+
+Readings come one at a time (:meth:`StepFeed.push`) or as a row of arrays
+(:meth:`StepFeed.push_row`: a batch of readings, e.g. one MQTT message), with the same result.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import AsyncIterable, AsyncIterator, Iterable, Iterator, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from enum import Enum
 
 import numpy as np
-import numpy.typing as npt
 
 from burstloc.exceptions import ConfigError, StreamError
-from burstloc.readings import FloatArray, Item, Reading, Step, Window
+from burstloc.readings import FloatArray, Item, Reading, Step
 
-__all__ = [
-    "MissingPolicy",
-    "ReadingStream",
-    "StreamStats",
-    "readings_of",
-    "replay",
-]
+__all__ = ["MissingPolicy", "StepFeed", "StreamStats"]
 
 
 @dataclass(slots=True)
 class StreamStats:
-    """Counters of what a :class:`ReadingStream` accepted, dropped, skipped or filled."""
+    """Counters of what a feed accepted, dropped, skipped or filled (``windows``: made by a
+    :class:`~burstloc.live.windows.ReadingStream`)."""
 
     readings: int = 0
     steps: int = 0
@@ -89,15 +81,13 @@ class _Pending:
     values: dict[int, float]
 
 
-class ReadingStream:
-    """Assemble readings into complete steps and steps into localization windows.
+class StepFeed:
+    """Assemble readings into complete time steps (module docstring).
 
     Parameters
     ----------
     meters:
         The meters (network junctions with a pressure meter), in column order.
-    interval:
-        The paper's localization interval: new complete steps per window (>= 1).
     timeout:
         How many newer steps may arrive while an incomplete step is still waited for (>= 0);
         the next one gives up on it.
@@ -106,21 +96,24 @@ class ReadingStream:
     period, origin:
         Optional capture clock: timestamps are snapped to ``origin + k * period``.
 
+    Raises:
+        ConfigError: no meter, a meter listed twice, a bad timeout, policy, period or origin.
+
     Examples
     --------
-    >>> s = ReadingStream(["a", "b"], interval=1)
-    >>> s.push(Reading(0.0, "a", 10.0))
+    >>> f = StepFeed(["a", "b"])
+    >>> f.push(Reading(0.0, "a", 10.0))
     []
-    >>> [w.values.tolist() for w in s.push(Reading(0.0, "b", 20.0))]
-    [[[10.0, 20.0]]]
-    >>> [w.values.tolist() for w in s.push(Step(0.2, np.array([11.0, 21.0])))]
-    [[[10.0, 20.0], [11.0, 21.0]]]
+    >>> [s.values.tolist() for s in f.push(Reading(0.0, "b", 20.0))]
+    [[10.0, 20.0]]
+    >>> steps, late = f.push_row([0.2, 0.2, 0.0], [1, 0, 0], [21.0, 11.0, 12.0])
+    >>> [(position, s.values.tolist()) for position, s in steps], late
+    ([(1, [11.0, 21.0])], [2])
     """
 
     def __init__(
         self,
         meters: Sequence[str],
-        interval: int,
         *,
         timeout: int = 3,
         missing: MissingPolicy | str = MissingPolicy.SKIP,
@@ -133,10 +126,6 @@ class ReadingStream:
         if len(set(meters)) != len(meters):
             dup = sorted({m for m in meters if meters.count(m) > 1})
             raise ConfigError(f"meters listed more than once: {dup}")
-        if isinstance(interval, bool) or not isinstance(interval, (int, np.integer)):
-            raise ConfigError(f"localization interval must be an integer, got {interval!r}")
-        if interval < 1:
-            raise ConfigError(f"localization interval must be >= 1, got {interval}")
         if isinstance(timeout, bool) or not isinstance(timeout, (int, np.integer)) or timeout < 0:
             raise ConfigError(f"timeout must be an integer number of steps >= 0, got {timeout!r}")
         try:
@@ -148,63 +137,128 @@ class ReadingStream:
         if not math.isfinite(origin):
             raise ConfigError(f"origin must be finite, got {origin}")
         self.meters: tuple[str, ...] = meters
-        self.interval: int = int(interval)
         self.timeout: int = int(timeout)
         self.missing: MissingPolicy = policy
         self.period: float | None = period
         self.origin: float = float(origin)
         self.stats: StreamStats = StreamStats()
+        self.excluded: set[str] = set()
         self._index = {m: j for j, m in enumerate(meters)}
         self._pending: dict[float, _Pending] = {}
         self._newest: float = -math.inf  # key of the newest emitted or skipped step
         self._last: FloatArray | None = None  # last emitted values (for "hold")
-        self._previous: list[Step] = []
-        self._current: list[Step] = []
-        self._emitted = 0
-        self.excluded: set[str] = set()
 
     # ----------------------------------------------------------------- input
-    def push(self, item: Item) -> list[Window]:
-        """Feed one reading (or one whole step); return the windows it completes (often none)."""
-        steps = self._push_step(item) if isinstance(item, Step) else self._push_reading(item)
-        return self._windows_from(steps)
+    def push(self, item: Item) -> list[Step]:
+        """Feed one reading (or one whole step); return the steps it completes (often none).
 
-    def flush(self) -> list[Window]:
-        """End of feed: resolve every pending step by the missing policy; return the windows.
-
-        A trailing partial window (fewer than ``interval`` new steps) is not emitted, as in the
-        paper's loop, which waits for ``interval`` new complete steps.
+        Raises:
+            StreamError: an unknown meter, a non-finite timestamp or value, a step of the wrong
+                size (the feed is left unchanged).
         """
+        if isinstance(item, Step):
+            return self._push_step(item)
+        if not isinstance(item, Reading):
+            raise StreamError(f"expected a Reading or a Step, got {type(item).__name__}")
+        j = self._index.get(item.meter)
+        if j is None:
+            raise StreamError(
+                f"reading from unknown meter {item.meter!r} at t={item.timestamp} "
+                f"(meters: {', '.join(self.meters)})"
+            )
+        self._check_time(item.timestamp, f"meter {item.meter!r}")
+        try:
+            value = float(item.value)
+        except (TypeError, ValueError):
+            raise StreamError(
+                f"meter {item.meter!r} at t={item.timestamp}: value {item.value!r} is not a number"
+            ) from None
+        if not math.isfinite(value):
+            raise StreamError(
+                f"meter {item.meter!r} at t={item.timestamp}: value {value} is not finite"
+            )
+        return [s for _, s in self.push_row([float(item.timestamp)], [j], [value])[0]]
+
+    def push_row(
+        self, times: Sequence[float], columns: Sequence[int], values: Sequence[float]
+    ) -> tuple[list[tuple[int, Step]], list[int]]:
+        """Feed a row of readings (timestamps, meter columns, values), in order, as
+        :meth:`push` would one by one; return the steps completed, each with the position of
+        the reading that completed it, and the positions of the late readings.
+
+        Raises:
+            StreamError: rows of different lengths, a column that is not a meter's, a
+                non-finite timestamp or value (the feed is left unchanged).
+        """
+        n = len(times)
+        if len(columns) != n or len(values) != n:
+            raise StreamError(
+                f"a row needs as many meters and values as timestamps, got "
+                f"{n}, {len(columns)} and {len(values)}"
+            )
+        if not n:
+            return [], []
+        if min(columns) < 0 or max(columns) >= len(self.meters):
+            raise StreamError(f"a row names meter columns outside 0..{len(self.meters) - 1}")
+        # One sum per row: NaN and infinities propagate (a huge finite sum is checked in full).
+        if not math.isfinite(math.fsum(times) + math.fsum(values)):
+            for t, v in zip(times, values, strict=True):
+                if not (math.isfinite(t) and math.isfinite(v)):
+                    raise StreamError(f"a row has a non-finite timestamp or value ({t}, {v})")
+        return self.push_admitted(times, columns, values)
+
+    def push_admitted(
+        self, times: Sequence[float], columns: Sequence[int], values: Sequence[float]
+    ) -> tuple[list[tuple[int, Step]], list[int]]:
+        """:meth:`push_row` without its checks, for a row already checked: as many meter
+        columns (each ``0 <= j < len(meters)``) and finite values as finite timestamps (what
+        :meth:`burstloc.live.health.Health.admit_row` answers)."""
+        stats, pending, m = self.stats, self._pending, len(self.meters)
+        needed = m - len(self.excluded)  # readings a step needs before it can be let go
+        period, origin = self.period, self.origin
+        keys = times if period is None else [float(round((t - origin) / period)) for t in times]
+        steps: list[tuple[int, Step]] = []
+        late: list[int] = []
+        newest = self._newest
+        for position, key in enumerate(keys):
+            if key <= newest:
+                late.append(position)
+                continue
+            j = columns[position]
+            step = pending.get(key)
+            if step is None:
+                pending[key] = _Pending(key, {j: values[position]})
+                if len(pending) <= self.timeout and needed > 1:
+                    continue  # a new step lets the oldest go only past the timeout
+            else:
+                got = step.values
+                if j in got:
+                    stats.duplicates += 1
+                    continue
+                got[j] = values[position]
+                # Only a step with a reading from every meter not excluded can let the oldest
+                # pending step go (a change of the excluded meters: :meth:`drain`).
+                if len(got) < needed:
+                    continue
+            steps.extend((position, s) for s in self._drain())
+            newest = self._newest
+        stats.readings += len(keys)
+        stats.late += len(late)
+        return steps, late
+
+    def drain(self) -> list[Step]:
+        """The steps that can be let go now: call after changing :attr:`excluded` (a step that
+        waited only for meters now excluded is complete)."""
+        return self._drain()
+
+    def flush(self) -> list[Step]:
+        """End of feed: resolve every pending step by the missing policy; return the steps."""
         steps: list[Step] = []
         while self._pending:
             steps.extend(self._resolve_head(force=True) or ())
-        return self._windows_from(steps)
-
-    def windows(self, source: Iterable[Item]) -> Iterator[Window]:
-        """Yield the windows of a live or replayed feed, flushing at its end."""
-        for item in source:
-            yield from self.push(item)
-        yield from self.flush()
-
-    async def awindows(self, source: AsyncIterable[Item] | Iterable[Item]) -> AsyncIterator[Window]:
-        """Async twin of :meth:`windows` for an async iterator (or a plain iterable) of items."""
-        if isinstance(source, AsyncIterable):
-            async for item in source:
-                for w in self.push(item):
-                    yield w
-        else:
-            for item in source:
-                for w in self.push(item):
-                    yield w
-        for w in self.flush():
-            yield w
+        return steps
 
     # ------------------------------------------------------------ internals
-    def _key(self, timestamp: float) -> float:
-        if self.period is None:
-            return timestamp
-        return float(round((timestamp - self.origin) / self.period))
-
     def _timestamp(self, key: float) -> float:
         if self.period is None:
             return key
@@ -217,38 +271,7 @@ class ReadingStream:
             raise StreamError(f"{what}: timestamp {timestamp!r} is not a number") from None
         if not math.isfinite(t):
             raise StreamError(f"{what}: timestamp {t} is not finite")
-        return self._key(t)
-
-    def _push_reading(self, r: Reading) -> list[Step]:
-        if not isinstance(r, Reading):
-            raise StreamError(f"expected a Reading or a Step, got {type(r).__name__}")
-        j = self._index.get(r.meter)
-        if j is None:
-            raise StreamError(
-                f"reading from unknown meter {r.meter!r} at t={r.timestamp} "
-                f"(meters: {', '.join(self.meters)})"
-            )
-        key = self._check_time(r.timestamp, f"meter {r.meter!r}")
-        try:
-            value = float(r.value)
-        except (TypeError, ValueError):
-            raise StreamError(
-                f"meter {r.meter!r} at t={r.timestamp}: value {r.value!r} is not a number"
-            ) from None
-        if not math.isfinite(value):
-            raise StreamError(f"meter {r.meter!r} at t={r.timestamp}: value {value} is not finite")
-        self.stats.readings += 1
-        if key <= self._newest:
-            self.stats.late += 1
-            return []
-        pending = self._pending.get(key)
-        if pending is None:
-            pending = self._pending[key] = _Pending(key, {})
-        if j in pending.values:
-            self.stats.duplicates += 1
-            return []
-        pending.values[j] = value
-        return self._drain()
+        return t if self.period is None else float(round((t - self.origin) / self.period))
 
     def _push_step(self, step: Step) -> list[Step]:
         key = self._check_time(step.timestamp, "step")
@@ -271,10 +294,9 @@ class ReadingStream:
             # Fast path: the next complete step.
             self.stats.readings += values.size
             return [self._emit(key, values.copy(), step.filled)]
-        out: list[Step] = []
-        for j, m in enumerate(self.meters):
-            out.extend(self._push_reading(Reading(step.timestamp, m, float(values[j]))))
-        return out
+        m = len(self.meters)
+        row = self.push_row([float(step.timestamp)] * m, list(range(m)), values.tolist())
+        return [s for _, s in row[0]]
 
     def _drain(self) -> list[Step]:
         out: list[Step] = []
@@ -300,39 +322,42 @@ class ReadingStream:
         m = len(self.meters)
         if len(head.values) == m:
             del self._pending[key]
-            values = np.array([head.values[j] for j in range(m)], dtype=np.float64)
+            got = head.values
+            values = np.array([got[j] for j in range(m)], dtype=np.float64)
             return [self._emit(key, values, ())]
         if self.excluded and all(
             self.meters[j] in self.excluded for j in range(m) if j not in head.values
         ):
             del self._pending[key]
-            values = np.full(m, np.nan) if self._last is None else self._last.copy()
-            for j, v in head.values.items():
-                values[j] = v
-            filled = tuple(self.meters[j] for j in range(m) if j not in head.values)
-            self.stats.filled_readings += len(filled)
-            return [self._emit(key, values, filled)]
+            return [self._filled(key, head, np.full(m, np.nan))]
         newer = len(self._pending) - 1
         if not force and newer <= self.timeout:
             return None
         del self._pending[key]
         self._newest = key
         if self.missing is MissingPolicy.HOLD and self._last is not None:
-            values = self._last.copy()
-            for j, v in head.values.items():
-                values[j] = v
-            filled = tuple(self.meters[j] for j in range(m) if j not in head.values)
-            self.stats.filled_readings += len(filled)
-            return [self._emit(key, values, filled)]
+            return [self._filled(key, head, self._last)]
         self.stats.skipped_steps += 1
         return []
 
+    def _filled(self, key: float, head: _Pending, fill: FloatArray) -> Step:
+        """The step of ``head`` with its missing meters filled (from the last step if any)."""
+        values = fill.copy() if self._last is None else self._last.copy()
+        for j, v in head.values.items():
+            values[j] = v
+        filled = tuple(self.meters[j] for j in range(len(self.meters)) if j not in head.values)
+        self.stats.filled_readings += len(filled)
+        return self._emit(key, values, filled)
+
+    def _emit(self, key: float, values: FloatArray, filled: tuple[str, ...]) -> Step:
+        self._newest = key
+        self._last = values
+        self.stats.steps += 1
+        return Step(self._timestamp(key), values, tuple(filled))
+
     # ---------------------------------------------------------------- state
     def to_state(self) -> dict[str, object]:
-        """The assembly state (pending steps, newest step, last values, counters), JSON-ready.
-
-        Only for a stream of single-step windows (``interval=1``), as the monitor uses.
-        """
+        """The assembly state (pending steps, newest step, last values, counters), JSON-ready."""
         return {
             "pending": [
                 [p.timestamp, {str(j): v for j, v in p.values.items()}]
@@ -345,7 +370,7 @@ class ReadingStream:
         }
 
     def restore(self, state: dict[str, object]) -> None:
-        """Inverse of :meth:`to_state` on a stream with the same meters and clock."""
+        """Inverse of :meth:`to_state` on a feed with the same meters and clock."""
         pending = state["pending"]
         assert isinstance(pending, list)
         self._pending = {
@@ -361,61 +386,3 @@ class ReadingStream:
         assert isinstance(stats, dict)
         for name, value in stats.items():
             setattr(self.stats, name, int(value))
-
-    def _emit(self, key: float, values: FloatArray, filled: tuple[str, ...]) -> Step:
-        self._newest = key
-        self._last = values
-        self.stats.steps += 1
-        return Step(self._timestamp(key), values, tuple(filled))
-
-    def _windows_from(self, steps: list[Step]) -> list[Window]:
-        out: list[Window] = []
-        for step in steps:
-            self._current.append(step)
-            if len(self._current) < self.interval:
-                continue
-            parts = self._previous + self._current
-            times = np.array([s.timestamp for s in parts], dtype=np.float64)
-            values = np.vstack([s.values for s in parts])
-            times.flags.writeable = False
-            values.flags.writeable = False
-            first = self._emitted - len(self._previous)
-            out.append(
-                Window(
-                    index=self.stats.windows,
-                    meters=self.meters,
-                    times=times,
-                    values=values,
-                    new=len(self._current),
-                    first_step=first,
-                    filled=tuple(s.filled for s in parts),
-                )
-            )
-            self.stats.windows += 1
-            self._emitted += len(self._current)
-            self._previous, self._current = self._current, []
-        return out
-
-
-def replay(times: npt.ArrayLike, values: npt.ArrayLike) -> Iterator[Step]:
-    """Replay recorded readings as a feed of complete steps.
-
-    ``times`` (T,) and ``values`` (T, M) are readings already captured at the capture interval
-    (a simulated timeline is sampled first, e.g. with :func:`burstloc.sim.capture.capture`).
-    Columns must follow the stream's meter order.
-    """
-    t = np.asarray(times, dtype=np.float64)
-    v = np.asarray(values, dtype=np.float64)
-    if t.ndim != 1 or v.ndim != 2 or v.shape[0] != t.shape[0]:
-        raise StreamError(
-            f"replay needs times (T,) and values (T, M); got shapes {t.shape} and {v.shape}"
-        )
-    for i in range(t.shape[0]):
-        yield Step(float(t[i]), v[i])
-
-
-def readings_of(steps: Iterable[Step], meters: Sequence[str]) -> Iterator[Reading]:
-    """Explode steps into per-meter readings (meter order within a step), e.g. to test a feed."""
-    for s in steps:
-        for m, x in zip(meters, s.values, strict=True):
-            yield Reading(s.timestamp, m, float(x))

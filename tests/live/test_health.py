@@ -1,0 +1,98 @@
+"""burstloc.live.health across a restart: what the feed sends again is replayed, not a clock
+offset and not a flood of late readings."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from live_feed import Collected, burst_steps, readings
+
+from burstloc.live.monitor import BurstMonitor
+from burstloc.live.state import StateFile, identity
+from burstloc.localize.config import Calibration
+from burstloc.readings import Reading
+
+RESTART = 695.0  # s; the burst starts at 702 s
+
+
+@pytest.fixture(scope="module")
+def long_feed(tiny: Path, tiny_config: Calibration) -> list[Reading]:
+    """Eleven minutes of steady readings, then a burst on pipe C."""
+    steps = burst_steps(tiny, tiny_config.meters, "C", before=700.0, after=200.0, sigma=0.002)
+    return readings(steps, tiny_config.meters)
+
+
+def _identity(config: Calibration) -> dict[str, object]:
+    return identity(
+        config,
+        capture_interval=0.2,
+        detector="cusum",
+        localizer="fused",
+        meter_model="instantaneous",
+    )
+
+
+def _loop(tiny: Path, config: Calibration, state: StateFile) -> Collected:
+    return Collected(BurstMonitor(tiny, config, capture_interval=0.2), state=state)
+
+
+@pytest.mark.parametrize("replay", [10.0, 60.0, 600.0])
+def test_readings_sent_again_after_a_restart_are_replayed_not_off_the_clock(
+    tiny, tiny_config, long_feed, tmp_path: Path, replay: float
+) -> None:
+    config, feed = tiny_config, long_feed
+    ident = _identity(config)
+    clean = _loop(tiny, config, StateFile(tmp_path / "clean.json", ident)).run(feed)
+    state = StateFile(tmp_path / "state.json", ident)
+    before = _loop(tiny, config, state)
+    for r in feed:
+        if r.timestamp < RESTART:
+            before.loop.feed(r)
+    before.loop.save()  # the last save before the monitor stopped (kill -9)
+
+    after = _loop(tiny, config, state)
+    saved = state.load()
+    assert saved is not None
+    after.loop.restore(saved)
+    again = [r for r in feed if r.timestamp >= RESTART - replay]  # the feed goes back
+    after.run(again)
+
+    strip = [{k: v for k, v in d.items() if k != "health"} for d in after.decisions]
+    assert strip == [{k: v for k, v in d.items() if k != "health"} for d in clean.decisions]
+    assert clean.decisions[0]["pipes"][0]["pipe"] == "C"
+    text = "\n".join(after.messages)
+    assert "off the clock" not in text and "clock offset" not in text and "late" not in text
+    meters = after.health.record()["meters"]
+    assert all(after.health.meter[m].clock_offset == 0.0 for m in config.meters)
+    assert sum(meters[m]["late"] for m in config.meters) == 0
+    assert sum(meters[m]["off_clock"] for m in config.meters) == 0
+    replayed = sum(r.timestamp < RESTART for r in again)
+    assert sum(meters[m]["replayed"] for m in config.meters) == replayed
+    per_meter = replayed // len(config.meters)
+    for m in config.meters:
+        assert (
+            f"meter {m!r}: {per_meter} readings sent again after the restart (seen before it) "
+            "skipped" in text
+        )
+    # Counted as readings once, as without the restart.
+    assert {m: meters[m]["readings"] for m in meters} == {
+        m: clean.health.record()["meters"][m]["readings"] for m in meters
+    }
+
+
+def test_after_the_replay_a_meter_reading_out_of_order_is_late_again(
+    tiny, tiny_config, long_feed, tmp_path: Path
+) -> None:
+    state = StateFile(tmp_path / "state.json", _identity(tiny_config))
+    before = _loop(tiny, tiny_config, state)
+    before.run([r for r in long_feed if r.timestamp < 100.0])
+    after = _loop(tiny, tiny_config, state)
+    saved = state.load()
+    assert saved is not None
+    after.loop.restore(saved)
+    fresh = [r for r in long_feed if 100.0 <= r.timestamp < 110.0]
+    old = Reading(109.0, "J1", fresh[0].value)  # after J1's replay ended: a late reading
+    after.run([*fresh, old])
+    assert after.health.meter["J1"].counts["replayed"] == 0
+    assert after.health.meter["J1"].counts["late"] == 1, after.messages
