@@ -17,6 +17,7 @@ from burstloc.experiments.position import (
     NetworkDistance,
     PipePoint,
     PositionErrors,
+    PositionOutcome,
     score_position,
 )
 from burstloc.experiments.runs import RunSpec
@@ -54,17 +55,18 @@ def test_position_errors_summarise_the_attempts(tiny: Path) -> None:
         score_position(distance, truth, elsewhere),
         score_position(distance, truth, None),
     ]
-    assert scored == [
-        (pytest.approx(20.0), True),
-        (pytest.approx(40.0), False),
-        (pytest.approx(70.0), None),
-        (None, None),
+    assert [(o.error, o.inside, o.width) for o in scored] == [
+        (pytest.approx(20.0), True, 80.0),
+        (pytest.approx(40.0), False, 130.0),
+        (pytest.approx(70.0), None, 250.0),
+        (None, None, None),
     ]
     summary = PositionErrors.of(scored)
+    assert summary.mean_width == pytest.approx(460.0 / 3)
     assert (summary.attempts, summary.count, summary.on_pipe, summary.interval_hits) == (4, 3, 2, 1)
     assert summary.mean == pytest.approx(130.0 / 3)
     assert 40.0 < summary.p90 <= 70.0
-    assert PositionErrors.of([(None, None)]).to_json()["mean"] is None
+    assert PositionErrors.of([PositionOutcome()]).to_json()["mean"] is None
 
 
 def test_evaluate_reports_position_errors_off_centre(tiny: Path) -> None:

@@ -58,7 +58,12 @@ from burstloc.experiments.harness import (
     rank_attempts,
     readings_at_offset,
 )
-from burstloc.experiments.position import PipePoint, PositionErrors, PositionScorer
+from burstloc.experiments.position import (
+    PipePoint,
+    PositionErrors,
+    PositionOutcome,
+    PositionScorer,
+)
 from burstloc.experiments.runs import (
     RunSpec,
     phase_offsets,
@@ -92,7 +97,7 @@ class RunResult:
     offsets: list[float]
     attempts: dict[str, list[Attempt]]
     points: dict[str, PipePoint] = field(default_factory=dict)
-    positions: dict[str, list[tuple[float | None, bool | None]]] = field(default_factory=dict)
+    positions: dict[str, list[PositionOutcome]] = field(default_factory=dict)
     """Per pipe and offset: the position error (m) and whether the interval held the true point
     (:func:`burstloc.experiments.position.score_position`)."""
 
@@ -157,7 +162,7 @@ class RunResult:
                     "true_position": None
                     if truth is None
                     else {"pipe": p, "from": truth.node, "metres": truth.metres},
-                    "position_error_m": (self.positions.get(p) or [(None, None)])[0][0],
+                    "position_error_m": (self.positions.get(p) or [PositionOutcome()])[0].error,
                 }
             )
         run = self.spec.paper_run()

@@ -35,6 +35,7 @@ __all__ = [
     "NetworkDistance",
     "PipePoint",
     "PositionErrors",
+    "PositionOutcome",
     "PositionScorer",
     "estimated_point",
     "score_position",
@@ -122,31 +123,45 @@ class NetworkDistance:
 
 
 @dataclass(frozen=True)
+class PositionOutcome:
+    """One attempt's position against the true point: the network distance ``error`` (m),
+    whether the interval held the true point (``inside``, ``None`` when another pipe was named)
+    and the interval's ``width`` (m); all ``None`` when the attempt gave no position."""
+
+    error: float | None = None
+    inside: bool | None = None
+    width: float | None = None
+
+
+@dataclass(frozen=True)
 class PositionErrors:
     """Position errors (m) of a run's attempts: ``count`` attempts gave a position (of
-    ``attempts``), with ``mean`` and ``p90`` errors (``None`` without any), and
-    ``interval_hits`` of the ``on_pipe`` positions on the burst pipe held the true point inside
-    their interval."""
+    ``attempts``), with ``mean`` and ``p90`` errors and the intervals' ``mean_width`` (``None``
+    without any), and ``interval_hits`` of the ``on_pipe`` positions on the burst pipe held the
+    true point inside their interval."""
 
     attempts: int
     count: int
     mean: float | None
     p90: float | None
+    mean_width: float | None
     on_pipe: int
     interval_hits: int
 
     @classmethod
-    def of(cls, outcomes: Iterable[tuple[float | None, bool | None]]) -> PositionErrors:
-        """Summarise ``(error, inside)`` pairs, one per attempt: ``error`` ``None`` when the
-        attempt gave no position, ``inside`` ``None`` when it named another pipe."""
+    def of(cls, outcomes: Iterable[PositionOutcome]) -> PositionErrors:
+        """Summarise the outcomes of a run's attempts."""
         items = list(outcomes)
-        errors = np.array([e for e, _ in items if e is not None], dtype=np.float64)
-        flags = [inside for e, inside in items if e is not None and inside is not None]
+        located = [o for o in items if o.error is not None]
+        errors = np.array([o.error for o in located], dtype=np.float64)
+        widths = np.array([o.width for o in located], dtype=np.float64)
+        flags = [o.inside for o in located if o.inside is not None]
         return cls(
             attempts=len(items),
             count=int(errors.size),
             mean=float(errors.mean()) if errors.size else None,
             p90=float(np.percentile(errors, 90)) if errors.size else None,
+            mean_width=float(widths.mean()) if widths.size else None,
             on_pipe=len(flags),
             interval_hits=sum(flags),
         )
@@ -158,6 +173,7 @@ class PositionErrors:
             "count": self.count,
             "mean": self.mean,
             "p90": self.p90,
+            "mean_width": self.mean_width,
             "on_pipe": self.on_pipe,
             "interval_hits": self.interval_hits,
         }
@@ -165,17 +181,17 @@ class PositionErrors:
 
 def score_position(
     distance: NetworkDistance, truth: PipePoint, position: PipePosition | None
-) -> tuple[float | None, bool | None]:
-    """``(error, inside)`` of one attempt's position against the true point: the network
-    distance (m) and, when the named pipe is the burst pipe, whether the true point lies inside
-    the reported interval (``None`` otherwise; ``(None, None)`` without a position)."""
+) -> PositionOutcome:
+    """One attempt's position against the true point (:class:`PositionOutcome`)."""
     if position is None:
-        return None, None
+        return PositionOutcome()
     error = distance.between(truth, estimated_point(position))
+    width = position.high - position.low
     if position.pipe != truth.pipe:
-        return error, None
+        return PositionOutcome(error, None, width)
     along = truth.metres if truth.node == position.start else position.length - truth.metres
-    return error, bool(position.low - 1e-6 <= along <= position.high + 1e-6)
+    inside = bool(position.low - 1e-6 <= along <= position.high + 1e-6)
+    return PositionOutcome(error, inside, width)
 
 
 class PositionScorer:
@@ -187,10 +203,8 @@ class PositionScorer:
         self.points = {p: true_point(r, wn) for p, r in results.items()}
         """Pipe -> where its burst opened."""
 
-    def score(
-        self, attempts: Mapping[str, Sequence[Attempt]]
-    ) -> dict[str, list[tuple[float | None, bool | None]]]:
-        """Per pipe, ``(error, inside)`` of each attempt (``attempts[pipe][k]``)."""
+    def score(self, attempts: Mapping[str, Sequence[Attempt]]) -> dict[str, list[PositionOutcome]]:
+        """Per pipe, the outcome of each attempt (``attempts[pipe][k]``)."""
         return {
             p: [
                 score_position(

@@ -28,7 +28,7 @@ from burstloc import _atomic as atomic
 from burstloc.constants import CAPTURE_INTERVALS
 from burstloc.experiments import paper
 from burstloc.experiments.evaluate import Evaluation, RunResult
-from burstloc.experiments.position import PositionErrors
+from burstloc.experiments.position import PositionErrors, PositionOutcome
 
 if TYPE_CHECKING:
     from burstloc.experiments.grid import StudySettings
@@ -154,7 +154,8 @@ def format_tables(ev: Evaluation) -> str:
         f"{len(ev.runs[0].offsets)} phase(s) spread over one "
         f"{'capture interval' if ev.phase_span == 'capture' else 'localization window'}; "
         "paper = Table V; time = median time to localize; position error = network distance "
-        "from the true burst point to the named position, over every attempt"
+        "from the true burst point to the named position, over every attempt (mean interval width, "
+        "intervals on the burst pipe that held the true point)"
     )
     header = [
         "detector",
@@ -167,7 +168,7 @@ def format_tables(ev: Evaluation) -> str:
         "median time",
         "localizer",
         "top-1 / top-3",
-        "position error mean / p90",
+        "position error mean / p90 (interval)",
     ]
     rows = []
     for kind, mode, runs in _groups(ev):
@@ -208,10 +209,12 @@ def format_tables(ev: Evaluation) -> str:
 
 
 def _metres(errors: PositionErrors) -> str:
-    """``mean / p90 m`` of a run's position errors, or ``-`` without any."""
-    if errors.mean is None or errors.p90 is None:
+    """``mean / p90 m (width m, hits/on-pipe held)`` of a run's position errors: mean interval
+    width, and how many intervals on the burst pipe held the true point; ``-`` without any."""
+    if errors.mean is None or errors.p90 is None or errors.mean_width is None:
         return "-"
-    return f"{errors.mean:.0f} / {errors.p90:.0f} m"
+    held = f", {errors.interval_hits}/{errors.on_pipe} held" if errors.on_pipe else ""
+    return f"{errors.mean:.0f} / {errors.p90:.0f} m ({errors.mean_width:.0f} m{held})"
 
 
 def write_json(ev: Evaluation, path: str | os.PathLike[str]) -> Path:
@@ -227,6 +230,7 @@ def _csv_rows(ev: Evaluation) -> list[dict[str, Any]]:
             a = r.attempts[p][0]
             loc = a.localization
             at = None if a.decision is None else a.decision.position
+            first = (r.positions.get(p) or [PositionOutcome()])[0]
             rows.append(
                 {
                     "detector": r.spec.detector.kind,
@@ -249,7 +253,7 @@ def _csv_rows(ev: Evaluation) -> list[dict[str, Any]]:
                     "phases": len(r.offsets),
                     "position_m": "" if at is None else at.metres,
                     "position_from": "" if at is None else at.start,
-                    "position_error_m": _blank(r.positions.get(p, [(None, None)])[0][0]),
+                    "position_error_m": _blank(first.error),
                 }
             )
     return rows
