@@ -108,6 +108,25 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="write PNGs: per run, a map of every burst's true and named pipe, and the meters' "
         "traces with their alarms for the first pipe of --pipes",
     )
+    parser.add_argument(
+        "--events",
+        action="store_true",
+        help="also simulate valve, pump and demand events (the network must have valve V16 "
+        "and pump PU1, as networks/paper15_assets.inp) and classify every alarm as burst, "
+        "other event or unsure: a confusion table per type and capture interval",
+    )
+    parser.add_argument(
+        "--classifier-network",
+        default=None,
+        metavar="NETWORK.inp",
+        help="--events: calibrate the classifier on this network's bursts (default: NETWORK)",
+    )
+    parser.add_argument(
+        "--classifier-out",
+        default=None,
+        metavar="PATH",
+        help="--events: write the calibrated classifier (for burstloc monitor --classify)",
+    )
     add_run_options(parser)
     parser.set_defaults(handler=run)
     return parser
@@ -119,7 +138,7 @@ def run(args: argparse.Namespace) -> int:
     from burstloc.experiments.evaluate import evaluate
     from burstloc.experiments.runs import plan_runs
 
-    for path in (args.json, args.csv):
+    for path in (args.json, args.csv, args.classifier_out):
         if path:
             check_output(path)
     if args.plot:
@@ -155,6 +174,8 @@ def run(args: argparse.Namespace) -> int:
         config=config,
     )
     print(report.format_tables(ev), end="")
+    if args.events:
+        _events(args, ev, cache)
     if args.json:
         print(f"wrote {report.write_json(ev, args.json)}")
     if args.csv:
@@ -165,3 +186,35 @@ def run(args: argparse.Namespace) -> int:
         for path in plot.write_plots(ev, args.plot):
             print(f"wrote {path}")
     return 0
+
+
+def _events(args: argparse.Namespace, ev: Any, cache: Any) -> None:
+    """Classify the evaluation's bursts and the default events; add the table to ``ev``."""
+    from burstloc.experiments.specificity import evaluate_events
+    from burstloc.localize.classify import ClassifierConfig
+    from burstloc.sim.scenario import burst_scenarios
+    from burstloc.sim.tsnet import simulate_many
+
+    intervals = sorted({r.spec.capture_interval for r in ev.runs})
+    duration = float(ev.scenario["duration"])
+    calibration = args.classifier_network or args.network
+    if calibration == args.network:
+        cal_bursts = dict(ev.results)
+    else:
+        scenarios = burst_scenarios(calibration, None, **ev.scenario)
+        report = simulate_many(scenarios, cache=cache, workers=args.workers, progress=False)
+        cal_bursts = {s.pipe: r for s, r in report.succeeded()}
+    spec, config = evaluate_events(
+        args.network,
+        dict(ev.results),
+        intervals,
+        calibration_network=calibration,
+        calibration_bursts=cal_bursts,
+        duration=duration,
+        cache=cache,
+        progress=not args.quiet,
+    )
+    ev.specificity = spec.to_json()
+    print(spec.format_table(), end="")
+    if args.classifier_out:
+        print(f"wrote {ClassifierConfig.save(config, args.classifier_out)}")

@@ -185,16 +185,20 @@ class Evaluation:
     warnings: list[str] = field(default_factory=list)
     results: dict[str, ScenarioResult] = field(default_factory=dict, repr=False)
     graph: Any = field(default=None, repr=False)
+    specificity: dict[str, Any] | None = None
 
     def to_json(self) -> dict[str, Any]:
         """The CLI's JSON document (see tests/evaluate_schema.json)."""
-        return {
+        doc = {
             "network": self.network,
             "scenario": dict(self.scenario),
             "phase_span": self.phase_span,
             "warnings": list(self.warnings),
             "runs": [r.to_json() for r in self.runs],
         }
+        if self.specificity is not None:
+            doc["specificity"] = self.specificity
+        return doc
 
 
 def evaluate(

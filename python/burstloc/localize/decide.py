@@ -32,11 +32,12 @@ import numpy as np
 from burstloc.constants import RANKING_LOCALIZERS, MeterModel
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.localize.arrival import ArrivalLocalizer
-from burstloc.localize.evidence import BurstEvidence, Localizer, Ranking, evidence_from_alarms
+from burstloc.localize.evidence import BurstEvidence, Localizer, Ranking, evidence_at
 from burstloc.localize.fused import FusedLocalizer
 from burstloc.localize.signature import SignatureLocalizer
 
 if TYPE_CHECKING:
+    from burstloc.localize.classify import Classification
     from burstloc.localize.config import IntervalCalibration
     from burstloc.localize.model import LocalizationModel
 
@@ -47,12 +48,19 @@ __all__ = ["Decision", "RankingLocalizers", "decision_time", "fused_of", "rank_a
 class Decision:
     """A ranking localizer's answer: the ranking, the reading time it was given at, the reading
     time of the first alarm, and whether the fused localizer waited for the signature (its
-    arrivals were not decisive)."""
+    arrivals were not decisive); ``classification``, when the alarm was classified
+    (:mod:`burstloc.localize.classify`): burst, other event or unsure."""
 
     ranking: Ranking
     time: float
     first_alarm: float
     waited: bool = False
+    classification: Classification | None = None
+
+    @property
+    def is_burst(self) -> bool:
+        """Whether this is reported as a burst: unclassified, or classified ``burst``."""
+        return self.classification is None or self.classification.is_burst
 
     @property
     def pipe(self) -> str | None:
@@ -62,7 +70,7 @@ class Decision:
 
     def to_json(self, top: int = 3) -> dict[str, Any]:
         """JSON-ready summary: time, first alarm, waited, and the ``top`` best pipes."""
-        return {
+        doc: dict[str, Any] = {
             "time": self.time,
             "first_alarm": self.first_alarm,
             "waited": self.waited,
@@ -71,6 +79,9 @@ class Decision:
                 for r in self.ranking.top(top)
             ],
         }
+        if self.classification is not None:
+            doc["classification"] = self.classification.to_json()
+        return doc
 
 
 @dataclass(frozen=True)
@@ -192,16 +203,7 @@ def rank_alarms(
     last = float(times[-1])
 
     def evidence(decided: float) -> BurstEvidence:
-        return evidence_from_alarms(
-            meters,
-            times,
-            readings,
-            alarms,
-            capture_interval=calibration.capture_interval,
-            meter_model=meter_model,
-            decision_time=decided,
-            alarm_window=calibration.arrival_decision_delay,
-        )
+        return evidence_at(decided, meters, times, readings, alarms, calibration, meter_model)
 
     decided = decision_time(localizer, alarms, times, calibration, fused)
     first, onset = _first_and_onset(alarms, times)
