@@ -111,9 +111,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument(
         "--events",
         action="store_true",
-        help="also simulate valve, pump and demand events (the network must have valve V16 "
-        "and pump PU1, as networks/paper15_assets.inp) and classify every alarm as burst, "
-        "other event or unsure: a confusion table per type and capture interval",
+        help="also simulate non-burst events (every valve closed and opened, every pump "
+        "tripped and started, demand steps at the largest consumers) and classify every "
+        "alarm as burst, other event or unsure: a confusion table per type and capture interval",
     )
     parser.add_argument(
         "--classifier-network",
@@ -211,6 +211,7 @@ def _events(args: argparse.Namespace, ev: Any, cache: Any) -> None:
         calibration_network=calibration,
         calibration_bursts=cal_bursts,
         duration=duration,
+        setup=ev.setup,
         cache=cache,
         progress=not args.quiet,
     )

@@ -186,6 +186,7 @@ class Evaluation:
     results: dict[str, ScenarioResult] = field(default_factory=dict, repr=False)
     graph: Any = field(default=None, repr=False)
     specificity: dict[str, Any] | None = None
+    setup: RankingSetup | None = field(default=None, repr=False)
 
     def to_json(self) -> dict[str, Any]:
         """The CLI's JSON document (see tests/evaluate_schema.json)."""
@@ -301,7 +302,7 @@ def evaluate(
         RunResult(spec, chosen, truth, phase_offsets(spec, phases, phase_span), attempts[spec])
         for spec in runs
     ]
-    return Evaluation(path, out, params, phase_span, warnings, results, graph)
+    return Evaluation(path, out, params, phase_span, warnings, results, graph, setup=setup)
 
 
 def _score(

@@ -1,7 +1,8 @@
 """Bursts and other events together: how often is a non-burst reported as a burst?
 
 Each simulated scenario (bursts on every pipe, and the non-burst events of
-:data:`DEFAULT_EVENTS`, :mod:`burstloc.sim.events`) is captured at each capture interval
+:func:`default_events`: every valve and pump operated, demand steps at the largest consumers;
+:mod:`burstloc.sim.events`) is captured at each capture interval
 (instantaneous readings, clock phase 0, with the warm-up of ``burstloc evaluate``), run through
 the calibrated CUSUM bank, and, when at least :data:`CORROBORATE` meters alarm (the monitor's
 rule), localized by the fused localizer and classified (:mod:`burstloc.localize.classify`) at
@@ -46,7 +47,9 @@ from burstloc.sim.scenario import ScenarioResult
 __all__ = [
     "ANSWERS",
     "CORROBORATE",
-    "DEFAULT_EVENTS",
+    "DEMAND_JUNCTIONS",
+    "PUMP_EVENTS",
+    "VALVE_EVENTS",
     "Outcome",
     "Specificity",
     "asset_nodes",
@@ -62,35 +65,50 @@ CORROBORATE = 2
 #: Noise level (m) the rise tolerance is floored at three times of.
 NOISE_SIGMA = 0.01
 
-#: The events of the evaluation on paper15_assets: (kind, asset, keyword arguments).
-DEFAULT_EVENTS: tuple[tuple[str, str, dict[str, float]], ...] = (
-    ("valve-closure", "V16", {"operation_time": 1.0}),
-    ("valve-closure", "V16", {"operation_time": 30.0}),
-    ("valve-closure", "V16", {"operation_time": 1.0, "setting": 0.3}),
-    ("valve-closure", "V16", {"operation_time": 30.0, "setting": 0.3}),
-    ("valve-opening", "V16", {"operation_time": 1.0, "setting": 1.0}),
-    ("valve-opening", "V16", {"operation_time": 30.0, "setting": 1.0}),
-    ("valve-opening", "V16", {"operation_time": 1.0, "setting": 0.3}),
-    ("pump-trip", "PU1", {"operation_time": 1.0}),
-    ("pump-trip", "PU1", {"operation_time": 10.0}),
-    ("pump-start", "PU1", {"operation_time": 2.0}),
-    ("pump-start", "PU1", {"operation_time": 10.0}),
-    ("demand-step", "N8", {"demand_change": 0.1}),
-    ("demand-step", "N8", {"demand_change": 0.02}),
-    ("demand-step", "3", {"demand_change": 0.02}),
-    ("demand-step", "5", {"demand_change": 0.008, "operation_time": 5.0}),
-    ("demand-step", "N2", {"demand_change": 0.025}),
-    ("demand-step", "7", {"demand_change": 0.01}),
-    ("demand-step", "N4", {"demand_change": -0.025}),
-    ("demand-step", "1", {"demand_change": 0.015, "operation_time": 5.0}),
+#: The operations of each valve and pump: (kind, keyword arguments): fast (1-2 s) and slow
+#: (10-30 s), full and partial (to 30 % open).
+VALVE_EVENTS: tuple[tuple[str, dict[str, float]], ...] = (
+    ("valve-closure", {"operation_time": 1.0}),
+    ("valve-closure", {"operation_time": 30.0}),
+    ("valve-closure", {"operation_time": 1.0, "setting": 0.3}),
+    ("valve-closure", {"operation_time": 30.0, "setting": 0.3}),
+    ("valve-opening", {"operation_time": 1.0, "setting": 1.0}),
+    ("valve-opening", {"operation_time": 30.0, "setting": 1.0}),
+    ("valve-opening", {"operation_time": 1.0, "setting": 0.3}),
 )
+PUMP_EVENTS: tuple[tuple[str, dict[str, float]], ...] = (
+    ("pump-trip", {"operation_time": 1.0}),
+    ("pump-trip", {"operation_time": 10.0}),
+    ("pump-start", {"operation_time": 2.0}),
+    ("pump-start", {"operation_time": 10.0}),
+)
+#: Demand steps at the junctions of largest base demand: this many junctions, each doubling
+#: its demand in 1 s and adding a quarter of it in 5 s; the largest also halves in 1 s.
+DEMAND_JUNCTIONS = 4
 
 
 def default_events(network: str | os.PathLike[str], duration: float) -> list[EventScenario]:
-    """:data:`DEFAULT_EVENTS` on ``network`` (which must have V16, PU1 and the junctions)."""
+    """The events of the evaluation on ``network``: :data:`VALVE_EVENTS` on every valve,
+    :data:`PUMP_EVENTS` on every pump, demand steps at :data:`DEMAND_JUNCTIONS` junctions."""
+    from burstloc import network as netmod
+
+    path = os.fspath(network)
+    wn = netmod.load_network(path)
+    out: list[tuple[str, str, dict[str, float]]] = []
+    for valve in wn.valve_name_list:
+        out += [(kind, valve, kw) for kind, kw in VALVE_EVENTS]
+    for pump in wn.pump_name_list:
+        out += [(kind, pump, kw) for kind, kw in PUMP_EVENTS]
+    demands = {j: float(wn.get_node(j).base_demand) for j in netmod.junction_names(wn)}
+    largest = sorted((j for j in demands if demands[j] > 0), key=lambda j: -demands[j])
+    for j in largest[:DEMAND_JUNCTIONS]:
+        out.append(("demand-step", j, {"demand_change": demands[j]}))
+        out.append(("demand-step", j, {"demand_change": demands[j] / 4, "operation_time": 5.0}))
+    if largest:
+        out.append(("demand-step", largest[0], {"demand_change": -demands[largest[0]] / 2}))
     return [
-        EventScenario(os.fspath(network), kind, asset, duration=duration, **kw)  # type: ignore[arg-type]
-        for kind, asset, kw in DEFAULT_EVENTS
+        EventScenario(path, kind, asset, duration=duration, **kw)  # type: ignore[arg-type]
+        for kind, asset, kw in out
     ]
 
 
@@ -284,20 +302,25 @@ def evaluate_events(
     calibration_network: str | os.PathLike[str],
     calibration_bursts: dict[str, ScenarioResult],
     duration: float,
+    setup: RankingSetup | None = None,
     cache: Any = True,
     progress: bool = True,
 ) -> tuple[Specificity, ClassifierConfig]:
-    """Classify ``bursts`` (pipe -> its burst on ``network``) and :data:`DEFAULT_EVENTS` at each
+    """Classify ``bursts`` (pipe -> its burst on ``network``) and :func:`default_events` at each
     capture interval, with a classifier calibrated on ``calibration_bursts`` (of
-    ``calibration_network``); every event also with its operation declared."""
+    ``calibration_network``); every event also with its operation declared. ``setup``: the
+    localizers and calibration of ``network`` (default: calibrated here)."""
     import sys
 
     from burstloc.sim.events import simulate_event
 
     meters = list(next(iter(bursts.values())).junctions)
-    setup = RankingSetup.build(network, meters, capture_intervals)
-    cal_meters = list(next(iter(calibration_bursts.values())).junctions)
-    cal_setup = RankingSetup.build(calibration_network, cal_meters, capture_intervals)
+    if setup is None:
+        setup = RankingSetup.build(network, meters, capture_intervals)
+    cal_setup = setup
+    if os.path.abspath(calibration_network) != os.path.abspath(network):
+        cal_meters = list(next(iter(calibration_bursts.values())).junctions)
+        cal_setup = RankingSetup.build(calibration_network, cal_meters, capture_intervals)
     config = calibrate_classifier(
         list(calibration_bursts.values()), cal_setup, capture_intervals, asset_nodes(network)
     )
