@@ -62,7 +62,7 @@ def test_evaluate_events_on_the_tiny_network(tiny: Path, tmp_path: Path, capsys)
     classifier = tmp_path / "classifier.json"
     args = ["evaluate", str(tiny), "--events", "--detector", "cusum", "--capture-interval", "2"]
     args += ["--phases", "1", "--workers", "1", "--quiet", "--json", str(out)]
-    args += ["--classifier-out", str(classifier)]
+    args += ["--classifier-out", str(classifier), "--normal-hours", "2"]
     assert main(args) == 0
     doc = json.loads(out.read_text())
     jsonschema.validate(doc, SCHEMA)
@@ -75,4 +75,8 @@ def test_evaluate_events_on_the_tiny_network(tiny: Path, tmp_path: Path, capsys)
     # a declared operation explains every demand step
     assert rows["demand-step"]["reported_as_burst_declared"] == 0.0
     assert json.loads(classifier.read_text())["provenance"]["bursts"] == 5
+    # two hours of normal operation (diurnal demand, noise) through the monitor: no burst
+    (day,) = spec["normal_operation"]
+    assert day["hours"] == 2 and day["capture_interval"] == 2.0
+    assert day["burst_reports"] == 0
     assert "as burst" in capsys.readouterr().out

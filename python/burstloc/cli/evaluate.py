@@ -122,6 +122,14 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="--events: calibrate the classifier on this network's bursts (default: NETWORK)",
     )
     parser.add_argument(
+        "--normal-hours",
+        type=float,
+        default=24.0,
+        metavar="H",
+        help="--events: hours of normal operation (diurnal demand, noise 0.01 m) through the "
+        "monitor per capture interval, to count false burst reports (default 24; 0: none)",
+    )
+    parser.add_argument(
         "--classifier-out",
         default=None,
         metavar="PATH",
@@ -212,6 +220,7 @@ def _events(args: argparse.Namespace, ev: Any, cache: Any) -> None:
         calibration_bursts=cal_bursts,
         duration=duration,
         setup=ev.setup,
+        normal_hours=args.normal_hours,
         cache=cache,
         progress=not args.quiet,
     )

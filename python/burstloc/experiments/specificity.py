@@ -7,8 +7,10 @@ Each simulated scenario (bursts on every pipe, and the non-burst events of
 the calibrated CUSUM bank, and, when at least :data:`CORROBORATE` meters alarm (the monitor's
 rule), localized by the fused localizer and classified (:mod:`burstloc.localize.classify`) at
 the signature's decision time: the answer is ``quiet`` (no corroborated alarm), ``burst``,
-``other`` or ``unsure``. Only ``burst`` is a burst report. With ``operations`` every event is
-also classified with its own operation declared (``asset, start, kind``).
+``other`` or ``unsure``. Only ``burst`` is a burst report. Every event is also classified
+with its own operation declared (``asset, start, kind``). And a day of normal operation
+(:func:`burstloc.sim.normal.normal_day`: diurnal demand, sensor noise) runs through the live
+monitor with the classifier: its burst reports are false alarms.
 
 **Calibrating the classifier** (:func:`calibrate_classifier`, never on the events): the bursts
 of a calibration network (paper15: one per pipe, the paper's scenario) are classified without
@@ -56,6 +58,8 @@ __all__ = [
     "calibrate_classifier",
     "classify_result",
     "default_events",
+    "evaluate_events",
+    "normal_operation",
 ]
 
 #: What a scenario can end as.
@@ -218,6 +222,7 @@ class Specificity:
     reported: list[dict[str, Any]] = field(default_factory=list)
     declared: dict[float, dict[str, int]] = field(default_factory=dict)
     classifier: dict[str, Any] = field(default_factory=dict)
+    normal: list[dict[str, Any]] = field(default_factory=list)
 
     def add(self, kind: str, ci: float, outcome: Outcome, label: str, truth: str | None) -> None:
         """Count one outcome; a non-burst reported as a burst is listed with its evidence."""
@@ -262,6 +267,7 @@ class Specificity:
             },
             "false_burst_reports": self.reported,
             "classifier": dict(self.classifier),
+            "normal_operation": list(self.normal),
         }
 
     def format_table(self) -> str:
@@ -285,6 +291,12 @@ class Specificity:
             )
         for r in self.reported:
             lines.append(f"reported as a burst: {r['event']} at {r['capture_interval']:g} s")
+        for day in self.normal:
+            lines.append(
+                f"normal operation at {day['capture_interval']:g} s: {day['hours']:g} h, "
+                f"{day['decisions']} decision(s), {day['burst_reports']} burst report(s) "
+                f"(sigma {day['noise_sigma']:g} m)"
+            )
         return "\n".join(lines) + "\n"
 
 
@@ -303,12 +315,14 @@ def evaluate_events(
     calibration_bursts: dict[str, ScenarioResult],
     duration: float,
     setup: RankingSetup | None = None,
+    normal_hours: float = 24.0,
     cache: Any = True,
     progress: bool = True,
 ) -> tuple[Specificity, ClassifierConfig]:
     """Classify ``bursts`` (pipe -> its burst on ``network``) and :func:`default_events` at each
     capture interval, with a classifier calibrated on ``calibration_bursts`` (of
-    ``calibration_network``); every event also with its operation declared. ``setup``: the
+    ``calibration_network``); every event also with its operation declared; and
+    ``normal_hours`` of normal operation (:func:`normal_operation`; 0: none). ``setup``: the
     localizers and calibration of ``network`` (default: calibrated here)."""
     import sys
 
@@ -342,4 +356,49 @@ def evaluate_events(
             out.add(scenario.kind, ci, outcome, scenario.label, None)
             known = classify_result(result, setup, with_operation(classifier, scenario), ci)
             declared[scenario.kind] = declared.get(scenario.kind, 0) + (known.answer == "burst")
+        if normal_hours > 0:
+            out.normal.append(normal_operation(network, setup, config, ci, hours=normal_hours))
     return out, config
+
+
+def normal_operation(
+    network: str | os.PathLike[str],
+    setup: RankingSetup,
+    config: ClassifierConfig,
+    capture_interval: float,
+    *,
+    hours: float = 24.0,
+    noise_sigma: float = NOISE_SIGMA,
+    seed: int = 0,
+) -> dict[str, Any]:
+    """A day of normal operation (:func:`burstloc.sim.normal.normal_day`) through the live
+    monitor with the classifier: how many decisions, how many reported as bursts."""
+    from burstloc.live.monitor import BurstMonitor
+    from burstloc.readings import Step
+    from burstloc.sim.normal import normal_day
+
+    times, values = normal_day(
+        network,
+        capture_interval=capture_interval,
+        noise_sigma=noise_sigma,
+        hours=hours,
+        meters=setup.meters,
+        seed=seed,
+    )
+    monitor = BurstMonitor(
+        network,
+        setup.config,
+        capture_interval=capture_interval,
+        localizers=setup.localizers,
+        classify=config,
+    )
+    decisions = list(monitor.run(Step(float(t), v) for t, v in zip(times, values, strict=True)))
+    return {
+        "capture_interval": capture_interval,
+        "hours": hours,
+        "noise_sigma": noise_sigma,
+        "decisions": len(decisions),
+        "burst_reports": sum(d.is_burst for d in decisions),
+        "dismissed": monitor.dismissed,
+        "events": [d.to_json()["classification"] for d in decisions],
+    }
