@@ -102,3 +102,10 @@ def test_operations_are_read_from_csv(tmp_path: Path) -> None:
     with pytest.raises(InputError, match="columns"):
         (tmp_path / "cols.csv").write_text("asset,when\nV16,1\n")
         read_operations(tmp_path / "cols.csv")
+
+
+def test_a_drop_beyond_the_tolerance_at_one_meter_only_is_unsure() -> None:
+    classifier = EventClassifier(CONFIG, SignatureLocalizer(SIGNATURES))
+    kind = classifier.classify(evidence(np.array([2.0, 0.04, 0.0, 0.0])))
+    assert kind.label == "unsure" and "small, local" in kind.reason
+    assert kind.evidence["falling"] == 1

@@ -223,6 +223,7 @@ class Specificity:
     declared: dict[float, dict[str, int]] = field(default_factory=dict)
     classifier: dict[str, Any] = field(default_factory=dict)
     normal: list[dict[str, Any]] = field(default_factory=list)
+    missed: list[dict[str, Any]] = field(default_factory=list)
 
     def add(self, kind: str, ci: float, outcome: Outcome, label: str, truth: str | None) -> None:
         """Count one outcome; a non-burst reported as a burst is listed with its evidence."""
@@ -231,6 +232,11 @@ class Specificity:
         if truth is not None:
             self.burst_top1[ci] = self.burst_top1.get(ci, 0) + (outcome.pipe == truth)
             self.burst_top3[ci] = self.burst_top3.get(ci, 0) + (truth in outcome.top3)
+            if outcome.answer != "burst":
+                self.missed.append(
+                    {"pipe": truth, "capture_interval": ci, "class": outcome.answer,
+                     "reason": outcome.reason}
+                )  # fmt: skip
         elif outcome.answer == "burst":
             self.reported.append(
                 {"event": label, "capture_interval": ci, "pipe": outcome.pipe, **outcome.evidence}
@@ -268,6 +274,7 @@ class Specificity:
             "false_burst_reports": self.reported,
             "classifier": dict(self.classifier),
             "normal_operation": list(self.normal),
+            "bursts_not_reported": list(self.missed),
         }
 
     def format_table(self) -> str:
@@ -291,6 +298,10 @@ class Specificity:
             )
         for r in self.reported:
             lines.append(f"reported as a burst: {r['event']} at {r['capture_interval']:g} s")
+        for m in self.missed:
+            lines.append(
+                f"burst on {m['pipe']} at {m['capture_interval']:g} s: {m['class']}, {m['reason']}"
+            )
         for day in self.normal:
             lines.append(
                 f"normal operation at {day['capture_interval']:g} s: {day['hours']:g} h, "

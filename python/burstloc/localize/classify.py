@@ -13,7 +13,10 @@ settled) the :class:`EventClassifier` weighs the evidence, in this order:
    heads rising on one side and falling on the other, a valve operation (``other``);
 3. **where it started**: the first meter to alarm is an asset's node (a pump's outlet, a valve's
    side): a pump trip or a valve closure starts there (``other``);
-4. **the lasting drop's fit to a burst**: the drop ``d`` fits ``k s_p`` (the signature
+4. **a drop large enough to be sure of**: a burst lowers heads beyond ``rise_tolerance`` at
+   :data:`MIN_FALLING` meters at least; a smaller drop (a demand change, a small leak) is
+   ``unsure``;
+5. **the lasting drop's fit to a burst**: the drop ``d`` fits ``k s_p`` (the signature
    localizer's fit, :func:`burstloc.localize.signature.fit_signatures`) with a scale ``k`` of at
    least ``min_scale`` (a burst's outflow, relative to the signatures' reference burst) and a
    relative residual ``rms(d - k s_p) / rms(d)`` of at most ``max_residual``; a smaller drop (a
@@ -61,6 +64,10 @@ Label = Literal["burst", "other", "unsure"]
 
 CLASSIFIER_FORMAT = "burstloc-classifier/1"
 """Format tag of a classifier configuration file."""
+
+#: A burst lowers the head beyond the rise tolerance (the calibrated uncertainty of a lasting
+#: change) at this many meters at least; a smaller, more local drop is ``unsure``.
+MIN_FALLING = 2
 
 #: Seconds around the onset within which a declared operation explains an alarm (default).
 OPERATION_WINDOW = 60.0
@@ -181,6 +188,11 @@ class ClassifierConfig:
             )
 
 
+def tol_text(config: ClassifierConfig) -> str:
+    """The rise tolerance as text (m)."""
+    return f"{config.rise_tolerance:.3g} m"
+
+
 def _first_meter(evidence: BurstEvidence) -> str | None:
     """The meter whose change started first (ties: the larger change)."""
     if not evidence.alarms:
@@ -254,6 +266,12 @@ class EventClassifier:
         if asset is not None:
             reason = f"the transient started at {f['first_meter']}, beside {asset}"
             return Classification("other", reason, evidence_json)
+        if len(f["falling"]) < MIN_FALLING:
+            reason = (
+                f"no lasting drop beyond {tol_text(cfg)} at {MIN_FALLING} meters "
+                f"(largest {f['largest_drop_m']:.3g} m): a small, local change"
+            )
+            return Classification("unsure", reason, evidence_json)
         if f["scale"] < cfg.min_scale:
             reason = f"a small lasting drop (scale {f['scale']:.3g} < {cfg.min_scale:.3g})"
             return Classification("unsure", reason, evidence_json)
