@@ -59,8 +59,9 @@ def test_heads_rising_on_one_side_and_falling_on_the_other_is_another_event() ->
     assert classify([1.0, 1.0, -1.0, -1.0]) == "other"
 
 
-def test_a_transient_starting_at_an_asset_node_is_another_event() -> None:
-    assert classify([0.5, 1.0, 3.0, 4.0], first="D") == "other"
+def test_a_transient_starting_at_an_asset_node_and_pointing_there_is_another_event() -> None:
+    assert classify([0.5, 1.0, 3.0, 4.0], first="D") == "other"  # pipe q ends at D
+    assert classify([4.0, 3.0, 1.0, 0.5], first="D") == "burst"  # pipe p does not
 
 
 def test_a_small_drop_is_unsure() -> None:
@@ -109,3 +110,18 @@ def test_a_drop_beyond_the_tolerance_at_one_meter_only_is_unsure() -> None:
     kind = classifier.classify(evidence(np.array([2.0, 0.04, 0.0, 0.0])))
     assert kind.label == "unsure" and "small, local" in kind.reason
     assert kind.evidence["falling"] == 1
+
+
+def test_thresholds_per_capture_interval(tmp_path: Path) -> None:
+    strict = {"max_residual": 0.01, "min_scale": 0.25, "rise_tolerance": 0.05}
+    config = ClassifierConfig(
+        max_residual=0.2, min_scale=0.25, rise_tolerance=0.05, intervals={"1": strict}
+    )
+    assert config.thresholds(1.0) == (0.01, 0.25, 0.05)
+    assert config.thresholds(2.0) == (0.2, 0.25, 0.05)
+    assert ClassifierConfig.load(config.save(tmp_path / "c.json")) == config
+    classifier = EventClassifier(config, SignatureLocalizer(SIGNATURES))
+    noisy = np.array([4.0, 3.0, 1.0, 0.5]) + np.array([0.1, -0.1, 0.1, 0.0])
+    assert classifier.classify(evidence(noisy)).label == "unsure"  # at 1 s: too far from a fit
+    with pytest.raises(ConfigError, match=r"intervals\.1"):
+        ClassifierConfig(0.2, 0.25, 0.05, intervals={"1": {"max_residual": 0.1}})

@@ -14,11 +14,13 @@ monitor with the classifier: its burst reports are false alarms.
 
 **Calibrating the classifier** (:func:`calibrate_classifier`, never on the events): the bursts
 of a calibration network (paper15: one per pipe, the paper's scenario) are classified without
-thresholds; at every capture interval their largest relative residual, smallest scale and
-largest lasting rise are measured, and the thresholds are: ``max_residual`` = 1.5 x the
-largest residual; ``min_scale`` = 0.25 x the smallest scale (the smallest burst reported with
-confidence is a quarter of the calibration bursts); ``rise_tolerance`` = 1.5 x the largest rise
-a burst showed, at least 3 noise sigmas. The asset nodes come from the evaluated network
+thresholds; at each capture interval their largest relative residual, smallest scale and
+largest lasting rise are measured, and that interval's thresholds are: ``max_residual`` =
+1.5 x the largest residual; ``min_scale`` = 0.25 x the smallest scale (the smallest burst
+reported with confidence is a quarter of the calibration bursts); ``rise_tolerance`` = 1.5 x
+the largest rise a burst showed, at least 3 noise sigmas (the margins: :data:`RESIDUAL_MARGIN`,
+:data:`SCALE_FRACTION`, :data:`RISE_MARGIN`). The top-level thresholds, for an interval not
+calibrated, are the loosest of them. The asset nodes come from the evaluated network
 (the junctions beside a valve or a pump).
 """
 
@@ -68,6 +70,10 @@ ANSWERS = ("quiet", *CLASSES)
 CORROBORATE = 2
 #: Noise level (m) the rise tolerance is floored at three times of.
 NOISE_SIGMA = 0.01
+#: The calibration's margins (module docstring).
+RESIDUAL_MARGIN = 1.5
+SCALE_FRACTION = 0.25
+RISE_MARGIN = 1.5
 
 #: The operations of each valve and pump: (kind, keyword arguments): fast (1-2 s) and slow
 #: (10-30 s), full and partial (to 30 % open).
@@ -184,32 +190,51 @@ def calibrate_classifier(
     signature = setup.localizers["signature"]
     assert isinstance(signature, SignatureLocalizer)
     probe = EventClassifier(loose, signature)
-    residuals, scales, rises = [], [], []
+    measured: dict[str, dict[str, list[float]]] = {}
     for ci in capture_intervals:
+        seen = measured.setdefault(f"{ci:g}", {"residual": [], "scale": [], "largest_rise_m": []})
         for result in results:
             outcome = classify_result(result, setup, probe, ci)
-            if outcome.answer == "quiet":
-                continue
-            residuals.append(outcome.evidence["residual"])
-            scales.append(outcome.evidence["scale"])
-            rises.append(outcome.evidence["largest_rise_m"])
-    if not residuals:
+            if outcome.answer != "quiet":
+                for name, values in seen.items():
+                    values.append(outcome.evidence[name])
+    if not any(seen["residual"] for seen in measured.values()):
         raise InputError("no calibration burst was detected: nothing to calibrate on")
+    intervals = {ci: _thresholds(seen) for ci, seen in measured.items() if seen["residual"]}
     return ClassifierConfig(
-        max_residual=min(1.5 * max(residuals), 10.0),
-        min_scale=0.25 * min(scales),
-        rise_tolerance=max(1.5 * max(max(rises), 0.0), 3 * NOISE_SIGMA),
+        max_residual=max(t["max_residual"] for t in intervals.values()),
+        min_scale=min(t["min_scale"] for t in intervals.values()),
+        rise_tolerance=max(t["rise_tolerance"] for t in intervals.values()),
         asset_nodes=assets,
+        intervals=intervals,
         provenance={
             "procedure": "burstloc.experiments.specificity.calibrate_classifier",
             "bursts": len(results),
-            "capture_intervals": list(capture_intervals),
-            "detected": len(residuals),
-            "largest_residual": max(residuals),
-            "smallest_scale": min(scales),
-            "largest_rise_m": max(rises),
+            "measured": {
+                ci: {"detected": len(seen["residual"]), **_extremes(seen)}
+                for ci, seen in measured.items()
+            },
         },
     )
+
+
+def _extremes(seen: dict[str, list[float]]) -> dict[str, float]:
+    """The largest residual, the smallest scale and the largest rise of the bursts seen."""
+    return {
+        "largest_residual": max(seen["residual"]),
+        "smallest_scale": min(seen["scale"]),
+        "largest_rise_m": max(seen["largest_rise_m"]),
+    }
+
+
+def _thresholds(seen: dict[str, list[float]]) -> dict[str, float]:
+    """The thresholds from one capture interval's bursts (module docstring)."""
+    worst = _extremes(seen)
+    return {
+        "max_residual": min(RESIDUAL_MARGIN * worst["largest_residual"], 10.0),
+        "min_scale": SCALE_FRACTION * worst["smallest_scale"],
+        "rise_tolerance": max(RISE_MARGIN * max(worst["largest_rise_m"], 0.0), 3 * NOISE_SIGMA),
+    }
 
 
 @dataclass

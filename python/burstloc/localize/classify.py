@@ -12,7 +12,9 @@ settled) the :class:`EventClassifier` weighs the evidence, in this order:
    ``rise_tolerance`` (m): all of them, a pump start, a valve opening or a falling demand; some,
    heads rising on one side and falling on the other, a valve operation (``other``);
 3. **where it started**: the first meter to alarm is an asset's node (a pump's outlet, a valve's
-   side): a pump trip or a valve closure starts there (``other``);
+   side) and the lasting drop fits best a pipe that ends there: a pump trip or a valve closure
+   (``other``). (At coarse capture intervals many meters alarm on the same reading, and the
+   first is the one with the largest change: the lasting drop must agree.)
 4. **a drop large enough to be sure of**: a burst lowers heads beyond ``rise_tolerance`` at
    :data:`MIN_FALLING` meters at least; a smaller drop (a demand change, a small leak) is
    ``unsure``;
@@ -68,6 +70,9 @@ CLASSIFIER_FORMAT = "burstloc-classifier/1"
 #: A burst lowers the head beyond the rise tolerance (the calibrated uncertainty of a lasting
 #: change) at this many meters at least; a smaller, more local drop is ``unsure``.
 MIN_FALLING = 2
+
+#: The thresholds, by name.
+THRESHOLDS = ("max_residual", "min_scale", "rise_tolerance")
 
 #: Seconds around the onset within which a declared operation explains an alarm (default).
 OPERATION_WINDOW = 60.0
@@ -131,8 +136,10 @@ class ClassifierConfig:
 
     ``max_residual``: largest relative residual of a burst's signature fit; ``min_scale``:
     smallest burst scale reported with confidence; ``rise_tolerance`` (m): a lasting rise larger
-    than this is not a burst's; ``asset_nodes``: junction -> the valve or pump beside it;
-    ``operation_window`` (s); ``provenance``: how the thresholds were found.
+    than this is not a burst's. ``intervals`` holds the same three per capture interval
+    (``{"2": {"max_residual": ..., ...}}``; the top-level values serve the others).
+    ``asset_nodes``: junction -> the valve or pump beside it; ``operation_window`` (s);
+    ``provenance``: how the thresholds were found.
     """
 
     max_residual: float
@@ -141,15 +148,29 @@ class ClassifierConfig:
     asset_nodes: Mapping[str, str] = field(default_factory=dict)
     operation_window: float = OPERATION_WINDOW
     provenance: Mapping[str, Any] = field(default_factory=dict)
+    intervals: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        check_number(self.max_residual, "max_residual", low=0, low_open=True, high=10.0)
-        check_number(self.min_scale, "min_scale", low=0, high=1e6)
-        check_number(self.rise_tolerance, "rise_tolerance", low=0, high=1e3)
+        _check_thresholds(self.max_residual, self.min_scale, self.rise_tolerance, "")
         check_number(self.operation_window, "operation_window", low=0, high=86_400.0)
         for node, asset in self.asset_nodes.items():
             check_string(node, "asset_nodes")
             check_string(asset, f"asset_nodes.{node}")
+        for ci, values in self.intervals.items():
+            where = f"intervals.{ci}."
+            check_number(float(ci), f"intervals.{ci}", low=0, low_open=True, high=3600.0)
+            if not isinstance(values, Mapping) or set(values) != set(THRESHOLDS):
+                raise ConfigError(f"{where[:-1]} must hold exactly {THRESHOLDS}")
+            _check_thresholds(
+                values["max_residual"], values["min_scale"], values["rise_tolerance"], where
+            )
+
+    def thresholds(self, capture_interval: float) -> tuple[float, float, float]:
+        """``(max_residual, min_scale, rise_tolerance)`` at ``capture_interval``."""
+        for ci, values in self.intervals.items():
+            if math.isclose(float(ci), capture_interval, rel_tol=1e-9):
+                return values["max_residual"], values["min_scale"], values["rise_tolerance"]
+        return self.max_residual, self.min_scale, self.rise_tolerance
 
     def to_json(self) -> dict[str, Any]:
         """The JSON document (format :data:`CLASSIFIER_FORMAT`)."""
@@ -160,6 +181,7 @@ class ClassifierConfig:
             "rise_tolerance": self.rise_tolerance,
             "asset_nodes": dict(self.asset_nodes),
             "operation_window": self.operation_window,
+            "intervals": {ci: dict(v) for ci, v in self.intervals.items()},
             "provenance": dict(self.provenance),
         }
 
@@ -185,12 +207,14 @@ class ClassifierConfig:
                 asset_nodes=doc.optional_object("asset_nodes"),
                 operation_window=doc.data.get("operation_window", OPERATION_WINDOW),
                 provenance=doc.optional_object("provenance"),
+                intervals=doc.optional_object("intervals"),
             )
 
 
-def tol_text(config: ClassifierConfig) -> str:
-    """The rise tolerance as text (m)."""
-    return f"{config.rise_tolerance:.3g} m"
+def _check_thresholds(max_residual: Any, min_scale: Any, rise_tolerance: Any, where: str) -> None:
+    check_number(max_residual, f"{where}max_residual", low=0, low_open=True, high=10.0)
+    check_number(min_scale, f"{where}min_scale", low=0, high=1e6)
+    check_number(rise_tolerance, f"{where}rise_tolerance", low=0, high=1e3)
 
 
 def _first_meter(evidence: BurstEvidence) -> str | None:
@@ -228,7 +252,7 @@ class EventClassifier:
         rms = np.stack([r for _, r in fits])
         where = np.unravel_index(int(np.argmin(rms)), rms.shape)
         size = float(np.sqrt(np.mean(drop**2)))
-        tol = self.config.rise_tolerance
+        tol = self.config.thresholds(evidence.capture_interval)[2]
         return {
             "scale": float(scale[where]),
             "residual": float(rms[where]) / size if size > 0 else math.inf,
@@ -243,6 +267,7 @@ class EventClassifier:
     def classify(self, evidence: BurstEvidence) -> Classification:
         """The class of the alarm whose evidence (readings up to the decision time) is given."""
         cfg = self.config
+        max_residual, min_scale, tol = cfg.thresholds(evidence.capture_interval)
         declared = [
             op for op in self.operations if abs(op.time - evidence.onset) <= cfg.operation_window
         ]
@@ -262,20 +287,24 @@ class EventClassifier:
                 f"{', '.join(f['falling'][:3])} (a valve operation)"
             )
             return Classification("other", reason, evidence_json)
-        asset = cfg.asset_nodes.get(f["first_meter"] or "")
-        if asset is not None:
-            reason = f"the transient started at {f['first_meter']}, beside {asset}"
+        first = f["first_meter"] or ""
+        asset = cfg.asset_nodes.get(first)
+        if asset is not None and first in self.signature.signatures.endpoints[f["pipe"]]:
+            reason = (
+                f"the transient started at {first}, beside {asset}, and the lasting drop "
+                f"points there (pipe {f['pipe']})"
+            )
             return Classification("other", reason, evidence_json)
         if len(f["falling"]) < MIN_FALLING:
             reason = (
-                f"no lasting drop beyond {tol_text(cfg)} at {MIN_FALLING} meters "
+                f"no lasting drop beyond {tol:.3g} m at {MIN_FALLING} meters "
                 f"(largest {f['largest_drop_m']:.3g} m): a small, local change"
             )
             return Classification("unsure", reason, evidence_json)
-        if f["scale"] < cfg.min_scale:
-            reason = f"a small lasting drop (scale {f['scale']:.3g} < {cfg.min_scale:.3g})"
+        if f["scale"] < min_scale:
+            reason = f"a small lasting drop (scale {f['scale']:.3g} < {min_scale:.3g})"
             return Classification("unsure", reason, evidence_json)
-        if f["residual"] > cfg.max_residual:
+        if f["residual"] > max_residual:
             reason = f"the drop fits no burst (residual {f['residual']:.3g})"
             return Classification("unsure", reason, evidence_json)
         reason = f"a lasting drop that fits a burst on pipe {f['pipe']}"
