@@ -183,16 +183,20 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if not args.tnet1.is_file():
         parser.error(f"Tnet1 INP not found: {args.tnet1}")
-    text = build(args.tnet1)
-    if args.check:
-        current = args.out.read_text(encoding="utf-8") if args.out.is_file() else None
+    return write_or_check(build(args.tnet1), args.out, args.tnet1, check=args.check)
+
+
+def write_or_check(text: str, out: Path, source: Path, *, check: bool) -> int:
+    """Write ``text`` to ``out``, or (``check``) exit status 1 if ``out`` holds other text."""
+    if check:
+        current = out.read_text(encoding="utf-8") if out.is_file() else None
         if current != text:
-            print(f"{args.out} is not what {args.tnet1} builds", file=sys.stderr)
+            print(f"{out} is not what {source} builds", file=sys.stderr)
             return 1
-        print(f"{args.out} is up to date")
+        print(f"{out} is up to date")
         return 0
-    args.out.write_text(text, encoding="utf-8", newline="\n")
-    print(f"wrote {args.out}")
+    out.write_text(text, encoding="utf-8", newline="\n")
+    print(f"wrote {out}")
     return 0
 
 

@@ -122,6 +122,26 @@ def test_paper15_is_what_the_builder_writes() -> None:
     assert builder.build(TNET1) == PAPER15.read_text(encoding="utf-8")
 
 
+def test_paper15_assets_is_what_the_builder_writes() -> None:
+    spec = importlib.util.spec_from_file_location(
+        "build_paper15_assets", REPO / "networks" / "build_paper15_assets.py"
+    )
+    assert spec is not None and spec.loader is not None
+    builder = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(builder)
+    assets = REPO / "networks" / "paper15_assets.inp"
+    assert builder.build(PAPER15) == assets.read_text(encoding="utf-8")
+
+
+def test_paper15_assets_has_the_valve_and_the_pump_and_clear_flows() -> None:
+    wn = network.load_network(REPO / "networks" / "paper15_assets.inp")
+    assert list(wn.valve_name_list) == ["V16"] and list(wn.pump_name_list) == ["PU1"]
+    assert len(network.junction_names(wn)) == 18 and len(network.pipe_names(wn)) == 27
+    flows = network.steady_state_flows(wn, "PDD")
+    assert min(abs(flows[p]) for p in network.pipe_names(wn)) > 3e-3  # m³/s: no ambiguous pipe
+    assert flows["18"] > 0.015  # the pump delivers into junction 8
+
+
 # --- loading and errors ----------------------------------------------------------------------
 
 

@@ -243,3 +243,44 @@ def test_the_monitor_never_loads_the_network(
     monitor = BurstMonitor(tiny, config, capture_interval=0.2, localizer="fused")
     decided = list(monitor.run(_steps(batch.results["C"], spec)))
     assert decided and decided[0].pipe == batch.runs[1].attempts["C"][0].predicted_pipe
+
+
+@pytest.fixture(scope="module")
+def long_burst(tiny: Path):
+    """A burst on pipe B that lasts past the signature's decision time (classification)."""
+    from burstloc.sim.scenario import BurstScenario
+    from burstloc.sim.tsnet import simulate_burst
+
+    return simulate_burst(BurstScenario(tiny, "B", burst_start=2.0, duration=175.0))
+
+
+def test_classified_decisions_are_bursts_or_events(tiny: Path, config: Calibration, long_burst):
+    from burstloc.localize.classify import ClassifierConfig, Operation
+
+    spec = RunSpec(DetectorConfig("cusum", 0.3), 2.0, 5, localizer="fused")
+    loose = ClassifierConfig(max_residual=1.0, min_scale=0.0, rise_tolerance=0.05)
+    steps = _steps(long_burst, spec)
+    monitor = BurstMonitor(tiny, config, capture_interval=2.0, classify=loose)
+    decisions = list(monitor.run(steps))
+    assert decisions and decisions[0].is_burst
+    doc = decisions[0].to_json()
+    assert doc["type"] == "decision" and doc["burst"] is True
+    assert doc["classification"]["class"] == "burst"
+    assert (
+        decisions[0].time >= decisions[0].first_alarm + config.for_interval(2.0).decision_delay - 2
+    )
+
+    # the same change mirrored: every head rises (as a pump start does): an event, not a burst
+    base = steps[0].values
+    mirrored = [Step(s.timestamp, 2 * base - s.values) for s in steps]
+    monitor = BurstMonitor(tiny, config, capture_interval=2.0, classify=loose)
+    events = list(monitor.run(mirrored))
+    assert events and not events[0].is_burst
+    doc = events[0].to_json()
+    assert doc["type"] == "event" and doc["classification"]["class"] == "other"
+
+    # declared: the burst at 2 s explained by an operation (a demand switched on)
+    declared = [Operation("J3", 2.0, "demand on")]
+    monitor = BurstMonitor(tiny, config, capture_interval=2.0, classify=loose, operations=declared)
+    explained = list(monitor.run(steps))
+    assert explained and explained[0].to_json()["classification"]["reason"].startswith("declared")

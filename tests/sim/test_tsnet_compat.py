@@ -58,6 +58,13 @@ PATCHES = {
     "add_leakage": ("tsnet.simulation.single", "add_leakage"),
     "cal_roughness_coef": ("tsnet.simulation.initialize", "cal_roughness_coef"),
 }
+#: The patches that make TSNet's valve and pump operations run (tests/sim/test_events.py runs
+#: them): the attribute of the module or class TSNet calls, by the key of its original.
+OPERATION_PATCHES = {
+    "pump_operation_points": ("tsnet.simulation.initialize", "pump_operation_points"),
+    "valve_opening": ("tsnet.network.model", "TransientModel.valve_opening"),
+    "pump_start_up": ("tsnet.network.model", "TransientModel.pump_start_up"),
+}
 
 
 def pinned_stack() -> bool:
@@ -124,9 +131,11 @@ def without(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> 
 def test_the_patches_are_the_functions_tsnet_calls() -> None:
     _tsnet_compat.load()
     assert _tsnet_compat.applied()
-    assert set(_tsnet_compat._ORIGINALS) == set(PATCHES)
-    for name, (module, attribute) in PATCHES.items():
-        patched = getattr(sys.modules[module], attribute)
+    assert set(_tsnet_compat._ORIGINALS) == set(PATCHES) | set(OPERATION_PATCHES)
+    for name, (module, attribute) in {**PATCHES, **OPERATION_PATCHES}.items():
+        patched: Any = sys.modules[module]
+        for part in attribute.split("."):
+            patched = getattr(patched, part)
         assert patched is not _tsnet_compat._ORIGINALS[name]
         assert patched.__module__ == "burstloc.sim._tsnet_compat"
 

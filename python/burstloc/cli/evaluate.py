@@ -126,6 +126,33 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "traces with their alarms for the first pipe of --pipes",
     )
     add_meters_file_option(parser)
+    parser.add_argument(
+        "--events",
+        action="store_true",
+        help="also simulate non-burst events (every valve closed and opened, every pump "
+        "tripped and started, demand steps at the largest consumers) and classify every "
+        "alarm as burst, other event or unsure: a confusion table per type and capture interval",
+    )
+    parser.add_argument(
+        "--classifier-network",
+        default=None,
+        metavar="NETWORK.inp",
+        help="--events: calibrate the classifier on this network's bursts (default: NETWORK)",
+    )
+    parser.add_argument(
+        "--normal-hours",
+        type=float,
+        default=24.0,
+        metavar="H",
+        help="--events: hours of normal operation (diurnal demand, noise 0.01 m) through the "
+        "monitor per capture interval, to count false burst reports (default 24; 0: none)",
+    )
+    parser.add_argument(
+        "--classifier-out",
+        default=None,
+        metavar="PATH",
+        help="--events: write the calibrated classifier (for burstloc monitor --classify)",
+    )
     add_run_options(parser)
     parser.set_defaults(handler=run)
     return parser
@@ -137,7 +164,7 @@ def run(args: argparse.Namespace) -> int:
     from burstloc.experiments.evaluate import evaluate
     from burstloc.experiments.runs import plan_runs
 
-    for path in (args.json, args.csv):
+    for path in (args.json, args.csv, args.classifier_out):
         if path:
             check_output(path)
     if args.plot:
@@ -181,6 +208,8 @@ def run(args: argparse.Namespace) -> int:
         meters=meters,
     )
     print(report.format_tables(ev), end="")
+    if args.events:
+        _events(args, ev, cache)
     if args.json:
         print(f"wrote {report.write_json(ev, args.json)}")
     if args.csv:
@@ -191,3 +220,37 @@ def run(args: argparse.Namespace) -> int:
         for path in plot.write_plots(ev, args.plot):
             print(f"wrote {path}")
     return 0
+
+
+def _events(args: argparse.Namespace, ev: Any, cache: Any) -> None:
+    """Classify the evaluation's bursts and the default events; add the table to ``ev``."""
+    from burstloc.experiments.specificity import evaluate_events
+    from burstloc.localize.classify import ClassifierConfig
+    from burstloc.sim.scenario import burst_scenarios
+    from burstloc.sim.tsnet import simulate_many
+
+    intervals = sorted({r.spec.capture_interval for r in ev.runs})
+    duration = float(ev.scenario["duration"])
+    calibration = args.classifier_network or args.network
+    if calibration == args.network:
+        cal_bursts = dict(ev.results)
+    else:
+        scenarios = burst_scenarios(calibration, None, **ev.scenario)
+        report = simulate_many(scenarios, cache=cache, workers=args.workers, progress=False)
+        cal_bursts = {s.pipe: r for s, r in report.succeeded()}
+    spec, config = evaluate_events(
+        args.network,
+        dict(ev.results),
+        intervals,
+        calibration_network=calibration,
+        calibration_bursts=cal_bursts,
+        duration=duration,
+        setup=ev.setup,
+        normal_hours=args.normal_hours,
+        cache=cache,
+        progress=not args.quiet,
+    )
+    ev.specificity = spec.to_json()
+    print(spec.format_table(), end="")
+    if args.classifier_out:
+        print(f"wrote {ClassifierConfig.save(config, args.classifier_out)}")

@@ -70,6 +70,17 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument(
         "--missing", choices=("skip", "hold"), default="hold", help="policy for incomplete steps"
     )
+    parser.add_argument(
+        "--classify",
+        metavar="FILE",
+        help="classifier from `burstloc evaluate --events --classifier-out`: every alarm is "
+        "classified burst, other event or unsure; only bursts are reported as decisions",
+    )
+    parser.add_argument(
+        "--operations",
+        metavar="CSV",
+        help="--classify: declared operations (header asset,time,action) that explain alarms",
+    )
     mqtt = parser.add_argument_group("MQTT")
     mqtt.add_argument("--mqtt", metavar="HOST:PORT", help="read readings from this broker")
     mqtt.add_argument("--topic", default="burstloc/readings/#", help="readings topic (subscribe)")
@@ -115,6 +126,14 @@ def run(args: argparse.Namespace) -> int:
         if not 0 <= value < float("inf"):
             raise ConfigError(f"{option} must be a finite number >= 0, got {value}")
     config = Calibration.load(args.config)
+    classify, operations = None, []
+    if args.classify:
+        from burstloc.localize.classify import ClassifierConfig, read_operations
+
+        classify = ClassifierConfig.load(args.classify)
+        operations = read_operations(args.operations) if args.operations else []
+    elif args.operations:
+        raise ConfigError("--operations needs --classify")
     monitor = BurstMonitor(
         args.network,
         config,
@@ -122,6 +141,8 @@ def run(args: argparse.Namespace) -> int:
         detector=args.detector,
         localizer=args.localizer,
         meter_model=args.meter_model,
+        classify=classify,
+        operations=operations,
     )
     plausible = PlausibleRange.default(monitor.meters, monitor.steady.tolist())
     health = Health(

@@ -1,4 +1,5 @@
-"""``burstloc simulate``: simulate pipe bursts with TSNet, one NPZ file per pipe."""
+"""``burstloc simulate``: simulate pipe bursts (one NPZ file per pipe) or another event with
+TSNet (a valve or pump operation, a demand step)."""
 
 from __future__ import annotations
 
@@ -9,8 +10,13 @@ from typing import Any
 from burstloc._atomic import check_output
 from burstloc.cli._options import add_run_options, cache_of, check_run_options
 from burstloc.constants import SCENARIO_DURATION, WAVE_SPEED
+from burstloc.exceptions import ConfigError
 
 __all__ = ["add_parser", "run"]
+
+#: The kinds of ``--event`` (:data:`burstloc.sim.events.EVENT_KINDS`, without importing the
+#: simulator to build the parser).
+EVENT_KINDS = ("valve-closure", "valve-opening", "pump-trip", "pump-start", "demand-step")
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
@@ -30,8 +36,45 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     which = parser.add_mutually_exclusive_group(required=True)
     which.add_argument("--pipe", nargs="+", metavar="ID", help="pipe(s) to burst")
     which.add_argument("--all", action="store_true", help="burst every pipe, one at a time")
+    which.add_argument(
+        "--event",
+        choices=list(EVENT_KINDS),
+        default=None,
+        help="simulate this non-burst event on --asset instead of a burst",
+    )
+    parser.add_argument(
+        "--asset", default=None, metavar="ID", help="--event: the valve, pump or junction"
+    )
+    parser.add_argument(
+        "--operation-time",
+        type=float,
+        default=1.0,
+        metavar="S",
+        help="--event: how long the operation or the demand ramp takes (default 1 s)",
+    )
+    parser.add_argument(
+        "--setting",
+        type=float,
+        default=None,
+        metavar="F",
+        help="--event valve-*: final fraction open (default: 0 for a closure, 1 for an opening)",
+    )
+    parser.add_argument(
+        "--demand-change",
+        type=float,
+        default=None,
+        metavar="M3/S",
+        help="--event demand-step: the change of the junction's demand, m^3/s",
+    )
     parser.add_argument("--position", type=float, default=0.5, help="fraction along the pipe")
-    parser.add_argument("--burst-start", type=float, default=sim.DEFAULT_BURST_START, metavar="S")
+    parser.add_argument(
+        "--burst-start",
+        "--start",
+        type=float,
+        default=sim.DEFAULT_BURST_START,
+        metavar="S",
+        help="when the burst (or --event) starts, s",
+    )
     parser.add_argument("--duration", type=float, default=SCENARIO_DURATION, metavar="S")
     parser.add_argument(
         "--burst-coeff",
@@ -66,6 +109,8 @@ def run(args: argparse.Namespace) -> int:
 
     check_output(args.out, directory=True)
     check_run_options(args)
+    if args.event is not None:
+        return _event(args)
     scenarios = scenario.burst_scenarios(
         args.network,
         None if args.all else args.pipe,
@@ -95,3 +140,32 @@ def run(args: argparse.Namespace) -> int:
     for failure in report.failures:
         print(f"burstloc: failed: {failure}", file=sys.stderr)
     return 0 if report.ok else 1
+
+
+def _event(args: argparse.Namespace) -> int:
+    """``burstloc simulate --event KIND --asset ID``: one event, one NPZ file."""
+    from burstloc.sim.events import EventScenario, event_output_path, simulate_event
+
+    if args.asset is None:
+        raise ConfigError(f"--event {args.event} needs --asset (the valve, pump or junction)")
+    setting = args.setting
+    if setting is None:
+        setting = 1.0 if args.event == "valve-opening" else 0.0
+    scenario = EventScenario(
+        args.network,
+        args.event,
+        args.asset,
+        start=args.burst_start,
+        operation_time=args.operation_time,
+        setting=setting,
+        demand_change=0.0 if args.demand_change is None else args.demand_change,
+        wave_speed=args.wave_speed,
+        duration=args.duration,
+        time_step=args.time_step,
+    )
+    result = simulate_event(scenario, cache=cache_of(args))
+    if args.capture_interval is not None:
+        result = result.resample(args.capture_interval, args.capture_phase)
+    path = result.save(event_output_path(args.out, scenario))
+    print(f"wrote {path} ({scenario.label})")
+    return 0

@@ -212,10 +212,12 @@ class Evaluation:
     graph: Any = field(default=None, repr=False)
     meters: list[str] = field(default_factory=list)
     """The junctions the ranking localizers read (empty: only the paper's rules ran)."""
+    specificity: dict[str, Any] | None = None
+    setup: RankingSetup | None = field(default=None, repr=False)
 
     def to_json(self) -> dict[str, Any]:
         """The CLI's JSON document (see tests/evaluate_schema.json)."""
-        return {
+        doc = {
             "network": self.network,
             "scenario": dict(self.scenario),
             "phase_span": self.phase_span,
@@ -223,6 +225,9 @@ class Evaluation:
             "meters": list(self.meters),
             "runs": [r.to_json() for r in self.runs],
         }
+        if self.specificity is not None:
+            doc["specificity"] = self.specificity
+        return doc
 
 
 def evaluate(
@@ -343,7 +348,9 @@ def evaluate(
         for spec in runs
     ]
     meters_used = [] if setup is None else list(setup.meters)
-    return Evaluation(path, out, params, phase_span, warnings, results, graph, meters_used)
+    return Evaluation(
+        path, out, params, phase_span, warnings, results, graph, meters_used, setup=setup
+    )
 
 
 def _score(

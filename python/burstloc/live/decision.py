@@ -27,6 +27,12 @@ class LiveDecision:
     waited: bool
 
     @property
+    def is_burst(self) -> bool:
+        """Whether this is reported as a burst (unclassified, or classified ``burst``); the
+        others are reported as events."""
+        return self.decision.is_burst
+
+    @property
     def pipe(self) -> str | None:
         """The best-ranked pipe."""
         return self.decision.pipe
@@ -52,8 +58,11 @@ class LiveDecision:
         return self.decision.time - self.decision.first_alarm
 
     def to_json(self, top: int = 3) -> dict[str, Any]:
-        """The decision record (``"type": "decision"``) that ``burstloc monitor`` prints."""
-        doc: dict[str, Any] = {"type": "decision", **self.decision.to_json(top)}
+        """The record that ``burstloc monitor`` prints: ``"type": "decision"`` for a burst,
+        ``"event"`` for an alarm classified as another event or unsure (its ``classification``
+        says which and why)."""
+        kind = "decision" if self.is_burst else "event"
+        doc: dict[str, Any] = {"type": kind, "burst": self.is_burst, **self.decision.to_json(top)}
         doc.update(
             waited=self.waited,
             decision_delay_s=self.delay,

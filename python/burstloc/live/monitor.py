@@ -45,7 +45,8 @@ from __future__ import annotations
 import math
 import os
 from collections import deque
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+from dataclasses import replace
 
 import numpy as np
 
@@ -53,6 +54,12 @@ from burstloc.constants import METER_MODELS, RANKING_LOCALIZERS, MeterModel
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.live.decision import LiveDecision
 from burstloc.live.subset import SubsetLocalizers
+from burstloc.localize.classify import (
+    ClassifierConfig,
+    EventClassifier,
+    Operation,
+    classify_alarms,
+)
 from burstloc.localize.config import Calibration, calibrated_bank
 from burstloc.localize.decide import (
     RankingLocalizers,
@@ -61,6 +68,7 @@ from burstloc.localize.decide import (
     rank_alarms,
 )
 from burstloc.localize.evidence import IndexedAlarm, Localizer
+from burstloc.localize.signature import SignatureLocalizer
 from burstloc.readings import Step
 
 __all__ = ["HISTORY_BEFORE_ONSET", "QUIET_FACTOR", "QUIET_WINDOW", "BurstMonitor"]
@@ -131,6 +139,8 @@ class BurstMonitor:
         rearm: int | None = None,
         corroborate: int = 2,
         settle: bool = True,
+        classify: ClassifierConfig | None = None,
+        operations: Sequence[Operation] = (),
     ) -> None:
         if localizer not in RANKING_LOCALIZERS:
             raise ConfigError(f"localizer must be one of {RANKING_LOCALIZERS}, got {localizer!r}")
@@ -179,6 +189,12 @@ class BurstMonitor:
         self._quiet_steps = max(math.ceil(QUIET_WINDOW / cal.capture_interval), 5)
         self._grace: dict[str, int] = {}  # meter back from silence -> step it counts again
         self.excluded: set[str] = set()
+        self.classifier: EventClassifier | None = None
+        if classify is not None:
+            signature = self.localizers.get("signature")
+            if not isinstance(signature, SignatureLocalizer):
+                raise ConfigError("classifying alarms needs the signature localizer")
+            self.classifier = EventClassifier(classify, signature, operations)
 
     @property
     def pending(self) -> bool:
@@ -342,11 +358,17 @@ class BurstMonitor:
             raise InputError(
                 f"burst detected but not located at t = {times[-1]:g} s: {exc}"
             ) from exc
-        if decision.waited:
+        if decision.waited or self.classifier is not None:
             settled = decision_time("signature", alarms, times, cal)
-            if times[-1] + 1e-9 < settled:  # the fused localizer waits for the signatures
+            if times[-1] + 1e-9 < settled:  # the fused localizer or the classifier waits
                 self._due = settled
                 return None
+        if self.classifier is not None:
+            settled = decision_time("signature", alarms, times, cal)
+            kind = classify_alarms(
+                self.classifier, meters, times, readings, alarms, cal, self.meter_model, settled
+            )
+            decision = replace(decision, classification=kind)
         alarmed = tuple(sorted({meters[a.channel] for a in alarms}, key=self.meters.index))
         self._alarms = []
         self._due = None

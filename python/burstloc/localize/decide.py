@@ -37,11 +37,12 @@ import numpy as np
 from burstloc.constants import RANKING_LOCALIZERS, MeterModel
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.localize.arrival import ArrivalLocalizer, PipePosition
-from burstloc.localize.evidence import BurstEvidence, Localizer, Ranking, evidence_from_alarms
+from burstloc.localize.evidence import BurstEvidence, Localizer, Ranking, evidence_at
 from burstloc.localize.fused import FusedLocalizer
 from burstloc.localize.signature import SignatureLocalizer
 
 if TYPE_CHECKING:
+    from burstloc.localize.classify import Classification
     from burstloc.localize.config import IntervalCalibration
     from burstloc.localize.model import LocalizationModel
 
@@ -52,15 +53,22 @@ __all__ = ["Decision", "RankingLocalizers", "decision_time", "fused_of", "rank_a
 class Decision:
     """A ranking localizer's answer: the ranking, the reading time it was given at, the reading
     time of the first alarm, whether the fused localizer waited for the signature (its
-    arrivals were not decisive), and where on the best pipe the burst is (from the arrival fit,
+    arrivals were not decisive), where on the best pipe the burst is (from the arrival fit,
     :meth:`burstloc.localize.arrival.ArrivalLocalizer.position`; ``None`` for the signature
-    localizer)."""
+    localizer) and ``classification``, when the alarm was classified
+    (:mod:`burstloc.localize.classify`): burst, other event or unsure."""
 
     ranking: Ranking
     time: float
     first_alarm: float
     waited: bool = False
     position: PipePosition | None = None
+    classification: Classification | None = None
+
+    @property
+    def is_burst(self) -> bool:
+        """Whether this is reported as a burst: unclassified, or classified ``burst``."""
+        return self.classification is None or self.classification.is_burst
 
     @property
     def pipe(self) -> str | None:
@@ -69,9 +77,9 @@ class Decision:
         return None if best is None else best.pipe
 
     def to_json(self, top: int = 3) -> dict[str, Any]:
-        """JSON-ready summary: time, first alarm, waited, the ``top`` best pipes and the
-        position on the best one (``None`` when the localizer gives none)."""
-        return {
+        """JSON-ready summary: time, first alarm, waited, the ``top`` best pipes, the position
+        on the best one (``None`` when the localizer gives none) and the classification."""
+        doc: dict[str, Any] = {
             "time": self.time,
             "first_alarm": self.first_alarm,
             "waited": self.waited,
@@ -81,6 +89,9 @@ class Decision:
                 for r in self.ranking.top(top)
             ],
         }
+        if self.classification is not None:
+            doc["classification"] = self.classification.to_json()
+        return doc
 
 
 @dataclass(frozen=True)
@@ -202,16 +213,7 @@ def rank_alarms(
     last = float(times[-1])
 
     def evidence(decided: float) -> BurstEvidence:
-        return evidence_from_alarms(
-            meters,
-            times,
-            readings,
-            alarms,
-            capture_interval=calibration.capture_interval,
-            meter_model=meter_model,
-            decision_time=decided,
-            alarm_window=calibration.arrival_decision_delay,
-        )
+        return evidence_at(decided, meters, times, readings, alarms, calibration, meter_model)
 
     decided = decision_time(localizer, alarms, times, calibration, fused)
     first, onset = _first_and_onset(alarms, times)

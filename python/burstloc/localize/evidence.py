@@ -35,6 +35,7 @@ __all__ = [
     "MeterAlarm",
     "RankedPipe",
     "Ranking",
+    "evidence_at",
     "evidence_from_alarms",
 ]
 
@@ -314,4 +315,28 @@ def evidence_from_alarms(
         capture_interval=capture_interval,
         meter_model=meter_model,
         alarms=per_meter,
+    )
+
+
+def evidence_at(
+    decided: float,
+    meters: Sequence[str],
+    times: NDArray[np.float64],
+    readings: NDArray[np.float64],
+    alarms: Iterable[Any],
+    calibration: Any,
+    meter_model: MeterModel,
+) -> BurstEvidence:
+    """:func:`evidence_from_alarms` at reading time ``decided`` with a calibration's capture
+    interval and alarm window (its ``arrival_decision_delay``): the evidence every ranking
+    localizer and the classifier read."""
+    return evidence_from_alarms(
+        meters,
+        times,
+        readings,
+        alarms,
+        capture_interval=calibration.capture_interval,
+        meter_model=meter_model,
+        decision_time=decided,
+        alarm_window=calibration.arrival_decision_delay,
     )

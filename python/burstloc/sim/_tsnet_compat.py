@@ -1,4 +1,4 @@
-"""TSNet 0.3.1 on numpy 2 and WNTR >= 1.4: four small patches, applied before every run.
+"""TSNet 0.3.1 on numpy 2 and current WNTR: small patches, applied before every run.
 
 TSNet 0.3.1 (its last release) was written against numpy 1 and WNTR 1.3. Three of its
 functions leave 1-element arrays where numbers belong, and numpy 2 refuses to convert them
@@ -18,6 +18,21 @@ to scalars; one relies on WNTR accepting a zero pipe roughness:
 * ``tsnet.simulation.initialize.cal_roughness_coef`` sets the roughness of a pipe without
   steady flow to 0 (no friction); WNTR >= 1.4 rejects a roughness <= 0. Patched: that case
   stores the 0 past WNTR's check, exactly as TSNet meant; every other case runs TSNet's code.
+
+Two more make TSNet's valve and pump operations run (they failed on every WNTR we install):
+
+* ``TransientModel.valve_opening`` and ``TransientModel.pump_start_up`` set ``link.status``
+  (to close the link before it opens), but in WNTR (1.3.2 as in 1.5) a link's ``status`` is a
+  read-only property: "use initial_status". Patched: TSNet's own code, with the status set
+  through ``initial_status`` (what WNTR's EPANET writer and TSNet's solver read).
+* ``tsnet.simulation.initialize.pump_operation_points`` replaces the design point nearest to
+  each pump's initial operating point with that point. A stopped pump (a start-up: no initial
+  flow) has no operating point: the head across it is not a pump head, and the refit would
+  bend the curve through it (lowering the shut-off head). Patched: a stopped pump's curve is
+  fitted through its operating point at full speed, as ``pump_start_up`` computed it
+  (``nominal_flow``, ``nominal_pump_head``); running pumps keep TSNet's code. And a starting
+  pump's speed is kept at 0.01 % or more, as TSNet's ``pumpclosing`` keeps a tripped one (at
+  zero speed its scaled curve is three identical points: no parabola, a division by zero).
 
 Nothing else changes: on the pinned stack (numpy 1.26, WNTR 1.3.2) the patched TSNet gives
 bit-identical heads (``tests/sim/test_tsnet_compat.py`` checks this, and checks numpy 2 against
@@ -40,6 +55,13 @@ __all__ = ["applied", "load"]
 _V_TOL = 1e-5
 _H_TOL = 1e-3
 
+#: TSNet's ``pumpclosing`` keeps a "closed" pump at this speed (its curve scaled by zero speed
+#: is three identical points, which no parabola fits); ``pumpopening`` did not: now it does.
+_MIN_SPEED = 1e-4
+
+#: Below this flow (m³/s) a pump has no operating point: it is stopped.
+_Q_TOL = 1e-9
+
 _ORIGINALS: dict[str, Callable[..., Any]] = {}
 
 
@@ -56,7 +78,7 @@ def load() -> ModuleType:
     """
     try:
         import tsnet
-        from tsnet.network import discretize
+        from tsnet.network import discretize, model
         from tsnet.simulation import initialize, single
     except ImportError as exc:
         raise SimulatorMissingError(exc) from exc
@@ -69,6 +91,12 @@ def load() -> ModuleType:
         discretize.adjust_wavev = _adjust_wavev
         initialize.cal_roughness_coef = _cal_roughness_coef
         single.add_leakage = _add_leakage
+        _ORIGINALS["pump_operation_points"] = initialize.pump_operation_points
+        initialize.pump_operation_points = _pump_operation_points
+        _ORIGINALS["valve_opening"] = model.TransientModel.valve_opening
+        _ORIGINALS["pump_start_up"] = model.TransientModel.pump_start_up
+        model.TransientModel.valve_opening = _valve_opening
+        model.TransientModel.pump_start_up = _pump_start_up
     return tsnet
 
 
@@ -104,3 +132,67 @@ def _add_leakage(*args: Any, **kwargs: Any) -> tuple[Any, np.float64]:
     """TSNet's ``add_leakage``, its velocity (a 1-element array) as a float64 scalar."""
     head, velocity = _ORIGINALS["add_leakage"](*args, **kwargs)
     return head, _scalar(velocity)
+
+
+def _set_status(link: Any, status: Any) -> None:
+    """Set a WNTR link's status the way WNTR allows (its ``status`` is read-only)."""
+    link.initial_status = status
+    link._user_status = status
+
+
+def _valve_opening(tm: Any, name: str, rule: Any, curve: Any = None) -> None:
+    """TSNet's ``valve_opening``: the valve starts closed, then opens by ``rule``."""
+    from tsnet.network.control import valveopening
+    from wntr.network.elements import LinkStatus
+
+    valve = tm.get_link(name)
+    if valve.link_type.lower() != "valve":
+        raise RuntimeError("The name of valve to operate is not associated with a vale")
+    _set_status(valve, LinkStatus.Closed)
+    valve.operating = True
+    valve.operation_rule = valveopening(tm.time_step, tm.simulation_period, rule)
+    valve.valve_coeff = None if curve is None else [[p for p, _ in curve], [k for _, k in curve]]
+
+
+def _pump_start_up(tm: Any, name: str, rule: Any) -> None:
+    """TSNet's ``pump_start_up``: the pump's full-speed operating point from EPANET (pump open),
+    then the pump starts closed and opens by ``rule``."""
+    import wntr
+    from tsnet.network.control import pumpopening
+    from wntr.network.elements import LinkStatus
+
+    pump = tm.get_link(name)
+    if pump.link_type.lower() != "pump":
+        raise RuntimeError("The name of pump to operate is not associated with a pump")
+    _set_status(pump, LinkStatus.Open)
+    results = wntr.sim.EpanetSimulator(tm).run_sim()
+    pump.nominal_flow = float(results.link["flowrate"].loc[0, name])
+    heads = results.node["head"].loc[0]
+    pump.nominal_pump_head = abs(float(heads[pump.end_node_name] - heads[pump.start_node_name]))
+    _set_status(pump, LinkStatus.Closed)
+    pump.operating = True
+    speed = pumpopening(tm.time_step, tm.simulation_period, rule)
+    pump.operation_rule = np.maximum(speed, _MIN_SPEED)
+
+
+def _pump_operation_points(tm: Any) -> Any:
+    """TSNet's ``pump_operation_points``; a stopped pump's curve goes through its full-speed
+    operating point (``nominal_flow``, ``nominal_pump_head``) instead of a zero-flow point."""
+    from tsnet.utils import calc_parabola_vertex
+
+    for _, pump in tm.pumps():
+        point = (pump.initial_flow, abs(pump.end_node.initial_head - pump.start_node.initial_head))
+        if abs(pump.initial_flow) < _Q_TOL and hasattr(pump, "nominal_flow"):
+            point = (pump.nominal_flow, pump.nominal_pump_head)
+        points = pump.get_pump_curve().points
+        if len(points) == 1:
+            (flow, head) = points[0]
+            points.append((0.0, 1.33 * head))
+            points.append((2 * flow, 0.0))
+        elif len(points) != 3:
+            raise Exception("TSNet only support one-point or three-point pump curve.")
+        dist = [np.sqrt((q - point[0]) ** 2 + (h - point[1]) ** 2) for q, h in points]
+        points.remove(points[dist.index(min(dist))])
+        points.append(point)
+        pump.curve_coef = calc_parabola_vertex(points)
+    return tm

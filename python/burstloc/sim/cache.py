@@ -33,6 +33,7 @@ import numpy as np
 import platformdirs
 
 from burstloc._atomic import write_npz
+from burstloc.exceptions import NetworkError
 
 __all__ = [
     "ENV_VAR",
@@ -42,6 +43,7 @@ __all__ = [
     "default_cache_dir",
     "drop_corrupt",
     "file_sha256",
+    "network_cache_key",
     "package_versions",
 ]
 
@@ -105,6 +107,18 @@ def cache_key(
     }
     text = json.dumps(document, sort_keys=True, separators=(",", ":"), allow_nan=False)
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def network_cache_key(namespace: str, parameters: Mapping[str, Any], network: str) -> str:
+    """:func:`cache_key` of a scenario on one network file.
+
+    Raises:
+        NetworkError: the network file does not exist.
+    """
+    try:
+        return cache_key(namespace, parameters, [network])
+    except FileNotFoundError:
+        raise NetworkError(f"network file not found: {network}") from None
 
 
 def arrays_sha256(arrays: Mapping[str, np.ndarray]) -> str:

@@ -38,9 +38,9 @@ from numpy.typing import NDArray
 from burstloc import inp
 from burstloc._atomic import write_npz
 from burstloc.constants import SCENARIO_DURATION, WAVE_SPEED
-from burstloc.exceptions import ConfigError, NetworkError
+from burstloc.exceptions import ConfigError
 from burstloc.sim import capture
-from burstloc.sim.cache import cache_key
+from burstloc.sim.cache import network_cache_key
 
 __all__ = [
     "DEFAULT_BURST_COEFF",
@@ -175,10 +175,7 @@ class BurstScenario:
         Raises:
             NetworkError: the network file does not exist.
         """
-        try:
-            return cache_key(SCHEMA, self.parameters(), [self.network])
-        except FileNotFoundError:
-            raise NetworkError(f"network file not found: {self.network}") from None
+        return network_cache_key(SCHEMA, self.parameters(), self.network)
 
 
 @dataclass(frozen=True, eq=False)

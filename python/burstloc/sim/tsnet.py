@@ -19,8 +19,8 @@ import os
 import tempfile
 import threading
 import time
-from collections.abc import Iterator, Sequence
-from dataclasses import replace
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -34,7 +34,14 @@ from burstloc.sim.scenario import SCHEMA, BurstScenario, ScenarioResult
 from burstloc.sim.sweep import SweepReport, sweep
 
 __all__ = [
+    "TransientSettings",
+    "cached",
     "expected_time_step",
+    "from_cache",
+    "isolated_run",
+    "resolve_cache",
+    "run_metadata",
+    "run_transient",
     "simulate_burst",
     "simulate_many",
 ]
@@ -47,7 +54,8 @@ MIN_STEPS = 10
 _TSNET_LOCK = threading.Lock()
 
 
-def _resolve_cache(cache: DiskCache | bool | None) -> DiskCache | None:
+def resolve_cache(cache: DiskCache | bool | None) -> DiskCache | None:
+    """The cache a ``cache`` argument means: ``True`` the default one, ``False``/``None`` none."""
     if cache is True:
         return DiskCache()
     if cache is False or cache is None:
@@ -57,7 +65,8 @@ def _resolve_cache(cache: DiskCache | bool | None) -> DiskCache | None:
     raise ConfigError(f"cache must be a DiskCache, True or False, got {cache!r}")
 
 
-def _from_cache(store: DiskCache, key: str, scenario: BurstScenario) -> ScenarioResult | None:
+def from_cache(store: DiskCache, key: str, scenario: Any) -> ScenarioResult | None:
+    """The cached result of ``scenario`` (anything with a ``network``), or ``None``."""
     arrays = store.get(key)
     if arrays is None:
         return None
@@ -87,20 +96,31 @@ def simulate_burst(
         SimulationError: TSNet failed, or produced non-finite heads.
         SimulatorMissingError: the simulator (the ``sim`` extra) is not installed.
     """
-    store = _resolve_cache(cache)
+    return cached(scenario, None, cache, _simulate)
+
+
+def cached(
+    scenario: Any,
+    key: str | None,
+    cache: DiskCache | bool | None,
+    simulate: Callable[[Any], ScenarioResult],
+) -> ScenarioResult:
+    """``simulate(scenario)``, or its cached result under ``key`` (default
+    ``scenario.cache_key()``; ``cache`` as for :func:`simulate_burst`)."""
+    store = resolve_cache(cache)
     if store is None:
-        return _simulate(scenario)
-    key = scenario.cache_key()
-    hit = _from_cache(store, key, scenario)
+        return simulate(scenario)
+    key = scenario.cache_key() if key is None else key
+    hit = from_cache(store, key, scenario)
     if hit is not None:
         return hit
-    result = _simulate(scenario)
+    result = simulate(scenario)
     store.put(key, result.to_arrays())
     return result
 
 
 @contextlib.contextmanager
-def _isolated_run() -> Iterator[str]:
+def isolated_run() -> Iterator[str]:
     """Hold the TSNet lock and work in a fresh temporary directory (TSNet writes into cwd)."""
     with _TSNET_LOCK, tempfile.TemporaryDirectory(prefix="burstloc-tsnet-") as tmp:
         previous = os.getcwd()
@@ -113,8 +133,8 @@ def _isolated_run() -> Iterator[str]:
 
 def _simulate(scenario: BurstScenario) -> ScenarioResult:
     started = time.perf_counter()
-    source = os.path.abspath(scenario.network)  # before _isolated_run changes directory
-    with _isolated_run() as tmp, capture_diagnostics() as diag:
+    source = os.path.abspath(scenario.network)  # before isolated_run changes directory
+    with isolated_run() as tmp, capture_diagnostics() as diag:
         wn = network.load_network(source)
         network.require_pipe(wn, scenario.pipe)
         flows = network.steady_state_flows(wn, scenario.engine)
@@ -122,19 +142,22 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
         true_start, true_end = network.pipe_endpoints(graph, scenario.pipe)
         split = network.split_pipe(wn, scenario.pipe, scenario.position)
         meters = network.junction_names(wn)
-        elevation = np.array([wn.get_node(j).elevation for j in meters], dtype=np.float64)
-        tm = _run_tsnet(scenario, split, os.path.join(tmp, "scenario.inp"))
-        steps = np.asarray(tm.simulation_timestamps, dtype=np.float64)
-        heads = np.column_stack([np.asarray(tm.get_node(j).head, np.float64) for j in meters])
-        dt = float(tm.time_step)
-    elapsed = time.perf_counter() - started
+        where = f"pipe {scenario.pipe!r} of {scenario.network}"
 
-    heads = heads - elevation
-    if heads.shape[0] != steps.size or not np.all(np.isfinite(heads)):
-        raise SimulationError(
-            f"TSNet produced non-finite or misshapen heads for pipe {scenario.pipe!r} of "
-            f"{scenario.network}"
+        def burst(tm: Any) -> None:
+            tm.add_burst(
+                split.burst_node, scenario.burst_start, scenario.opening_time, scenario.burst_coeff
+            )
+
+        steps, heads, dt = run_transient(
+            split.network,
+            meters,
+            os.path.join(tmp, "scenario.inp"),
+            TransientSettings.of(scenario),
+            burst,
+            where=f"{where} split at {scenario.position:g}",
         )
+    elapsed = time.perf_counter() - started
     meta: dict[str, Any] = {
         "network": scenario.network,
         "network_sha256": file_sha256(scenario.network),
@@ -144,8 +167,17 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
         "steady_flow_m3s": abs(flows[scenario.pipe]),
         "burst_node": split.burst_node,
         "split_pipes": [split.pipe, split.second_pipe],
+        **run_metadata(dt, steps.size, diag, elapsed),
+        "schema": SCHEMA,
+    }
+    return ScenarioResult(steps, heads, meters, dt, meta)
+
+
+def run_metadata(dt: float, samples: int, diag: Any, elapsed: float) -> dict[str, Any]:
+    """The metadata every simulation records: time step, TSNet's captured output, versions."""
+    return {
         "time_step": dt,
-        "samples": int(steps.size),
+        "samples": int(samples),
         "head": "pressure head, m (hydraulic head - elevation)",
         "warnings": diag.warnings,
         "negative_pressure_nodes": diag.negative_pressure_nodes(),
@@ -155,9 +187,57 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
         "capture_interval": None,
         "capture_phase": None,
         "cache": "miss",
-        "schema": SCHEMA,
     }
-    return ScenarioResult(steps, heads, meters, dt, meta)
+
+
+@dataclass(frozen=True)
+class TransientSettings:
+    """How TSNet runs a transient: wave speed (m/s), duration (s), requested time step (s,
+    ``None`` = TSNet's largest), initial steady state engine and friction model."""
+
+    wave_speed: float
+    duration: float
+    time_step: float | None
+    engine: str
+    friction: str
+
+    @classmethod
+    def of(cls, scenario: Any) -> TransientSettings:
+        """The settings of a scenario (anything with these five fields)."""
+        return cls(
+            scenario.wave_speed,
+            scenario.duration,
+            scenario.time_step,
+            scenario.engine,
+            scenario.friction,
+        )
+
+
+def run_transient(
+    wn: Any,
+    meters: Sequence[str],
+    inp: str,
+    settings: TransientSettings,
+    operate: Callable[[Any], None],
+    *,
+    where: str,
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """Write ``wn`` to ``inp``, run TSNet on it with ``operate(tm)`` setting up the event, and
+    return ``(times, pressure heads of meters (T, M), time step)``. Call inside
+    :func:`isolated_run` (TSNet writes into the working directory).
+
+    Raises:
+        ConfigError: a time step above TSNet's limit, or too few time steps.
+        SimulationError: TSNet failed or produced non-finite heads.
+    """
+    tm = _run_tsnet(wn, inp, settings, operate, where)
+    steps = np.asarray(tm.simulation_timestamps, dtype=np.float64)
+    heads = np.column_stack([np.asarray(tm.get_node(j).head, np.float64) for j in meters])
+    elevation = np.array([wn.get_node(j).elevation for j in meters], dtype=np.float64)
+    heads = heads - elevation
+    if heads.shape[0] != steps.size or not np.all(np.isfinite(heads)):
+        raise SimulationError(f"TSNet produced non-finite or misshapen heads for {where}")
+    return steps, heads, float(tm.time_step)
 
 
 def expected_time_step(scenario: BurstScenario) -> float:
@@ -185,46 +265,43 @@ def expected_time_step(scenario: BurstScenario) -> float:
     return float(np.sum(phi**2) / np.sum(phi))
 
 
-def _run_tsnet(scenario: BurstScenario, split: network.SplitPipe, inp: str) -> Any:
+def _run_tsnet(
+    wn: Any, inp: str, settings: TransientSettings, operate: Callable[[Any], None], where: str
+) -> Any:
     tsnet = _tsnet_compat.load()
     import wntr  # loaded with the network (burstloc.network), so known to be installed
     from tsnet.network.discretize import max_time_step
 
     # TSNet's Initializer sets this too; setting it first writes the INP's pressure-driven
-    # demand options (required pressure, ...) into the split file instead of WNTR's defaults.
-    split.network.options.hydraulic.demand_model = scenario.engine
-    wntr.network.write_inpfile(
-        split.network, inp, units=split.network.options.hydraulic.inpfile_units
-    )
-    where = f"pipe {scenario.pipe!r} of {scenario.network}"
+    # demand options (required pressure, ...) into the file instead of WNTR's defaults.
+    wn.options.hydraulic.demand_model = settings.engine
+    wntr.network.write_inpfile(wn, inp, units=wn.options.hydraulic.inpfile_units)
     try:
         tm = tsnet.network.TransientModel(inp)
-        tm.set_wavespeed(scenario.wave_speed)
+        tm.set_wavespeed(settings.wave_speed)
     except Exception as exc:
         raise SimulationError(f"TSNet could not load {where}: {exc}") from exc
-    if scenario.time_step is not None:
+    if settings.time_step is not None:
         limit = float(max_time_step(tm))
-        if scenario.time_step > limit:
+        if settings.time_step > limit:
             raise ConfigError(
-                f"time_step {scenario.time_step:g} s exceeds TSNet's stability limit "
-                f"{limit:.5g} s for {where} split at {scenario.position:g}"
+                f"time_step {settings.time_step:g} s exceeds TSNet's stability limit "
+                f"{limit:.5g} s for {where}"
             )
     try:
-        tm.set_time(scenario.duration, scenario.time_step)
+        tm.set_time(settings.duration, settings.time_step)
     except Exception as exc:
         raise SimulationError(f"TSNet could not discretize {where}: {exc}") from exc
-    steps = int(scenario.duration / tm.time_step)
+    steps = int(settings.duration / tm.time_step)
     if steps < MIN_STEPS:  # TSNet's progress report divides by steps // 10
         raise ConfigError(
-            f"duration {scenario.duration:g} s is only {steps} time steps of "
+            f"duration {settings.duration:g} s is only {steps} time steps of "
             f"{tm.time_step:.5g} s; TSNet needs at least {MIN_STEPS}"
         )
     try:
-        tm.add_burst(
-            split.burst_node, scenario.burst_start, scenario.opening_time, scenario.burst_coeff
-        )
-        tm = tsnet.simulation.Initializer(tm, 0.0, scenario.engine)
-        return tsnet.simulation.MOCSimulator(tm, results_obj="no", friction=scenario.friction)
+        operate(tm)
+        tm = tsnet.simulation.Initializer(tm, 0.0, settings.engine)
+        return tsnet.simulation.MOCSimulator(tm, results_obj="no", friction=settings.friction)
     except Exception as exc:
         raise SimulationError(f"TSNet failed for {where}: {type(exc).__name__}: {exc}") from exc
 
@@ -259,11 +336,11 @@ def simulate_many(
     Dask workers read the network file at the scenario's path: on a cluster, give a path all
     workers can read (a shared file system).
     """
-    store = _resolve_cache(cache)
+    store = resolve_cache(cache)
     todo = list(scenarios)
     keys = [_key_or_none(s) if store is not None else None for s in todo]
     results: list[ScenarioResult | None] = [
-        _from_cache(store, key, s) if store is not None and key is not None else None
+        from_cache(store, key, s) if store is not None and key is not None else None
         for s, key in zip(todo, keys, strict=True)
     ]
     missing = [i for i, result in enumerate(results) if result is None]

@@ -1,0 +1,440 @@
+"""Bursts and other events together: how often is a non-burst reported as a burst?
+
+Each simulated scenario (bursts on every pipe, and the non-burst events of
+:func:`default_events`: every valve and pump operated, demand steps at the largest consumers;
+:mod:`burstloc.sim.events`) is captured at each capture interval
+(instantaneous readings, clock phase 0, with the warm-up of ``burstloc evaluate``), run through
+the calibrated CUSUM bank, and, when at least :data:`CORROBORATE` meters alarm (the monitor's
+rule), localized by the fused localizer and classified (:mod:`burstloc.localize.classify`) at
+the signature's decision time: the answer is ``quiet`` (no corroborated alarm), ``burst``,
+``other`` or ``unsure``. Only ``burst`` is a burst report. Every event is also classified
+with its own operation declared (``asset, start, kind``). And a day of normal operation
+(:func:`burstloc.sim.normal.normal_day`: diurnal demand, sensor noise) runs through the live
+monitor with the classifier: its burst reports are false alarms.
+
+**Calibrating the classifier** (:func:`calibrate_classifier`, never on the events): the bursts
+of a calibration network (paper15: one per pipe, the paper's scenario) are classified without
+thresholds; at each capture interval their largest relative residual, smallest scale and
+largest lasting rise are measured, and that interval's thresholds are: ``max_residual`` =
+1.5 x the largest residual; ``min_scale`` = 0.25 x the smallest scale (the smallest burst
+reported with confidence is a quarter of the calibration bursts); ``rise_tolerance`` = 1.5 x
+the largest rise a burst showed, at least 3 noise sigmas (the margins: :data:`RESIDUAL_MARGIN`,
+:data:`SCALE_FRACTION`, :data:`RISE_MARGIN`). The top-level thresholds, for an interval not
+calibrated, are the loosest of them. The asset nodes come from the evaluated network
+(the junctions beside a valve or a pump).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from burstloc.exceptions import InputError
+from burstloc.experiments.harness import Clock, RankingSetup, capture_readings
+from burstloc.localize.classify import (
+    CLASSES,
+    ClassifierConfig,
+    EventClassifier,
+    Operation,
+    classify_alarms,
+)
+from burstloc.localize.config import calibrated_bank
+from burstloc.localize.decide import decision_time, rank_alarms
+from burstloc.localize.signature import SignatureLocalizer
+from burstloc.sim.events import EventScenario
+from burstloc.sim.scenario import ScenarioResult
+
+__all__ = [
+    "ANSWERS",
+    "CORROBORATE",
+    "DEMAND_JUNCTIONS",
+    "PUMP_EVENTS",
+    "VALVE_EVENTS",
+    "Outcome",
+    "Specificity",
+    "asset_nodes",
+    "calibrate_classifier",
+    "classify_result",
+    "default_events",
+    "evaluate_events",
+    "normal_operation",
+]
+
+#: What a scenario can end as.
+ANSWERS = ("quiet", *CLASSES)
+#: Meters that must alarm for a decision (the monitor's default).
+CORROBORATE = 2
+#: Noise level (m) the rise tolerance is floored at three times of.
+NOISE_SIGMA = 0.01
+#: The calibration's margins (module docstring).
+RESIDUAL_MARGIN = 1.5
+SCALE_FRACTION = 0.25
+RISE_MARGIN = 1.5
+
+#: The operations of each valve and pump: (kind, keyword arguments): fast (1-2 s) and slow
+#: (10-30 s), full and partial (to 30 % open).
+VALVE_EVENTS: tuple[tuple[str, dict[str, float]], ...] = (
+    ("valve-closure", {"operation_time": 1.0}),
+    ("valve-closure", {"operation_time": 30.0}),
+    ("valve-closure", {"operation_time": 1.0, "setting": 0.3}),
+    ("valve-closure", {"operation_time": 30.0, "setting": 0.3}),
+    ("valve-opening", {"operation_time": 1.0, "setting": 1.0}),
+    ("valve-opening", {"operation_time": 30.0, "setting": 1.0}),
+    ("valve-opening", {"operation_time": 1.0, "setting": 0.3}),
+)
+PUMP_EVENTS: tuple[tuple[str, dict[str, float]], ...] = (
+    ("pump-trip", {"operation_time": 1.0}),
+    ("pump-trip", {"operation_time": 10.0}),
+    ("pump-start", {"operation_time": 2.0}),
+    ("pump-start", {"operation_time": 10.0}),
+)
+#: Demand steps at the junctions of largest base demand: this many junctions, each doubling
+#: its demand in 1 s and adding a quarter of it in 5 s; the largest also halves in 1 s.
+DEMAND_JUNCTIONS = 4
+
+
+def default_events(network: str | os.PathLike[str], duration: float) -> list[EventScenario]:
+    """The events of the evaluation on ``network``: :data:`VALVE_EVENTS` on every valve,
+    :data:`PUMP_EVENTS` on every pump, demand steps at :data:`DEMAND_JUNCTIONS` junctions."""
+    from burstloc import network as netmod
+
+    path = os.fspath(network)
+    wn = netmod.load_network(path)
+    out: list[tuple[str, str, dict[str, float]]] = []
+    for valve in wn.valve_name_list:
+        out += [(kind, valve, kw) for kind, kw in VALVE_EVENTS]
+    for pump in wn.pump_name_list:
+        out += [(kind, pump, kw) for kind, kw in PUMP_EVENTS]
+    demands = {j: float(wn.get_node(j).base_demand) for j in netmod.junction_names(wn)}
+    largest = sorted((j for j in demands if demands[j] > 0), key=lambda j: -demands[j])
+    for j in largest[:DEMAND_JUNCTIONS]:
+        out.append(("demand-step", j, {"demand_change": demands[j]}))
+        out.append(("demand-step", j, {"demand_change": demands[j] / 4, "operation_time": 5.0}))
+    if largest:
+        out.append(("demand-step", largest[0], {"demand_change": -demands[largest[0]] / 2}))
+    return [
+        EventScenario(path, kind, asset, duration=duration, **kw)  # type: ignore[arg-type]
+        for kind, asset, kw in out
+    ]
+
+
+def asset_nodes(network: str | os.PathLike[str]) -> dict[str, str]:
+    """Junction -> the valve or pump it is an end of."""
+    from burstloc import network as netmod
+
+    wn = netmod.load_network(os.fspath(network))
+    junctions = set(netmod.junction_names(wn))
+    out: dict[str, str] = {}
+    for name in list(wn.valve_name_list) + list(wn.pump_name_list):
+        link = wn.get_link(name)
+        for node in (link.start_node_name, link.end_node_name):
+            if node in junctions:
+                out[node] = name
+    return out
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """One scenario at one capture interval: the answer, the named pipe (if located), why."""
+
+    answer: str
+    pipe: str | None = None
+    top3: tuple[str, ...] = ()
+    reason: str = ""
+    evidence: dict[str, Any] = field(default_factory=dict)
+
+
+def classify_result(
+    result: ScenarioResult,
+    setup: RankingSetup,
+    classifier: EventClassifier,
+    capture_interval: float,
+) -> Outcome:
+    """Capture, detect, localize and classify one simulated scenario (module docstring)."""
+    cal = setup.config.for_interval(capture_interval)
+    clock = Clock.at_offset(capture_interval, 0.0, 2 * cal.localization_interval)
+    times, values = capture_readings(result, clock, "instantaneous", meters=setup.meters)
+    alarms = calibrated_bank("cusum", len(setup.meters), cal).run(np.ascontiguousarray(values))
+    if len({a.channel for a in alarms}) < CORROBORATE:
+        return Outcome("quiet")
+    try:
+        decision = rank_alarms(
+            "fused", setup.localizers, setup.meters, times, values, alarms, cal, "instantaneous"
+        )
+        settled = decision_time("signature", alarms, times, cal)
+        kind = classify_alarms(
+            classifier, setup.meters, times, values, alarms, cal, "instantaneous", settled
+        )
+    except InputError as exc:
+        return Outcome("quiet", reason=str(exc))
+    top = tuple(r.pipe for r in decision.ranking.top(3))
+    return Outcome(kind.label, decision.pipe, top, kind.reason, dict(kind.evidence))
+
+
+def calibrate_classifier(
+    results: Sequence[ScenarioResult],
+    setup: RankingSetup,
+    capture_intervals: Sequence[float],
+    assets: dict[str, str],
+) -> ClassifierConfig:
+    """Thresholds from bursts (module docstring): ``results`` are bursts of ``setup``'s network.
+
+    Raises:
+        InputError: no burst was detected, so nothing was measured.
+    """
+    loose = ClassifierConfig(max_residual=10.0, min_scale=0.0, rise_tolerance=1e3)
+    signature = setup.localizers["signature"]
+    assert isinstance(signature, SignatureLocalizer)
+    probe = EventClassifier(loose, signature)
+    measured: dict[str, dict[str, list[float]]] = {}
+    for ci in capture_intervals:
+        seen = measured.setdefault(f"{ci:g}", {"residual": [], "scale": [], "largest_rise_m": []})
+        for result in results:
+            outcome = classify_result(result, setup, probe, ci)
+            if outcome.answer != "quiet":
+                for name, values in seen.items():
+                    values.append(outcome.evidence[name])
+    if not any(seen["residual"] for seen in measured.values()):
+        raise InputError("no calibration burst was detected: nothing to calibrate on")
+    intervals = {ci: _thresholds(seen) for ci, seen in measured.items() if seen["residual"]}
+    return ClassifierConfig(
+        max_residual=max(t["max_residual"] for t in intervals.values()),
+        min_scale=min(t["min_scale"] for t in intervals.values()),
+        rise_tolerance=max(t["rise_tolerance"] for t in intervals.values()),
+        asset_nodes=assets,
+        intervals=intervals,
+        provenance={
+            "procedure": "burstloc.experiments.specificity.calibrate_classifier",
+            "bursts": len(results),
+            "measured": {
+                ci: {"detected": len(seen["residual"]), **_extremes(seen)}
+                for ci, seen in measured.items()
+            },
+        },
+    )
+
+
+def _extremes(seen: dict[str, list[float]]) -> dict[str, float]:
+    """The largest residual, the smallest scale and the largest rise of the bursts seen."""
+    return {
+        "largest_residual": max(seen["residual"]),
+        "smallest_scale": min(seen["scale"]),
+        "largest_rise_m": max(seen["largest_rise_m"]),
+    }
+
+
+def _thresholds(seen: dict[str, list[float]]) -> dict[str, float]:
+    """The thresholds from one capture interval's bursts (module docstring)."""
+    worst = _extremes(seen)
+    return {
+        "max_residual": min(RESIDUAL_MARGIN * worst["largest_residual"], 10.0),
+        "min_scale": SCALE_FRACTION * worst["smallest_scale"],
+        "rise_tolerance": max(RISE_MARGIN * max(worst["largest_rise_m"], 0.0), 3 * NOISE_SIGMA),
+    }
+
+
+@dataclass
+class Specificity:
+    """Counts of answers per (scenario type, capture interval), burst localization, failures."""
+
+    counts: dict[str, dict[float, dict[str, int]]] = field(default_factory=dict)
+    burst_top1: dict[float, int] = field(default_factory=dict)
+    burst_top3: dict[float, int] = field(default_factory=dict)
+    reported: list[dict[str, Any]] = field(default_factory=list)
+    declared: dict[float, dict[str, int]] = field(default_factory=dict)
+    classifier: dict[str, Any] = field(default_factory=dict)
+    normal: list[dict[str, Any]] = field(default_factory=list)
+    missed: list[dict[str, Any]] = field(default_factory=list)
+
+    def add(self, kind: str, ci: float, outcome: Outcome, label: str, truth: str | None) -> None:
+        """Count one outcome; a non-burst reported as a burst is listed with its evidence."""
+        row = self.counts.setdefault(kind, {}).setdefault(ci, dict.fromkeys(ANSWERS, 0))
+        row[outcome.answer] += 1
+        if truth is not None:
+            self.burst_top1[ci] = self.burst_top1.get(ci, 0) + (outcome.pipe == truth)
+            self.burst_top3[ci] = self.burst_top3.get(ci, 0) + (truth in outcome.top3)
+            if outcome.answer != "burst":
+                self.missed.append(
+                    {"pipe": truth, "capture_interval": ci, "class": outcome.answer,
+                     "reason": outcome.reason}
+                )  # fmt: skip
+        elif outcome.answer == "burst":
+            self.reported.append(
+                {"event": label, "capture_interval": ci, "pipe": outcome.pipe, **outcome.evidence}
+            )
+
+    def to_json(self) -> dict[str, Any]:
+        """The ``specificity`` block of ``burstloc evaluate --events`` (evaluate_schema.json)."""
+        table = []
+        for kind, by_ci in self.counts.items():
+            for ci, row in sorted(by_ci.items()):
+                n = sum(row.values())
+                table.append(
+                    {
+                        "type": kind,
+                        "capture_interval": ci,
+                        "scenarios": n,
+                        **row,
+                        "reported_as_burst": row["burst"] / n,
+                        "reported_as_burst_declared": (
+                            self.declared[ci][kind] / n
+                            if kind != "burst" and ci in self.declared
+                            else None
+                        ),
+                    }
+                )
+        bursts = self.counts.get("burst", {})
+        return {
+            "table": table,
+            "burst_top1": {
+                str(ci): self.burst_top1[ci] / sum(bursts[ci].values()) for ci in bursts
+            },
+            "burst_top3": {
+                str(ci): self.burst_top3[ci] / sum(bursts[ci].values()) for ci in bursts
+            },
+            "false_burst_reports": self.reported,
+            "classifier": dict(self.classifier),
+            "normal_operation": list(self.normal),
+            "bursts_not_reported": list(self.missed),
+        }
+
+    def format_table(self) -> str:
+        """The confusion table as text: one row per type and capture interval."""
+        lines = [
+            "type            CI s  n   quiet burst other unsure  as burst  declared",
+        ]
+        for row in self.to_json()["table"]:
+            declared = row["reported_as_burst_declared"]
+            lines.append(
+                f"{row['type']:<14} {row['capture_interval']:>5g} {row['scenarios']:>3} "
+                f"{row['quiet']:>6} {row['burst']:>5} {row['other']:>5} {row['unsure']:>6} "
+                f"{100 * row['reported_as_burst']:>8.1f}% "
+                + ("      -" if declared is None else f"{100 * declared:>7.1f}%")
+            )
+        for ci in sorted(self.burst_top1):
+            n = sum(self.counts["burst"][ci].values())
+            lines.append(
+                f"bursts at {ci:g} s: top-1 {100 * self.burst_top1[ci] / n:.1f} %, "
+                f"top-3 {100 * self.burst_top3[ci] / n:.1f} %"
+            )
+        for r in self.reported:
+            lines.append(f"reported as a burst: {r['event']} at {r['capture_interval']:g} s")
+        for m in self.missed:
+            lines.append(
+                f"burst on {m['pipe']} at {m['capture_interval']:g} s: {m['class']}, {m['reason']}"
+            )
+        for day in self.normal:
+            lines.append(
+                f"normal operation at {day['capture_interval']:g} s: {day['hours']:g} h, "
+                f"{day['decisions']} decision(s), {day['burst_reports']} burst report(s) "
+                f"(sigma {day['noise_sigma']:g} m)"
+            )
+        return "\n".join(lines) + "\n"
+
+
+def with_operation(classifier: EventClassifier, event: EventScenario) -> EventClassifier:
+    """The classifier with ``event``'s own operation declared."""
+    op = Operation(event.asset, event.start, event.kind)
+    return EventClassifier(replace(classifier.config), classifier.signature, [op])
+
+
+def evaluate_events(
+    network: str | os.PathLike[str],
+    bursts: dict[str, ScenarioResult],
+    capture_intervals: Sequence[float],
+    *,
+    calibration_network: str | os.PathLike[str],
+    calibration_bursts: dict[str, ScenarioResult],
+    duration: float,
+    setup: RankingSetup | None = None,
+    normal_hours: float = 24.0,
+    cache: Any = True,
+    progress: bool = True,
+) -> tuple[Specificity, ClassifierConfig]:
+    """Classify ``bursts`` (pipe -> its burst on ``network``) and :func:`default_events` at each
+    capture interval, with a classifier calibrated on ``calibration_bursts`` (of
+    ``calibration_network``); every event also with its operation declared; and
+    ``normal_hours`` of normal operation (:func:`normal_operation`; 0: none). ``setup``: the
+    localizers and calibration of ``network`` (default: calibrated here)."""
+    import sys
+
+    from burstloc.sim.events import simulate_event
+
+    meters = list(next(iter(bursts.values())).junctions)
+    if setup is None:
+        setup = RankingSetup.build(network, meters, capture_intervals)
+    cal_setup = setup
+    if os.path.abspath(calibration_network) != os.path.abspath(network):
+        cal_meters = list(next(iter(calibration_bursts.values())).junctions)
+        cal_setup = RankingSetup.build(calibration_network, cal_meters, capture_intervals)
+    config = calibrate_classifier(
+        list(calibration_bursts.values()), cal_setup, capture_intervals, asset_nodes(network)
+    )
+    signature = setup.localizers["signature"]
+    assert isinstance(signature, SignatureLocalizer)
+    classifier = EventClassifier(config, signature)
+    events = []
+    for scenario in default_events(network, duration):
+        if progress:
+            print(f"simulating {scenario.label}", file=sys.stderr)
+        events.append((scenario, simulate_event(scenario, cache=cache)))
+    out = Specificity(classifier=config.to_json())
+    for ci in capture_intervals:
+        for pipe, result in bursts.items():
+            out.add("burst", ci, classify_result(result, setup, classifier, ci), pipe, pipe)
+        declared = out.declared.setdefault(ci, {})
+        for scenario, result in events:
+            outcome = classify_result(result, setup, classifier, ci)
+            out.add(scenario.kind, ci, outcome, scenario.label, None)
+            known = classify_result(result, setup, with_operation(classifier, scenario), ci)
+            declared[scenario.kind] = declared.get(scenario.kind, 0) + (known.answer == "burst")
+        if normal_hours > 0:
+            out.normal.append(normal_operation(network, setup, config, ci, hours=normal_hours))
+    return out, config
+
+
+def normal_operation(
+    network: str | os.PathLike[str],
+    setup: RankingSetup,
+    config: ClassifierConfig,
+    capture_interval: float,
+    *,
+    hours: float = 24.0,
+    noise_sigma: float = NOISE_SIGMA,
+    seed: int = 0,
+) -> dict[str, Any]:
+    """A day of normal operation (:func:`burstloc.sim.normal.normal_day`) through the live
+    monitor with the classifier: how many decisions, how many reported as bursts."""
+    from burstloc.live.monitor import BurstMonitor
+    from burstloc.readings import Step
+    from burstloc.sim.normal import normal_day
+
+    times, values = normal_day(
+        network,
+        capture_interval=capture_interval,
+        noise_sigma=noise_sigma,
+        hours=hours,
+        meters=setup.meters,
+        seed=seed,
+    )
+    monitor = BurstMonitor(
+        network,
+        setup.config,
+        capture_interval=capture_interval,
+        localizers=setup.localizers,
+        classify=config,
+    )
+    decisions = list(monitor.run(Step(float(t), v) for t, v in zip(times, values, strict=True)))
+    return {
+        "capture_interval": capture_interval,
+        "hours": hours,
+        "noise_sigma": noise_sigma,
+        "decisions": len(decisions),
+        "burst_reports": sum(d.is_burst for d in decisions),
+        "dismissed": monitor.dismissed,
+        "events": [d.to_json()["classification"] for d in decisions],
+    }
