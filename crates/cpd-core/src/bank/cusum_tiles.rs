@@ -9,13 +9,17 @@
 //! [`super::CusumBank::step`] is a chunk of one row. Given a `T x channels` matrix,
 //! [`super::CusumBank::step_many`] walks the channels in tiles of [`TILE`] and, for each tile,
 //! the rows of a chunk of steps: the tile's state stays in the L1 cache over the chunk instead
-//! of travelling to the L2 cache and back every step. The alarms found in a chunk are put back
-//! in step order, then channel order, before they are appended: the output is that of stepping
-//! row by row.
+//! of travelling to the L2 cache and back every step. Per step and per four channels the kernel
+//! reads and writes six state vectors (the four sums and the two starts), not nine: the
+//! previous reading is the row above in the chunk, and a start value is the reading at its
+//! start, so both are brought up to date once, at the end of the chunk (the bank's state, and
+//! so its snapshot, is the same as stepping row by row). The alarms found in a chunk are put
+//! back in step order, then channel order, before they are appended: the output is that of
+//! stepping row by row.
 
 use alloc::vec::Vec;
 
-use wide::bytemuck::{cast, cast_slice_mut};
+use wide::bytemuck::cast;
 use wide::{f64x4, u64x4};
 
 use super::cusum::{Block, CusumBank};
@@ -26,13 +30,15 @@ use crate::cusum::{CusumLane, DROP, RISE};
 /// loop-carried chain (`(g + s) - drift`, then a select).
 pub(super) const TILE: usize = 16;
 
-/// Readings per chunk of rows (32 KiB): a chunk stays in the L2 cache while its tiles walk it.
-const CHUNK_READINGS: usize = 4096;
+/// Readings per chunk of rows (512 KiB, within a Zen 4 core's L2 cache).
+const CHUNK_READINGS: usize = 65_536;
 
-/// Rows per chunk for `channels` channels: as many as fit [`CHUNK_READINGS`], at least 8 and at
-/// most 512.
+/// Rows per chunk for `channels` channels: as many as fit [`CHUNK_READINGS`], at least 64 and at
+/// most 512. A tile's work per chunk (its state loaded and stored once, its previous readings
+/// and start values brought up to date) is spread over the rows; the matrix is read once
+/// whatever the chunk (each tile reads its own columns of each row).
 fn rows_per_chunk(channels: usize) -> usize {
-    (CHUNK_READINGS / channels).clamp(8, 512)
+    (CHUNK_READINGS / channels).clamp(64, 512)
 }
 
 /// What every tile of a chunk shares.
@@ -48,8 +54,25 @@ pub(super) struct Chunk<'m> {
     pub drift: f64,
 }
 
+impl Chunk<'_> {
+    /// The start value of channel `col` whose start is `t`: its reading in the chunk if the
+    /// sums reset in it (`t >= first`), else `before`, the value stored before the chunk.
+    #[inline(always)]
+    fn start_value(&self, t: u64, col: usize, before: f64) -> f64 {
+        if t >= self.first {
+            self.rows[(t - self.first) as usize * self.channels + col]
+        } else {
+            before
+        }
+    }
+}
+
 /// The state of a tile of `W` channels, borrowed from the bank as fixed-size arrays (no bounds
 /// checks in the kernel); over a chunk of rows it stays in the L1 cache.
+///
+/// Per step the kernel reads and writes only the four sums and the two starts: the previous
+/// reading is the row above in the chunk, and a start value is the reading at its start, so
+/// `x_prev`, `x_tap` and `x_tan` are brought up to date once, at the end of the chunk.
 struct Tile<'a, const W: usize> {
     x_prev: &'a mut [f64; W],
     gp: &'a mut [f64; W],
@@ -58,10 +81,8 @@ struct Tile<'a, const W: usize> {
     gn_real: &'a mut [f64; W],
     tap: &'a mut [u64; W],
     tan: &'a mut [u64; W],
-    /// The start values as bits: their selects stay blends (as floats the compiler makes them
-    /// masked stores, which are slow on some CPUs).
-    x_tap: &'a mut [u64; W],
-    x_tan: &'a mut [u64; W],
+    x_tap: &'a mut [f64; W],
+    x_tan: &'a mut [f64; W],
 }
 
 impl<'a, const W: usize> Tile<'a, W> {
@@ -78,69 +99,81 @@ impl<'a, const W: usize> Tile<'a, W> {
             gn_real: arr(b.gn_real, c),
             tap: arr(b.tap, c),
             tan: arr(b.tan, c),
-            x_tap: arr(cast_slice_mut(b.x_tap), c),
-            x_tan: arr(cast_slice_mut(b.x_tan), c),
+            x_tap: arr(b.x_tap, c),
+            x_tan: arr(b.x_tan, c),
         }
     }
 
-    /// [`CusumLane::step`] for the four lanes `g..g + 4` (readings `x`) as 4-wide vectors, every
-    /// select a blend; without the alarm's resets, which [`collect`] does on the rare slow path.
+    /// [`CusumLane::step`] for the four lanes `g..g + 4` (readings `x`, previous readings
+    /// `x_prev`) as 4-wide vectors, every select a blend; without the alarm's resets, which
+    /// [`collect`] does on the rare slow path, and without the start values (see [`Tile`]).
     /// Returns whether a lane's sum crossed the threshold. Additions, subtractions, comparisons
     /// and blends are exact lane by lane, so the results are those of the scalar step.
     #[inline(always)]
-    fn step4(&mut self, g: usize, x: f64x4, i: u64x4, thr: f64x4, drift: f64x4) -> bool {
+    fn step4(&mut self, g: usize, x: f64x4, x_prev: f64x4, i: u64x4, c: Consts) -> bool {
         let ld = |v: &[f64; W]| f64x4::new(v[g..g + 4].try_into().expect("group"));
         let ldu = |v: &[u64; W]| u64x4::new(v[g..g + 4].try_into().expect("group"));
         let zero = f64x4::ZERO;
-        let s = x - ld(self.x_prev);
+        let s = x - x_prev;
         // Same operation order as TSNet: (g + s) - drift.
-        let vp = ld(self.gp) + s - drift;
-        let vn = ld(self.gn) - s - drift;
+        let vp = ld(self.gp) + s - c.drift;
+        let vn = ld(self.gn) - s - c.drift;
         let (rp, rn) = (vp.simd_lt(zero), vn.simd_lt(zero));
         let (rpu, rnu): (u64x4, u64x4) = (cast(rp), cast(rn));
-        let gp_real = rp.select(zero, ld(self.gp_real) + s);
-        let gn_real = rn.select(zero, ld(self.gn_real) - s);
+        // 0 where the mask is set: a bitwise select (an and-not) on the comparison's all-ones
+        // or all-zeros lanes, which a blend would first turn into sign masks.
+        let reset = |m: f64x4, v: f64x4| m.bitselect(zero, v);
+        let gp_real = reset(rp, ld(self.gp_real) + s);
+        let gn_real = reset(rn, ld(self.gn_real) - s);
         let st = |v: &mut [f64; W], y: f64x4| v[g..g + 4].copy_from_slice(&y.to_array());
         let stu = |v: &mut [u64; W], y: u64x4| v[g..g + 4].copy_from_slice(&y.to_array());
-        let (tap, tan) = (rpu.select(i, ldu(self.tap)), rnu.select(i, ldu(self.tan)));
-        let xu: u64x4 = cast(x);
-        let (x_tap, x_tan) = (
-            rpu.select(xu, ldu(self.x_tap)),
-            rnu.select(xu, ldu(self.x_tan)),
-        );
-        stu(self.tap, tap);
-        stu(self.tan, tan);
-        stu(self.x_tap, x_tap);
-        stu(self.x_tan, x_tan);
-        st(self.x_prev, x);
-        st(self.gp, rp.select(zero, vp));
-        st(self.gn, rn.select(zero, vn));
+        stu(self.tap, rpu.select(i, ldu(self.tap)));
+        stu(self.tan, rnu.select(i, ldu(self.tan)));
+        st(self.gp, reset(rp, vp));
+        st(self.gn, reset(rn, vn));
         st(self.gp_real, gp_real);
         st(self.gn_real, gn_real);
-        (gp_real.simd_gt(thr) | gn_real.simd_gt(thr)).any()
+        (gp_real.simd_gt(c.thr) | gn_real.simd_gt(c.thr)).any()
     }
 
     /// The same step for the one lane `k` (the tiles' remainder), on the scalar lane.
     #[inline(always)]
-    fn step1(&mut self, k: usize, x: f64, i: u64, thr: f64, drift: f64) -> bool {
+    fn step1(&mut self, k: usize, x: f64, x_prev: f64, i: u64, c: Consts) -> bool {
         let mut lane = CusumLane {
-            x_prev: self.x_prev[k],
+            x_prev,
             gp: self.gp[k],
             gn: self.gn[k],
             gp_real: self.gp_real[k],
             gn_real: self.gn_real[k],
             tap: self.tap[k],
             tan: self.tan[k],
-            x_tap: f64::from_bits(self.x_tap[k]),
-            x_tan: f64::from_bits(self.x_tan[k]),
+            ..CusumLane::ZERO
         };
-        lane.step_sums(x, i, drift);
-        (self.x_prev[k], self.gp[k], self.gn[k]) = (lane.x_prev, lane.gp, lane.gn);
+        lane.step_sums(x, i, c.drift1);
+        (self.gp[k], self.gn[k]) = (lane.gp, lane.gn);
         (self.gp_real[k], self.gn_real[k]) = (lane.gp_real, lane.gn_real);
         (self.tap[k], self.tan[k]) = (lane.tap, lane.tan);
-        (self.x_tap[k], self.x_tan[k]) = (lane.x_tap.to_bits(), lane.x_tan.to_bits());
-        (lane.gp_real > thr) | (lane.gn_real > thr)
+        (lane.gp_real > c.thr1) | (lane.gn_real > c.thr1)
     }
+
+    /// At the end of a chunk whose last row is `last`: the previous readings and the start
+    /// values of the tile (at column `c`) as stepping row by row leaves them.
+    fn finish(&mut self, c: usize, last: &[f64; W], chunk: &Chunk<'_>) {
+        *self.x_prev = *last;
+        for k in 0..W {
+            self.x_tap[k] = chunk.start_value(self.tap[k], c + k, self.x_tap[k]);
+            self.x_tan[k] = chunk.start_value(self.tan[k], c + k, self.x_tan[k]);
+        }
+    }
+}
+
+/// The threshold and the drift, as scalars and as vectors.
+#[derive(Clone, Copy)]
+struct Consts {
+    thr: f64x4,
+    drift: f64x4,
+    thr1: f64,
+    drift1: f64,
 }
 
 /// Runs the channels `c..c + W` over every row of `chunk`, starting from and returning to the
@@ -153,8 +186,14 @@ pub(super) fn tile<const W: usize>(
     out: &mut Vec<ChannelAlarm>,
 ) {
     let mut r = Tile::<W>::of(lanes, c);
-    let (thr, drift) = (chunk.threshold, chunk.drift);
-    let (thr4, drift4) = (f64x4::splat(thr), f64x4::splat(drift));
+    let k = Consts {
+        thr: f64x4::splat(chunk.threshold),
+        drift: f64x4::splat(chunk.drift),
+        thr1: chunk.threshold,
+        drift1: chunk.drift,
+    };
+    let before: [f64; W] = *r.x_prev;
+    let mut prev: &[f64; W] = &before;
     for (i, row) in (chunk.first..).zip(chunk.rows.chunks_exact(chunk.channels)) {
         let xs: &[f64; W] = row[c..c + W].try_into().expect("tile width");
         let i4 = u64x4::splat(i);
@@ -162,22 +201,25 @@ pub(super) fn tile<const W: usize>(
         let mut g = 0;
         while g + 4 <= W {
             let x = f64x4::new(xs[g..g + 4].try_into().expect("group"));
-            any |= r.step4(g, x, i4, thr4, drift4);
+            let xp = f64x4::new(prev[g..g + 4].try_into().expect("group"));
+            any |= r.step4(g, x, xp, i4, k);
             g += 4;
         }
         while g < W {
-            any |= r.step1(g, xs[g], i, thr, drift);
+            any |= r.step1(g, xs[g], prev[g], i, k);
             g += 1;
         }
         if any {
-            collect(c, &mut r, xs, i, thr, out);
+            collect(c, &mut r, xs, i, &chunk, out);
         }
+        prev = xs;
     }
+    r.finish(c, prev, &chunk);
 }
 
 /// The rare slow path: one alarm per channel of the tile over the threshold, from its state
-/// after the step (its starts and start values), and that channel's four sums back to 0, as
-/// [`CusumLane::step`] does.
+/// after the step (its starts, and their start values read from the chunk), and that
+/// channel's four sums back to 0, as [`CusumLane::step`] does.
 #[cold]
 #[inline(never)]
 fn collect<const W: usize>(
@@ -185,9 +227,10 @@ fn collect<const W: usize>(
     r: &mut Tile<'_, W>,
     xs: &[f64; W],
     i: u64,
-    threshold: f64,
+    chunk: &Chunk<'_>,
     out: &mut Vec<ChannelAlarm>,
 ) {
+    let threshold = chunk.threshold;
     for (k, &x) in xs.iter().enumerate() {
         let flags =
             ((r.gp_real[k] > threshold) as u8 * RISE) | ((r.gn_real[k] > threshold) as u8 * DROP);
@@ -195,8 +238,8 @@ fn collect<const W: usize>(
             let lane = CusumLane {
                 tap: r.tap[k],
                 tan: r.tan[k],
-                x_tap: f64::from_bits(r.x_tap[k]),
-                x_tan: f64::from_bits(r.x_tan[k]),
+                x_tap: chunk.start_value(r.tap[k], c + k, r.x_tap[k]),
+                x_tan: chunk.start_value(r.tan[k], c + k, r.x_tan[k]),
                 ..CusumLane::ZERO
             };
             out.push(ChannelAlarm {
