@@ -27,6 +27,7 @@ mod sums;
 
 pub use config::ShewhartConfig;
 
+use sums::PairedSums;
 pub(crate) use sums::{exact_decision, Derived, Sums};
 
 use crate::alarm::{Alarm, Direction};
@@ -44,7 +45,8 @@ struct Cursor {
     seen: u64,
     since_rebuild: u64,
     pos: usize,
-    sums: Sums,
+    /// The sums as one vector while stepping (converted from and back to the stored [`Sums`]).
+    sums: PairedSums,
 }
 
 impl Cursor {
@@ -71,17 +73,17 @@ impl Cursor {
         self.seen = i + 1;
         self.since_rebuild = since;
         // The periodic schedule depends on the sample count only (as in a bank).
-        if pos == 0 && (since >= REBUILD_MIN || sums.off_centre(d.inv_w)) {
+        if pos == 0 && (since >= REBUILD_MIN || Sums::from(sums).off_centre(d.inv_w)) {
             if since >= REBUILD_MIN {
                 self.since_rebuild = 0;
             }
-            sums = rebuilt(ring, sums.reference, d.inv_w);
+            sums = rebuilt(ring, sums.reference, d.inv_w).into();
         }
         self.sums = sums;
         if i + 1 < w as u64 || sums.surely_in_control(x, &d, config.threshold) {
             return None;
         }
-        let decision = sums.decide(x, config, || exact_in_ring(ring, pos, x, config));
+        let decision = Sums::from(sums).decide(x, config, || exact_in_ring(ring, pos, x, config));
         decision.map(|(direction, amplitude)| Alarm {
             index: i,
             start: i,
@@ -257,7 +259,7 @@ impl Shewhart {
             seen: self.seen,
             since_rebuild: self.since_rebuild,
             pos: self.pos,
-            sums: self.sums,
+            sums: self.sums.into(),
         }
     }
 
@@ -266,7 +268,7 @@ impl Shewhart {
         self.seen = c.seen;
         self.since_rebuild = c.since_rebuild;
         self.pos = c.pos;
-        self.sums = c.sums;
+        self.sums = c.sums.into();
     }
 
     #[inline(always)]
