@@ -20,7 +20,8 @@
 //! generate them (`benches/common/traces.rs`): the detector is first warmed up on data it
 //! then never sees again (a trace, or one row that primes a bank), and only the calls on
 //! fresh data are counted (`measure`). Single detectors see 4 traces of 100 000 samples;
-//! banks one `T x channels` matrix of about 2 M readings (`T` as in the benchmarks).
+//! banks one `T x channels` matrix of about 2 M readings (`T` as in the benchmarks), in one
+//! call (`step_many`) or, for `cusum_bank_step_1024`, one call per row (`step`).
 
 use std::hint::black_box;
 use std::process::{Command, ExitCode};
@@ -53,6 +54,10 @@ fn kernels() -> Vec<(String, Kernel)> {
         k.push((format!("cusum_bank_{c}"), Kernel::CusumBank(c)));
     }
     k.push((
+        "cusum_bank_step_1024".to_string(),
+        Kernel::CusumBankStep(1024),
+    ));
+    k.push((
         "shewhart_bank_w50_1024".to_string(),
         Kernel::ShewhartBank(50, 1024),
     ));
@@ -72,6 +77,8 @@ enum Kernel {
     ShewhartSlice(usize),
     /// `CusumBank::step_many` over `channels`, drift 0.01.
     CusumBank(usize),
+    /// `CusumBank::step` row by row over `channels`, drift 0.01.
+    CusumBankStep(usize),
     /// `ShewhartBank::step_many`, window `W`, over `channels`.
     ShewhartBank(usize, usize),
 }
@@ -130,8 +137,9 @@ fn single(mut det: impl Stream, slice: bool, traces: &mut Traces) -> usize {
 }
 
 /// Warms `bank` up on `warm` rows (one primes a CUSUM bank, `W` fill a Shewhart window),
-/// then counts one call of `step_many` on a fresh matrix; returns the readings counted.
-fn bank(mut bank: Bank, warm: usize, traces: &mut Traces) -> usize {
+/// then counts one call of `step_many` on a fresh matrix (or a `step` per row: `by_row`);
+/// returns the readings counted.
+fn bank(mut bank: Bank, warm: usize, by_row: bool, traces: &mut Traces) -> usize {
     let channels = bank.channels();
     let mut out: Vec<ChannelAlarm> = Vec::new();
     bank.step_many(&traces.matrix(warm, channels), &mut out)
@@ -140,7 +148,13 @@ fn bank(mut bank: Bank, warm: usize, traces: &mut Traces) -> usize {
     let m = traces.matrix(steps, channels);
     let alarms = measure(&mut || {
         out.clear();
-        bank.step_many(black_box(&m), &mut out).unwrap();
+        if by_row {
+            for row in m.chunks_exact(channels) {
+                bank.step(black_box(row), &mut out).unwrap();
+            }
+        } else {
+            bank.step_many(black_box(&m), &mut out).unwrap();
+        }
         out.len()
     });
     black_box(alarms);
@@ -157,14 +171,15 @@ fn run(kernel: Kernel) -> usize {
             let det = Shewhart::new(shewhart_config(w)).unwrap();
             single(det, matches!(kernel, Kernel::ShewhartSlice(_)), &mut traces)
         }
-        Kernel::CusumBank(channels) => {
+        Kernel::CusumBank(channels) | Kernel::CusumBankStep(channels) => {
             let cfg = CusumConfig::new(CUSUM_THRESHOLD, CUSUM_DRIFT).unwrap();
             let b = CusumBank::new(channels, cfg).unwrap();
-            bank(b.into(), 1, &mut traces)
+            let by_row = matches!(kernel, Kernel::CusumBankStep(_));
+            bank(b.into(), 1, by_row, &mut traces)
         }
         Kernel::ShewhartBank(w, channels) => {
             let b = ShewhartBank::new(channels, shewhart_config(w)).unwrap();
-            bank(b.into(), w, &mut traces)
+            bank(b.into(), w, false, &mut traces)
         }
     }
 }

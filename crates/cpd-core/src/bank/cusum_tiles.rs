@@ -18,8 +18,9 @@
 //! stepping row by row.
 
 use alloc::vec::Vec;
+use core::hint::select_unpredictable;
 
-use wide::bytemuck::cast;
+use wide::bytemuck::{cast, cast_slice_mut};
 use wide::{f64x4, u64x4};
 
 use super::cusum::{Block, CusumBank};
@@ -30,15 +31,16 @@ use crate::cusum::{CusumLane, DROP, RISE};
 /// loop-carried chain (`(g + s) - drift`, then a select).
 pub(super) const TILE: usize = 16;
 
-/// Readings per chunk of rows (512 KiB, within a Zen 4 core's L2 cache).
-const CHUNK_READINGS: usize = 65_536;
+/// Readings per chunk of rows (128 KiB: a chunk stays in the L2 cache while its tiles walk it;
+/// 512 KiB measured slower at 1 024 channels).
+const CHUNK_READINGS: usize = 16_384;
 
-/// Rows per chunk for `channels` channels: as many as fit [`CHUNK_READINGS`], at least 64 and at
+/// Rows per chunk for `channels` channels: as many as fit [`CHUNK_READINGS`], at least 16 and at
 /// most 512. A tile's work per chunk (its state loaded and stored once, its previous readings
 /// and start values brought up to date) is spread over the rows; the matrix is read once
 /// whatever the chunk (each tile reads its own columns of each row).
 fn rows_per_chunk(channels: usize) -> usize {
-    (CHUNK_READINGS / channels).clamp(64, 512)
+    (CHUNK_READINGS / channels).clamp(16, 512)
 }
 
 /// What every tile of a chunk shares.
@@ -55,15 +57,15 @@ pub(super) struct Chunk<'m> {
 }
 
 impl Chunk<'_> {
-    /// The start value of channel `col` whose start is `t`: its reading in the chunk if the
-    /// sums reset in it (`t >= first`), else `before`, the value stored before the chunk.
+    /// The start value (as bits) of channel `col` whose start is `t`: its reading in the chunk
+    /// if the sums reset in it (`t >= first`), else `before`, the value stored before the chunk.
+    /// Branch-free: whether a channel reset in the chunk is the noise's decision.
     #[inline(always)]
-    fn start_value(&self, t: u64, col: usize, before: f64) -> f64 {
-        if t >= self.first {
-            self.rows[(t - self.first) as usize * self.channels + col]
-        } else {
-            before
-        }
+    fn start_value(&self, t: u64, col: usize, before: u64) -> u64 {
+        let inside = t >= self.first;
+        let row = select_unpredictable(inside, t.wrapping_sub(self.first), 0) as usize;
+        let v = self.rows[row * self.channels + col].to_bits();
+        select_unpredictable(inside, v, before)
     }
 }
 
@@ -81,8 +83,10 @@ struct Tile<'a, const W: usize> {
     gn_real: &'a mut [f64; W],
     tap: &'a mut [u64; W],
     tan: &'a mut [u64; W],
-    x_tap: &'a mut [f64; W],
-    x_tan: &'a mut [f64; W],
+    /// The start values as bits: their selects stay blends or integer moves (as floats the
+    /// compiler makes them branches or masked stores).
+    x_tap: &'a mut [u64; W],
+    x_tan: &'a mut [u64; W],
 }
 
 impl<'a, const W: usize> Tile<'a, W> {
@@ -99,8 +103,8 @@ impl<'a, const W: usize> Tile<'a, W> {
             gn_real: arr(b.gn_real, c),
             tap: arr(b.tap, c),
             tan: arr(b.tan, c),
-            x_tap: arr(b.x_tap, c),
-            x_tan: arr(b.x_tan, c),
+            x_tap: arr(cast_slice_mut(b.x_tap), c),
+            x_tan: arr(cast_slice_mut(b.x_tan), c),
         }
     }
 
@@ -110,10 +114,22 @@ impl<'a, const W: usize> Tile<'a, W> {
     /// Returns whether a lane's sum crossed the threshold. Additions, subtractions, comparisons
     /// and blends are exact lane by lane, so the results are those of the scalar step.
     #[inline(always)]
-    fn step4(&mut self, g: usize, x: f64x4, x_prev: f64x4, i: u64x4, c: Consts) -> bool {
+    fn step4<const ONE: bool>(
+        &mut self,
+        g: usize,
+        x: f64x4,
+        x_prev: f64x4,
+        i: u64x4,
+        c: Consts,
+    ) -> bool {
         let ld = |v: &[f64; W]| f64x4::new(v[g..g + 4].try_into().expect("group"));
         let ldu = |v: &[u64; W]| u64x4::new(v[g..g + 4].try_into().expect("group"));
         let zero = f64x4::ZERO;
+        // Every load before every store: the state arrays of a bank of 1 024 channels lie
+        // 8 KiB apart, so a store to one and a load from the next look alike to the CPU's
+        // 4 KiB address check and the load would wait (measured: row by row 1.6x slower).
+        // One row (a `step`): the previous readings from the state, the readings stored there.
+        let x_prev = if ONE { ld(self.x_prev) } else { x_prev };
         let s = x - x_prev;
         // Same operation order as TSNet: (g + s) - drift.
         let vp = ld(self.gp) + s - c.drift;
@@ -125,14 +141,29 @@ impl<'a, const W: usize> Tile<'a, W> {
         let reset = |m: f64x4, v: f64x4| m.bitselect(zero, v);
         let gp_real = reset(rp, ld(self.gp_real) + s);
         let gn_real = reset(rn, ld(self.gn_real) - s);
+        let (tap, tan) = (rpu.select(i, ldu(self.tap)), rnu.select(i, ldu(self.tan)));
+        // A chunk of one row (a `step`): the start values as blends here, where the resets are
+        // in registers, rather than reloaded at the end of the chunk.
+        let xu: u64x4 = cast(x);
+        let starts = ONE.then(|| {
+            (
+                rpu.select(xu, ldu(self.x_tap)),
+                rnu.select(xu, ldu(self.x_tan)),
+            )
+        });
         let st = |v: &mut [f64; W], y: f64x4| v[g..g + 4].copy_from_slice(&y.to_array());
         let stu = |v: &mut [u64; W], y: u64x4| v[g..g + 4].copy_from_slice(&y.to_array());
-        stu(self.tap, rpu.select(i, ldu(self.tap)));
-        stu(self.tan, rnu.select(i, ldu(self.tan)));
+        stu(self.tap, tap);
+        stu(self.tan, tan);
         st(self.gp, reset(rp, vp));
         st(self.gn, reset(rn, vn));
         st(self.gp_real, gp_real);
         st(self.gn_real, gn_real);
+        if let Some((x_tap, x_tan)) = starts {
+            stu(self.x_tap, x_tap);
+            stu(self.x_tan, x_tan);
+            st(self.x_prev, x);
+        }
         (gp_real.simd_gt(c.thr) | gn_real.simd_gt(c.thr)).any()
     }
 
@@ -156,11 +187,10 @@ impl<'a, const W: usize> Tile<'a, W> {
         (lane.gp_real > c.thr1) | (lane.gn_real > c.thr1)
     }
 
-    /// At the end of a chunk whose last row is `last`: the previous readings and the start
-    /// values of the tile (at column `c`) as stepping row by row leaves them.
-    fn finish(&mut self, c: usize, last: &[f64; W], chunk: &Chunk<'_>) {
-        *self.x_prev = *last;
-        for k in 0..W {
+    /// At the end of a chunk: the start values of the tile's lanes `from..W` (at column `c`)
+    /// as stepping row by row leaves them.
+    fn finish(&mut self, from: usize, c: usize, chunk: &Chunk<'_>) {
+        for k in from..W {
             self.x_tap[k] = chunk.start_value(self.tap[k], c + k, self.x_tap[k]);
             self.x_tan[k] = chunk.start_value(self.tan[k], c + k, self.x_tan[k]);
         }
@@ -179,7 +209,7 @@ struct Consts {
 /// Runs the channels `c..c + W` over every row of `chunk`, starting from and returning to the
 /// bank's state in `lanes`, and appends their alarms (in row order) to `out`.
 #[inline(never)]
-pub(super) fn tile<const W: usize>(
+pub(super) fn tile<const W: usize, const ONE: bool>(
     lanes: &mut Block<'_>,
     c: usize,
     chunk: Chunk<'_>,
@@ -202,7 +232,7 @@ pub(super) fn tile<const W: usize>(
         while g + 4 <= W {
             let x = f64x4::new(xs[g..g + 4].try_into().expect("group"));
             let xp = f64x4::new(prev[g..g + 4].try_into().expect("group"));
-            any |= r.step4(g, x, xp, i4, k);
+            any |= r.step4::<ONE>(g, x, xp, i4, k);
             g += 4;
         }
         while g < W {
@@ -214,7 +244,11 @@ pub(super) fn tile<const W: usize>(
         }
         prev = xs;
     }
-    r.finish(c, prev, &chunk);
+    // With one row, `step4` did the start values of the groups of four.
+    r.finish(if ONE { W / 4 * 4 } else { 0 }, c, &chunk);
+    if !ONE {
+        *r.x_prev = *prev;
+    }
 }
 
 /// The rare slow path: one alarm per channel of the tile over the threshold, from its state
@@ -238,8 +272,8 @@ fn collect<const W: usize>(
             let lane = CusumLane {
                 tap: r.tap[k],
                 tan: r.tan[k],
-                x_tap: chunk.start_value(r.tap[k], c + k, r.x_tap[k]),
-                x_tan: chunk.start_value(r.tan[k], c + k, r.x_tan[k]),
+                x_tap: f64::from_bits(chunk.start_value(r.tap[k], c + k, r.x_tap[k])),
+                x_tan: f64::from_bits(chunk.start_value(r.tan[k], c + k, r.x_tan[k])),
                 ..CusumLane::ZERO
             };
             out.push(ChannelAlarm {
@@ -272,13 +306,18 @@ impl CusumBank {
             };
             let start = out.len();
             let mut lanes = self.block(0, n);
+            let one_row = chunk_rows.len() == n;
             let mut c = 0;
             while c + TILE <= n {
-                tile::<TILE>(&mut lanes, c, chunk, out);
+                if one_row {
+                    tile::<TILE, true>(&mut lanes, c, chunk, out);
+                } else {
+                    tile::<TILE, false>(&mut lanes, c, chunk, out);
+                }
                 c += TILE;
             }
             while c < n {
-                tile::<1>(&mut lanes, c, chunk, out);
+                tile::<1, false>(&mut lanes, c, chunk, out);
                 c += 1;
             }
             // Tiles ran one after another: put the chunk's alarms back in step, then channel,

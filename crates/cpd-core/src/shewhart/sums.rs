@@ -198,13 +198,45 @@ impl Sums {
     }
 }
 
+/// What a detector's step needs of its running sums: [`Sums`] (per `update` call, kept in
+/// memory between calls) or [`PairedSums`] (over a slice, kept in registers).
+pub(crate) trait RunningSums: Copy + From<Sums> + Into<Sums> {
+    /// The reference subtracted from every sample.
+    fn reference(&mut self) -> &mut f64;
+    /// Adds a sample while the window is filling.
+    fn push(&mut self, x: f64);
+    /// Adds `x` and removes `old` (the window is full).
+    fn slide(&mut self, x: f64, old: f64);
+    /// [`Sums::surely_in_control`].
+    fn surely_in_control(&self, x: f64, d: &Derived, threshold: f64) -> bool;
+}
+
+impl RunningSums for Sums {
+    #[inline(always)]
+    fn reference(&mut self) -> &mut f64 {
+        &mut self.reference
+    }
+    #[inline(always)]
+    fn push(&mut self, x: f64) {
+        Sums::push(self, x)
+    }
+    #[inline(always)]
+    fn slide(&mut self, x: f64, old: f64) {
+        Sums::slide(self, x, old)
+    }
+    #[inline(always)]
+    fn surely_in_control(&self, x: f64, d: &Derived, threshold: f64) -> bool {
+        Sums::surely_in_control(self, x, d, threshold)
+    }
+}
+
 /// [`Sums`] with the two running sums as the two lanes of one vector, `s = [Σy, Σy²]` and `c`
 /// their compensations: one pair of vector TwoSums per update instead of two scalar ones, with
 /// the same results bit for bit (see [`acc`]). The single detector keeps its sums this way
 /// while it steps; the bank keeps [`Sums`] (its loop vectorizes across channels instead).
 #[derive(Clone, Copy)]
 pub(crate) struct PairedSums {
-    pub reference: f64,
+    reference: f64,
     s: f64x2,
     c: f64x2,
 }
@@ -234,26 +266,28 @@ impl From<PairedSums> for Sums {
     }
 }
 
-impl PairedSums {
-    /// [`Sums::push`].
+impl RunningSums for PairedSums {
     #[inline(always)]
-    pub(crate) fn push(&mut self, x: f64) {
+    fn reference(&mut self) -> &mut f64 {
+        &mut self.reference
+    }
+
+    #[inline(always)]
+    fn push(&mut self, x: f64) {
         let y = x - self.reference;
         (self.s, self.c) = acc(self.s, self.c, f64x2::new([y, y * y]));
     }
 
-    /// [`Sums::slide`].
     #[inline(always)]
-    pub(crate) fn slide(&mut self, x: f64, old: f64) {
+    fn slide(&mut self, x: f64, old: f64) {
         let y = x - self.reference;
         let yo = old - self.reference;
         let (s, c) = acc(self.s, self.c, f64x2::new([y, y * y]));
         (self.s, self.c) = acc(s, c, -f64x2::new([yo, yo * yo]));
     }
 
-    /// [`Sums::surely_in_control`].
     #[inline(always)]
-    pub(crate) fn surely_in_control(&self, x: f64, d: &Derived, threshold: f64) -> bool {
+    fn surely_in_control(&self, x: f64, d: &Derived, threshold: f64) -> bool {
         let [mu_y, m2] = ((self.s + self.c) * f64x2::splat(d.inv_w)).to_array();
         surely_in_control(x, self.reference, (mu_y, m2), threshold)
     }
