@@ -6,7 +6,7 @@
 //! 2-core machines are shared, and other processes would otherwise inflate the figures.
 //! Set `CPD_BENCH_WALL=1` to measure wall time instead.
 //!
-//! Inputs are **fresh** seeded pressure-like traces (see [`Traces`]): heads of 200 m with
+//! Inputs are **fresh** seeded pressure-like traces (see `common/traces.rs`): heads of 200 m with
 //! near-Gaussian sensor noise (a sum of 4 uniforms) of σ = 0.05 m and a burst (a 0.5–2 m drop with damped ringing) every
 //! ~50 000 samples, detectors at thresholds calibrated for that noise (CUSUM 0.3 m, drift
 //! 0.01 m; Shewhart 3σ and 0.2 m). Every timed iteration gets a trace it has never seen (a new
@@ -16,12 +16,14 @@
 
 use std::hint::black_box;
 
-use cpd_core::{
-    ChannelAlarm, Cusum, CusumBank, CusumConfig, Shewhart, ShewhartBank, ShewhartConfig,
-};
+use cpd_core::{ChannelAlarm, CusumBank, CusumConfig, Shewhart, ShewhartBank};
 use cpu_time::ThreadTime;
 use criterion::measurement::{Measurement, ValueFormatter, WallTime};
 use criterion::{criterion_group, criterion_main, BatchSize, BenchmarkId, Criterion, Throughput};
+
+#[path = "common/traces.rs"]
+mod traces;
+use traces::*;
 
 /// Thread CPU time in nanoseconds (or wall time with `CPD_BENCH_WALL=1`).
 struct CpuTime {
@@ -66,92 +68,6 @@ fn config() -> Criterion<CpuTime> {
     Criterion::default().with_measurement(CpuTime { wall })
 }
 
-/// SplitMix64: seeded, tiny.
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in (0, 1].
-    fn uniform(&mut self) -> f64 {
-        ((self.next_u64() >> 11) + 1) as f64 / (1u64 << 53) as f64
-    }
-
-    /// Approximately standard normal: the sum of 4 uniforms (Irwin-Hall), cheap to draw.
-    fn normal(&mut self) -> f64 {
-        let s = self.uniform() + self.uniform() + self.uniform() + self.uniform();
-        (s - 2.0) * 3f64.sqrt()
-    }
-}
-
-/// Sensor noise (m) and the calibrated detector parameters for it.
-const NOISE: f64 = 0.05;
-const CUSUM_THRESHOLD: f64 = 0.3;
-const CUSUM_DRIFT: f64 = 0.01;
-const SHEWHART_SIGMA: f64 = 3.0;
-const SHEWHART_THRESHOLD: f64 = 0.2;
-
-/// A source of fresh traces: every call gets a new seed.
-struct Traces {
-    seed: u64,
-}
-
-impl Traces {
-    fn new(seed: u64) -> Self {
-        Traces { seed }
-    }
-
-    /// `n` samples of one meter: 200 m + noise of σ = NOISE, a burst every ~50 000 samples.
-    fn heads(&mut self, n: usize) -> Vec<f64> {
-        self.seed += 1;
-        let mut rng = Rng(self.seed.wrapping_mul(0xD1B5_4A32_D192_ED03));
-        let mut level = 200.0;
-        let mut ring = 0.0f64;
-        let mut since = u32::MAX;
-        (0..n)
-            .map(|_| {
-                if rng.next_u64().is_multiple_of(50_000) {
-                    ring = 0.5 + 1.5 * rng.uniform();
-                    level -= ring;
-                    since = 0;
-                }
-                let t = since as f64;
-                since = since.saturating_add(1);
-                let transient = if since < 4_000 {
-                    0.5 * ring * (-t / 400.0).exp() * (t / 15.0).cos()
-                } else {
-                    0.0
-                };
-                level + transient + NOISE * rng.normal()
-            })
-            .collect()
-    }
-
-    /// `steps` rows of `channels` meters (row-major), each column a fresh trace.
-    fn matrix(&mut self, steps: usize, channels: usize) -> Vec<f64> {
-        let cols: Vec<Vec<f64>> = (0..channels).map(|_| self.heads(steps)).collect();
-        (0..steps)
-            .flat_map(|t| cols.iter().map(move |c| c[t]))
-            .collect()
-    }
-}
-
-fn cusum(drift: f64) -> Cusum {
-    Cusum::new(CusumConfig::new(CUSUM_THRESHOLD, drift).unwrap())
-}
-
-fn shewhart_config(w: usize) -> ShewhartConfig {
-    ShewhartConfig::new(w, SHEWHART_SIGMA, SHEWHART_THRESHOLD).unwrap()
-}
-
-const SAMPLES: usize = 100_000;
-const WINDOWS: [usize; 3] = [10, 100, 10_000];
 const CUSUMS: [(&str, f64); 2] = [("cusum", CUSUM_DRIFT), ("cusum_nodrift", 0.0)];
 
 /// One detector per sample (`update`) and per slice (`update_slice`), fresh data each time.
@@ -252,11 +168,6 @@ fn replayed(c: &mut Criterion<CpuTime>) {
         })
     });
     group.finish();
-}
-
-/// Time steps per timed iteration of a bank benchmark (about 2 M channel-samples).
-fn bank_steps(channels: usize) -> usize {
-    (2_097_152 / channels).clamp(16, 4096)
 }
 
 fn banks(c: &mut Criterion<CpuTime>) {

@@ -28,6 +28,7 @@ mod sums;
 pub use config::ShewhartConfig;
 
 pub(crate) use sums::{exact_decision, Derived, Sums};
+use sums::{PairedSums, RunningSums};
 
 use crate::alarm::{Alarm, Direction};
 use crate::error::{check_sample, check_samples, filled, Error};
@@ -40,14 +41,16 @@ pub(crate) const REBUILD_MIN: u64 = 1024;
 
 /// The small, copyable part of a detector's state: kept in registers while stepping.
 #[derive(Clone, Copy)]
-struct Cursor {
+struct Cursor<S> {
     seen: u64,
     since_rebuild: u64,
     pos: usize,
-    sums: Sums,
+    /// The sums while stepping: [`Sums`] per `update` call, [`PairedSums`] over a slice
+    /// (converted from and back to the stored [`Sums`] once per slice).
+    sums: S,
 }
 
-impl Cursor {
+impl<S: RunningSums> Cursor<S> {
     /// One sample (finite): ring, sums, periodic rebuild, decision.
     #[inline(always)]
     fn step(&mut self, ring: &mut [f64], config: &ShewhartConfig, x: f64) -> Option<Alarm> {
@@ -56,7 +59,7 @@ impl Cursor {
         let i = self.seen;
         let mut sums = self.sums;
         if i == 0 {
-            sums.reference = x;
+            *sums.reference() = x;
         }
         let pos = self.pos;
         let old = core::mem::replace(&mut ring[pos], x);
@@ -71,17 +74,19 @@ impl Cursor {
         self.seen = i + 1;
         self.since_rebuild = since;
         // The periodic schedule depends on the sample count only (as in a bank).
-        if pos == 0 && (since >= REBUILD_MIN || sums.off_centre(d.inv_w)) {
+        if pos == 0 && (since >= REBUILD_MIN || sums.into().off_centre(d.inv_w)) {
             if since >= REBUILD_MIN {
                 self.since_rebuild = 0;
             }
-            sums = rebuilt(ring, sums.reference, d.inv_w);
+            sums = rebuilt(ring, *sums.reference(), d.inv_w).into();
         }
         self.sums = sums;
         if i + 1 < w as u64 || sums.surely_in_control(x, &d, config.threshold) {
             return None;
         }
-        let decision = sums.decide(x, config, || exact_in_ring(ring, pos, x, config));
+        let decision = sums
+            .into()
+            .decide(x, config, || exact_in_ring(ring, pos, x, config));
         decision.map(|(direction, amplitude)| Alarm {
             index: i,
             start: i,
@@ -252,26 +257,26 @@ impl Shewhart {
     }
 
     #[inline(always)]
-    fn cursor(&self) -> Cursor {
+    fn cursor<S: RunningSums>(&self) -> Cursor<S> {
         Cursor {
             seen: self.seen,
             since_rebuild: self.since_rebuild,
             pos: self.pos,
-            sums: self.sums,
+            sums: self.sums.into(),
         }
     }
 
     #[inline(always)]
-    fn set_cursor(&mut self, c: Cursor) {
+    fn set_cursor<S: RunningSums>(&mut self, c: Cursor<S>) {
         self.seen = c.seen;
         self.since_rebuild = c.since_rebuild;
         self.pos = c.pos;
-        self.sums = c.sums;
+        self.sums = c.sums.into();
     }
 
     #[inline(always)]
     fn update_unchecked(&mut self, x: f64) -> Option<Alarm> {
-        let mut cur = self.cursor();
+        let mut cur = self.cursor::<Sums>();
         let alarm = cur.step(&mut self.ring, &self.config, x);
         self.set_cursor(cur);
         alarm
@@ -284,7 +289,7 @@ impl Shewhart {
     pub fn update_slice(&mut self, xs: &[f64], out: &mut Vec<Alarm>) -> Result<(), Error> {
         check_samples(xs, self.seen)?;
         // The counters and sums live in locals (registers) for the whole slice.
-        let mut cur = self.cursor();
+        let mut cur = self.cursor::<PairedSums>();
         for &x in xs {
             if let Some(a) = cur.step(&mut self.ring, &self.config, x) {
                 out.push(a);

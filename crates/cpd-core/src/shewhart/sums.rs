@@ -1,6 +1,10 @@
 //! The running window sums of one Shewhart channel and the decision made from them, shared by
 //! the detector and the bank (see the parent module's docs for the numerics).
 
+use core::ops::{Add, Sub};
+
+use wide::f64x2;
+
 use crate::alarm::Direction;
 use crate::math::{abs, sqrt};
 use crate::stats::{lane_sum, np_mean_std, out_of_control};
@@ -35,13 +39,24 @@ pub(crate) struct Derived {
     pub sigma2_lo: f64,
 }
 
-/// Adds `v` to the compensated sum `(s, c)` (Knuth's TwoSum; branch-free).
+/// Adds `v` to the compensated sum `(s, c)` (Knuth's TwoSum; branch-free), on scalars or lane
+/// by lane on vectors (exact lane by lane: each lane is the scalar result, bit for bit).
 #[inline(always)]
-fn acc(s: f64, c: f64, v: f64) -> (f64, f64) {
+fn acc<T: Copy + Add<Output = T> + Sub<Output = T>>(s: T, c: T, v: T) -> (T, T) {
     let t = s + v;
     let bp = t - s;
     let err = (s - (t - bp)) + (v - bp);
     (t, c + err)
+}
+
+/// The cheap in-control test of [`Sums::surely_in_control`] from the sample `x`, the reference
+/// and the window moments `(mu_y, m2) = (Σy / W, Σy² / W)`.
+#[inline(always)]
+fn surely_in_control(x: f64, reference: f64, (mu_y, m2): (f64, f64), threshold: f64) -> bool {
+    let y = x - reference;
+    let ad = abs(y - mu_y);
+    let ed = MARGIN * (abs(x) + abs(reference) + abs(y) + 1.0 + abs(m2) + ad);
+    ad + ed <= threshold
 }
 
 /// Running window sums of one channel, shared by the detector and the bank.
@@ -104,8 +119,8 @@ impl Sums {
     /// [`CANCELLATION`]).
     #[inline(always)]
     pub(crate) fn off_centre(&self, inv_w: f64) -> bool {
-        let mu_y = (self.s1 + self.c1) * inv_w;
-        let var = (self.s2 + self.c2) * inv_w - mu_y * mu_y;
+        let (mu_y, m2) = self.moments(inv_w);
+        let var = m2 - mu_y * mu_y;
         mu_y * mu_y > CANCELLATION * var
     }
 
@@ -115,17 +130,18 @@ impl Sums {
         (x - self.reference) - (self.s1 + self.c1) * inv_w
     }
 
+    /// `(Σy / W, Σy² / W)` from the compensated sums.
+    #[inline(always)]
+    fn moments(&self, inv_w: f64) -> (f64, f64) {
+        ((self.s1 + self.c1) * inv_w, (self.s2 + self.c2) * inv_w)
+    }
+
     /// Cheap first test, true for most in-control samples: `|x - μ| <= threshold` holds even
     /// with the worst-case error of the running sums. Uses `sqrt(m2) <= 1 + m2` instead of a
     /// square root, so it implies the [`Sums::classify`] outcome [`NONE`]; branch-free.
     #[inline(always)]
     pub(crate) fn surely_in_control(&self, x: f64, d: &Derived, threshold: f64) -> bool {
-        let y = x - self.reference;
-        let mu_y = (self.s1 + self.c1) * d.inv_w;
-        let m2 = (self.s2 + self.c2) * d.inv_w;
-        let ad = abs(y - mu_y);
-        let ed = MARGIN * (abs(x) + abs(self.reference) + abs(y) + 1.0 + abs(m2) + ad);
-        ad + ed <= threshold
+        surely_in_control(x, self.reference, self.moments(d.inv_w), threshold)
     }
 
     /// Fast classification of the newest sample `x` of a full window:
@@ -133,8 +149,7 @@ impl Sums {
     #[inline(always)]
     pub(crate) fn classify(&self, x: f64, d: &Derived, threshold: f64) -> u8 {
         let y = x - self.reference;
-        let mu_y = (self.s1 + self.c1) * d.inv_w;
-        let m2 = (self.s2 + self.c2) * d.inv_w;
+        let (mu_y, m2) = self.moments(d.inv_w);
         let dev = y - mu_y;
         let var = m2 - mu_y * mu_y;
         let var = if var > 0.0 { var } else { 0.0 };
@@ -180,6 +195,101 @@ impl Sums {
                 Some((direction, self.deviation(x, d.inv_w)))
             }
         }
+    }
+}
+
+/// What a detector's step needs of its running sums: [`Sums`] (per `update` call, kept in
+/// memory between calls) or [`PairedSums`] (over a slice, kept in registers).
+pub(crate) trait RunningSums: Copy + From<Sums> + Into<Sums> {
+    /// The reference subtracted from every sample.
+    fn reference(&mut self) -> &mut f64;
+    /// Adds a sample while the window is filling.
+    fn push(&mut self, x: f64);
+    /// Adds `x` and removes `old` (the window is full).
+    fn slide(&mut self, x: f64, old: f64);
+    /// [`Sums::surely_in_control`].
+    fn surely_in_control(&self, x: f64, d: &Derived, threshold: f64) -> bool;
+}
+
+impl RunningSums for Sums {
+    #[inline(always)]
+    fn reference(&mut self) -> &mut f64 {
+        &mut self.reference
+    }
+    #[inline(always)]
+    fn push(&mut self, x: f64) {
+        Sums::push(self, x)
+    }
+    #[inline(always)]
+    fn slide(&mut self, x: f64, old: f64) {
+        Sums::slide(self, x, old)
+    }
+    #[inline(always)]
+    fn surely_in_control(&self, x: f64, d: &Derived, threshold: f64) -> bool {
+        Sums::surely_in_control(self, x, d, threshold)
+    }
+}
+
+/// [`Sums`] with the two running sums as the two lanes of one vector, `s = [Σy, Σy²]` and `c`
+/// their compensations: one pair of vector TwoSums per update instead of two scalar ones, with
+/// the same results bit for bit (see [`acc`]). The single detector keeps its sums this way
+/// while it steps; the bank keeps [`Sums`] (its loop vectorizes across channels instead).
+#[derive(Clone, Copy)]
+pub(crate) struct PairedSums {
+    reference: f64,
+    s: f64x2,
+    c: f64x2,
+}
+
+impl From<Sums> for PairedSums {
+    #[inline(always)]
+    fn from(v: Sums) -> Self {
+        Self {
+            reference: v.reference,
+            s: f64x2::new([v.s1, v.s2]),
+            c: f64x2::new([v.c1, v.c2]),
+        }
+    }
+}
+
+impl From<PairedSums> for Sums {
+    #[inline(always)]
+    fn from(v: PairedSums) -> Self {
+        let ([s1, s2], [c1, c2]) = (v.s.to_array(), v.c.to_array());
+        Self {
+            reference: v.reference,
+            s1,
+            c1,
+            s2,
+            c2,
+        }
+    }
+}
+
+impl RunningSums for PairedSums {
+    #[inline(always)]
+    fn reference(&mut self) -> &mut f64 {
+        &mut self.reference
+    }
+
+    #[inline(always)]
+    fn push(&mut self, x: f64) {
+        let y = x - self.reference;
+        (self.s, self.c) = acc(self.s, self.c, f64x2::new([y, y * y]));
+    }
+
+    #[inline(always)]
+    fn slide(&mut self, x: f64, old: f64) {
+        let y = x - self.reference;
+        let yo = old - self.reference;
+        let (s, c) = acc(self.s, self.c, f64x2::new([y, y * y]));
+        (self.s, self.c) = acc(s, c, -f64x2::new([yo, yo * yo]));
+    }
+
+    #[inline(always)]
+    fn surely_in_control(&self, x: f64, d: &Derived, threshold: f64) -> bool {
+        let [mu_y, m2] = ((self.s + self.c) * f64x2::splat(d.inv_w)).to_array();
+        surely_in_control(x, self.reference, (mu_y, m2), threshold)
     }
 }
 
