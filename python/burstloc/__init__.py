@@ -46,11 +46,13 @@ if TYPE_CHECKING:
     from burstloc.experiments.evaluate import evaluate
     from burstloc.live.monitor import BurstMonitor
     from burstloc.live.windows import ReadingStream
+    from burstloc.localize.classify import Classification, ClassifierConfig, Operation
     from burstloc.localize.config import Calibration
     from burstloc.localize.decide import Decision
     from burstloc.localize.evidence import BurstEvidence, RankedPipe, Ranking
     from burstloc.localize.model import LocalizationModel
     from burstloc.readings import Reading, Step
+    from burstloc.sim.events import EventScenario, simulate_event
     from burstloc.sim.scenario import BurstScenario
     from burstloc.sim.tsnet import simulate_burst
 
@@ -61,6 +63,9 @@ _LAZY: dict[str, str] = {
     "Reading": "burstloc.readings",
     "Step": "burstloc.readings",
     "Calibration": "burstloc.localize.config",
+    "Classification": "burstloc.localize.classify",
+    "ClassifierConfig": "burstloc.localize.classify",
+    "Operation": "burstloc.localize.classify",
     "LocalizationModel": "burstloc.localize.model",
     "Decision": "burstloc.localize.decide",
     "Ranking": "burstloc.localize.evidence",
@@ -70,6 +75,8 @@ _LAZY: dict[str, str] = {
     "evaluate": "burstloc.experiments.evaluate",
     "BurstScenario": "burstloc.sim.scenario",
     "simulate_burst": "burstloc.sim.tsnet",
+    "EventScenario": "burstloc.sim.events",
+    "simulate_event": "burstloc.sim.events",
 }
 
 __all__ = [
@@ -78,13 +85,17 @@ __all__ = [
     "BurstMonitor",
     "BurstScenario",
     "Calibration",
+    "Classification",
+    "ClassifierConfig",
     "ConfigError",
     "Cusum",
     "Decision",
     "DetectorBank",
+    "EventScenario",
     "InputError",
     "LocalizationModel",
     "NetworkError",
+    "Operation",
     "RankedPipe",
     "Ranking",
     "Reading",
@@ -99,6 +110,7 @@ __all__ = [
     "detect_shewhart",
     "evaluate",
     "simulate_burst",
+    "simulate_event",
 ]
 
 

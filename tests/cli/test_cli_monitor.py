@@ -108,3 +108,22 @@ def test_bad_options_and_a_foreign_state_stop_it_by_name(
     assert done.returncode == 2 and b"--queue-size must be >= 1" in done.stderr
     done = _monitor(tiny, cfg, "--save-every", "nan")
     assert done.returncode == 2 and b"--save-every must be a finite number" in done.stderr
+
+
+def test_classify_and_operations_options(tiny: Path, cfg: Path, tmp_path: Path) -> None:
+    from burstloc.localize.classify import ClassifierConfig
+
+    classifier = ClassifierConfig(max_residual=1.0, min_scale=0.0, rise_tolerance=0.05)
+    path = classifier.save(tmp_path / "classifier.json")
+    ops = tmp_path / "ops.csv"
+    ops.write_text("asset,time,action\nJ1,5,demand on\n")
+    done = _monitor(tiny, cfg, "--classify", str(path), "--operations", str(ops),
+                    "--health-every", "10", stdin=_steady(100))  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    health = [json.loads(line) for line in done.stdout.decode().splitlines()]
+    assert health[-1]["decisions"] == 0 and health[-1]["events"] == 0
+    alone = _monitor(tiny, cfg, "--operations", str(ops), stdin=_steady(10))
+    assert alone.returncode != 0 and b"--operations needs --classify" in alone.stderr
+    ops.write_text("asset,time,action\nJ1,soon,demand on\n")
+    bad = _monitor(tiny, cfg, "--classify", str(path), "--operations", str(ops))
+    assert bad.returncode != 0 and b"line 2" in bad.stderr

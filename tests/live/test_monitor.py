@@ -284,3 +284,16 @@ def test_classified_decisions_are_bursts_or_events(tiny: Path, config: Calibrati
     monitor = BurstMonitor(tiny, config, capture_interval=2.0, classify=loose, operations=declared)
     explained = list(monitor.run(steps))
     assert explained and explained[0].to_json()["classification"]["reason"].startswith("declared")
+
+
+def test_a_classified_decision_without_a_silent_meter(tiny: Path, config: Calibration, long_burst):
+    from burstloc.localize.classify import ClassifierConfig
+
+    spec = RunSpec(DetectorConfig("cusum", 0.3), 2.0, 5, localizer="fused")
+    loose = ClassifierConfig(max_residual=1.0, min_scale=0.0, rise_tolerance=0.05)
+    monitor = BurstMonitor(tiny, config, capture_interval=2.0, classify=loose)
+    monitor.exclude("J4")
+    decisions = list(monitor.run(_steps(long_burst, spec)))
+    assert decisions and decisions[0].meters == ("J1", "J2", "J3")
+    assert decisions[0].decision.classification is not None
+    assert decisions[0].decision.classification.evidence["falling"] <= 3  # J4 left out

@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 
 from burstloc.exceptions import InputError
+from burstloc.experiments.calibrate import DEFAULT_NOISE_SIGMA
 from burstloc.experiments.harness import Clock, RankingSetup, capture_readings
 from burstloc.localize.classify import (
     CLASSES,
@@ -61,15 +62,12 @@ __all__ = [
     "classify_result",
     "default_events",
     "evaluate_events",
-    "normal_operation",
 ]
 
 #: What a scenario can end as.
 ANSWERS = ("quiet", *CLASSES)
 #: Meters that must alarm for a decision (the monitor's default).
 CORROBORATE = 2
-#: Noise level (m) the rise tolerance is floored at three times of.
-NOISE_SIGMA = 0.01
 #: The calibration's margins (module docstring).
 RESIDUAL_MARGIN = 1.5
 SCALE_FRACTION = 0.25
@@ -233,7 +231,9 @@ def _thresholds(seen: dict[str, list[float]]) -> dict[str, float]:
     return {
         "max_residual": min(RESIDUAL_MARGIN * worst["largest_residual"], 10.0),
         "min_scale": SCALE_FRACTION * worst["smallest_scale"],
-        "rise_tolerance": max(RISE_MARGIN * max(worst["largest_rise_m"], 0.0), 3 * NOISE_SIGMA),
+        "rise_tolerance": max(
+            RISE_MARGIN * max(worst["largest_rise_m"], 0.0), 3 * DEFAULT_NOISE_SIGMA
+        ),
     }
 
 
@@ -358,10 +358,12 @@ def evaluate_events(
     """Classify ``bursts`` (pipe -> its burst on ``network``) and :func:`default_events` at each
     capture interval, with a classifier calibrated on ``calibration_bursts`` (of
     ``calibration_network``); every event also with its operation declared; and
-    ``normal_hours`` of normal operation (:func:`normal_operation`; 0: none). ``setup``: the
+    ``normal_hours`` of normal operation
+    (:func:`burstloc.experiments.normal_day.normal_operation`; 0: none). ``setup``: the
     localizers and calibration of ``network`` (default: calibrated here)."""
     import sys
 
+    from burstloc.experiments.normal_day import normal_operation
     from burstloc.sim.events import simulate_event
 
     meters = list(next(iter(bursts.values())).junctions)
@@ -395,46 +397,3 @@ def evaluate_events(
         if normal_hours > 0:
             out.normal.append(normal_operation(network, setup, config, ci, hours=normal_hours))
     return out, config
-
-
-def normal_operation(
-    network: str | os.PathLike[str],
-    setup: RankingSetup,
-    config: ClassifierConfig,
-    capture_interval: float,
-    *,
-    hours: float = 24.0,
-    noise_sigma: float = NOISE_SIGMA,
-    seed: int = 0,
-) -> dict[str, Any]:
-    """A day of normal operation (:func:`burstloc.sim.normal.normal_day`) through the live
-    monitor with the classifier: how many decisions, how many reported as bursts."""
-    from burstloc.live.monitor import BurstMonitor
-    from burstloc.readings import Step
-    from burstloc.sim.normal import normal_day
-
-    times, values = normal_day(
-        network,
-        capture_interval=capture_interval,
-        noise_sigma=noise_sigma,
-        hours=hours,
-        meters=setup.meters,
-        seed=seed,
-    )
-    monitor = BurstMonitor(
-        network,
-        setup.config,
-        capture_interval=capture_interval,
-        localizers=setup.localizers,
-        classify=config,
-    )
-    decisions = list(monitor.run(Step(float(t), v) for t, v in zip(times, values, strict=True)))
-    return {
-        "capture_interval": capture_interval,
-        "hours": hours,
-        "noise_sigma": noise_sigma,
-        "decisions": len(decisions),
-        "burst_reports": sum(d.is_burst for d in decisions),
-        "dismissed": monitor.dismissed,
-        "events": [d.to_json()["classification"] for d in decisions],
-    }

@@ -9,7 +9,8 @@
   skipped; the loop goes on;
 * a meter that goes silent or comes back, a clock offset found and corrected: reported;
   the monitor and the stream exclude / include the meter;
-* a decision: emitted as a record (``"type": "decision"``, with the health at decision time);
+* a decision: emitted as a record (``"type": "decision"``, with the health at decision time;
+  with a classifier, an alarm that is not a burst is an ``"event"`` record, counted apart);
 * every ``health_every`` seconds of reading time: a health record (``"type": "health"``).
 
 Records go to ``emit`` (stdout, MQTT: the caller's choice); both kinds go the same way and
@@ -120,6 +121,7 @@ class LiveLoop:
         self._items = 0
         self._columns = {m: j for j, m in enumerate(monitor.meters)}
         self.decisions = 0
+        self.events = 0  # alarms classified other or unsure (with a classifier)
 
     def feed(self, item: Reading | BadReading, where: str | None = None) -> None:
         """One parsed input item (module docstring); ``where`` names it in reports (default:
@@ -253,7 +255,8 @@ class LiveLoop:
             self.report("step", str(exc))
             return
         if decided is not None:
-            self.decisions += 1
+            self.decisions += decided.is_burst
+            self.events += not decided.is_burst
             record = decided.to_json()
             record["health"] = self.health_record()
             self.emit(record)
@@ -324,6 +327,7 @@ class LiveLoop:
             steps=stats.steps,
             skipped_steps=stats.skipped_steps,
             decisions=self.decisions,
+            events=self.events,
         )
         return record
 
@@ -349,7 +353,11 @@ class LiveLoop:
             "monitor": monitor_state(self.monitor),
             "stream": self.stream.to_state(),
             "health": self.health.to_state(),
-            "loop": {"next_health": self._next_health, "decisions": self.decisions},
+            "loop": {
+                "next_health": self._next_health,
+                "decisions": self.decisions,
+                "events": self.events,
+            },
         }
 
     def restore(self, state: Record) -> None:
@@ -360,3 +368,4 @@ class LiveLoop:
         nxt = state["loop"]["next_health"]
         self._next_health = None if nxt is None or not math.isfinite(nxt) else float(nxt)
         self.decisions = int(state["loop"]["decisions"])
+        self.events = int(state["loop"].get("events", 0))  # states saved before classifying

@@ -54,12 +54,7 @@ from burstloc.constants import METER_MODELS, RANKING_LOCALIZERS, MeterModel
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.live.decision import LiveDecision
 from burstloc.live.subset import SubsetLocalizers
-from burstloc.localize.classify import (
-    ClassifierConfig,
-    EventClassifier,
-    Operation,
-    classify_alarms,
-)
+from burstloc.localize.classify import ClassifierConfig, EventClassifier, Operation, classify_alarms
 from burstloc.localize.config import Calibration, calibrated_bank
 from burstloc.localize.decide import (
     RankingLocalizers,
@@ -68,7 +63,6 @@ from burstloc.localize.decide import (
     rank_alarms,
 )
 from burstloc.localize.evidence import IndexedAlarm, Localizer
-from burstloc.localize.signature import SignatureLocalizer
 from burstloc.readings import Step
 
 __all__ = ["HISTORY_BEFORE_ONSET", "QUIET_FACTOR", "QUIET_WINDOW", "BurstMonitor"]
@@ -189,12 +183,10 @@ class BurstMonitor:
         self._quiet_steps = max(math.ceil(QUIET_WINDOW / cal.capture_interval), 5)
         self._grace: dict[str, int] = {}  # meter back from silence -> step it counts again
         self.excluded: set[str] = set()
-        self.classifier: EventClassifier | None = None
-        if classify is not None:
-            signature = self.localizers.get("signature")
-            if not isinstance(signature, SignatureLocalizer):
-                raise ConfigError("classifying alarms needs the signature localizer")
-            self.classifier = EventClassifier(classify, signature, operations)
+        self.classifier = (
+            None if classify is None else EventClassifier.of(classify, self.localizers)
+        )
+        self.operations = list(operations)
 
     @property
     def pending(self) -> bool:
@@ -358,15 +350,14 @@ class BurstMonitor:
             raise InputError(
                 f"burst detected but not located at t = {times[-1]:g} s: {exc}"
             ) from exc
-        if decision.waited or self.classifier is not None:
-            settled = decision_time("signature", alarms, times, cal)
-            if times[-1] + 1e-9 < settled:  # the fused localizer or the classifier waits
-                self._due = settled
-                return None
-        if self.classifier is not None:
-            settled = decision_time("signature", alarms, times, cal)
+        settled = decision_time("signature", alarms, times, cal)
+        if (decision.waited or self.classifier) and times[-1] + 1e-9 < settled:
+            self._due = settled  # the fused localizer or the classifier waits for the signatures
+            return None
+        if self.classifier is not None:  # over the meters that take part
+            classifier = EventClassifier.of(self.classifier.config, localizers, self.operations)
             kind = classify_alarms(
-                self.classifier, meters, times, readings, alarms, cal, self.meter_model, settled
+                classifier, meters, times, readings, alarms, cal, self.meter_model, settled
             )
             decision = replace(decision, classification=kind)
         alarmed = tuple(sorted({meters[a.channel] for a in alarms}, key=self.meters.index))

@@ -242,6 +242,23 @@ class EventClassifier:
         self.signature = signature
         self.operations = list(operations)
 
+    @classmethod
+    def of(
+        cls,
+        config: ClassifierConfig,
+        localizers: Mapping[str, Any],
+        operations: Sequence[Operation] = (),
+    ) -> EventClassifier:
+        """The classifier over the ``"signature"`` localizer of ``localizers``.
+
+        Raises:
+            ConfigError: there is no signature localizer.
+        """
+        signature = localizers.get("signature")
+        if not isinstance(signature, SignatureLocalizer):
+            raise ConfigError("classifying alarms needs the signature localizer")
+        return cls(config, signature, operations)
+
     def features(self, evidence: BurstEvidence) -> dict[str, Any]:
         """What the classification weighs: the lasting drop per meter and its best burst fit
         (``scale``, ``residual`` relative, ``pipe``), the rising meters and the first meter."""
