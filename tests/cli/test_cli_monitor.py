@@ -83,6 +83,15 @@ def test_an_empty_feed_is_said(tiny: Path, cfg: Path, feed: bytes) -> None:
     assert done.stdout == b""
 
 
+def test_a_feed_of_only_bad_readings_is_said(tiny: Path, cfg: Path) -> None:
+    feed = b"t,meter,value\n0.0,J9,60.0\n\xff\xfe0,J1,\x9960\n"
+    done = _monitor(tiny, cfg, stdin=feed)
+    assert done.returncode == 0, done.stderr
+    err = done.stderr.decode()
+    assert "the feed held no usable readings (3 bad, skipped): nothing was monitored" in err, err
+    assert "line 3: not UTF-8 text" in err, err
+
+
 def test_bad_options_and_a_foreign_state_stop_it_by_name(
     tiny: Path, cfg: Path, tmp_path: Path
 ) -> None:

@@ -119,6 +119,7 @@ class LiveLoop:
         self._next_health: float | None = None
         self._last_save = time.monotonic()
         self._items = 0
+        self._readings = 0  # items that were readings of a configured meter
         self._columns = {m: j for j, m in enumerate(monitor.meters)}
         self.decisions = 0
         self.events = 0  # alarms classified other or unsure (with a classifier)
@@ -169,6 +170,7 @@ class LiveLoop:
             self._part(row, where, slice(good, upto), row.bad[bad:stop], end)
             good, bad = upto, stop
         self._items = first + row.size
+        self._readings += len(row.positions)
 
     def _part(
         self, row: Row, where: str, part: slice, bad: list[tuple[int, BadReading]], end: int
@@ -313,6 +315,12 @@ class LiveLoop:
             self._step(step)
         if self._items == 0:
             self.report("input", "the feed held no readings: nothing was monitored")
+        elif self._readings == 0:
+            self.report(
+                "input",
+                f"the feed held no usable readings ({self._items} bad, skipped): "
+                "nothing was monitored",
+            )
         self.report.close()
         self.save()
 
