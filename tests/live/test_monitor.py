@@ -286,6 +286,45 @@ def test_classified_decisions_are_bursts_or_events(tiny: Path, config: Calibrati
     assert explained and explained[0].to_json()["classification"]["reason"].startswith("declared")
 
 
+def test_a_classified_alarm_is_located_at_once_and_classified_later(
+    tiny: Path, config: Calibration, long_burst
+) -> None:
+    """With a classifier the localizer's early answer is given at once as a transient record
+    (here the arrival localizer's, which answers without waiting), the classification later."""
+    from burstloc.localize.classify import ClassifierConfig
+
+    spec = RunSpec(DetectorConfig("cusum", 0.3), 0.2, 5, localizer="arrival")
+    loose = ClassifierConfig(max_residual=1.0, min_scale=0.0, rise_tolerance=0.05)
+    steps = _steps(long_burst, spec)
+    plain = list(BurstMonitor(tiny, config, capture_interval=0.2, localizer="arrival").run(steps))
+    monitor = BurstMonitor(tiny, config, capture_interval=0.2, localizer="arrival", classify=loose)
+    records = list(monitor.run(steps))
+    assert [r.transient for r in records[:2]] == [True, False]
+    early, final = records[0], records[1]
+    # the early record is the unclassified monitor's answer, at the same time
+    assert plain and not plain[0].waited
+    assert [r.pipe for r in early.ranking] == [r.pipe for r in plain[0].ranking]
+    assert final.pipe == early.pipe  # the same alarms, the same arrival ranking
+    assert early.time == plain[0].time < final.time
+    assert early.time - early.first_alarm <= config.for_interval(0.2).arrival_decision_delay + 0.2
+    assert not early.is_burst and final.is_burst
+    doc = early.to_json()
+    assert doc["type"] == "transient" and doc["burst"] is None and "classification" not in doc
+    assert math.isclose(doc["classify_at"], final.time, abs_tol=0.2 + 1e-9)
+    assert final.to_json()["type"] == "decision"
+    # one early record per alarm, even over a restart in between
+    from burstloc.live.monitor_state import monitor_state, restore_monitor
+
+    cut = next(k for k, s in enumerate(steps) if s.timestamp > early.time)
+    first = BurstMonitor(tiny, config, capture_interval=0.2, localizer="arrival", classify=loose)
+    before = list(first.run(steps[:cut]))
+    again = BurstMonitor(tiny, config, capture_interval=0.2, localizer="arrival", classify=loose)
+    restore_monitor(again, json.loads(json.dumps(monitor_state(first))))
+    after = list(again.run(steps[cut:]))
+    assert [r.transient for r in before] == [True]
+    assert [r.transient for r in after[:1]] == [False] and after[0].time == final.time
+
+
 def test_a_classified_decision_without_a_silent_meter(tiny: Path, config: Calibration, long_burst):
     from burstloc.localize.classify import ClassifierConfig
 

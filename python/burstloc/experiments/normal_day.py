@@ -48,7 +48,8 @@ def normal_operation(
         localizers=setup.localizers,
         classify=config,
     )
-    decisions = list(monitor.run(Step(float(t), v) for t, v in zip(times, values, strict=True)))
+    steps = (Step(float(t), v) for t, v in zip(times, values, strict=True))
+    decisions = [d for d in monitor.run(steps) if not d.transient]  # the classified answers
     return {
         "capture_interval": capture_interval,
         "hours": hours,

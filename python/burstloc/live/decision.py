@@ -17,7 +17,12 @@ class LiveDecision:
     took part (``meters``), which were excluded and which alarmed, and how long it waited after
     the first alarm. ``waited`` is true when the answer came later than the arrival localizer's
     own delay (plus one capture interval): the monitor waited for settled readings. (The live
-    loop adds the health record at decision time to :meth:`to_json`'s record.)"""
+    loop adds the health record at decision time to :meth:`to_json`'s record.)
+
+    With a classifier the answer comes in two records: a *transient* located as soon as the
+    arrival localizer can (``classify_at`` is then the reading time at which the lasting change
+    will have settled and the alarm will be classified), then the decision or event at that
+    time. A transient is neither a burst report nor an event."""
 
     decision: Decision
     localizer: str
@@ -25,12 +30,18 @@ class LiveDecision:
     excluded: tuple[str, ...]
     alarmed: tuple[str, ...]
     waited: bool
+    classify_at: float | None = None
+
+    @property
+    def transient(self) -> bool:
+        """Whether this is the early record of an alarm still to be classified."""
+        return self.classify_at is not None
 
     @property
     def is_burst(self) -> bool:
         """Whether this is reported as a burst (unclassified, or classified ``burst``); the
         others are reported as events."""
-        return self.decision.is_burst
+        return not self.transient and self.decision.is_burst
 
     @property
     def pipe(self) -> str | None:
@@ -60,9 +71,15 @@ class LiveDecision:
     def to_json(self, top: int = 3) -> dict[str, Any]:
         """The record that ``burstloc monitor`` prints: ``"type": "decision"`` for a burst,
         ``"event"`` for an alarm classified as another event or unsure (its ``classification``
-        says which and why)."""
-        kind = "decision" if self.is_burst else "event"
-        doc: dict[str, Any] = {"type": kind, "burst": self.is_burst, **self.decision.to_json(top)}
+        says which and why), ``"transient"`` for the early record of an alarm still to be
+        classified (``"burst": null`` and ``classify_at``, the reading time of its answer)."""
+        if self.transient:
+            kind, burst = "transient", None
+        else:
+            kind, burst = ("decision" if self.is_burst else "event"), self.is_burst
+        doc: dict[str, Any] = {"type": kind, "burst": burst, **self.decision.to_json(top)}
+        if self.transient:
+            doc["classify_at"] = self.classify_at
         doc.update(
             waited=self.waited,
             decision_delay_s=self.delay,

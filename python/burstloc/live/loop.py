@@ -123,6 +123,7 @@ class LiveLoop:
         self._columns = {m: j for j, m in enumerate(monitor.meters)}
         self.decisions = 0
         self.events = 0  # alarms classified other or unsure (with a classifier)
+        self.transients = 0  # early records of alarms still to be classified
 
     def feed(self, item: Reading | BadReading, where: str | None = None) -> None:
         """One parsed input item (module docstring); ``where`` names it in reports (default:
@@ -257,8 +258,9 @@ class LiveLoop:
             self.report("step", str(exc))
             return
         if decided is not None:
+            self.transients += decided.transient
             self.decisions += decided.is_burst
-            self.events += not decided.is_burst
+            self.events += not (decided.is_burst or decided.transient)
             record = decided.to_json()
             record["health"] = self.health_record()
             self.emit(record)
@@ -336,6 +338,7 @@ class LiveLoop:
             skipped_steps=stats.skipped_steps,
             decisions=self.decisions,
             events=self.events,
+            transients=self.transients,
         )
         return record
 
@@ -365,6 +368,7 @@ class LiveLoop:
                 "next_health": self._next_health,
                 "decisions": self.decisions,
                 "events": self.events,
+                "transients": self.transients,
             },
         }
 
@@ -377,3 +381,4 @@ class LiveLoop:
         self._next_health = None if nxt is None or not math.isfinite(nxt) else float(nxt)
         self.decisions = int(state["loop"]["decisions"])
         self.events = int(state["loop"].get("events", 0))  # states saved before classifying
+        self.transients = int(state["loop"].get("transients", 0))

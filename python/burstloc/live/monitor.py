@@ -176,6 +176,7 @@ class BurstMonitor:
         self._steps = 0  # steps fed in all
         self._alarms: list[IndexedAlarm] = []  # by bank index
         self._due: float | None = None
+        self._announced = False  # the pending decision's transient record has been given
         self._quiet_until: float | None = None  # end of the hold-off after a decision
         self._arming = 0  # alarm-free steps still needed after the hold-off
         self._arm_by: float | None = None  # re-arming; re-armed by then even if still ringing
@@ -284,7 +285,7 @@ class BurstMonitor:
         alarmed = {a.channel for a in self._alarms}
         if len(alarmed) < min(self.corroborate, len(self.meters) - len(self.excluded)):
             self.dismissed += 1  # one meter alone: noise or a glitch, not a burst
-            self._alarms, self._due = [], None
+            self._alarms, self._due, self._announced = [], None, False
             return None
         return self._decide()
 
@@ -346,33 +347,35 @@ class BurstMonitor:
                 self.localizer, localizers, meters, times, readings, alarms, cal, self.meter_model
             )
         except InputError as exc:
-            self._alarms, self._due = [], None
+            self._alarms, self._due, self._announced = [], None, False
             raise InputError(
                 f"burst detected but not located at t = {times[-1]:g} s: {exc}"
             ) from exc
+        alarmed = tuple(sorted({meters[a.channel] for a in alarms}, key=self.meters.index))
+        excluded = tuple(m for m in self.meters if m in self.excluded)
         settled = decision_time("signature", alarms, times, cal)
         if (decision.waited or self.classifier) and times[-1] + 1e-9 < settled:
             self._due = settled  # the fused localizer or the classifier waits for the signatures
-            return None
+            if self.classifier is None or decision.waited or self._announced:
+                return None
+            # Located now, classified when the lasting change has settled: say where at once.
+            self._announced = True
+            return LiveDecision(
+                decision, self.localizer, tuple(meters), excluded, alarmed, False, settled
+            )
         if self.classifier is not None:  # over the meters that take part
             classifier = EventClassifier.of(self.classifier.config, localizers, self.operations)
             kind = classify_alarms(
                 classifier, meters, times, readings, alarms, cal, self.meter_model, settled
             )
-            decision = replace(decision, classification=kind)
-        alarmed = tuple(sorted({meters[a.channel] for a in alarms}, key=self.meters.index))
+            # answered now, whatever time the ranking itself could have been given
+            decision = replace(decision, time=float(times[-1]), classification=kind)
         self._alarms = []
         self._due = None
+        self._announced = False
         self._quiet_until = float(times[-1]) + self.holdoff
         waited = decision.waited or (
             decision.time - decision.first_alarm
             > cal.arrival_decision_delay + cal.capture_interval + 1e-9
         )
-        return LiveDecision(
-            decision,
-            self.localizer,
-            tuple(meters),
-            tuple(m for m in self.meters if m in self.excluded),
-            alarmed,
-            waited,
-        )
+        return LiveDecision(decision, self.localizer, tuple(meters), excluded, alarmed, waited)

@@ -34,6 +34,7 @@ def monitor_state(monitor: BurstMonitor) -> dict[str, Any]:
         "steps": m._steps,
         "alarms": [[a.channel, a.index, a.start, a.amplitude] for a in m._alarms],
         "due": m._due,
+        "announced": m._announced,
         "quiet_until": m._quiet_until,
         "arming": m._arming,
         "arm_by": m._arm_by,
@@ -66,6 +67,7 @@ def restore_monitor(monitor: BurstMonitor, state: Mapping[str, Any]) -> None:
     m._seen, m._steps = int(state["seen"]), int(state["steps"])
     m._alarms = [IndexedAlarm(int(c), int(i), int(s), float(a)) for c, i, s, a in state["alarms"]]
     m._due = state["due"]
+    m._announced = bool(state.get("announced", False))  # states saved before: False
     m._quiet_until = state["quiet_until"]
     m._arming = int(state["arming"])
     m._arm_by = state["arm_by"]
