@@ -66,6 +66,24 @@ impl TryFrom<CusumConfigRepr> for CusumConfig {
     }
 }
 
+/// The sign bit of an `f64`, hidden from the optimizer (`black_box`): [`CusumLane::advance`]
+/// negates `s` by flipping it, which LLVM cannot fold into the drop side's addition. Seeing a
+/// plain `-s` it turns `g + (-s)` into a scalar subtraction and, with AVX-512, rebuilds the
+/// vector of the two sides around it: two shuffles more on the loop-carried chain (`update_slice`
+/// 5.0 -> 3.5 ns/sample with `-C target-cpu=native` on an AVX-512 Xeon, the same results).
+#[inline(always)]
+fn opaque_sign() -> u64 {
+    core::hint::black_box(1 << 63)
+}
+
+/// What every step of [`CusumLane::advance`] shares: the config and [`opaque_sign`].
+#[derive(Clone, Copy)]
+struct Sides {
+    threshold: f64,
+    drift: f64,
+    sign: u64,
+}
+
 /// Alarm flag bits returned by [`CusumLane::step`].
 pub(crate) const RISE: u8 = 1;
 /// `gn_real` crossed the threshold.
@@ -153,12 +171,14 @@ impl CusumLane {
     /// alarm is a branch; the loop-carried chain is `(g + s) - drift` and a max. Returns the
     /// alarm flags and the two reset decisions.
     #[inline(always)]
-    fn advance(&mut self, x: f64, i: u64, threshold: f64, drift: f64) -> (u8, bool, bool) {
+    fn advance(&mut self, x: f64, i: u64, c: Sides) -> (u8, bool, bool) {
         let s = x - self.x_prev;
         self.x_prev = x;
-        // The two sides as two lanes of one vector (`g - s` is exactly `g + (-s)`), so that
-        // the compiler keeps the resets as vector blends instead of scalar branches.
-        let t = [s, -s];
+        // The two sides as two lanes of one vector (`g - s` is exactly `g + (-s)`, and `-s` is
+        // `s` with its sign bit flipped), so that the compiler keeps the resets as vector
+        // blends instead of scalar branches, and the sums as one vector addition.
+        let t = [s, f64::from_bits(s.to_bits() ^ c.sign)];
+        let (threshold, drift) = (c.threshold, c.drift);
         let g = [self.gp, self.gn];
         let real = [self.gp_real, self.gn_real];
         let mut reset = [false; 2];
@@ -193,7 +213,12 @@ impl CusumLane {
     /// become a branch).
     #[inline(always)]
     pub(crate) fn step_scalar(&mut self, x: f64, i: u64, threshold: f64, drift: f64) -> u8 {
-        let (flags, reset_p, reset_n) = self.advance(x, i, threshold, drift);
+        let sides = Sides {
+            threshold,
+            drift,
+            sign: opaque_sign(),
+        };
+        let (flags, reset_p, reset_n) = self.advance(x, i, sides);
         let bits = x.to_bits();
         self.x_tap = f64::from_bits(select_unpredictable(reset_p, bits, self.x_tap.to_bits()));
         self.x_tan = f64::from_bits(select_unpredictable(reset_n, bits, self.x_tan.to_bits()));
@@ -220,8 +245,13 @@ impl CusumLane {
             }
         };
         let mut lane = *self;
+        let sides = Sides {
+            threshold: thr,
+            drift,
+            sign: opaque_sign(),
+        };
         for (i, &x) in (base..).zip(xs) {
-            let (flags, _, _) = lane.advance(x, i, thr, drift);
+            let (flags, _, _) = lane.advance(x, i, sides);
             if flags != 0 {
                 lane.x_tap = at(lane.tap, x_tap0);
                 lane.x_tan = at(lane.tan, x_tan0);
