@@ -248,49 +248,62 @@ fn run(
     Ok((g.bank, g.stats))
 }
 
-fn main() {
-    let options = match parse_args(std::env::args().skip(1)) {
+/// The whole program on the given streams: options, `--restore`, the run, `--snapshot`
+/// (written to a temporary file beside it, then renamed: a failed write keeps the previous
+/// snapshot) and the closing summary on `err`. Returns the exit code: 0, 1 (a file that cannot
+/// be read or written, a snapshot that cannot be restored) or 2 (bad options).
+fn cli(
+    args: impl IntoIterator<Item = String>,
+    input: impl Read,
+    out: &mut impl Write,
+    err: &mut impl Write,
+) -> i32 {
+    let options = match parse_args(args) {
         Ok(o) => o,
         Err(e) => {
-            eprintln!("gateway: {e}");
-            std::process::exit(2);
+            let _ = writeln!(err, "gateway: {e}");
+            return 2;
         }
     };
-    let bank = options.restore.as_ref().map(|path| {
-        let bytes = std::fs::read(path).unwrap_or_else(|e| {
-            eprintln!("gateway: cannot read {}: {e}", path.display());
-            std::process::exit(1);
-        });
-        snapshot::from_bytes::<Bank>(&bytes).unwrap_or_else(|e| {
-            eprintln!("gateway: {}: {e}", path.display());
-            std::process::exit(1);
-        })
-    });
+    let bank = match &options.restore {
+        None => None,
+        Some(path) => {
+            let restored = std::fs::read(path)
+                .map_err(|e| format!("cannot read {}: {e}", path.display()))
+                .and_then(|bytes| {
+                    snapshot::from_bytes::<Bank>(&bytes)
+                        .map_err(|e| format!("{}: {e}", path.display()))
+                });
+            match restored {
+                Ok(bank) => Some(bank),
+                Err(e) => {
+                    let _ = writeln!(err, "gateway: {e}");
+                    return 1;
+                }
+            }
+        }
+    };
     let start = std::time::Instant::now();
-    let (stdin, stdout, stderr) = (io::stdin(), io::stdout(), io::stderr());
-    let mut out = io::BufWriter::with_capacity(1 << 16, stdout.lock());
-    let result = run(
-        options.clone(),
-        bank,
-        stdin.lock(),
-        &mut out,
-        &mut stderr.lock(),
-    );
-    let (bank, stats) = result.unwrap_or_else(|e| {
-        eprintln!("gateway: {e}");
-        std::process::exit(1);
-    });
+    let (bank, stats) = match run(options.clone(), bank, input, out, err) {
+        Ok(done) => done,
+        Err(e) => {
+            let _ = writeln!(err, "gateway: {e}");
+            return 1;
+        }
+    };
     let seconds = start.elapsed().as_secs_f64();
     if let (Some(path), Some(bank)) = (&options.snapshot, &bank) {
         let tmp = path.with_extension("tmp");
         let written = std::fs::write(&tmp, snapshot::to_bytes(bank))
             .and_then(|()| std::fs::rename(&tmp, path));
         if let Err(e) = written {
-            eprintln!("gateway: cannot write {}: {e}", path.display());
-            std::process::exit(1);
+            let _ = std::fs::remove_file(&tmp);
+            let _ = writeln!(err, "gateway: cannot write {}: {e}", path.display());
+            return 1;
         }
     }
-    eprintln!(
+    let _ = writeln!(
+        err,
         "gateway: {} rows, {} readings, {} alarms, {} bad lines in {seconds:.3} s ({:.2} M readings/s)",
         stats.rows,
         stats.readings,
@@ -298,6 +311,20 @@ fn main() {
         stats.bad_lines,
         stats.readings as f64 / seconds / 1e6
     );
+    0
+}
+
+fn main() {
+    let (stdin, stdout, stderr) = (io::stdin(), io::stdout(), io::stderr());
+    let mut out = io::BufWriter::with_capacity(1 << 16, stdout.lock());
+    let code = cli(
+        std::env::args().skip(1),
+        stdin.lock(),
+        &mut out,
+        &mut stderr.lock(),
+    );
+    drop(out);
+    std::process::exit(code);
 }
 
 #[cfg(test)]
@@ -387,6 +414,65 @@ mod tests {
             snapshot::to_bytes(&bank.unwrap()),
             snapshot::to_bytes(&clean.unwrap())
         );
+    }
+
+    /// The program with its files: a snapshot written at the end of one run, restored by the
+    /// next; the two runs give the alarms of one; unreadable or foreign files are refused.
+    #[test]
+    fn the_program_snapshots_to_a_file_and_carries_on_from_it() {
+        let dir = std::env::temp_dir().join(format!("gateway-test-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let state = dir.join("state.cbor");
+        let args = |extra: &[&str]| -> Vec<String> {
+            ["--threshold", "0.5", "--drift", "0.01"]
+                .iter()
+                .chain(extra)
+                .map(|s| s.to_string())
+                .collect()
+        };
+        let program = |args: Vec<String>, input: &str| {
+            let (mut out, mut err) = (Vec::new(), Vec::new());
+            let code = cli(args, input.as_bytes(), &mut out, &mut err);
+            let text = |v: Vec<u8>| String::from_utf8(v).unwrap();
+            (code, text(out), text(err))
+        };
+        let (code, whole, err) = program(args(&[]), &csv(0, 200, 120));
+        assert_eq!(code, 0, "{err}");
+        assert!(err.contains("200 rows, 600 readings"), "{err}");
+        let path = state.to_str().unwrap();
+        let (code, first, err) = program(args(&["--snapshot", path]), &csv(0, 90, 120));
+        assert_eq!(code, 0, "{err}");
+        assert!(state.exists() && !state.with_extension("tmp").exists());
+        let tail = csv(90, 110, 120);
+        let restore = args(&["--restore", path, "--snapshot", path]);
+        let (code, second, err) = program(restore.clone(), &tail);
+        assert_eq!(code, 0, "{err}");
+        assert_eq!(first + &second, whole);
+        // A missing or corrupt snapshot is refused by name, and the file is left as it was.
+        let missing = dir.join("missing.cbor");
+        let (code, out, err) = program(args(&["--restore", missing.to_str().unwrap()]), &tail);
+        assert_eq!((code, out.as_str()), (1, ""));
+        assert!(
+            err.contains("cannot read") && err.contains("missing.cbor"),
+            "{err}"
+        );
+        std::fs::write(&state, b"not a snapshot").unwrap();
+        let (code, _, err) = program(restore, &tail);
+        assert_eq!(code, 1);
+        assert!(err.starts_with(&format!("gateway: {path}: ")), "{err}");
+        assert_eq!(std::fs::read(&state).unwrap(), b"not a snapshot");
+        // A snapshot that cannot be written: exit 1, named.
+        let nowhere = dir.join("no-such-dir").join("state.cbor");
+        let (code, _, err) = program(args(&["--snapshot", nowhere.to_str().unwrap()]), &tail);
+        assert_eq!(code, 1);
+        assert!(
+            err.contains("cannot write") && err.contains("no-such-dir"),
+            "{err}"
+        );
+        let (code, _, err) = program(vec!["--bogus".to_string()], "");
+        assert_eq!(code, 2);
+        assert!(err.contains("unknown option --bogus"), "{err}");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
