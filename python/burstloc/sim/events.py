@@ -40,6 +40,7 @@ from burstloc.constants import SCENARIO_DURATION, WAVE_SPEED
 from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.sim.cache import DiskCache, file_sha256, network_cache_key
 from burstloc.sim.scenario import DEFAULT_BURST_START, FRICTION_MODELS, ScenarioResult
+from burstloc.sim.steady import check_steady_start
 from burstloc.sim.tsnet import (
     TransientSettings,
     cached,
@@ -174,6 +175,8 @@ def simulate_event(
             another kind, or a junction without demand for a demand step).
         ConfigError: a time step above TSNet's limit, or too few time steps.
         SimulationError: TSNet failed, or produced non-finite heads.
+        UnsteadyStartError: a junction's head moved more than
+            :data:`~burstloc.sim.steady.STEADY_TOLERANCE` before the event.
         SimulatorMissingError: the simulator (the ``sim`` extra) is not installed.
     """
     key = network_cache_key(SCHEMA, scenario.parameters(), scenario.network)
@@ -238,6 +241,7 @@ def _simulate(scenario: EventScenario) -> ScenarioResult:
             _operate(scenario, wn),
             where=f"{scenario.label} of {scenario.network}",
         )
+    steady = check_steady_start(steps, heads, meters, scenario.start, scenario.network)
     elapsed = time.perf_counter() - started
     meta: dict[str, Any] = {
         "network": scenario.network,
@@ -246,6 +250,7 @@ def _simulate(scenario: EventScenario) -> ScenarioResult:
         "event": scenario.kind,
         "asset_nodes": nodes,
         "label": scenario.label,
+        "steady_start": steady.as_metadata(),
         **run_metadata(dt, steps.size, diag, elapsed),
         "schema": SCHEMA,
     }

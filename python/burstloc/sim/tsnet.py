@@ -31,6 +31,7 @@ from burstloc.exceptions import ConfigError, NetworkError, SimulationError
 from burstloc.sim import _tsnet_compat
 from burstloc.sim.cache import DiskCache, file_sha256, package_versions
 from burstloc.sim.scenario import SCHEMA, BurstScenario, ScenarioResult
+from burstloc.sim.steady import check_steady_start
 from burstloc.sim.sweep import SweepReport, sweep
 
 __all__ = [
@@ -94,6 +95,8 @@ def simulate_burst(
         ConfigError: ``time_step`` above TSNet's stability limit for this network, or a
             ``duration`` shorter than TSNet's minimum of 10 time steps.
         SimulationError: TSNet failed, or produced non-finite heads.
+        UnsteadyStartError: a junction's head moved more than
+            :data:`~burstloc.sim.steady.STEADY_TOLERANCE` before the burst (nothing is cached).
         SimulatorMissingError: the simulator (the ``sim`` extra) is not installed.
     """
     return cached(scenario, None, cache, _simulate)
@@ -157,6 +160,7 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
             burst,
             where=f"{where} split at {scenario.position:g}",
         )
+    steady = check_steady_start(steps, heads, meters, scenario.burst_start, scenario.network)
     elapsed = time.perf_counter() - started
     meta: dict[str, Any] = {
         "network": scenario.network,
@@ -167,6 +171,7 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
         "steady_flow_m3s": abs(flows[scenario.pipe]),
         "burst_node": split.burst_node,
         "split_pipes": [split.pipe, split.second_pipe],
+        "steady_start": steady.as_metadata(),
         **run_metadata(dt, steps.size, diag, elapsed),
         "schema": SCHEMA,
     }
