@@ -37,6 +37,7 @@ from burstloc.sim.sweep import SweepReport, sweep
 __all__ = [
     "TransientSettings",
     "cached",
+    "capture_time_step",
     "expected_time_step",
     "from_cache",
     "isolated_run",
@@ -45,6 +46,7 @@ __all__ = [
     "run_transient",
     "simulate_burst",
     "simulate_many",
+    "with_capture_time_step",
 ]
 
 
@@ -268,6 +270,34 @@ def expected_time_step(scenario: BurstScenario) -> float:
         return dt  # TSNet refuses such a step; _run_tsnet reports it
     phi = travel / reaches
     return float(np.sum(phi**2) / np.sum(phi))
+
+
+def capture_time_step(
+    scenario: BurstScenario, finest_interval: float, requested: float | None = None
+) -> float | None:
+    """The time step to request for ``scenario`` when its results are read every
+    ``finest_interval`` s or coarser: ``requested`` if given; else TSNet's own (``None``) when
+    it is no coarser than that interval, and half the interval otherwise (a capture needs
+    simulated samples at least as fine as its interval; half of it keeps TSNet's wave-speed
+    adjustment, which can lengthen a requested step by up to 50 %, below the interval).
+    The rule of ``burstloc study`` and ``burstloc evaluate``.
+    """
+    if requested is not None:
+        return requested
+    try:
+        expected = expected_time_step(replace(scenario, time_step=None))
+    except NetworkError:
+        return None  # an unknown pipe: its simulation fails and names it
+    return None if expected <= finest_interval else finest_interval / 2
+
+
+def with_capture_time_step(
+    scenarios: Sequence[BurstScenario], finest_interval: float
+) -> list[BurstScenario]:
+    """``scenarios`` with the time step of :func:`capture_time_step` (their own, if set)."""
+    return [
+        replace(s, time_step=capture_time_step(s, finest_interval, s.time_step)) for s in scenarios
+    ]
 
 
 def _run_tsnet(
