@@ -39,6 +39,7 @@ from burstloc._diagnostics import capture_diagnostics
 from burstloc.constants import SCENARIO_DURATION, WAVE_SPEED
 from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.sim.cache import DiskCache, file_sha256, network_cache_key
+from burstloc.sim.connectors import add_connectors
 from burstloc.sim.scenario import DEFAULT_BURST_START, FRICTION_MODELS, ScenarioResult
 from burstloc.sim.steady import check_steady_start
 from burstloc.sim.tsnet import (
@@ -233,6 +234,7 @@ def _simulate(scenario: EventScenario) -> ScenarioResult:
         wn = network.load_network(source)
         nodes = _asset_nodes(wn, scenario)
         meters = network.junction_names(wn)
+        connectors = add_connectors(wn)
         steps, heads, dt = run_transient(
             wn,
             meters,
@@ -251,6 +253,7 @@ def _simulate(scenario: EventScenario) -> ScenarioResult:
         "asset_nodes": nodes,
         "label": scenario.label,
         "steady_start": steady.as_metadata(),
+        "connectors": [c.as_metadata() for c in connectors],
         **run_metadata(dt, steps.size, diag, elapsed),
         "schema": SCHEMA,
     }

@@ -1,0 +1,99 @@
+"""burstloc.sim.connectors: a pump into a junction where pipes branch gets a connector pipe, and
+the network then starts steady under TSNet (it does not without one)."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+from burstloc import network
+from burstloc.sim.connectors import Connector, add_connectors
+from burstloc.sim.scenario import BurstScenario
+from burstloc.sim.steady import STEADY_TOLERANCE, steady_start
+from burstloc.sim.tsnet import TransientSettings, isolated_run, run_transient, simulate_burst
+from conftest import REPO
+
+#: A pump from a reservoir into J1, where pipes A and B branch; a five-point pump curve
+#: (EPANET's multi-point curve, which TSNet 0.3.1 alone refuses).
+PUMP_AT_BRANCH_INP = """\
+[JUNCTIONS]
+ J1  0  0
+ J2  0  10
+ J3  0  10
+
+[RESERVOIRS]
+ R1  10
+
+[PIPES]
+ A  J1  J2  300  250  100  0  Open
+ B  J1  J3  350  250  100  0  Open
+ C  J2  J3  400  150  100  0  Open
+
+[PUMPS]
+ P1  R1  J1  HEAD 1
+
+[CURVES]
+ 1  0  60
+ 1  10  58
+ 1  20  54
+ 1  30  47
+ 1  40  38
+
+[OPTIONS]
+ Units  LPS
+ Headloss  H-W
+
+[END]
+"""
+
+
+@pytest.fixture
+def pump_at_branch(tmp_path: Path) -> Path:
+    path = tmp_path / "pump_at_branch.inp"
+    path.write_text(PUMP_AT_BRANCH_INP, encoding="utf-8")
+    return path
+
+
+def test_a_pump_into_a_branch_gets_one_connector(pump_at_branch: Path) -> None:
+    wn = network.load_network(pump_at_branch)
+    added = add_connectors(wn)
+    assert added == [Connector("P1", "J1", "P1_E", "P1_EP", 300.0, 0.25)]
+    pump = wn.get_link("P1")
+    assert (pump.start_node_name, pump.end_node_name) == ("R1", "P1_E")
+    assert sorted(wn.get_links_for_node("J1")) == ["A", "B", "P1_EP"]
+    assert wn.get_node("P1_E").elevation == wn.get_node("J1").elevation
+    assert add_connectors(wn) == []  # nothing left to mend
+
+
+def test_pumps_and_valves_between_single_pipes_need_none() -> None:
+    wn = network.load_network(REPO / "networks" / "paper15_assets.inp")
+    assert wn.num_pumps == 1 and wn.num_valves == 1
+    assert add_connectors(wn) == []
+
+
+def _pre_event_movement(path: Path, connect: bool) -> float:
+    source = os.path.abspath(path)
+    with isolated_run() as tmp:
+        wn = network.load_network(source)
+        meters = network.junction_names(wn)
+        if connect:
+            add_connectors(wn)
+        settings = TransientSettings(1200.0, 2.0, None, "PDD", "steady")
+        steps, heads, _ = run_transient(
+            wn, meters, os.path.join(tmp, "n.inp"), settings, lambda tm: None, where=source
+        )
+    return steady_start(steps, heads, meters, onset=2.0).movement
+
+
+def test_tsnet_starts_steady_only_with_the_connector(pump_at_branch: Path) -> None:
+    assert _pre_event_movement(pump_at_branch, connect=False) > 1.0  # 7.2 m at J3
+    assert _pre_event_movement(pump_at_branch, connect=True) < STEADY_TOLERANCE  # 0.1 mm
+
+
+def test_a_burst_simulation_records_its_connectors(pump_at_branch: Path) -> None:
+    result = simulate_burst(BurstScenario(pump_at_branch, "C", burst_start=1.0, duration=2.0))
+    assert [c["junction"] for c in result.metadata["connectors"]] == ["P1_E"]
+    assert result.metadata["steady_start"]["max_movement_m"] < STEADY_TOLERANCE
+    assert list(result.junctions) == ["J1", "J2", "J3"]  # the connector junction is no meter
