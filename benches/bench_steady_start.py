@@ -8,6 +8,9 @@ TSNet's time step to the network's shortest pipe) at ``--onset`` s, simulated ``
 beyond it; printed as a Markdown table row:
 
 * the network's junctions, pipes, pumps / valves / tanks / reservoirs and shortest pipe;
+* what :mod:`burstloc.sim.tsnet_ready` changes (closed pipes removed, connector pipes for
+  pumps and valves at a branch), and the largest change it makes to a junction's steady head
+  (EPANET, pressure-driven);
 * TSNet's time step (:func:`burstloc.sim.tsnet.expected_time_step`, before running);
 * the steady-start check (:mod:`burstloc.sim.steady`): the largest movement of a junction's
   pressure head before the onset, where and when; or the error that stopped the run;
@@ -33,11 +36,23 @@ NETWORKS = [REPO / "networks" / n for n in ("paper15.inp", "paper15_assets.inp")
 
 def describe(path: Path) -> dict[str, Any]:
     """The network's size and assets, and the burst scenario used on it."""
-    from burstloc.network import load_network
+    from burstloc.network import junction_names, load_network, steady_state
+    from burstloc.sim.tsnet_ready import prepare_for_tsnet
 
     wn = load_network(str(path))
     pipes = {name: float(pipe.length) for name, pipe in wn.pipes()}
+    before = steady_state(wn).heads
+    connected = load_network(str(path))
+    prepared = prepare_for_tsnet(connected)
+    after = steady_state(connected).heads
+    change = max(abs(float(after[j]) - float(before[j])) for j in junction_names(wn))
     return {
+        "connectors": "; ".join(
+            [f"closed pipe {p} removed" for p in prepared.removed_closed_pipes]
+            + [f"{c.link} at {c.node}" for c in prepared.connectors]
+        )
+        or "none",
+        "connector_change_m": change,
         "junctions": wn.num_junctions,
         "pipes": wn.num_pipes,
         "assets": f"{wn.num_pumps} / {wn.num_valves} / {wn.num_tanks} / {wn.num_reservoirs}",
@@ -108,7 +123,8 @@ def table_row(name: str, row: dict[str, Any]) -> str:
     )
     return (
         f"| {name} | {row['junctions']} | {row['pipes']} | {row['assets']} | "
-        f"{row['shortest_m']:.1f} m | {row['pipe']} | {row['dt']:.4g} s ({row['steps']}) | "
+        f"{row['shortest_m']:.1f} m | {row['connectors']} ({row['connector_change_m']:.2g} m) | "
+        f"{row['pipe']} | {row['dt']:.4g} s ({row['steps']}) | "
         f"{steady} | {cost} |"
     )
 
@@ -123,10 +139,10 @@ def main() -> None:
     args = parser.parse_args()
     print(
         "| network | junctions | pipes | pumps / valves / tanks / reservoirs | shortest pipe "
-        "| burst pipe | TSNet step (steps) | steady start: max pre-burst movement | "
-        "CPU: run, per simulated s |"
+        "| prepared for TSNet (steady head change) | burst pipe | TSNet step (steps) "
+        "| steady start: max pre-burst movement | CPU: run, per simulated s |"
     )
-    print("|---|---:|---:|---|---:|---|---|---|---|")
+    print("|---|---:|---:|---|---:|---|---|---|---|---|")
     for path in args.networks:
         row = measure(path, args.onset, args.after, args.timeout)
         print(table_row(path.name, row), flush=True)

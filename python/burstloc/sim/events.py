@@ -39,7 +39,6 @@ from burstloc._diagnostics import capture_diagnostics
 from burstloc.constants import SCENARIO_DURATION, WAVE_SPEED
 from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.sim.cache import DiskCache, file_sha256, network_cache_key
-from burstloc.sim.connectors import add_connectors
 from burstloc.sim.scenario import DEFAULT_BURST_START, FRICTION_MODELS, ScenarioResult
 from burstloc.sim.steady import check_steady_start
 from burstloc.sim.tsnet import (
@@ -49,6 +48,7 @@ from burstloc.sim.tsnet import (
     run_metadata,
     run_transient,
 )
+from burstloc.sim.tsnet_ready import prepare_for_tsnet
 
 __all__ = ["EVENT_KINDS", "SCHEMA", "EventScenario", "event_output_path", "simulate_event"]
 
@@ -234,7 +234,7 @@ def _simulate(scenario: EventScenario) -> ScenarioResult:
         wn = network.load_network(source)
         nodes = _asset_nodes(wn, scenario)
         meters = network.junction_names(wn)
-        connectors = add_connectors(wn)
+        prepared = prepare_for_tsnet(wn)
         steps, heads, dt = run_transient(
             wn,
             meters,
@@ -253,7 +253,7 @@ def _simulate(scenario: EventScenario) -> ScenarioResult:
         "asset_nodes": nodes,
         "label": scenario.label,
         "steady_start": steady.as_metadata(),
-        "connectors": [c.as_metadata() for c in connectors],
+        **prepared.as_metadata(),
         **run_metadata(dt, steps.size, diag, elapsed),
         "schema": SCHEMA,
     }

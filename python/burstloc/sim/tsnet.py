@@ -30,10 +30,10 @@ from burstloc._diagnostics import capture_diagnostics
 from burstloc.exceptions import ConfigError, NetworkError, SimulationError
 from burstloc.sim import _tsnet_compat
 from burstloc.sim.cache import DiskCache, file_sha256, package_versions
-from burstloc.sim.connectors import add_connectors
 from burstloc.sim.scenario import SCHEMA, BurstScenario, ScenarioResult
 from burstloc.sim.steady import check_steady_start
 from burstloc.sim.sweep import SweepReport, sweep
+from burstloc.sim.tsnet_ready import prepare_for_tsnet
 
 __all__ = [
     "TransientSettings",
@@ -147,7 +147,7 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
         graph = network.flow_direction_graph(wn, flows)
         true_start, true_end = network.pipe_endpoints(graph, scenario.pipe)
         split = network.split_pipe(wn, scenario.pipe, scenario.position)
-        connectors = add_connectors(split.network)
+        prepared = prepare_for_tsnet(split.network)
         meters = network.junction_names(wn)
         where = f"pipe {scenario.pipe!r} of {scenario.network}"
 
@@ -176,7 +176,7 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
         "burst_node": split.burst_node,
         "split_pipes": [split.pipe, split.second_pipe],
         "steady_start": steady.as_metadata(),
-        "connectors": [c.as_metadata() for c in connectors],
+        **prepared.as_metadata(),
         **run_metadata(dt, steps.size, diag, elapsed),
         "schema": SCHEMA,
     }

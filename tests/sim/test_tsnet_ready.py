@@ -1,18 +1,20 @@
-"""burstloc.sim.connectors: a pump into a junction where pipes branch gets a connector pipe, and
+"""burstloc.sim.tsnet_ready: a pump into a junction where pipes branch gets a connector pipe, and
 the network then starts steady under TSNet (it does not without one)."""
 
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 from burstloc import network
-from burstloc.sim.connectors import Connector, add_connectors
 from burstloc.sim.scenario import BurstScenario
 from burstloc.sim.steady import STEADY_TOLERANCE, steady_start
 from burstloc.sim.tsnet import TransientSettings, isolated_run, run_transient, simulate_burst
+from burstloc.sim.tsnet_ready import Connector, add_connectors, prepare_for_tsnet
 from conftest import REPO
 
 #: A pump from a reservoir into J1, where pipes A and B branch; a five-point pump curve
@@ -73,13 +75,14 @@ def test_pumps_and_valves_between_single_pipes_need_none() -> None:
     assert add_connectors(wn) == []
 
 
-def _pre_event_movement(path: Path, connect: bool) -> float:
+def _pre_event_movement(path: Path, prepare: Callable[[Any], object] | None) -> float:
+    """The largest head movement over 2 s of TSNet with no event, after ``prepare(network)``."""
     source = os.path.abspath(path)
     with isolated_run() as tmp:
         wn = network.load_network(source)
         meters = network.junction_names(wn)
-        if connect:
-            add_connectors(wn)
+        if prepare is not None:
+            prepare(wn)
         settings = TransientSettings(1200.0, 2.0, None, "PDD", "steady")
         steps, heads, _ = run_transient(
             wn, meters, os.path.join(tmp, "n.inp"), settings, lambda tm: None, where=source
@@ -88,8 +91,8 @@ def _pre_event_movement(path: Path, connect: bool) -> float:
 
 
 def test_tsnet_starts_steady_only_with_the_connector(pump_at_branch: Path) -> None:
-    assert _pre_event_movement(pump_at_branch, connect=False) > 1.0  # 7.2 m at J3
-    assert _pre_event_movement(pump_at_branch, connect=True) < STEADY_TOLERANCE  # 0.1 mm
+    assert _pre_event_movement(pump_at_branch, None) > 1.0  # 7.2 m at J3
+    assert _pre_event_movement(pump_at_branch, prepare_for_tsnet) < STEADY_TOLERANCE  # 0.1 mm
 
 
 def test_a_burst_simulation_records_its_connectors(pump_at_branch: Path) -> None:
@@ -97,3 +100,18 @@ def test_a_burst_simulation_records_its_connectors(pump_at_branch: Path) -> None
     assert [c["junction"] for c in result.metadata["connectors"]] == ["P1_E"]
     assert result.metadata["steady_start"]["max_movement_m"] < STEADY_TOLERANCE
     assert list(result.junctions) == ["J1", "J2", "J3"]  # the connector junction is no meter
+
+
+def test_a_closed_pipe_is_removed_and_the_start_is_steady(tmp_path: Path) -> None:
+    closed = tmp_path / "closed_pipe.inp"
+    closed_pipe = " D  J1  J3  200  150  100  0  Closed\n"
+    closed.write_text(
+        PUMP_AT_BRANCH_INP.replace("\n[PUMPS]", closed_pipe + "\n[PUMPS]"), encoding="utf-8"
+    )
+    wn = network.load_network(closed)
+    prepared = prepare_for_tsnet(wn)
+    assert prepared.removed_closed_pipes == ["D"] and "D" not in wn.link_name_list
+    assert [c.link for c in prepared.connectors] == ["P1"]
+    # TSNet lets water through the closed pipe: with the connector alone J3 moves 4.7 cm
+    assert _pre_event_movement(closed, add_connectors) > 0.02
+    assert _pre_event_movement(closed, prepare_for_tsnet) < 0.005  # removed: 0.1 mm

@@ -1,4 +1,9 @@
-"""Connector pipes: give every pump and valve the single pipe on each side that TSNet needs.
+"""A network as TSNet needs it: closed pipes out, a single pipe at each side of a pump or valve.
+
+TSNet 0.3.1 simulates a pipe whose status is Closed as an open one (a boundary valve modelled as
+a closed pipe, Net3's pump bypass 330): the water EPANET kept out flows through it from the
+first time step. :func:`prepare_for_tsnet` removes closed pipes first (with any control that
+names them): EPANET gives them no flow, and no burstloc event opens a pipe.
 
 TSNet 0.3.1 models a pump or a valve as the boundary between the pipe before it and the pipe
 after it (``tsnet.network.topology``): at each end it takes *one* adjacent link. A pump that
@@ -7,14 +12,15 @@ pipes) or a valve next to another valve is then simulated with the wrong pipes a
 the "steady" network jumps by metres at the first time step
 (:class:`~burstloc.exceptions.UnsteadyStartError`).
 
-:func:`add_connectors` mends this before TSNet runs: where a pump's or valve's end node is a
-junction that does not join exactly one other link, a pipe, the link is moved to a new junction
-(same elevation, no demand) joined to the old node by a short connector pipe. The connector is
+:func:`add_connectors` (then called by :func:`prepare_for_tsnet`) mends this: where a pump's
+or valve's end node is a junction that does not join exactly one other link, a pipe, the link
+is moved to a new junction (same elevation, no demand) joined to the old node by a short
+connector pipe. The connector is
 as long as the network's shortest pipe, so TSNet's time step does not shrink, and copies the
 widest pipe at the node (diameter and roughness), so its head loss is small; EPANET's steady
 state is recomputed with it, so the transient starts steady. Reservoirs and tanks at a pump's
 or valve's end need nothing. The meters stay the original junctions; the simulation's metadata
-lists the connectors (``connectors``).
+lists the connectors (``connectors``) and the removed pipes (``removed_closed_pipes``).
 """
 
 from __future__ import annotations
@@ -24,7 +30,7 @@ from typing import Any
 
 from burstloc.network import _fresh_name
 
-__all__ = ["Connector", "add_connectors"]
+__all__ = ["Connector", "TsnetPreparation", "add_connectors", "prepare_for_tsnet"]
 
 
 @dataclass(frozen=True)
@@ -94,3 +100,34 @@ def add_connectors(wn: Any) -> list[Connector]:
                 Connector(link_name, node_name, junction, pipe, length, float(template.diameter))
             )
     return added
+
+
+@dataclass(frozen=True)
+class TsnetPreparation:
+    """What :func:`prepare_for_tsnet` changed: the closed pipes removed, the connectors added."""
+
+    removed_closed_pipes: list[str]
+    connectors: list[Connector]
+
+    def as_metadata(self) -> dict[str, Any]:
+        """The records stored in a simulation's metadata."""
+        return {
+            "removed_closed_pipes": list(self.removed_closed_pipes),
+            "connectors": [c.as_metadata() for c in self.connectors],
+        }
+
+
+def remove_closed_pipes(wn: Any) -> list[str]:
+    """Remove the pipes of ``wn`` (changed in place) whose initial status is Closed, with any
+    control that names them; return their names."""
+    closed = [name for name, pipe in wn.pipes() if pipe.initial_status.name == "Closed"]
+    for name in closed:
+        wn.remove_link(name, with_control=True)
+    return closed
+
+
+def prepare_for_tsnet(wn: Any) -> TsnetPreparation:
+    """Make ``wn`` (changed in place) a network TSNet simulates as EPANET solves it: closed
+    pipes removed (:func:`remove_closed_pipes`), then connectors (:func:`add_connectors`)."""
+    removed = remove_closed_pipes(wn)
+    return TsnetPreparation(removed, add_connectors(wn))
