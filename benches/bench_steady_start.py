@@ -8,7 +8,7 @@ TSNet's time step to the network's shortest pipe) at ``--onset`` s, simulated ``
 beyond it; printed as a Markdown table row:
 
 * the network's junctions, pipes, pumps / valves / tanks / reservoirs and shortest pipe;
-* what :mod:`burstloc.sim.tsnet_ready` changes (closed pipes removed, connector pipes for
+* what :mod:`burstloc.sim.tsnet_ready` changes (closed pipes and pumps removed, connector pipes for
   pumps and valves at a branch), and the largest change it makes to a junction's steady head
   (EPANET, pressure-driven);
 * TSNet's time step (:func:`burstloc.sim.tsnet.expected_time_step`, before running);
@@ -48,7 +48,7 @@ def describe(path: Path) -> dict[str, Any]:
     change = max(abs(float(after[j]) - float(before[j])) for j in junction_names(wn))
     return {
         "connectors": "; ".join(
-            [f"closed pipe {p} removed" for p in prepared.removed_closed_pipes]
+            [f"closed {p} removed" for p in prepared.removed_closed_links]
             + [f"{c.link} at {c.node}" for c in prepared.connectors]
         )
         or "none",

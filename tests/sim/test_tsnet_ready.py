@@ -110,8 +110,26 @@ def test_a_closed_pipe_is_removed_and_the_start_is_steady(tmp_path: Path) -> Non
     )
     wn = network.load_network(closed)
     prepared = prepare_for_tsnet(wn)
-    assert prepared.removed_closed_pipes == ["D"] and "D" not in wn.link_name_list
+    assert prepared.removed_closed_links == ["D"] and "D" not in wn.link_name_list
     assert [c.link for c in prepared.connectors] == ["P1"]
     # TSNet lets water through the closed pipe: with the connector alone J3 moves 4.7 cm
     assert _pre_event_movement(closed, add_connectors) > 0.02
     assert _pre_event_movement(closed, prepare_for_tsnet) < 0.005  # removed: 0.1 mm
+
+
+def test_a_closed_pump_is_removed_unless_it_is_kept(tmp_path: Path) -> None:
+    closed = tmp_path / "closed_pump.inp"
+    text = PUMP_AT_BRANCH_INP.replace(" R1  10\n", " R1  10\n R2  100\n")
+    text = text.replace(" P1  R1  J1  HEAD 1\n", " P1  R1  J1  HEAD 1\n P2  R2  J3  HEAD 1\n")
+    closed.write_text(text.replace("[OPTIONS]", "[STATUS]\n P2  Closed\n\n[OPTIONS]"), "utf-8")
+    wn = network.load_network(closed)
+    prepared = prepare_for_tsnet(wn)
+    assert prepared.removed_closed_links == ["P2"]
+    assert "R2" not in wn.node_name_list  # left with no link
+    assert [c.link for c in prepared.connectors] == ["P1"]
+    kept = network.load_network(closed)
+    assert prepare_for_tsnet(kept, keep=("P2",)).removed_closed_links == []
+    # a closed pump holding back a reservoir above J3: TSNet runs it on its curve, and with the
+    # connectors alone J3 moves by metres
+    assert _pre_event_movement(closed, add_connectors) > 1.0
+    assert _pre_event_movement(closed, prepare_for_tsnet) < STEADY_TOLERANCE

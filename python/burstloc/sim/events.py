@@ -234,7 +234,7 @@ def _simulate(scenario: EventScenario) -> ScenarioResult:
         wn = network.load_network(source)
         nodes = _asset_nodes(wn, scenario)
         meters = network.junction_names(wn)
-        prepared = prepare_for_tsnet(wn)
+        prepared = prepare_for_tsnet(wn, keep=(scenario.asset,))
         steps, heads, dt = run_transient(
             wn,
             meters,

@@ -1,9 +1,13 @@
-"""A network as TSNet needs it: closed pipes out, a single pipe at each side of a pump or valve.
+"""A network as TSNet needs it: closed pipes and pumps out, a single pipe at each side of a pump
+or valve.
 
 TSNet 0.3.1 simulates a pipe whose status is Closed as an open one (a boundary valve modelled as
-a closed pipe, Net3's pump bypass 330): the water EPANET kept out flows through it from the
-first time step. :func:`prepare_for_tsnet` removes closed pipes first (with any control that
-names them): EPANET gives them no flow, and no burstloc event opens a pipe.
+a closed pipe; Net3's pump bypass 330), and a pump that is not being operated by its curve
+whatever its status (Net3's Lake pump 10, Closed at the start): the water EPANET kept out flows
+from the first time step. :func:`prepare_for_tsnet` removes them first (with any control that
+names them, and a reservoir or tank left with no link): EPANET gives them no flow. An event's
+own asset is kept (TSNet's pump start-up opens a closed pump itself). Closed valves TSNet
+models as closed.
 
 TSNet 0.3.1 models a pump or a valve as the boundary between the pipe before it and the pipe
 after it (``tsnet.network.topology``): at each end it takes *one* adjacent link. A pump that
@@ -20,11 +24,12 @@ as long as the network's shortest pipe, so TSNet's time step does not shrink, an
 widest pipe at the node (diameter and roughness), so its head loss is small; EPANET's steady
 state is recomputed with it, so the transient starts steady. Reservoirs and tanks at a pump's
 or valve's end need nothing. The meters stay the original junctions; the simulation's metadata
-lists the connectors (``connectors``) and the removed pipes (``removed_closed_pipes``).
+lists the connectors (``connectors``) and the removed links (``removed_closed_links``).
 """
 
 from __future__ import annotations
 
+from collections.abc import Collection
 from dataclasses import asdict, dataclass
 from typing import Any
 
@@ -104,30 +109,41 @@ def add_connectors(wn: Any) -> list[Connector]:
 
 @dataclass(frozen=True)
 class TsnetPreparation:
-    """What :func:`prepare_for_tsnet` changed: the closed pipes removed, the connectors added."""
+    """What :func:`prepare_for_tsnet` changed: the closed links removed, the connectors added."""
 
-    removed_closed_pipes: list[str]
+    removed_closed_links: list[str]
     connectors: list[Connector]
 
     def as_metadata(self) -> dict[str, Any]:
         """The records stored in a simulation's metadata."""
         return {
-            "removed_closed_pipes": list(self.removed_closed_pipes),
+            "removed_closed_links": list(self.removed_closed_links),
             "connectors": [c.as_metadata() for c in self.connectors],
         }
 
 
-def remove_closed_pipes(wn: Any) -> list[str]:
-    """Remove the pipes of ``wn`` (changed in place) whose initial status is Closed, with any
-    control that names them; return their names."""
-    closed = [name for name, pipe in wn.pipes() if pipe.initial_status.name == "Closed"]
+def remove_closed_links(wn: Any, keep: Collection[str] = ()) -> list[str]:
+    """Remove the pipes and pumps of ``wn`` (changed in place) whose initial status is Closed,
+    except those in ``keep``, with any control that names them and any reservoir or tank they
+    leave unconnected; return the links' names."""
+    closed = [
+        name
+        for name, link in [*wn.pipes(), *wn.pumps()]
+        if link.initial_status.name == "Closed" and name not in keep
+    ]
     for name in closed:
+        link = wn.get_link(name)
+        ends = (link.start_node_name, link.end_node_name)
         wn.remove_link(name, with_control=True)
+        for node in ends:
+            if wn.get_node(node).node_type != "Junction" and not wn.get_links_for_node(node):
+                wn.remove_node(node, with_control=True)
     return closed
 
 
-def prepare_for_tsnet(wn: Any) -> TsnetPreparation:
+def prepare_for_tsnet(wn: Any, keep: Collection[str] = ()) -> TsnetPreparation:
     """Make ``wn`` (changed in place) a network TSNet simulates as EPANET solves it: closed
-    pipes removed (:func:`remove_closed_pipes`), then connectors (:func:`add_connectors`)."""
-    removed = remove_closed_pipes(wn)
+    pipes and pumps removed except ``keep`` (:func:`remove_closed_links`), then connectors
+    (:func:`add_connectors`)."""
+    removed = remove_closed_links(wn, keep)
     return TsnetPreparation(removed, add_connectors(wn))
