@@ -121,11 +121,13 @@ def test_a_closed_pump_is_removed_unless_it_is_kept(tmp_path: Path) -> None:
     closed = tmp_path / "closed_pump.inp"
     text = PUMP_AT_BRANCH_INP.replace(" R1  10\n", " R1  10\n R2  100\n")
     text = text.replace(" P1  R1  J1  HEAD 1\n", " P1  R1  J1  HEAD 1\n P2  R2  J3  HEAD 1\n")
-    closed.write_text(text.replace("[OPTIONS]", "[STATUS]\n P2  Closed\n\n[OPTIONS]"), "utf-8")
+    text = text.replace("[OPTIONS]", "[STATUS]\n P2  Closed\n\n[OPTIONS]\n Quality  Trace R2")
+    closed.write_text(text, encoding="utf-8")
     wn = network.load_network(closed)
     prepared = prepare_for_tsnet(wn)
     assert prepared.removed_closed_links == ["P2"]
     assert "R2" not in wn.node_name_list  # left with no link
+    assert wn.options.quality.parameter == "NONE"  # R2 was the trace node (as Net3's Lake)
     assert [c.link for c in prepared.connectors] == ["P1"]
     kept = network.load_network(closed)
     assert prepare_for_tsnet(kept, keep=("P2",)).removed_closed_links == []

@@ -137,6 +137,9 @@ def remove_closed_links(wn: Any, keep: Collection[str] = ()) -> list[str]:
         wn.remove_link(name, with_control=True)
         for node in ends:
             if wn.get_node(node).node_type != "Junction" and not wn.get_links_for_node(node):
+                if wn.options.quality.trace_node == node:  # water quality plays no part here
+                    wn.options.quality.parameter = "NONE"
+                    wn.options.quality.trace_node = None
                 wn.remove_node(node, with_control=True)
     return closed
 
