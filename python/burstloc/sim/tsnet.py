@@ -245,9 +245,28 @@ def run_transient(
     heads = np.column_stack([np.asarray(tm.get_node(j).head, np.float64) for j in meters])
     elevation = np.array([wn.get_node(j).elevation for j in meters], dtype=np.float64)
     heads = heads - elevation
-    if heads.shape[0] != steps.size or not np.all(np.isfinite(heads)):
-        raise SimulationError(f"TSNet produced non-finite or misshapen heads for {where}")
+    if heads.shape[0] != steps.size:
+        raise SimulationError(f"TSNet produced misshapen heads for {where}")
+    broken = [j for j, ok in zip(meters, np.isfinite(heads).all(axis=0), strict=True) if not ok]
+    if broken:
+        raise SimulationError(
+            f"TSNet produced non-finite heads for {where} at {len(broken)} junction(s) "
+            f"({', '.join(broken[:5])}{', ...' if len(broken) > 5 else ''}){_negative(tm)}"
+        )
     return steps, heads, float(tm.time_step)
+
+
+def _negative(tm: Any) -> str:
+    """The junctions of TSNet's model with a negative initial pressure, as a message's end."""
+    low = {
+        name: float(node.head[0] - node.elevation)
+        for name, node in tm.junctions()
+        if node.head[0] - node.elevation < 0
+    }
+    if not low:
+        return ""
+    named = ", ".join(f"{name!r} {p:.3g} m" for name, p in list(low.items())[:5])
+    return f"; it cannot start from a negative pressure (EPANET's steady state): {named}"
 
 
 def expected_time_step(scenario: BurstScenario) -> float:
