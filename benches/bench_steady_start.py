@@ -11,7 +11,7 @@ beyond it; printed as a Markdown table row:
 * what :mod:`burstloc.sim.tsnet_ready` changes (closed pipes and pumps removed, connector pipes for
   pumps and valves at a branch), and the largest change it makes to a junction's steady head
   (EPANET, pressure-driven);
-* TSNet's time step (:func:`burstloc.sim.tsnet.expected_time_step`, before running);
+* TSNet's time step (:func:`burstloc.sim.time_step.expected_time_step`, before running);
 * the steady-start check (:mod:`burstloc.sim.steady`): the largest movement of a junction's
   pressure head before the onset, where and when; or the error that stopped the run;
 * CPU seconds of the run and per simulated second.
@@ -85,7 +85,7 @@ def _run(path: str, pipe: str, onset: float, duration: float, queue: Any) -> Non
 def measure(path: Path, onset: float, after: float, timeout: float) -> dict[str, Any]:
     """Describe ``path`` and run its burst in a child process (at most ``timeout`` s)."""
     from burstloc.sim.scenario import BurstScenario
-    from burstloc.sim.tsnet import expected_time_step
+    from burstloc.sim.time_step import expected_time_step
 
     row = describe(path)
     duration = onset + after

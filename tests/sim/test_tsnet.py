@@ -18,7 +18,8 @@ from burstloc import inp, network
 from burstloc.exceptions import ConfigError, NetworkError, SimulationError
 from burstloc.sim.cache import DiskCache
 from burstloc.sim.scenario import BurstScenario, ScenarioResult, burst_scenarios, output_path
-from burstloc.sim.tsnet import expected_time_step, simulate_burst, simulate_many
+from burstloc.sim.time_step import expected_time_step
+from burstloc.sim.tsnet import simulate_burst, simulate_many
 from conftest import write_tiny
 
 SHORT = {"burst_start": 0.5, "duration": 3.0}

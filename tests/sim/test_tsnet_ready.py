@@ -13,6 +13,7 @@ import pytest
 from burstloc import network
 from burstloc.sim.scenario import BurstScenario
 from burstloc.sim.steady import STEADY_TOLERANCE, steady_start
+from burstloc.sim.time_step import expected_time_step
 from burstloc.sim.tsnet import TransientSettings, isolated_run, run_transient, simulate_burst
 from burstloc.sim.tsnet_ready import Connector, add_connectors, prepare_for_tsnet
 from conftest import REPO
@@ -96,7 +97,9 @@ def test_tsnet_starts_steady_only_with_the_connector(pump_at_branch: Path) -> No
 
 
 def test_a_burst_simulation_records_its_connectors(pump_at_branch: Path) -> None:
-    result = simulate_burst(BurstScenario(pump_at_branch, "C", burst_start=1.0, duration=2.0))
+    scenario = BurstScenario(pump_at_branch, "C", burst_start=1.0, duration=2.0)
+    result = simulate_burst(scenario)
+    assert result.time_step == pytest.approx(expected_time_step(scenario), rel=1e-12)
     assert [c["junction"] for c in result.metadata["connectors"]] == ["P1_E"]
     assert result.metadata["steady_start"]["max_movement_m"] < STEADY_TOLERANCE
     assert list(result.junctions) == ["J1", "J2", "J3"]  # the connector junction is no meter

@@ -232,7 +232,8 @@ def _events(args: argparse.Namespace, ev: Any, cache: Any) -> None:
     from burstloc.experiments.specificity import evaluate_events
     from burstloc.localize.classify import ClassifierConfig
     from burstloc.sim.scenario import burst_scenarios
-    from burstloc.sim.tsnet import simulate_many, with_capture_time_step
+    from burstloc.sim.time_step import with_capture_time_step
+    from burstloc.sim.tsnet import simulate_many
 
     intervals = sorted({r.spec.capture_interval for r in ev.runs})
     duration = float(ev.scenario["duration"])

@@ -249,7 +249,7 @@ def evaluate(
     """Run the experiment: simulate (cached), stream, localize and score every run.
 
     ``time_step`` is TSNet's requested time step (s); ``None`` applies the rule of ``burstloc
-    study`` (:func:`burstloc.sim.tsnet.capture_time_step`): TSNet's own step, or half the finest
+    study`` (:func:`burstloc.sim.time_step.capture_time_step`): TSNet's own step, or half the finest
     capture interval where TSNet's would be coarser. The JSON's ``scenario`` records it.
 
     ``config`` is the calibration the ranking localizers' detector bank uses (runs with
@@ -268,6 +268,7 @@ def evaluate(
     from burstloc import network as netmod
     from burstloc.sim import tsnet as simulate
     from burstloc.sim.scenario import burst_scenarios
+    from burstloc.sim.time_step import with_capture_time_step
 
     if not runs:
         raise ConfigError("no runs to evaluate")
@@ -295,7 +296,7 @@ def evaluate(
         )
     params["time_step"] = time_step
     finest = min(spec.capture_interval for spec in runs)
-    scenarios = simulate.with_capture_time_step(burst_scenarios(path, chosen, **params), finest)
+    scenarios = with_capture_time_step(burst_scenarios(path, chosen, **params), finest)
     report = simulate.simulate_many(
         scenarios, cache=cache, workers=workers, scheduler=scheduler, progress=progress
     )

@@ -216,7 +216,7 @@ def point_scenarios(point: StudyPoint, settings: StudySettings) -> list[Any]:
 
 def study_time_step(scenario: Any, settings: StudySettings) -> float | None:
     """TSNet time step for a study burst: ``settings.time_step`` if given, else the rule of
-    :func:`burstloc.sim.tsnet.capture_time_step` for the finest capture interval."""
-    from burstloc.sim.tsnet import capture_time_step
+    :func:`burstloc.sim.time_step.capture_time_step` for the finest capture interval."""
+    from burstloc.sim.time_step import capture_time_step
 
     return capture_time_step(scenario, min(settings.capture_intervals), settings.time_step)

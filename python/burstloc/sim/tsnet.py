@@ -38,8 +38,6 @@ from burstloc.sim.tsnet_ready import prepare_for_tsnet
 __all__ = [
     "TransientSettings",
     "cached",
-    "capture_time_step",
-    "expected_time_step",
     "from_cache",
     "isolated_run",
     "resolve_cache",
@@ -47,7 +45,6 @@ __all__ = [
     "run_transient",
     "simulate_burst",
     "simulate_many",
-    "with_capture_time_step",
 ]
 
 
@@ -267,59 +264,6 @@ def _negative(tm: Any) -> str:
         return ""
     named = ", ".join(f"{name!r} {p:.3g} m" for name, p in list(low.items())[:5])
     return f"; it cannot start from a negative pressure (EPANET's steady state): {named}"
-
-
-def expected_time_step(scenario: BurstScenario) -> float:
-    """The time step (s) TSNet will use for ``scenario``, without running TSNet.
-
-    TSNet's discretisation is arithmetic on the pipe lengths of the split network: each pipe
-    gets ``N = floor(L / (a dt))`` reaches for the requested step ``dt`` (default: the Courant
-    limit ``min L / (2 a)``), and the step becomes ``sum(phi^2) / sum(phi)`` with
-    ``phi = L / (a N)`` (its wave-speed adjustment). This reproduces it, so a caller can choose
-    ``time_step`` before simulating (e.g. finer than a capture interval).
-
-    Raises:
-        NetworkError: the network or pipe cannot be read.
-    """
-    wn = network.load_network(scenario.network)
-    link = network.require_pipe(wn, scenario.pipe)
-    lengths = [float(wn.get_link(p).length) for p in network.pipe_names(wn) if p != scenario.pipe]
-    lengths += [scenario.position * link.length, (1.0 - scenario.position) * link.length]
-    travel = np.array(lengths) / scenario.wave_speed
-    dt = float(travel.min() / 2.0) if scenario.time_step is None else float(scenario.time_step)
-    reaches = np.floor(travel / dt)
-    if np.any(reaches < 1):
-        return dt  # TSNet refuses such a step; _run_tsnet reports it
-    phi = travel / reaches
-    return float(np.sum(phi**2) / np.sum(phi))
-
-
-def capture_time_step(
-    scenario: BurstScenario, finest_interval: float, requested: float | None = None
-) -> float | None:
-    """The time step to request for ``scenario`` when its results are read every
-    ``finest_interval`` s or coarser: ``requested`` if given; else TSNet's own (``None``) when
-    it is no coarser than that interval, and half the interval otherwise (a capture needs
-    simulated samples at least as fine as its interval; half of it keeps TSNet's wave-speed
-    adjustment, which can lengthen a requested step by up to 50 %, below the interval).
-    The rule of ``burstloc study`` and ``burstloc evaluate``.
-    """
-    if requested is not None:
-        return requested
-    try:
-        expected = expected_time_step(replace(scenario, time_step=None))
-    except NetworkError:
-        return None  # an unknown pipe: its simulation fails and names it
-    return None if expected <= finest_interval else finest_interval / 2
-
-
-def with_capture_time_step(
-    scenarios: Sequence[BurstScenario], finest_interval: float
-) -> list[BurstScenario]:
-    """``scenarios`` with the time step of :func:`capture_time_step` (their own, if set)."""
-    return [
-        replace(s, time_step=capture_time_step(s, finest_interval, s.time_step)) for s in scenarios
-    ]
 
 
 def _run_tsnet(
