@@ -16,7 +16,7 @@ PYTHON313  ?= $(shell for p in "$$(command -v python3.13)" \
 VENV313 := .venv313
 BIN313  := $(VENV313)/bin
 
-.PHONY: setup setup313 paper study test test-rust test-python test-python313 lint bench bench-rust clean
+.PHONY: setup setup313 networks paper study test test-rust test-python test-python313 lint bench bench-rust clean
 
 ## setup: create .venv (the default Python), build burstloc's wheel, install it with its
 ## sim/dev/bench extras
@@ -41,8 +41,17 @@ EXTRAS       := sim,dev,bench,river
 # `make setup EXT_RUSTFLAGS=` builds a portable wheel.
 EXT_RUSTFLAGS ?= -C target-cpu=native
 
-setup: $(VENV)/.installed networks/todini6.inp
+setup: $(VENV)/.installed networks/todini6.inp networks
 	scripts/install-mosquitto.sh
+
+## networks: EPANET's Net1, Net2, Net3 and Anytown in networks/public/ (not committed), from the
+## pinned epyt wheel on PyPI, every file checked against its pinned SHA-256 (standard library
+## only; downloads once, a few seconds; see networks/README.md)
+networks: networks/public/MANIFEST.json
+
+networks/public/MANIFEST.json: networks/fetch_public.py
+	$(PYTHON) networks/fetch_public.py
+	@touch $@
 
 ## setup313: create .venv313 (Python 3.13, numpy 2) and install the same wheel there
 setup313: $(VENV313)/.installed
@@ -117,7 +126,7 @@ test-python:
 	$(BIN)/python -m pytest -q
 
 # The installed wheel, not the sources, on Python 3.13 (the tests' own helpers come from tests/).
-test-python313: setup313 networks/todini6.inp
+test-python313: setup313 networks/todini6.inp networks
 	$(BIN313)/python -m pytest -q
 
 ## bench: Python-side benchmarks on fresh data (bindings vs pure Python vs River vs TSNet), then

@@ -6,7 +6,8 @@ What a user imports (``docs/api.md`` describes each):
   :class:`DetectorBank`, :class:`Alarm`, and the batch references :func:`detect_cusum`,
   :func:`detect_shewhart`;
 * the errors: :class:`ConfigError`, :class:`InputError`, :class:`StreamError`,
-  :class:`NetworkError` (all ``ValueError``) and :class:`SimulationError`;
+  :class:`NetworkError` (all ``ValueError``), :class:`SimulationError` and its
+  :class:`UnsteadyStartError`;
 * the live path: :class:`BurstMonitor`, :class:`ReadingStream`, :class:`Reading`, :class:`Step`,
   :class:`Calibration` (the stored configuration, with its :class:`LocalizationModel`), and
   what a decision holds: :class:`Decision`, :class:`Ranking`, :class:`RankedPipe`,
@@ -39,6 +40,7 @@ from burstloc.exceptions import (
     NetworkError,
     SimulationError,
     StreamError,
+    UnsteadyStartError,
 )
 
 if TYPE_CHECKING:
@@ -104,6 +106,7 @@ __all__ = [
     "SimulationError",
     "Step",
     "StreamError",
+    "UnsteadyStartError",
     "__version__",
     "calibrate",
     "detect_cusum",

@@ -11,6 +11,9 @@ Every error is a typed subclass of a built-in exception, so callers can catch pr
 * :class:`NetworkError` (``ValueError``): an unknown node or pipe, or a malformed INP file
   (with the file and line).
 * :class:`SimulationError` (``RuntimeError``): the transient simulation (TSNet) failed.
+* :class:`UnsteadyStartError` (``SimulationError``): the simulated heads moved before the event
+  (the network does not start steady under TSNet); the message names the junction, the
+  movement in metres and the network.
 * :class:`SimulatorMissingError` (``SimulationError``): a command needs the simulator (TSNet,
   WNTR: the ``sim`` extra), which is not installed; the message says how to install it.
 * :class:`OutputError` (``ValueError``): an output file or directory cannot be written (a
@@ -31,6 +34,7 @@ __all__ = [
     "SimulationError",
     "SimulatorMissingError",
     "StreamError",
+    "UnsteadyStartError",
 ]
 
 
@@ -44,6 +48,39 @@ class NetworkError(ValueError):
 
 class SimulationError(RuntimeError):
     """The transient simulation (TSNet) failed for a scenario."""
+
+
+class UnsteadyStartError(SimulationError):
+    """A simulation's heads moved before its event: not a valid experiment.
+
+    Args:
+        network: the network file.
+        junction: the junction whose pressure head moved most before the onset.
+        movement: how far it moved from its initial head (m, absolute).
+        time: when (s).
+        onset: when the event begins (s).
+        tolerance: the largest movement allowed (m).
+    """
+
+    def __init__(
+        self,
+        network: str,
+        junction: str,
+        movement: float,
+        time: float,
+        onset: float,
+        tolerance: float,
+    ) -> None:
+        super().__init__(
+            f"{network} does not start steady under TSNet: junction {junction!r} moved "
+            f"{movement:.3g} m from its initial head by {time:.3g} s, before the event at "
+            f"{onset:g} s (tolerance {tolerance:g} m)"
+        )
+        self.network = network
+        self.junction = junction
+        self.movement = movement
+        self.time = time
+        self.onset = onset
 
 
 class SimulatorMissingError(SimulationError):

@@ -103,9 +103,14 @@ def test_evaluate_writes_tables_json_csv_and_plots(tmp_path: Path, capsys) -> No
                 "P4",
                 "--workers",
                 "1",
+                "--time-step",
+                "0.09",
             ],
             "finer than the simulation time step",
         ),
+        (["--time-step", "0", "--pipes", "P4"], "--time-step must be a positive number"),
+        (["--time-step", "nan", "--pipes", "P4"], "--time-step must be a positive number"),
+        (["--time-step", "-0.1", "--pipes", "P4"], "--time-step must be a positive number"),
     ],
 )
 def test_evaluate_bad_input_exits_2_with_a_clear_message(args, message, capsys) -> None:
@@ -156,3 +161,65 @@ def test_evaluate_unknown_detector_is_an_argparse_error(capsys) -> None:
         main(["evaluate", str(PAPER15), "--detector", "ewma"])
     assert exc.value.code == 2
     assert "invalid choice: 'ewma'" in capsys.readouterr().err
+
+
+#: Pipes of 1000 m or more: a burst at mid-pipe leaves 500 m halves, and TSNet's own time step
+#: (0.208 s) is coarser than the paper's finest capture interval (0.2 s), as on todini6.
+LONG_PIPES_INP = """\
+[JUNCTIONS]
+ J1  0  10
+ J2  0  10
+ J3  0  10
+
+[RESERVOIRS]
+ R1  80
+
+[PIPES]
+ A  R1  J1  1200  400  100  0  Open
+ B  J1  J2  1000  300  100  0  Open
+ C  J1  J3  1000  300  100  0  Open
+ D  J2  J3  1100  200  100  0  Open
+
+[OPTIONS]
+ Units  LPS
+ Headloss  H-W
+
+[END]
+"""
+
+
+def _evaluate_long_pipes(tmp_path: Path, *options: str) -> int:
+    inp = tmp_path / "long.inp"
+    inp.write_text(LONG_PIPES_INP, encoding="utf-8")
+    args = ["evaluate", str(inp), "--localizer", "paper", "--detector", "cusum", "--pipes", "B"]
+    args += ["--capture-interval", "0.2", "--phases", "1", "--workers", "1", "--quiet"]
+    return main([*args, "--json", str(tmp_path / "r.json"), *options])
+
+
+def test_the_default_time_step_follows_the_finest_capture_interval(tmp_path: Path) -> None:
+    from burstloc.sim.scenario import BurstScenario
+    from burstloc.sim.time_step import capture_time_step, expected_time_step
+
+    inp = tmp_path / "long.inp"
+    inp.write_text(LONG_PIPES_INP, encoding="utf-8")
+    scenario = BurstScenario(inp, "B", duration=13.0)
+    assert expected_time_step(scenario) > 0.2  # 500 m halves: 0.208 s, adjusted to 0.222 s
+    assert capture_time_step(scenario, 0.2) == 0.1  # the rule `burstloc study` uses
+    assert capture_time_step(scenario, 0.5) is None  # TSNet's own step is fine
+    assert capture_time_step(scenario, 0.2, requested=0.15) == 0.15
+
+    assert _evaluate_long_pipes(tmp_path) == 0
+    doc = json.loads((tmp_path / "r.json").read_text())
+    jsonschema.validate(doc, SCHEMA)
+    assert doc["scenario"]["time_step"] is None  # the rule, not a requested step
+    assert len(doc["runs"]) == 1 and doc["runs"][0]["capture_interval"] == 0.2
+
+
+def test_an_explicit_time_step_reaches_the_simulation(tmp_path: Path, capsys) -> None:
+    assert _evaluate_long_pipes(tmp_path, "--time-step", "0.15") == 0
+    assert json.loads((tmp_path / "r.json").read_text())["scenario"]["time_step"] == 0.15
+    capsys.readouterr()
+    # above TSNet's stability limit: refused, naming the limit and the pipe
+    assert _evaluate_long_pipes(tmp_path, "--time-step", "0.3") == 2
+    err = capsys.readouterr().err
+    assert "time_step 0.3 s exceeds TSNet's stability limit 0.20833 s for pipe 'B'" in err

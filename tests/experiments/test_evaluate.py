@@ -126,7 +126,8 @@ def test_evaluate_rejects_bad_input_clearly(short_evaluation) -> None:
             scenario=paper.ScenarioConfig(burst_start=2.0, duration=5.0),
             progress=False,
         )
-    # the simulation (already cached) cannot provide readings every 0.01 s
+    # a simulation at a requested 0.09 s cannot provide readings every 0.01 s (by default the
+    # time step would follow the capture interval: 0.005 s)
     fine = [RunSpec(CUSUM, 0.01, 100)]
     with pytest.raises(ConfigError, match="finer than the simulation time step"):
         evaluate(
@@ -135,4 +136,5 @@ def test_evaluate_rejects_bad_input_clearly(short_evaluation) -> None:
             pipes=["P4"],
             scenario=paper.ScenarioConfig(burst_start=2.0, duration=5.0),
             progress=False,
+            time_step=0.09,
         )

@@ -15,10 +15,11 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from burstloc import inp, network
-from burstloc.exceptions import ConfigError, NetworkError
+from burstloc.exceptions import ConfigError, NetworkError, SimulationError
 from burstloc.sim.cache import DiskCache
 from burstloc.sim.scenario import BurstScenario, ScenarioResult, burst_scenarios, output_path
-from burstloc.sim.tsnet import expected_time_step, simulate_burst, simulate_many
+from burstloc.sim.time_step import expected_time_step
+from burstloc.sim.tsnet import simulate_burst, simulate_many
 from conftest import write_tiny
 
 SHORT = {"burst_start": 0.5, "duration": 3.0}
@@ -313,3 +314,17 @@ def test_simulate_many_on_a_dask_cluster(
     assert result is not None and result.pipe == "B"
     np.testing.assert_array_equal(result.heads, local.heads)  # same simulation, deterministic
     assert all(s.cache_key() in DiskCache(cache_dir) for s in scenarios)
+
+
+def test_a_negative_initial_pressure_is_named(tmp_path: Path) -> None:
+    # J3, a dead end without demand 80 m up, lies above the hydraulic grade (as Net3's junction
+    # 10 with its pump closed): TSNet's start takes the square root of its pressure
+    inp = tmp_path / "uphill.inp"
+    inp.write_text(
+        "[JUNCTIONS]\n J1  0  10\n J2  0  10\n J3  80  0\n\n[RESERVOIRS]\n R1  60\n\n"
+        "[PIPES]\n A  R1  J1  300  250  100  0  Open\n B  J1  J2  300  250  100  0  Open\n"
+        " C  J2  J3  300  150  100  0  Open\n\n[OPTIONS]\n Units  LPS\n Headloss  H-W\n\n[END]\n",
+        encoding="utf-8",
+    )
+    with pytest.raises(SimulationError, match=r"negative pressure .*'J3' -20\.5 m"):
+        simulate_burst(BurstScenario(inp, "B", burst_start=0.5, duration=1.5), cache=False)

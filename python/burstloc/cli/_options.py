@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import math
 from typing import TYPE_CHECKING
+
+from burstloc.exceptions import ConfigError
 
 if TYPE_CHECKING:
     from burstloc.sim.cache import DiskCache
@@ -11,9 +14,11 @@ if TYPE_CHECKING:
 __all__ = [
     "add_meters_file_option",
     "add_run_options",
+    "add_time_step_option",
     "cache_of",
     "check_run_options",
     "meters_of",
+    "time_step_of",
 ]
 
 
@@ -63,3 +68,24 @@ def check_run_options(args: argparse.Namespace) -> None:
         from burstloc.sim.sweep import check_scheduler
 
         check_scheduler(args.scheduler)
+
+
+def add_time_step_option(parser: argparse.ArgumentParser) -> None:
+    """``--time-step S``: TSNet's requested time step (default: the capture rule)."""
+    parser.add_argument(
+        "--time-step",
+        type=float,
+        default=None,
+        metavar="S",
+        help="TSNet's time step in seconds (default: TSNet's largest stable step, or half the "
+        "finest capture interval where TSNet's is coarser)",
+    )
+
+
+def time_step_of(args: argparse.Namespace) -> float | None:
+    """``--time-step``, checked: a positive, finite number of seconds (ConfigError otherwise),
+    or ``None`` without the option."""
+    step = args.time_step
+    if step is not None and not (math.isfinite(step) and step > 0):
+        raise ConfigError(f"--time-step must be a positive number of seconds, got {step:g}")
+    return step

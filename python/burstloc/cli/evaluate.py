@@ -10,9 +10,11 @@ from burstloc._atomic import check_output
 from burstloc.cli._options import (
     add_meters_file_option,
     add_run_options,
+    add_time_step_option,
     cache_of,
     check_run_options,
     meters_of,
+    time_step_of,
 )
 from burstloc.constants import DETECTORS, LOCALIZERS, METER_MODELS
 from burstloc.exceptions import ConfigError
@@ -126,6 +128,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "traces with their alarms for the first pipe of --pipes",
     )
     add_meters_file_option(parser)
+    add_time_step_option(parser)
     parser.add_argument(
         "--events",
         action="store_true",
@@ -170,6 +173,7 @@ def run(args: argparse.Namespace) -> int:
     if args.plot:
         check_output(args.plot, directory=True)
     check_run_options(args)
+    time_step = time_step_of(args)
     runs = plan_runs(
         localizers=args.localizer,
         detectors=DETECTORS if args.detector == "both" else (args.detector,),
@@ -206,6 +210,7 @@ def run(args: argparse.Namespace) -> int:
         progress=not args.quiet,
         config=config,
         meters=meters,
+        time_step=time_step,
     )
     print(report.format_tables(ev), end="")
     if args.events:
@@ -227,6 +232,7 @@ def _events(args: argparse.Namespace, ev: Any, cache: Any) -> None:
     from burstloc.experiments.specificity import evaluate_events
     from burstloc.localize.classify import ClassifierConfig
     from burstloc.sim.scenario import burst_scenarios
+    from burstloc.sim.time_step import with_capture_time_step
     from burstloc.sim.tsnet import simulate_many
 
     intervals = sorted({r.spec.capture_interval for r in ev.runs})
@@ -235,7 +241,9 @@ def _events(args: argparse.Namespace, ev: Any, cache: Any) -> None:
     if calibration == args.network:
         cal_bursts = dict(ev.results)
     else:
-        scenarios = burst_scenarios(calibration, None, **ev.scenario)
+        scenarios = with_capture_time_step(
+            burst_scenarios(calibration, None, **ev.scenario), min(intervals)
+        )
         report = simulate_many(scenarios, cache=cache, workers=args.workers, progress=False)
         cal_bursts = {s.pipe: r for s, r in report.succeeded()}
     spec, config = evaluate_events(

@@ -7,7 +7,12 @@ from pathlib import Path
 from typing import Any
 
 from burstloc._atomic import check_output
-from burstloc.cli._options import add_run_options, check_run_options
+from burstloc.cli._options import (
+    add_run_options,
+    add_time_step_option,
+    check_run_options,
+    time_step_of,
+)
 from burstloc.constants import CAPTURE_INTERVALS, DETECTORS, RANKING_LOCALIZERS, SCENARIO_DURATION
 from burstloc.exceptions import ConfigError
 from burstloc.experiments.grid import DEFAULT_LEVELS, DEFAULT_NETWORKS, StudySettings, study_grid
@@ -49,12 +54,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help=f"factors varied on the first network (default: all of {list(DEFAULT_LEVELS)})",
     )
     parser.add_argument("--pipes", nargs="+", default=None, help="only these pipes")
-    parser.add_argument(
-        "--time-step",
-        type=float,
-        default=None,
-        help="TSNet time step, s (default: TSNet's, or half the finest capture if coarser)",
-    )
+    add_time_step_option(parser)
     parser.add_argument(
         "--placement",
         choices=PLACEMENT_METHODS,
@@ -96,7 +96,7 @@ def run(args: argparse.Namespace) -> int:
         phases=args.phases,
         duration=args.duration,
         pipes=tuple(args.pipes) if args.pipes else None,
-        time_step=args.time_step,
+        time_step=time_step_of(args),
         placement=args.placement,
         meter_sets=meter_sets,
     )

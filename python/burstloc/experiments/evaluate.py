@@ -244,8 +244,13 @@ def evaluate(
     progress: bool = True,
     config: Calibration | None = None,
     meters: Sequence[str] | None = None,
+    time_step: float | None = None,
 ) -> Evaluation:
     """Run the experiment: simulate (cached), stream, localize and score every run.
+
+    ``time_step`` is TSNet's requested time step (s); ``None`` applies the rule of ``burstloc
+    study`` (:func:`burstloc.sim.time_step.capture_time_step`): TSNet's own step, or half the finest
+    capture interval where TSNet's would be coarser. The JSON's ``scenario`` records it.
 
     ``config`` is the calibration the ranking localizers' detector bank uses (runs with
     ``localizer != "paper"``); without one the network is calibrated here. ``meters`` are the
@@ -255,14 +260,15 @@ def evaluate(
 
     Raises:
         NetworkError: missing or malformed network, unknown pipe.
-        ConfigError: no runs, bad phases, or a capture interval finer than the simulation's
-            time step.
+        ConfigError: no runs, bad phases, a time step that is not a positive number of seconds,
+            or a capture interval finer than the simulation's time step.
         SimulationError: a burst could not be simulated.
     """
     from burstloc import inp
     from burstloc import network as netmod
     from burstloc.sim import tsnet as simulate
     from burstloc.sim.scenario import burst_scenarios
+    from burstloc.sim.time_step import with_capture_time_step
 
     if not runs:
         raise ConfigError("no runs to evaluate")
@@ -288,7 +294,9 @@ def evaluate(
             f"{worst.localization_interval} needs {needed:g} s (2 x interval readings after "
             f"the burst at {scenario.burst_start:g} s, whatever the phase)"
         )
-    scenarios = burst_scenarios(path, chosen, **params)
+    params["time_step"] = time_step
+    finest = min(spec.capture_interval for spec in runs)
+    scenarios = with_capture_time_step(burst_scenarios(path, chosen, **params), finest)
     report = simulate.simulate_many(
         scenarios, cache=cache, workers=workers, scheduler=scheduler, progress=progress
     )

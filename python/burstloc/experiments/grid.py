@@ -20,7 +20,7 @@ from burstloc.constants import (
     RANKING_LOCALIZERS,
     SCENARIO_DURATION,
 )
-from burstloc.exceptions import ConfigError, NetworkError
+from burstloc.exceptions import ConfigError
 from burstloc.inp import network_hash
 from burstloc.sim.placement import PLACEMENT_METHODS, MeterSet
 
@@ -215,19 +215,8 @@ def point_scenarios(point: StudyPoint, settings: StudySettings) -> list[Any]:
 
 
 def study_time_step(scenario: Any, settings: StudySettings) -> float | None:
-    """TSNet time step for a study burst: ``settings.time_step`` if given; else TSNet's own
-    (``None``) when it is no coarser than the finest capture interval, and half that interval
-    otherwise (a capture needs simulated samples at least as fine as its interval; half of it
-    keeps TSNet's wave-speed adjustment, which can lengthen a requested step by up to 50 %,
-    below the interval).
-    """
-    from burstloc.sim.tsnet import expected_time_step
+    """TSNet time step for a study burst: ``settings.time_step`` if given, else the rule of
+    :func:`burstloc.sim.time_step.capture_time_step` for the finest capture interval."""
+    from burstloc.sim.time_step import capture_time_step
 
-    if settings.time_step is not None:
-        return settings.time_step
-    finest = min(settings.capture_intervals)
-    try:
-        expected = expected_time_step(replace(scenario, time_step=None))
-    except NetworkError:
-        return None  # an unknown pipe: its simulation fails and names it
-    return None if expected <= finest else finest / 2
+    return capture_time_step(scenario, min(settings.capture_intervals), settings.time_step)

@@ -4,6 +4,10 @@ Nothing on the live path imports this package (it pulls in TSNet and WNTR).
 
 * :mod:`~burstloc.sim.scenario`: burst scenarios and their results (NPZ files);
 * :mod:`~burstloc.sim.tsnet`: the TSNet transient driver;
+* :mod:`~burstloc.sim.time_step`: the time step TSNet will use, and the one to ask for;
+* :mod:`~burstloc.sim.steady`: the steady-start check every simulation passes;
+* :mod:`~burstloc.sim.tsnet_ready`: the network as TSNet needs it (closed pipes out, connector
+  pipes where a pump or valve meets no single pipe);
 * :mod:`~burstloc.sim.capture`: meter sampling (instantaneous or interval-averaged readings);
 * :mod:`~burstloc.sim.sensors`: sensor noise models;
 * :mod:`~burstloc.sim.cache`: the content-addressed cache of simulations on disk;

@@ -33,6 +33,10 @@ Two more make TSNet's valve and pump operations run (they failed on every WNTR w
   (``nominal_flow``, ``nominal_pump_head``); running pumps keep TSNet's code. And a starting
   pump's speed is kept at 0.01 % or more, as TSNet's ``pumpclosing`` keeps a tripped one (at
   zero speed its scaled curve is three identical points: no parabola, a division by zero).
+  A pump curve of more than three points (EPANET's multi-point curve, e.g. Anytown's five),
+  which TSNet refused, keeps three of them, its first, middle and last, before TSNet's refit
+  (which replaces the one nearest the operating point with that point, so the transient starts
+  from EPANET's steady state).
 
 Nothing else changes: on the pinned stack (numpy 1.26, WNTR 1.3.2) the patched TSNet gives
 bit-identical heads (``tests/sim/test_tsnet_compat.py`` checks this, and checks numpy 2 against
@@ -189,6 +193,9 @@ def _pump_operation_points(tm: Any) -> Any:
             (flow, head) = points[0]
             points.append((0.0, 1.33 * head))
             points.append((2 * flow, 0.0))
+        elif len(points) > 3:
+            # a multi-point curve: its shut-off, middle and last points (TSNet refused it)
+            points[:] = [points[0], points[len(points) // 2], points[-1]]
         elif len(points) != 3:
             raise Exception("TSNet only support one-point or three-point pump curve.")
         dist = [np.sqrt((q - point[0]) ** 2 + (h - point[1]) ** 2) for q, h in points]

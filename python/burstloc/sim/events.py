@@ -40,6 +40,7 @@ from burstloc.constants import SCENARIO_DURATION, WAVE_SPEED
 from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.sim.cache import DiskCache, file_sha256, network_cache_key
 from burstloc.sim.scenario import DEFAULT_BURST_START, FRICTION_MODELS, ScenarioResult
+from burstloc.sim.steady import check_steady_start
 from burstloc.sim.tsnet import (
     TransientSettings,
     cached,
@@ -47,6 +48,7 @@ from burstloc.sim.tsnet import (
     run_metadata,
     run_transient,
 )
+from burstloc.sim.tsnet_ready import prepare_for_tsnet
 
 __all__ = ["EVENT_KINDS", "SCHEMA", "EventScenario", "event_output_path", "simulate_event"]
 
@@ -174,6 +176,8 @@ def simulate_event(
             another kind, or a junction without demand for a demand step).
         ConfigError: a time step above TSNet's limit, or too few time steps.
         SimulationError: TSNet failed, or produced non-finite heads.
+        UnsteadyStartError: a junction's head moved more than
+            :data:`~burstloc.sim.steady.STEADY_TOLERANCE` before the event.
         SimulatorMissingError: the simulator (the ``sim`` extra) is not installed.
     """
     key = network_cache_key(SCHEMA, scenario.parameters(), scenario.network)
@@ -230,6 +234,7 @@ def _simulate(scenario: EventScenario) -> ScenarioResult:
         wn = network.load_network(source)
         nodes = _asset_nodes(wn, scenario)
         meters = network.junction_names(wn)
+        prepared = prepare_for_tsnet(wn, keep=(scenario.asset,))
         steps, heads, dt = run_transient(
             wn,
             meters,
@@ -238,6 +243,7 @@ def _simulate(scenario: EventScenario) -> ScenarioResult:
             _operate(scenario, wn),
             where=f"{scenario.label} of {scenario.network}",
         )
+    steady = check_steady_start(steps, heads, meters, scenario.start, scenario.network)
     elapsed = time.perf_counter() - started
     meta: dict[str, Any] = {
         "network": scenario.network,
@@ -246,6 +252,8 @@ def _simulate(scenario: EventScenario) -> ScenarioResult:
         "event": scenario.kind,
         "asset_nodes": nodes,
         "label": scenario.label,
+        "steady_start": steady.as_metadata(),
+        **prepared.as_metadata(),
         **run_metadata(dt, steps.size, diag, elapsed),
         "schema": SCHEMA,
     }

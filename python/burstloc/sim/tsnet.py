@@ -31,12 +31,13 @@ from burstloc.exceptions import ConfigError, NetworkError, SimulationError
 from burstloc.sim import _tsnet_compat
 from burstloc.sim.cache import DiskCache, file_sha256, package_versions
 from burstloc.sim.scenario import SCHEMA, BurstScenario, ScenarioResult
+from burstloc.sim.steady import check_steady_start
 from burstloc.sim.sweep import SweepReport, sweep
+from burstloc.sim.tsnet_ready import prepare_for_tsnet
 
 __all__ = [
     "TransientSettings",
     "cached",
-    "expected_time_step",
     "from_cache",
     "isolated_run",
     "resolve_cache",
@@ -94,6 +95,8 @@ def simulate_burst(
         ConfigError: ``time_step`` above TSNet's stability limit for this network, or a
             ``duration`` shorter than TSNet's minimum of 10 time steps.
         SimulationError: TSNet failed, or produced non-finite heads.
+        UnsteadyStartError: a junction's head moved more than
+            :data:`~burstloc.sim.steady.STEADY_TOLERANCE` before the burst (nothing is cached).
         SimulatorMissingError: the simulator (the ``sim`` extra) is not installed.
     """
     return cached(scenario, None, cache, _simulate)
@@ -141,6 +144,7 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
         graph = network.flow_direction_graph(wn, flows)
         true_start, true_end = network.pipe_endpoints(graph, scenario.pipe)
         split = network.split_pipe(wn, scenario.pipe, scenario.position)
+        prepared = prepare_for_tsnet(split.network)
         meters = network.junction_names(wn)
         where = f"pipe {scenario.pipe!r} of {scenario.network}"
 
@@ -157,6 +161,7 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
             burst,
             where=f"{where} split at {scenario.position:g}",
         )
+    steady = check_steady_start(steps, heads, meters, scenario.burst_start, scenario.network)
     elapsed = time.perf_counter() - started
     meta: dict[str, Any] = {
         "network": scenario.network,
@@ -167,6 +172,8 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
         "steady_flow_m3s": abs(flows[scenario.pipe]),
         "burst_node": split.burst_node,
         "split_pipes": [split.pipe, split.second_pipe],
+        "steady_start": steady.as_metadata(),
+        **prepared.as_metadata(),
         **run_metadata(dt, steps.size, diag, elapsed),
         "schema": SCHEMA,
     }
@@ -235,34 +242,28 @@ def run_transient(
     heads = np.column_stack([np.asarray(tm.get_node(j).head, np.float64) for j in meters])
     elevation = np.array([wn.get_node(j).elevation for j in meters], dtype=np.float64)
     heads = heads - elevation
-    if heads.shape[0] != steps.size or not np.all(np.isfinite(heads)):
-        raise SimulationError(f"TSNet produced non-finite or misshapen heads for {where}")
+    if heads.shape[0] != steps.size:
+        raise SimulationError(f"TSNet produced misshapen heads for {where}")
+    broken = [j for j, ok in zip(meters, np.isfinite(heads).all(axis=0), strict=True) if not ok]
+    if broken:
+        raise SimulationError(
+            f"TSNet produced non-finite heads for {where} at {len(broken)} junction(s) "
+            f"({', '.join(broken[:5])}{', ...' if len(broken) > 5 else ''}){_negative(tm)}"
+        )
     return steps, heads, float(tm.time_step)
 
 
-def expected_time_step(scenario: BurstScenario) -> float:
-    """The time step (s) TSNet will use for ``scenario``, without running TSNet.
-
-    TSNet's discretisation is arithmetic on the pipe lengths of the split network: each pipe
-    gets ``N = floor(L / (a dt))`` reaches for the requested step ``dt`` (default: the Courant
-    limit ``min L / (2 a)``), and the step becomes ``sum(phi^2) / sum(phi)`` with
-    ``phi = L / (a N)`` (its wave-speed adjustment). This reproduces it, so a caller can choose
-    ``time_step`` before simulating (e.g. finer than a capture interval).
-
-    Raises:
-        NetworkError: the network or pipe cannot be read.
-    """
-    wn = network.load_network(scenario.network)
-    link = network.require_pipe(wn, scenario.pipe)
-    lengths = [float(wn.get_link(p).length) for p in network.pipe_names(wn) if p != scenario.pipe]
-    lengths += [scenario.position * link.length, (1.0 - scenario.position) * link.length]
-    travel = np.array(lengths) / scenario.wave_speed
-    dt = float(travel.min() / 2.0) if scenario.time_step is None else float(scenario.time_step)
-    reaches = np.floor(travel / dt)
-    if np.any(reaches < 1):
-        return dt  # TSNet refuses such a step; _run_tsnet reports it
-    phi = travel / reaches
-    return float(np.sum(phi**2) / np.sum(phi))
+def _negative(tm: Any) -> str:
+    """The junctions of TSNet's model with a negative initial pressure, as a message's end."""
+    low = {
+        name: float(node.head[0] - node.elevation)
+        for name, node in tm.junctions()
+        if node.head[0] - node.elevation < 0
+    }
+    if not low:
+        return ""
+    named = ", ".join(f"{name!r} {p:.3g} m" for name, p in list(low.items())[:5])
+    return f"; it cannot start from a negative pressure (EPANET's steady state): {named}"
 
 
 def _run_tsnet(

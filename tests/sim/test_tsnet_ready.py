@@ -1,0 +1,140 @@
+"""burstloc.sim.tsnet_ready: a pump into a junction where pipes branch gets a connector pipe, and
+the network then starts steady under TSNet (it does not without one)."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from burstloc import network
+from burstloc.sim.scenario import BurstScenario
+from burstloc.sim.steady import STEADY_TOLERANCE, steady_start
+from burstloc.sim.time_step import expected_time_step
+from burstloc.sim.tsnet import TransientSettings, isolated_run, run_transient, simulate_burst
+from burstloc.sim.tsnet_ready import Connector, add_connectors, prepare_for_tsnet
+from conftest import REPO
+
+#: A pump from a reservoir into J1, where pipes A and B branch; a five-point pump curve
+#: (EPANET's multi-point curve, which TSNet 0.3.1 alone refuses).
+PUMP_AT_BRANCH_INP = """\
+[JUNCTIONS]
+ J1  0  0
+ J2  0  10
+ J3  0  10
+
+[RESERVOIRS]
+ R1  10
+
+[PIPES]
+ A  J1  J2  300  250  100  0  Open
+ B  J1  J3  350  250  100  0  Open
+ C  J2  J3  400  150  100  0  Open
+
+[PUMPS]
+ P1  R1  J1  HEAD 1
+
+[CURVES]
+ 1  0  60
+ 1  10  58
+ 1  20  54
+ 1  30  47
+ 1  40  38
+
+[OPTIONS]
+ Units  LPS
+ Headloss  H-W
+
+[END]
+"""
+
+
+@pytest.fixture
+def pump_at_branch(tmp_path: Path) -> Path:
+    path = tmp_path / "pump_at_branch.inp"
+    path.write_text(PUMP_AT_BRANCH_INP, encoding="utf-8")
+    return path
+
+
+def test_a_pump_into_a_branch_gets_one_connector(pump_at_branch: Path) -> None:
+    wn = network.load_network(pump_at_branch)
+    added = add_connectors(wn)
+    assert added == [Connector("P1", "J1", "P1_E", "P1_EP", 300.0, 0.25)]
+    pump = wn.get_link("P1")
+    assert (pump.start_node_name, pump.end_node_name) == ("R1", "P1_E")
+    assert sorted(wn.get_links_for_node("J1")) == ["A", "B", "P1_EP"]
+    assert wn.get_node("P1_E").elevation == wn.get_node("J1").elevation
+    assert add_connectors(wn) == []  # nothing left to mend
+
+
+def test_pumps_and_valves_between_single_pipes_need_none() -> None:
+    wn = network.load_network(REPO / "networks" / "paper15_assets.inp")
+    assert wn.num_pumps == 1 and wn.num_valves == 1
+    assert add_connectors(wn) == []
+
+
+def _pre_event_movement(path: Path, prepare: Callable[[Any], object] | None) -> float:
+    """The largest head movement over 2 s of TSNet with no event, after ``prepare(network)``."""
+    source = os.path.abspath(path)
+    with isolated_run() as tmp:
+        wn = network.load_network(source)
+        meters = network.junction_names(wn)
+        if prepare is not None:
+            prepare(wn)
+        settings = TransientSettings(1200.0, 2.0, None, "PDD", "steady")
+        steps, heads, _ = run_transient(
+            wn, meters, os.path.join(tmp, "n.inp"), settings, lambda tm: None, where=source
+        )
+    return steady_start(steps, heads, meters, onset=2.0).movement
+
+
+def test_tsnet_starts_steady_only_with_the_connector(pump_at_branch: Path) -> None:
+    assert _pre_event_movement(pump_at_branch, None) > 1.0  # 7.2 m at J3
+    assert _pre_event_movement(pump_at_branch, prepare_for_tsnet) < STEADY_TOLERANCE  # 0.1 mm
+
+
+def test_a_burst_simulation_records_its_connectors(pump_at_branch: Path) -> None:
+    scenario = BurstScenario(pump_at_branch, "C", burst_start=1.0, duration=2.0)
+    result = simulate_burst(scenario)
+    assert result.time_step == pytest.approx(expected_time_step(scenario), rel=1e-12)
+    assert [c["junction"] for c in result.metadata["connectors"]] == ["P1_E"]
+    assert result.metadata["steady_start"]["max_movement_m"] < STEADY_TOLERANCE
+    assert list(result.junctions) == ["J1", "J2", "J3"]  # the connector junction is no meter
+
+
+def test_a_closed_pipe_is_removed_and_the_start_is_steady(tmp_path: Path) -> None:
+    closed = tmp_path / "closed_pipe.inp"
+    closed_pipe = " D  J1  J3  200  150  100  0  Closed\n"
+    closed.write_text(
+        PUMP_AT_BRANCH_INP.replace("\n[PUMPS]", closed_pipe + "\n[PUMPS]"), encoding="utf-8"
+    )
+    wn = network.load_network(closed)
+    prepared = prepare_for_tsnet(wn)
+    assert prepared.removed_closed_links == ["D"] and "D" not in wn.link_name_list
+    assert [c.link for c in prepared.connectors] == ["P1"]
+    # TSNet lets water through the closed pipe: with the connector alone J3 moves 4.7 cm
+    assert _pre_event_movement(closed, add_connectors) > 0.02
+    assert _pre_event_movement(closed, prepare_for_tsnet) < 0.005  # removed: 0.1 mm
+
+
+def test_a_closed_pump_is_removed_unless_it_is_kept(tmp_path: Path) -> None:
+    closed = tmp_path / "closed_pump.inp"
+    text = PUMP_AT_BRANCH_INP.replace(" R1  10\n", " R1  10\n R2  100\n")
+    text = text.replace(" P1  R1  J1  HEAD 1\n", " P1  R1  J1  HEAD 1\n P2  R2  J3  HEAD 1\n")
+    text = text.replace("[OPTIONS]", "[STATUS]\n P2  Closed\n\n[OPTIONS]\n Quality  Trace R2")
+    closed.write_text(text, encoding="utf-8")
+    wn = network.load_network(closed)
+    prepared = prepare_for_tsnet(wn)
+    assert prepared.removed_closed_links == ["P2"]
+    assert "R2" not in wn.node_name_list  # left with no link
+    assert wn.options.quality.parameter == "NONE"  # R2 was the trace node (as Net3's Lake)
+    assert [c.link for c in prepared.connectors] == ["P1"]
+    kept = network.load_network(closed)
+    assert prepare_for_tsnet(kept, keep=("P2",)).removed_closed_links == []
+    # a closed pump holding back a reservoir above J3: TSNet runs it on its curve, and with the
+    # connectors alone J3 moves by metres
+    assert _pre_event_movement(closed, add_connectors) > 1.0
+    assert _pre_event_movement(closed, prepare_for_tsnet) < STEADY_TOLERANCE
