@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from burstloc import network
+from burstloc import network, skeleton
 from burstloc._diagnostics import capture_diagnostics
 from burstloc.exceptions import ConfigError, NetworkError, SimulationError
 from burstloc.sim import _tsnet_compat
@@ -44,6 +44,7 @@ __all__ = [
     "run_transient",
     "simulate_burst",
     "simulate_many",
+    "transient_model",
 ]
 
 
@@ -140,8 +141,9 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
         flows = network.steady_state_flows(wn, scenario.engine)
         graph = network.flow_direction_graph(wn, flows)
         true_start, true_end = network.pipe_endpoints(graph, scenario.pipe)
-        split = network.split_pipe(wn, scenario.pipe, scenario.position)
         meters = network.junction_names(wn)
+        model, pipe, position, prepared = transient_model(wn, scenario)
+        split = network.split_pipe(model, pipe, position)
         where = f"pipe {scenario.pipe!r} of {scenario.network}"
 
         def burst(tm: Any) -> None:
@@ -167,10 +169,26 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
         "steady_flow_m3s": abs(flows[scenario.pipe]),
         "burst_node": split.burst_node,
         "split_pipes": [split.pipe, split.second_pipe],
+        **({} if prepared is None else {"transient_model": prepared.summary()}),
         **run_metadata(dt, steps.size, diag, elapsed),
         "schema": SCHEMA,
     }
     return ScenarioResult(steps, heads, meters, dt, meta)
+
+
+def transient_model(
+    wn: Any, scenario: BurstScenario
+) -> tuple[Any, str, float, skeleton.PreparedNetwork | None]:
+    """The model TSNet simulates for ``scenario`` and the burst's pipe and position in it:
+    ``wn`` itself, or with ``scenario.min_pipe_length`` its transient-ready model keeping every
+    junction (:func:`burstloc.skeleton.prepare_transient_model`), and that preparation."""
+    if scenario.min_pipe_length is None:
+        return wn, scenario.pipe, scenario.position, None
+    prepared = skeleton.prepare_transient_model(
+        wn, scenario.min_pipe_length, keep=network.junction_names(wn)
+    )
+    pipe, position = prepared.locate(scenario.pipe, scenario.position)
+    return prepared.network, pipe, position, prepared
 
 
 def run_metadata(dt: float, samples: int, diag: Any, elapsed: float) -> dict[str, Any]:
@@ -253,9 +271,11 @@ def expected_time_step(scenario: BurstScenario) -> float:
         NetworkError: the network or pipe cannot be read.
     """
     wn = network.load_network(scenario.network)
-    link = network.require_pipe(wn, scenario.pipe)
-    lengths = [float(wn.get_link(p).length) for p in network.pipe_names(wn) if p != scenario.pipe]
-    lengths += [scenario.position * link.length, (1.0 - scenario.position) * link.length]
+    network.require_pipe(wn, scenario.pipe)
+    model, pipe, position, _ = transient_model(wn, scenario)
+    link = model.get_link(pipe)
+    lengths = [float(model.get_link(p).length) for p in network.pipe_names(model) if p != pipe]
+    lengths += [position * link.length, (1.0 - position) * link.length]
     travel = np.array(lengths) / scenario.wave_speed
     dt = float(travel.min() / 2.0) if scenario.time_step is None else float(scenario.time_step)
     reaches = np.floor(travel / dt)
