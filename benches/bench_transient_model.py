@@ -19,6 +19,11 @@ merged or lengthened to ``M`` m; the network's junctions kept, so the meters are
   junction's last ``--moved`` pipes move to a new junction ``<node>x`` (same elevation, no
   demand) joined to it by an ``L`` m connector as wide as its widest pipe; and the pipe
   ``--split-pipe`` is cut ``L`` m before its end node (a connector in series);
+* with ``--localize``: the arrival localizer of the network as given (every junction metered,
+  :func:`burstloc.sim.prepare.arrival_localizer`) ranks each run's burst from alarms at the
+  arrival times below (amplitude: the head change then): the pipe it names first, the rank
+  of the burst pipe and the position error on it, for the original model and the prepared
+  one (whose pipes are the original's: nothing is merged when every junction is kept);
 * with ``--compare`` (both models simulated over the same duration): the largest head
   difference at the meters (the prepared model's heads interpolated to the original's times)
   and the difference of the arrival times (first time a meter's head moves more than 1 % of
@@ -218,6 +223,37 @@ def compare(original: dict[str, Any], prepared: dict[str, Any]) -> dict[str, Any
     }
 
 
+def localize(path: str, pipe: str, run: dict[str, Any]) -> dict[str, Any]:
+    """The arrival localizer's first pipe and the burst pipe's rank, from ``run``'s arrivals."""
+    from burstloc.localize.evidence import BurstEvidence, MeterAlarm
+    from burstloc.sim.prepare import arrival_localizer
+
+    loc = arrival_localizer(path)
+    t, h = np.array(run["time"]), np.array(run["heads"])
+    at = arrivals(t, h, run["start"])
+    base = h[np.searchsorted(t, run["start"]) - 1]
+    alarms = {
+        m: MeterAlarm(m, float(a), float(h[-1, j] - base[j]))
+        for j, (m, a) in enumerate(zip(loc.meters, at, strict=True))
+        if np.isfinite(a)
+    }
+    evidence = BurstEvidence(
+        meters=loc.meters,
+        times=t,
+        readings=h,
+        onset=min(a.start for a in alarms.values()),
+        capture_interval=float(run["dt"]),
+        alarms=alarms,
+    )
+    ranking = [r.pipe for r in loc.rank(evidence)]
+    at_pipe = loc.position(evidence, pipe)  # the burst is mid-pipe: length / 2 from either end
+    return {
+        "named": ranking[0],
+        "rank_of_burst_pipe": ranking.index(pipe) + 1,
+        "position_error_m": round(abs(at_pipe.metres - at_pipe.length / 2), 1),
+    }
+
+
 def summarize(run: dict[str, Any], duration: float) -> dict[str, Any]:
     """A run's numbers without its arrays."""
     if "error" in run:
@@ -248,6 +284,7 @@ def main() -> None:
     parser.add_argument("--original-duration", type=float, default=None)
     parser.add_argument("--timeout", type=float, default=540.0)
     parser.add_argument("--compare", action="store_true")
+    parser.add_argument("--localize", action="store_true")
     parser.add_argument("--connectors", type=float, default=None, metavar="L")
     parser.add_argument("--split-nodes", nargs="*", default=["N2", "N5", "7"])
     parser.add_argument("--split-pipe", default="P7")
@@ -268,6 +305,8 @@ def main() -> None:
                 duration = args.original_duration
             runs[label] = simulate(path, pipe, length, duration, args.timeout)
             row[label]["run"] = summarize(runs[label], duration)
+            if args.localize and "error" not in runs[label]:
+                row[label]["run"]["localized"] = localize(path, pipe, runs[label])
         if args.compare and all("error" not in r for r in runs.values()):
             row["comparison"] = compare(runs["original"], runs["prepared"])
         print(json.dumps(row, indent=1), flush=True)

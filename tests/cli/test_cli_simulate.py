@@ -87,6 +87,10 @@ def test_min_pipe_length_simulates_the_transient_ready_model(tmp_path: Path) -> 
         (["--pipe", "B", "--wave-speed", "0"], "wave_speed must be > 0 m/s, got 0.0"),
         (["--pipe", "B", "--workers", "0"], "workers must be a positive integer, got 0"),
         (["--pipe", "B", "--min-pipe-length", "0"], "min_pipe_length must be > 0 m, got 0.0"),
+        (
+            ["--event", "demand-step", "--asset", "J1", "--min-pipe-length", "5"],
+            "--min-pipe-length applies to bursts only",
+        ),
     ],
 )
 def test_bad_input_exits_2_naming_the_value(

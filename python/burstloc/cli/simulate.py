@@ -155,6 +155,8 @@ def _event(args: argparse.Namespace) -> int:
 
     if args.asset is None:
         raise ConfigError(f"--event {args.event} needs --asset (the valve, pump or junction)")
+    if args.min_pipe_length is not None:
+        raise ConfigError("--min-pipe-length applies to bursts only, not to --event")
     setting = args.setting
     if setting is None:
         setting = 1.0 if args.event == "valve-opening" else 0.0

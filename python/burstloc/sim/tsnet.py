@@ -261,7 +261,8 @@ def run_transient(
 def expected_time_step(scenario: BurstScenario) -> float:
     """The time step (s) TSNet will use for ``scenario``, without running TSNet.
 
-    TSNet's discretisation is arithmetic on the pipe lengths of the split network: each pipe
+    TSNet's discretisation is arithmetic on the pipe lengths of the split network (of its
+    transient-ready model with ``min_pipe_length``, :func:`transient_model`): each pipe
     gets ``N = floor(L / (a dt))`` reaches for the requested step ``dt`` (default: the Courant
     limit ``min L / (2 a)``), and the step becomes ``sum(phi^2) / sum(phi)`` with
     ``phi = L / (a N)`` (its wave-speed adjustment). This reproduces it, so a caller can choose
