@@ -183,3 +183,30 @@ def test_a_network_without_short_pipes_is_unchanged(connectors: Path) -> None:
     prepared = skeleton.prepare_transient_model(wn, 0.1)
     assert prepared.summary()["merged"] == {} and prepared.lengthened == {}
     assert sorted(prepared.network.pipe_name_list) == sorted(wn.pipe_name_list)
+
+
+# WNTR reads [OPTIONS] after [PIPES] and warns that roughness units do not follow the formula
+@pytest.mark.filterwarnings("ignore:Changing the headloss formula")
+@pytest.mark.parametrize(
+    ("formula", "roughness"), [("H-W", None), ("D-W", "0.1"), ("C-M", "0.012")]
+)
+def test_each_head_loss_formula_keeps_the_steady_heads(
+    tmp_path: Path, formula: str, roughness: str | None
+) -> None:
+    text = CONNECTOR_INP.replace("Headloss  H-W", f"Headloss  {formula}")
+    if roughness is not None:  # the same roughness in every pipe, in the formula's own unit
+        text = "\n".join(
+            " ".join([*line.split()[:5], roughness, *line.split()[6:]])
+            if line.split()[:1] and line.split()[0] in {"P1", "C1", "P2", "P3", "P4", "C2", "P5"}
+            else line
+            for line in text.splitlines()
+        )
+    wn = network.load_network(_write(tmp_path, "formula.inp", text))
+    prepared = skeleton.prepare_transient_model(wn, 20.0, keep=METERS)
+    assert prepared.lengthened and prepared.summary()["merged"] == {"C2": "P5"}
+    before = network.steady_state(wn).heads
+    after = network.steady_state(prepared.network).heads
+    loss = max(60.0 - before[m] for m in METERS)
+    assert loss > 0.5
+    for meter in METERS:
+        assert after[meter] == pytest.approx(before[meter], abs=0.02 * loss)
