@@ -90,6 +90,7 @@ def test_evaluate_writes_tables_json_csv_and_plots(tmp_path: Path, capsys) -> No
         (["--capture-interval", "-1", "--pipes", "P4"], "capture interval must be > 0"),
         (["--capture-interval", "3"], "not one of the paper's"),
         (["--phases", "0"], "phases must be an integer in [1, 1000], got 0"),
+        (["--min-pipe-length", "-1", "--pipes", "P4"], "min_pipe_length must be > 0 m, got -1"),
         (["--detector", "cusum", "--sigma", "2"], "Shewhart chart only"),
         (
             [

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from burstloc.cli import main
+from connector_network import CONNECTOR_INP
 
 SHORT = ["--burst-start", "0.2", "--duration", "1.5", "--quiet", "--workers", "1"]
 
@@ -54,6 +55,24 @@ def test_chosen_pipes_parameters_and_capture_interval(tiny_network: Path, tmp_pa
     assert meta["capture_interval"] == 0.1 and meta["capture_phase"] == 0.05
 
 
+def test_min_pipe_length_simulates_the_transient_ready_model(tmp_path: Path) -> None:
+    network = tmp_path / "connectors.inp"
+    network.write_text(CONNECTOR_INP)
+    out = tmp_path / "out"
+    code = _run(
+        "simulate", network, "--pipe", "C1", "--min-pipe-length", "6", "--burst-start", "0.05",
+        "--duration", "0.3", "--out", out, "--no-cache", "--quiet", "--workers", "1",
+    )  # fmt: skip
+    assert code == 0
+    with np.load(out / "connectors_pipe-C1.npz", allow_pickle=False) as data:
+        meta = json.loads(str(data["metadata"]))
+        assert list(data["junctions"]) == ["J1", "J2", "J3", "J4", "J5", "J6"]
+    assert meta["pipe"] == "C1" and meta["min_pipe_length"] == 6.0
+    assert meta["transient_model"]["lengthened"] == {"C1": 0.3, "C2": 0.5}
+    # the burst splits the lengthened 6 m connector in two 3 m halves: the step follows them
+    assert meta["time_step"] == pytest.approx(3.0 / 2400, rel=0.05)
+
+
 @pytest.mark.parametrize(
     ("args", "words"),
     [
@@ -67,6 +86,11 @@ def test_chosen_pipes_parameters_and_capture_interval(tiny_network: Path, tmp_pa
         (["--pipe", "B", "--burst-coeff", "-1"], "burst_coeff must be > 0, got -1.0"),
         (["--pipe", "B", "--wave-speed", "0"], "wave_speed must be > 0 m/s, got 0.0"),
         (["--pipe", "B", "--workers", "0"], "workers must be a positive integer, got 0"),
+        (["--pipe", "B", "--min-pipe-length", "0"], "min_pipe_length must be > 0 m, got 0.0"),
+        (
+            ["--event", "demand-step", "--asset", "J1", "--min-pipe-length", "5"],
+            "--min-pipe-length applies to bursts only",
+        ),
     ],
 )
 def test_bad_input_exits_2_naming_the_value(

@@ -13,6 +13,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "add_meters_file_option",
+    "add_min_pipe_length_option",
     "add_run_options",
     "add_time_step_option",
     "cache_of",
@@ -41,6 +42,20 @@ def add_meters_file_option(parser: argparse.ArgumentParser) -> None:
         metavar="FILE",
         help="meters from a meter file written by `burstloc place` (format burstloc-meters/1); "
         "refused if it was made for another network",
+    )
+
+
+def add_min_pipe_length_option(parser: argparse.ArgumentParser) -> None:
+    """``--min-pipe-length M``: simulate the transient-ready model (:mod:`burstloc.skeleton`)."""
+    parser.add_argument(
+        "--min-pipe-length",
+        type=float,
+        default=None,
+        metavar="M",
+        help="simulate the network's transient-ready model: pipes shorter than M metres are "
+        "lengthened to M (diameter widened to keep their head loss), so TSNet's time step is "
+        "at least M / (2 x wave speed) instead of being set by the shortest connector pipe "
+        "(default: the network as it is)",
     )
 
 

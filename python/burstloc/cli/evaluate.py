@@ -9,6 +9,7 @@ from typing import Any
 from burstloc._atomic import check_output
 from burstloc.cli._options import (
     add_meters_file_option,
+    add_min_pipe_length_option,
     add_run_options,
     add_time_step_option,
     cache_of,
@@ -109,6 +110,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "start node, strictly between 0 and 1 (default 0.5, mid-pipe); position errors are "
         "measured against this point",
     )
+    add_min_pipe_length_option(parser)
     parser.add_argument(
         "--phases", type=int, default=5, metavar="N", help="clock phases per burst (default 5)"
     )
@@ -197,6 +199,8 @@ def run(args: argparse.Namespace) -> int:
         if not 0.0 < args.position < 1.0:
             raise ConfigError(f"--position must be strictly between 0 and 1, got {args.position}")
         scenario = replace(scenario, position=args.position)
+    if args.min_pipe_length is not None:
+        scenario = replace(scenario, min_pipe_length=args.min_pipe_length)
     ev = evaluate(
         args.network,
         runs,

@@ -8,7 +8,12 @@ import sys
 from typing import Any
 
 from burstloc._atomic import check_output
-from burstloc.cli._options import add_run_options, cache_of, check_run_options
+from burstloc.cli._options import (
+    add_min_pipe_length_option,
+    add_run_options,
+    cache_of,
+    check_run_options,
+)
 from burstloc.constants import SCENARIO_DURATION, WAVE_SPEED
 from burstloc.exceptions import ConfigError
 
@@ -88,6 +93,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument(
         "--time-step", type=float, default=None, metavar="S", help="default: TSNet's largest"
     )
+    add_min_pipe_length_option(parser)
     parser.add_argument(
         "--capture-interval",
         type=float,
@@ -121,6 +127,7 @@ def run(args: argparse.Namespace) -> int:
         wave_speed=args.wave_speed,
         duration=args.duration,
         time_step=args.time_step,
+        min_pipe_length=args.min_pipe_length,
     )
     cache = cache_of(args)
     report = simulate_many(
@@ -148,6 +155,8 @@ def _event(args: argparse.Namespace) -> int:
 
     if args.asset is None:
         raise ConfigError(f"--event {args.event} needs --asset (the valve, pump or junction)")
+    if args.min_pipe_length is not None:
+        raise ConfigError("--min-pipe-length applies to bursts only, not to --event")
     setting = args.setting
     if setting is None:
         setting = 1.0 if args.event == "valve-opening" else 0.0

@@ -190,6 +190,8 @@ class ScenarioConfig:
     readings after the burst whatever the phase: onset + (2 x interval + 1) x capture interval,
     rounded up to a second (220 s for the paper's experiment with :data:`SCENARIO`: 10 s
     onset + 21 x 10 s); an explicit duration too short for a run is an error.
+    ``min_pipe_length`` (m, ``None`` = the network as it is) simulates the transient-ready
+    model (``BurstScenario.min_pipe_length``, :mod:`burstloc.skeleton`).
     """
 
     burst_start: float = 10.0
@@ -198,9 +200,12 @@ class ScenarioConfig:
     position: float = 0.5
     wave_speed: float = WAVE_SPEED
     duration: float | None = None
+    min_pipe_length: float | None = None
 
     def parameters(self) -> dict[str, float | None]:
-        """The scenario fields as keyword arguments of ``burstloc.sim.scenario.BurstScenario``."""
+        """The scenario fields as keyword arguments of ``burstloc.sim.scenario.BurstScenario``
+        (``min_pipe_length`` only when set)."""
+        extra = {} if self.min_pipe_length is None else {"min_pipe_length": self.min_pipe_length}
         return {
             "burst_start": self.burst_start,
             "opening_time": self.opening_time,
@@ -208,6 +213,7 @@ class ScenarioConfig:
             "position": self.position,
             "wave_speed": self.wave_speed,
             "duration": self.duration,
+            **extra,
         }
 
 

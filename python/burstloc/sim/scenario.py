@@ -103,6 +103,11 @@ class BurstScenario:
             TSNet adjusts it (wave-speed adjustment), see :attr:`ScenarioResult.time_step`.
         friction: TSNet's friction model, one of :data:`FRICTION_MODELS` (default ``"steady"``,
             TSNet's own default and what every scenario used before this field existed).
+        min_pipe_length: ``None`` (default) simulates the network as it is; a length (m, > 0)
+            simulates its transient-ready model (:func:`burstloc.skeleton.prepare_transient_model`
+            keeping every junction): pipes shorter than this are lengthened to it, so TSNet's
+            step is at least ``min_pipe_length / (2 wave_speed)``. The burst pipe and meters
+            keep their original names.
 
     Raises:
         ConfigError: a parameter is out of range (the message names it and its value).
@@ -119,6 +124,7 @@ class BurstScenario:
     engine: str = "PDD"
     time_step: float | None = None
     friction: str = "steady"
+    min_pipe_length: float | None = None
 
     def __post_init__(self) -> None:
         def put(name: str, value: Any) -> None:
@@ -156,17 +162,23 @@ class BurstScenario:
             put("time_step", _number("time_step", self.time_step))
             if self.time_step <= 0:  # type: ignore[operator]
                 raise ConfigError(f"time_step must be > 0 s, got {self.time_step}")
+        if self.min_pipe_length is not None:
+            put("min_pipe_length", _number("min_pipe_length", self.min_pipe_length))
+            if self.min_pipe_length <= 0:  # type: ignore[operator]
+                raise ConfigError(f"min_pipe_length must be > 0 m, got {self.min_pipe_length}")
 
     def parameters(self) -> dict[str, Any]:
         """Every field except the network path (the cache hashes the file's bytes instead).
 
-        The default friction model is left out, so scenarios cached before the field existed
-        keep their keys.
+        The default friction model and ``min_pipe_length=None`` are left out, so scenarios
+        cached before those fields existed keep their keys.
         """
         params = asdict(self)
         del params["network"]
         if params["friction"] == "steady":
             del params["friction"]
+        if params["min_pipe_length"] is None:
+            del params["min_pipe_length"]
         return params
 
     def cache_key(self) -> str:

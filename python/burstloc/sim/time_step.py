@@ -15,7 +15,7 @@ import numpy as np
 from burstloc import network
 from burstloc.exceptions import NetworkError
 from burstloc.sim.scenario import BurstScenario
-from burstloc.sim.tsnet_ready import prepare_for_tsnet
+from burstloc.sim.tsnet_ready import prepare_for_tsnet, transient_model
 
 __all__ = ["capture_time_step", "expected_time_step", "with_capture_time_step"]
 
@@ -23,7 +23,9 @@ __all__ = ["capture_time_step", "expected_time_step", "with_capture_time_step"]
 def expected_time_step(scenario: BurstScenario) -> float:
     """The time step (s) TSNet will use for ``scenario``, without running TSNet.
 
-    TSNet's discretisation is arithmetic on the pipe lengths of the split network: each pipe
+    TSNet's discretisation is arithmetic on the pipe lengths of the split network (of its
+    transient-ready model with ``min_pipe_length``, :func:`~burstloc.sim.tsnet_ready.
+    transient_model`, prepared for TSNet): each pipe
     gets ``N = floor(L / (a dt))`` reaches for the requested step ``dt`` (default: the Courant
     limit ``min L / (2 a)``), and the step becomes ``sum(phi^2) / sum(phi)`` with
     ``phi = L / (a N)`` (its wave-speed adjustment). This reproduces it, so a caller can choose
@@ -33,7 +35,9 @@ def expected_time_step(scenario: BurstScenario) -> float:
         NetworkError: the network or pipe cannot be read.
     """
     wn = network.load_network(scenario.network)
-    split = network.split_pipe(wn, scenario.pipe, scenario.position)
+    network.require_pipe(wn, scenario.pipe)
+    model, pipe, position, _ = transient_model(wn, scenario)
+    split = network.split_pipe(model, pipe, position)
     prepare_for_tsnet(split.network)  # the pipes TSNet will see
     lengths = [float(pipe.length) for _, pipe in split.network.pipes()]
     travel = np.array(lengths) / scenario.wave_speed

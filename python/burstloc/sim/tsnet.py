@@ -33,7 +33,7 @@ from burstloc.sim.cache import DiskCache, file_sha256, package_versions
 from burstloc.sim.scenario import SCHEMA, BurstScenario, ScenarioResult
 from burstloc.sim.steady import check_steady_start
 from burstloc.sim.sweep import SweepReport, sweep
-from burstloc.sim.tsnet_ready import prepare_for_tsnet
+from burstloc.sim.tsnet_ready import prepare_for_tsnet, transient_model
 
 __all__ = [
     "TransientSettings",
@@ -45,6 +45,7 @@ __all__ = [
     "run_transient",
     "simulate_burst",
     "simulate_many",
+    "transient_model",
 ]
 
 
@@ -143,9 +144,10 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
         flows = network.steady_state_flows(wn, scenario.engine)
         graph = network.flow_direction_graph(wn, flows)
         true_start, true_end = network.pipe_endpoints(graph, scenario.pipe)
-        split = network.split_pipe(wn, scenario.pipe, scenario.position)
-        prepared = prepare_for_tsnet(split.network)
         meters = network.junction_names(wn)
+        model, pipe, position, shortened = transient_model(wn, scenario)
+        split = network.split_pipe(model, pipe, position)
+        prepared = prepare_for_tsnet(split.network)
         where = f"pipe {scenario.pipe!r} of {scenario.network}"
 
         def burst(tm: Any) -> None:
@@ -174,6 +176,7 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
         "split_pipes": [split.pipe, split.second_pipe],
         "steady_start": steady.as_metadata(),
         **prepared.as_metadata(),
+        **({} if shortened is None else {"transient_model": shortened.summary()}),
         **run_metadata(dt, steps.size, diag, elapsed),
         "schema": SCHEMA,
     }

@@ -33,9 +33,17 @@ from collections.abc import Collection
 from dataclasses import asdict, dataclass
 from typing import Any
 
+from burstloc import network, skeleton
 from burstloc.network import _fresh_name
+from burstloc.sim.scenario import BurstScenario
 
-__all__ = ["Connector", "TsnetPreparation", "add_connectors", "prepare_for_tsnet"]
+__all__ = [
+    "Connector",
+    "TsnetPreparation",
+    "add_connectors",
+    "prepare_for_tsnet",
+    "transient_model",
+]
 
 
 @dataclass(frozen=True)
@@ -150,3 +158,18 @@ def prepare_for_tsnet(wn: Any, keep: Collection[str] = ()) -> TsnetPreparation:
     (:func:`add_connectors`)."""
     removed = remove_closed_links(wn, keep)
     return TsnetPreparation(removed, add_connectors(wn))
+
+
+def transient_model(
+    wn: Any, scenario: BurstScenario
+) -> tuple[Any, str, float, skeleton.PreparedNetwork | None]:
+    """The model TSNet simulates for ``scenario`` and the burst's pipe and position in it:
+    ``wn`` itself, or with ``scenario.min_pipe_length`` its transient-ready model keeping every
+    junction (:func:`burstloc.skeleton.prepare_transient_model`), and that preparation."""
+    if scenario.min_pipe_length is None:
+        return wn, scenario.pipe, scenario.position, None
+    prepared = skeleton.prepare_transient_model(
+        wn, scenario.min_pipe_length, keep=network.junction_names(wn)
+    )
+    pipe, position = prepared.locate(scenario.pipe, scenario.position)
+    return prepared.network, pipe, position, prepared
