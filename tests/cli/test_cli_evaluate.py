@@ -12,6 +12,7 @@ import pytest
 from burstloc.cli import build_parser, main
 from burstloc.constants import METER_MODELS
 from burstloc.exceptions import ConfigError
+from burstloc.experiments import paper
 from burstloc.experiments.evaluate import DEFAULT_LOCALIZER
 from burstloc.experiments.report import CSV_FIELDS
 from burstloc.experiments.runs import RANKING_LOCALIZATION_INTERVAL, ranking_runs
@@ -112,6 +113,8 @@ def test_evaluate_writes_tables_json_csv_and_plots(tmp_path: Path, capsys) -> No
         (["--time-step", "0", "--pipes", "P4"], "--time-step must be a positive number"),
         (["--time-step", "nan", "--pipes", "P4"], "--time-step must be a positive number"),
         (["--time-step", "-0.1", "--pipes", "P4"], "--time-step must be a positive number"),
+        (["--burst-coeff", "0", "--pipes", "P4"], "--burst-coeff must be a positive number"),
+        (["--burst-coeff", "inf", "--pipes", "P4"], "--burst-coeff must be a positive number"),
     ],
 )
 def test_evaluate_bad_input_exits_2_with_a_clear_message(args, message, capsys) -> None:
@@ -224,3 +227,13 @@ def test_an_explicit_time_step_reaches_the_simulation(tmp_path: Path, capsys) ->
     assert _evaluate_long_pipes(tmp_path, "--time-step", "0.3") == 2
     err = capsys.readouterr().err
     assert "time_step 0.3 s exceeds TSNet's stability limit 0.20833 s for pipe 'B'" in err
+
+
+def test_the_burst_size_reaches_the_simulation_and_the_record(tmp_path: Path) -> None:
+    assert _evaluate_long_pipes(tmp_path, "--burst-coeff", "0.002") == 0
+    doc = json.loads((tmp_path / "r.json").read_text())
+    jsonschema.validate(doc, SCHEMA)
+    assert doc["scenario"]["burst_coeff"] == 0.002  # the parameters the bursts were built with
+    assert _evaluate_long_pipes(tmp_path) == 0
+    default = json.loads((tmp_path / "r.json").read_text())["scenario"]["burst_coeff"]
+    assert default == paper.SCENARIO.burst_coeff == 0.02

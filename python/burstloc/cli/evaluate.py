@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 from dataclasses import replace
 from typing import Any
 
@@ -110,6 +111,15 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "start node, strictly between 0 and 1 (default 0.5, mid-pipe); position errors are "
         "measured against this point",
     )
+    parser.add_argument(
+        "--burst-coeff",
+        type=float,
+        default=None,
+        metavar="C",
+        help="the bursts' final emitter coefficient, m^3/s per m^0.5 of pressure head (default "
+        "0.02, the paper's scenario: the burst draws 0.02 x sqrt(pressure head) m^3/s, which "
+        "can be more than a small network's whole demand)",
+    )
     add_min_pipe_length_option(parser)
     parser.add_argument(
         "--phases", type=int, default=5, metavar="N", help="clock phases per burst (default 5)"
@@ -201,6 +211,10 @@ def run(args: argparse.Namespace) -> int:
         scenario = replace(scenario, position=args.position)
     if args.min_pipe_length is not None:
         scenario = replace(scenario, min_pipe_length=args.min_pipe_length)
+    if args.burst_coeff is not None:
+        if not (math.isfinite(args.burst_coeff) and args.burst_coeff > 0):
+            raise ConfigError(f"--burst-coeff must be a positive number, got {args.burst_coeff}")
+        scenario = replace(scenario, burst_coeff=args.burst_coeff)
     ev = evaluate(
         args.network,
         runs,
