@@ -144,13 +144,16 @@ def sweep(
         if scheduler is not None:
             _run_dask(func, todo, scheduler, done)
         elif (workers or os.cpu_count() or 1) == 1 or len(todo) == 1:
-            for index, item in enumerate(todo):
-                try:
-                    result = func(item)
-                except Exception as exc:
-                    done(index, None, exc)
-                else:
-                    done(index, result, None)
+            with _sigint_remembered() as interrupted:
+                for index, item in enumerate(todo):
+                    try:
+                        result = func(item)
+                    except Exception as exc:
+                        done(index, None, exc)
+                    else:
+                        done(index, result, None)
+                    if interrupted:  # swallowed inside ``func`` (TSNet's bare ``except:``)
+                        raise KeyboardInterrupt
         else:
             _run_processes(func, todo, min(workers or os.cpu_count() or 1, len(todo)), done)
     finally:
@@ -171,6 +174,28 @@ def _ignore_interrupts() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     if hasattr(signal, "pthread_sigmask"):
         signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
+@contextmanager
+def _sigint_remembered() -> Iterator[list[int]]:
+    """Ctrl-C raises ``KeyboardInterrupt`` as usual, and is also recorded in the yielded list,
+    so that the caller can stop after an item whose code swallowed the exception (TSNet's
+    solver catches everything with bare ``except:`` clauses)."""
+    interrupted: list[int] = []
+    main = threading.current_thread() is threading.main_thread()
+    if not main or signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        yield interrupted  # signals are the main thread's; a caller's own handling stands
+        return
+
+    def remember(signum: int, frame: object) -> None:
+        interrupted.append(signum)
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGINT, remember)
+    try:
+        yield interrupted
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 @contextmanager
