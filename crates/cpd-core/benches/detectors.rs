@@ -229,9 +229,57 @@ fn banks(c: &mut Criterion<CpuTime>) {
     group.finish();
 }
 
+/// The banks at 1 024 channels on a batch of 64 fresh rows (512 KiB, just written, as a gateway
+/// hands over the readings it has just received), and the floor of the matrix benchmarks above:
+/// only reading a fresh 16 MiB matrix once (a sum), at the speed of memory.
+fn batches(c: &mut Criterion<CpuTime>) {
+    const CHANNELS: usize = 1024;
+    const ROWS: usize = 64;
+    let mut traces = Traces::new(7_000_000);
+    let mut group = c.benchmark_group("bank_batch");
+    group.sample_size(30);
+    group.throughput(Throughput::Elements((ROWS * CHANNELS) as u64));
+    let mut out: Vec<ChannelAlarm> = Vec::with_capacity(CHANNELS);
+    let cfg = CusumConfig::new(CUSUM_THRESHOLD, CUSUM_DRIFT).unwrap();
+    let mut bank = CusumBank::new(CHANNELS, cfg).unwrap();
+    group.bench_function(BenchmarkId::new("cusum_step_many", CHANNELS), |b| {
+        b.iter_batched_ref(
+            || traces.matrix(ROWS, CHANNELS),
+            |m| {
+                out.clear();
+                bank.step_many(black_box(m), &mut out).unwrap();
+                out.len()
+            },
+            BatchSize::PerIteration,
+        )
+    });
+    let mut bank = ShewhartBank::new(CHANNELS, shewhart_config(50)).unwrap();
+    group.bench_function(BenchmarkId::new("shewhart_w50_step_many", CHANNELS), |b| {
+        b.iter_batched_ref(
+            || traces.matrix(ROWS, CHANNELS),
+            |m| {
+                out.clear();
+                bank.step_many(black_box(m), &mut out).unwrap();
+                out.len()
+            },
+            BatchSize::PerIteration,
+        )
+    });
+    let steps = bank_steps(CHANNELS);
+    group.throughput(Throughput::Elements((steps * CHANNELS) as u64));
+    group.bench_function(BenchmarkId::new("read_matrix_only", CHANNELS), |b| {
+        b.iter_batched_ref(
+            || traces.matrix(steps, CHANNELS),
+            |m| black_box(&*m).iter().fold(0u64, |a, x| a ^ x.to_bits()),
+            BatchSize::LargeInput,
+        )
+    });
+    group.finish();
+}
+
 criterion_group! {
     name = benches;
     config = config();
-    targets = single_channel, banks, replayed
+    targets = single_channel, banks, batches, replayed
 }
 criterion_main!(benches);

@@ -6,6 +6,7 @@
 //! detectors. Channels that alarm are handled afterwards on a rare slow path.
 
 mod cusum;
+mod cusum_resident;
 mod cusum_tiles;
 mod shewhart;
 
