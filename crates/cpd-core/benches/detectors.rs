@@ -16,10 +16,12 @@
 
 use std::hint::black_box;
 
-use cpd_core::{ChannelAlarm, CusumBank, CusumConfig, Shewhart, ShewhartBank};
+use cpd_core::{Bank, ChannelAlarm, CusumBank, CusumConfig, Shewhart, ShewhartBank};
 use cpu_time::ThreadTime;
 use criterion::measurement::{Measurement, ValueFormatter, WallTime};
-use criterion::{criterion_group, criterion_main, BatchSize, BenchmarkId, Criterion, Throughput};
+use criterion::{
+    criterion_group, criterion_main, BatchSize, BenchmarkGroup, BenchmarkId, Criterion, Throughput,
+};
 
 #[path = "common/traces.rs"]
 mod traces;
@@ -196,20 +198,14 @@ fn banks(c: &mut Criterion<CpuTime>) {
                 )
             });
             // The same fresh matrix in one call: the time-blocked kernel.
-            group.bench_function(
-                BenchmarkId::new(format!("{name}_step_many"), channels),
-                |b| {
-                    b.iter_batched_ref(
-                        || traces.matrix(steps, channels),
-                        |m| {
-                            out.clear();
-                            bank.step_many(black_box(m), &mut out).unwrap();
-                            out.len()
-                        },
-                        BatchSize::LargeInput,
-                    )
-                },
-            );
+            let id = BenchmarkId::new(format!("{name}_step_many"), channels);
+            let mut bank = Bank::from(bank);
+            let input = Input {
+                rows: steps,
+                channels,
+                size: BatchSize::LargeInput,
+            };
+            step_many(&mut group, id, &mut traces, &mut bank, input);
         }
         let mut bank = ShewhartBank::new(channels, shewhart_config(50)).unwrap();
         group.bench_function(BenchmarkId::new("shewhart_w50", channels), |b| {
@@ -229,9 +225,39 @@ fn banks(c: &mut Criterion<CpuTime>) {
     group.finish();
 }
 
+/// The fresh matrices a `step_many` benchmark is fed.
+#[derive(Clone, Copy)]
+struct Input {
+    rows: usize,
+    channels: usize,
+    size: BatchSize,
+}
+
+/// Times `bank.step_many` on a fresh `input.rows x input.channels` matrix per iteration.
+fn step_many(
+    group: &mut BenchmarkGroup<'_, CpuTime>,
+    id: BenchmarkId,
+    traces: &mut Traces,
+    bank: &mut Bank,
+    input: Input,
+) {
+    let mut out: Vec<ChannelAlarm> = Vec::with_capacity(input.channels);
+    group.bench_function(id, |b| {
+        b.iter_batched_ref(
+            || traces.matrix(input.rows, input.channels),
+            |m| {
+                out.clear();
+                bank.step_many(black_box(m), &mut out).unwrap();
+                out.len()
+            },
+            input.size,
+        )
+    });
+}
+
 /// The banks at 1 024 channels on a batch of 64 fresh rows (512 KiB, just written, as a gateway
 /// hands over the readings it has just received), and the floor of the matrix benchmarks above:
-/// only reading a fresh 16 MiB matrix once (a sum), at the speed of memory.
+/// only reading a fresh 16 MiB matrix once (an XOR of its bits), at the speed of memory.
 fn batches(c: &mut Criterion<CpuTime>) {
     const CHANNELS: usize = 1024;
     const ROWS: usize = 64;
@@ -239,32 +265,18 @@ fn batches(c: &mut Criterion<CpuTime>) {
     let mut group = c.benchmark_group("bank_batch");
     group.sample_size(30);
     group.throughput(Throughput::Elements((ROWS * CHANNELS) as u64));
-    let mut out: Vec<ChannelAlarm> = Vec::with_capacity(CHANNELS);
     let cfg = CusumConfig::new(CUSUM_THRESHOLD, CUSUM_DRIFT).unwrap();
-    let mut bank = CusumBank::new(CHANNELS, cfg).unwrap();
-    group.bench_function(BenchmarkId::new("cusum_step_many", CHANNELS), |b| {
-        b.iter_batched_ref(
-            || traces.matrix(ROWS, CHANNELS),
-            |m| {
-                out.clear();
-                bank.step_many(black_box(m), &mut out).unwrap();
-                out.len()
-            },
-            BatchSize::PerIteration,
-        )
-    });
-    let mut bank = ShewhartBank::new(CHANNELS, shewhart_config(50)).unwrap();
-    group.bench_function(BenchmarkId::new("shewhart_w50_step_many", CHANNELS), |b| {
-        b.iter_batched_ref(
-            || traces.matrix(ROWS, CHANNELS),
-            |m| {
-                out.clear();
-                bank.step_many(black_box(m), &mut out).unwrap();
-                out.len()
-            },
-            BatchSize::PerIteration,
-        )
-    });
+    let input = Input {
+        rows: ROWS,
+        channels: CHANNELS,
+        size: BatchSize::PerIteration,
+    };
+    let mut bank = Bank::from(CusumBank::new(CHANNELS, cfg).unwrap());
+    let id = BenchmarkId::new("cusum_step_many", CHANNELS);
+    step_many(&mut group, id, &mut traces, &mut bank, input);
+    let mut bank = Bank::from(ShewhartBank::new(CHANNELS, shewhart_config(50)).unwrap());
+    let id = BenchmarkId::new("shewhart_w50_step_many", CHANNELS);
+    step_many(&mut group, id, &mut traces, &mut bank, input);
     let steps = bank_steps(CHANNELS);
     group.throughput(Throughput::Elements((steps * CHANNELS) as u64));
     group.bench_function(BenchmarkId::new("read_matrix_only", CHANNELS), |b| {
