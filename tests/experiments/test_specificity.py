@@ -44,16 +44,30 @@ def test_a_non_burst_reported_as_a_burst_is_listed() -> None:
     spec = Specificity()
     spec.add("burst", 2.0, Outcome("burst", "p", ("p", "q")), "p", "p")
     spec.add("burst", 2.0, Outcome("unsure", "p", ("p", "q")), "q", "q")
-    spec.add("demand-step", 2.0, Outcome("burst", "p", evidence={"scale": 1.0}), "step", None)
-    spec.add("demand-step", 2.0, Outcome("other"), "other step", None)
-    spec.declared[2.0] = {"demand-step": 0}
+    declared = Outcome("other", reason="declared operation")
+    step = Outcome("burst", "p", evidence={"scale": 1.0}, reason="fits p")
+    spec.add("demand-step", 2.0, step, "step", None, declared=declared)
+    spec.add("demand-step", 2.0, Outcome("other"), "other step", None, declared=step)
+    spec.add("pump-trip", 2.0, Outcome("other", "p", reason="beside the pump"), "trip", None)
     doc = spec.to_json()
-    rows = {r["type"]: r for r in doc["table"]}
-    assert rows["burst"]["burst"] == 1 and rows["burst"]["unsure"] == 1
-    assert rows["demand-step"]["reported_as_burst"] == 0.5
-    assert rows["demand-step"]["reported_as_burst_declared"] == 0.0
+    rows = {(r["type"], r["capture_interval"]): r for r in doc["table"]}
+    assert rows["burst", 2.0]["burst"] == 1 and rows["burst", 2.0]["unsure"] == 1
+    assert rows["demand-step", 2.0]["reported_as_burst"] == 0.5
+    # one of the two steps was still called a burst with its operation declared
+    assert rows["demand-step", 2.0]["reported_as_burst_declared"] == 0.5
+    # no declared run for the pump trip: no declared figure, rather than a made-up 0
+    assert rows["pump-trip", 2.0]["reported_as_burst_declared"] is None
     assert doc["burst_top1"] == {"2.0": 0.5} and doc["burst_top3"] == {"2.0": 1.0}
-    assert [r["event"] for r in doc["false_burst_reports"]] == ["step"]
+    assert doc["false_burst_reports"] == [
+        {"event": "step", "capture_interval": 2.0, "pipe": "p", "scale": 1.0}
+    ]
+    # every event is listed, whatever its answer, with why and its declared answer
+    listed = {e["event"]: e for e in doc["events"]}
+    assert set(listed) == {"step", "other step", "trip"}
+    assert listed["step"]["class"] == "burst" and listed["step"]["reason"] == "fits p"
+    assert listed["step"]["class_declared"] == "other"
+    assert listed["trip"]["class"] == "other" and listed["trip"]["class_declared"] is None
+    assert listed["trip"]["reason"] == "beside the pump" and listed["trip"]["type"] == "pump-trip"
     assert "reported as a burst: step at 2 s" in spec.format_table()
 
 
@@ -74,9 +88,15 @@ def test_evaluate_events_on_the_tiny_network(tiny: Path, tmp_path: Path, capsys)
     assert rows["burst"]["other"] == 0
     # a declared operation explains every demand step
     assert rows["demand-step"]["reported_as_burst_declared"] == 0.0
+    # each step is listed with its answer, and those answers make the table's counts
+    steps = [e for e in spec["events"] if e["type"] == "demand-step"]
+    assert len(steps) == 9 and all(e["class_declared"] in ("other", "quiet") for e in steps)
+    for answer in ("quiet", "burst", "other", "unsure"):
+        assert sum(e["class"] == answer for e in steps) == rows["demand-step"][answer]
     assert json.loads(classifier.read_text())["provenance"]["bursts"] == 5
     # two hours of normal operation (diurnal demand, noise) through the monitor: no burst
     (day,) = spec["normal_operation"]
     assert day["hours"] == 2 and day["capture_interval"] == 2.0
     assert day["burst_reports"] == 0
+    assert day["simulator_warnings"] == []  # the tiny network sets EPANET's required pressure
     assert "as burst" in capsys.readouterr().out

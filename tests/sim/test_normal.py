@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from burstloc._diagnostics import capture_diagnostics
 from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.sim.normal import DIURNAL, normal_day
 
@@ -38,3 +40,22 @@ def test_bad_arguments(tiny: Path) -> None:
         normal_day(tiny, capture_interval=1.0, hours=-1)
     with pytest.raises(NetworkError, match="nowhere"):
         normal_day(tiny, capture_interval=1.0, meters=["nowhere"])
+
+
+def test_what_epanet_warns_is_recorded_not_printed(tiny: Path, tmp_path: Path) -> None:
+    # EPANET's Net1 sets no required pressure: WNTR's default (0.07 m) is below EPANET's lower
+    # limit (0.1 psi there, 0.1 m here), and WNTR warns that it raised it
+    low = tmp_path / "low_required_pressure.inp"
+    text = tiny.read_text()
+    assert "Required Pressure  0.1" in text
+    low.write_text(text.replace("Required Pressure  0.1", "Required Pressure  0.05"))
+    with warnings.catch_warnings(record=True) as shown:
+        warnings.simplefilter("always")
+        _, heads = normal_day(low, capture_interval=60.0, noise_sigma=0.0, hours=1)
+    assert not [w for w in shown if "REQUIRED PRESSURE" in str(w.message)]
+    with capture_diagnostics() as diagnostics:
+        normal_day(low, capture_interval=60.0, noise_sigma=0.0, hours=1)
+    assert any("REQUIRED PRESSURE" in w for w in diagnostics.warnings)
+    # EPANET ran with its 0.1 m, as the tiny network itself asks: the same heads
+    _, same = normal_day(tiny, capture_interval=60.0, noise_sigma=0.0, hours=1)
+    np.testing.assert_allclose(heads, same)

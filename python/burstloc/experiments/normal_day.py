@@ -28,19 +28,22 @@ def normal_operation(
     seed: int = 0,
 ) -> dict[str, Any]:
     """A day of normal operation (:func:`burstloc.sim.normal.normal_day`) through the live
-    monitor with the classifier: how many decisions, how many reported as bursts."""
+    monitor with the classifier: how many decisions, how many reported as bursts, and what
+    the simulator warned (``simulator_warnings``)."""
+    from burstloc._diagnostics import capture_diagnostics
     from burstloc.live.monitor import BurstMonitor
     from burstloc.readings import Step
     from burstloc.sim.normal import normal_day
 
-    times, values = normal_day(
-        network,
-        capture_interval=capture_interval,
-        noise_sigma=noise_sigma,
-        hours=hours,
-        meters=setup.meters,
-        seed=seed,
-    )
+    with capture_diagnostics() as diagnostics:
+        times, values = normal_day(
+            network,
+            capture_interval=capture_interval,
+            noise_sigma=noise_sigma,
+            hours=hours,
+            meters=setup.meters,
+            seed=seed,
+        )
     monitor = BurstMonitor(
         network,
         setup.config,
@@ -58,4 +61,5 @@ def normal_operation(
         "burst_reports": sum(d.is_burst for d in decisions),
         "dismissed": monitor.dismissed,
         "events": [d.to_json()["classification"] for d in decisions],
+        "simulator_warnings": list(diagnostics.warnings),
     }

@@ -244,14 +244,25 @@ class Specificity:
     counts: dict[str, dict[float, dict[str, int]]] = field(default_factory=dict)
     burst_top1: dict[float, int] = field(default_factory=dict)
     burst_top3: dict[float, int] = field(default_factory=dict)
-    reported: list[dict[str, Any]] = field(default_factory=list)
+    events: list[dict[str, Any]] = field(default_factory=list)
     declared: dict[float, dict[str, int]] = field(default_factory=dict)
     classifier: dict[str, Any] = field(default_factory=dict)
     normal: list[dict[str, Any]] = field(default_factory=list)
     missed: list[dict[str, Any]] = field(default_factory=list)
 
-    def add(self, kind: str, ci: float, outcome: Outcome, label: str, truth: str | None) -> None:
-        """Count one outcome; a non-burst reported as a burst is listed with its evidence."""
+    def add(
+        self,
+        kind: str,
+        ci: float,
+        outcome: Outcome,
+        label: str,
+        truth: str | None,
+        declared: Outcome | None = None,
+    ) -> None:
+        """Count one outcome: a burst's (``truth``: its pipe) or an event's (``truth`` None),
+        with ``declared`` the event's outcome when its operation was declared. Every event is
+        listed with its answer, reason and evidence; a burst only when it is not reported as
+        one."""
         row = self.counts.setdefault(kind, {}).setdefault(ci, dict.fromkeys(ANSWERS, 0))
         row[outcome.answer] += 1
         if truth is not None:
@@ -262,10 +273,31 @@ class Specificity:
                     {"pipe": truth, "capture_interval": ci, "class": outcome.answer,
                      "reason": outcome.reason}
                 )  # fmt: skip
-        elif outcome.answer == "burst":
-            self.reported.append(
-                {"event": label, "capture_interval": ci, "pipe": outcome.pipe, **outcome.evidence}
-            )
+            return
+        record = {
+            "event": label,
+            "type": kind,
+            "capture_interval": ci,
+            "class": outcome.answer,
+            "pipe": outcome.pipe,
+            "reason": outcome.reason,
+            "evidence": dict(outcome.evidence),
+            "class_declared": None if declared is None else declared.answer,
+        }
+        self.events.append(record)
+        if declared is not None:
+            counted = self.declared.setdefault(ci, {})
+            counted[kind] = counted.get(kind, 0) + (declared.answer == "burst")
+
+    @property
+    def reported(self) -> list[dict[str, Any]]:
+        """The events reported as bursts: event, capture interval, named pipe and evidence."""
+        return [
+            {"event": e["event"], "capture_interval": e["capture_interval"], "pipe": e["pipe"],
+             **e["evidence"]}
+            for e in self.events
+            if e["class"] == "burst"
+        ]  # fmt: skip
 
     def to_json(self) -> dict[str, Any]:
         """The ``specificity`` block of ``burstloc evaluate --events`` (evaluate_schema.json)."""
@@ -273,6 +305,7 @@ class Specificity:
         for kind, by_ci in self.counts.items():
             for ci, row in sorted(by_ci.items()):
                 n = sum(row.values())
+                declared = self.declared.get(ci, {}).get(kind) if kind != "burst" else None
                 table.append(
                     {
                         "type": kind,
@@ -280,11 +313,7 @@ class Specificity:
                         "scenarios": n,
                         **row,
                         "reported_as_burst": row["burst"] / n,
-                        "reported_as_burst_declared": (
-                            self.declared[ci][kind] / n
-                            if kind != "burst" and ci in self.declared
-                            else None
-                        ),
+                        "reported_as_burst_declared": None if declared is None else declared / n,
                     }
                 )
         bursts = self.counts.get("burst", {})
@@ -297,6 +326,7 @@ class Specificity:
                 str(ci): self.burst_top3[ci] / sum(bursts[ci].values()) for ci in bursts
             },
             "false_burst_reports": self.reported,
+            "events": list(self.events),
             "classifier": dict(self.classifier),
             "normal_operation": list(self.normal),
             "bursts_not_reported": list(self.missed),
@@ -388,12 +418,10 @@ def evaluate_events(
     for ci in capture_intervals:
         for pipe, result in bursts.items():
             out.add("burst", ci, classify_result(result, setup, classifier, ci), pipe, pipe)
-        declared = out.declared.setdefault(ci, {})
         for scenario, result in events:
             outcome = classify_result(result, setup, classifier, ci)
-            out.add(scenario.kind, ci, outcome, scenario.label, None)
             known = classify_result(result, setup, with_operation(classifier, scenario), ci)
-            declared[scenario.kind] = declared.get(scenario.kind, 0) + (known.answer == "burst")
+            out.add(scenario.kind, ci, outcome, scenario.label, None, declared=known)
         if normal_hours > 0:
             out.normal.append(normal_operation(network, setup, config, ci, hours=normal_hours))
     return out, config

@@ -7,6 +7,11 @@ multipliers of a residential day: a night low, a morning and an evening peak; me
 the meters' pressure heads at the capture interval (linear between the hydraulic steps, which
 is what the slow part is: no transient solver is needed) and adds Gaussian sensor noise
 (:class:`burstloc.sim.sensors.SensorModel`). For tests, benchmarks and the monitor's soak.
+
+What EPANET warns (e.g. WNTR raising a required pressure below EPANET's lower limit of 0.1 in
+the file's pressure unit, as for EPANET's Net1, which sets none) is kept out of the terminal,
+as for the steady state (:func:`burstloc.network.steady_state`): a caller's
+:func:`burstloc._diagnostics.capture_diagnostics` records it.
 """
 
 from __future__ import annotations
@@ -20,6 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from burstloc import network
+from burstloc._diagnostics import capture_diagnostics
 from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.sim.sensors import SensorModel
 
@@ -78,7 +84,7 @@ def normal_day(
     wn.options.time.report_timestep = HYDRAULIC_STEP
     wn.options.time.pattern_timestep = 3600
     wn.options.hydraulic.demand_model = "PDD"
-    with tempfile.TemporaryDirectory(prefix="burstloc-eps-") as tmp:
+    with tempfile.TemporaryDirectory(prefix="burstloc-eps-") as tmp, capture_diagnostics():
         sim = wntr.sim.EpanetSimulator(wn)
         results = sim.run_sim(file_prefix=os.path.join(tmp, "normal"))
     pressure = results.node["pressure"]
