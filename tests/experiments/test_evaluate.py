@@ -15,7 +15,7 @@ from burstloc.experiments.evaluate import RunResult, evaluate
 from burstloc.experiments.harness import locate_burst, readings_at_offset
 from burstloc.experiments.runs import RunSpec
 from burstloc.localize.detection import DetectorConfig, Mode
-from conftest import PAPER15
+from conftest import PAPER15, write_tiny
 from synthetic_bursts import small_graph, synthetic
 
 SCHEMA = json.loads((Path(__file__).parents[1] / "evaluate_schema.json").read_text())
@@ -107,6 +107,24 @@ def test_evaluate_short_real_sweep(short_evaluation) -> None:
         assert run["accuracy_phase_min"] <= run["accuracy_phase_mean"]
         assert run["accuracy_phase_mean"] <= run["accuracy_phase_max"]
         assert run["correct"] == sum(p["correct"] for p in run["pipes"])
+
+
+def test_negative_pressure_warning_names_the_burst_point_as_a_user_knows_it(
+    tmp_path: Path,
+) -> None:
+    # A large, instant burst on the tiny network's pipe B: TSNet reports negative pressure at
+    # the junction it inserted on B (named "B_B" inside the simulation) and at J1-J3.
+    runs = [RunSpec(DetectorConfig("cusum", 0.3), 0.2, 5, Mode.WINDOW, "S_C1")]
+    scenario = paper.ScenarioConfig(burst_start=0.2, opening_time=0.0, burst_coeff=0.02)
+    tiny = write_tiny(tmp_path / "tiny.inp")
+    ev = evaluate(tiny, runs, pipes=["B"], phases=1, scenario=scenario, workers=1, progress=False)
+    meta = ev.results["B"].metadata
+    assert meta["burst_node"] in meta["negative_pressure_nodes"]
+    [warning] = [w for w in ev.warnings if "negative pressure" in w]
+    assert warning.startswith("burst on pipe B: negative pressure at ")
+    places = warning.removeprefix("burst on pipe B: negative pressure at ").split(", ")
+    assert "the burst point on pipe B" in places and "J1" in places
+    assert "B_B" not in warning
 
 
 def test_evaluate_rejects_bad_input_clearly(short_evaluation) -> None:

@@ -103,6 +103,10 @@ def test_a_burst_simulation_records_its_connectors(pump_at_branch: Path) -> None
     assert [c["junction"] for c in result.metadata["connectors"]] == ["P1_E"]
     assert result.metadata["steady_start"]["max_movement_m"] < STEADY_TOLERANCE
     assert list(result.junctions) == ["J1", "J2", "J3"]  # the connector junction is no meter
+    # Nodes the simulation added are named as a user knows them; the network's keep their names.
+    assert result.node_label("P1_E") == "the junction added between link P1 and node J1"
+    assert result.node_label(result.metadata["burst_node"]) == "the burst point on pipe C"
+    assert result.node_label("J2") == "J2"
 
 
 def test_a_closed_pipe_is_removed_and_the_start_is_steady(tmp_path: Path) -> None:

@@ -329,7 +329,8 @@ def evaluate(
     for p, r in results.items():
         negative = r.metadata.get("negative_pressure_nodes") or []
         if negative:
-            warnings.append(f"burst on pipe {p}: negative pressure at {', '.join(negative)}")
+            places = ", ".join(r.node_label(node) for node in negative)
+            warnings.append(f"burst on pipe {p}: negative pressure at {places}")
     truth = {p: r.true_endpoints for p, r in results.items()}
     ranked = [spec for spec in runs if spec.localizer != "paper"]
     setup = None

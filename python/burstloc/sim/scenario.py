@@ -221,6 +221,21 @@ class ScenarioResult:
         """The burst pipe's ``(start, end)`` in steady-state flow direction."""
         return str(self.metadata["true_start"]), str(self.metadata["true_end"])
 
+    def node_label(self, node: str) -> str:
+        """What a user calls ``node``, a node of the simulated network (as TSNet's messages
+        name it): the junction the simulation inserted on the burst pipe is "the burst point on
+        pipe <pipe>", a connector junction (:mod:`burstloc.sim.tsnet_ready`) "the junction
+        added between link <link> and node <node>"; the network's own nodes keep their names."""
+        if node == self.metadata.get("burst_node"):
+            return f"the burst point on pipe {self.pipe}"
+        for connector in self.metadata.get("connectors") or ():
+            if node == connector["junction"]:
+                return (
+                    f"the junction added between link {connector['link']} "
+                    f"and node {connector['node']}"
+                )
+        return node
+
     def resample(self, capture_interval: float, phase: float = 0.0) -> ScenarioResult:
         """Return the readings meters would transmit every ``capture_interval`` seconds.
 
