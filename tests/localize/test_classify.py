@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -57,6 +58,28 @@ def test_a_rise_everywhere_is_another_event() -> None:
 
 def test_heads_rising_on_one_side_and_falling_on_the_other_is_another_event() -> None:
     assert classify([1.0, 1.0, -1.0, -1.0]) == "other"
+
+
+def test_the_reason_for_a_split_names_only_what_the_classifier_knows() -> None:
+    def reason(config: ClassifierConfig, first: str) -> str:
+        classifier = EventClassifier(config, SignatureLocalizer(SIGNATURES))
+        kind = classifier.classify(evidence(np.array([1.0, 1.0, -1.0, -1.0]), first))
+        assert kind.label == "other"
+        return kind.reason
+
+    split = "an operation splitting the network (one side rose, the other fell)"
+    # No asset beside the first meter nor on both sides (PU1 is at D only): no valve is named.
+    assert reason(CONFIG, "A") == f"heads rose at C, D and fell at A, B: {split}"
+    # The transient started beside PU1.
+    assert reason(CONFIG, "D") == (
+        f"heads rose at C, D and fell at A, B, the transient starting at D, beside link PU1: "
+        f"{split}"
+    )
+    # V1 joins B (fell) and C (rose): its operation, wherever the transient started.
+    between = replace(CONFIG, asset_nodes={"B": "V1", "C": "V1", "D": "PU1"})
+    assert reason(between, "D") == (
+        "heads rose at C, D and fell at A, B, on either side of link V1: an operation of V1"
+    )
 
 
 def test_a_transient_starting_at_an_asset_node_and_pointing_there_is_another_event() -> None:

@@ -10,7 +10,9 @@ settled) the :class:`EventClassifier` weighs the evidence, in this order:
    (``other``);
 2. **rises**: a burst only lowers heads. Meters whose lasting change is a rise beyond
    ``rise_tolerance`` (m): all of them, a pump start, a valve opening or a falling demand; some,
-   heads rising on one side and falling on the other, a valve operation (``other``);
+   heads rising on one side and falling on the other, an operation splitting the network (a
+   valve or pump between the sides; the reason names one with an end on each side, or else
+   beside the first meter to alarm, when ``asset_nodes`` holds it) (``other``);
 3. **where it started**: the first meter to alarm is an asset's node (a pump's outlet, a valve's
    side) and the lasting drop fits best a pipe that ends there: a pump trip or a valve closure
    (``other``). (At coarse capture intervals many meters alarm on the same reading, and the
@@ -225,6 +227,24 @@ def _first_meter(evidence: BurstEvidence) -> str | None:
     return first.meter
 
 
+def _split_reason(
+    rising: Sequence[str], falling: Sequence[str], first: str | None, assets: Mapping[str, str]
+) -> str:
+    """Why heads rising at some meters and falling at others is another event, naming what is
+    known: the valve or pump (``assets``: junction -> link) with an end on each side, else the
+    one beside the first meter to alarm, else no asset (the network may have no valve)."""
+    heads = f"heads rose at {', '.join(rising[:3])} and fell at {', '.join(falling[:3])}"
+    for asset in dict.fromkeys(assets.values()):
+        ends = {node for node, a in assets.items() if a == asset}
+        if ends & set(rising) and ends & set(falling):
+            return f"{heads}, on either side of link {asset}: an operation of {asset}"
+    splitting = "an operation splitting the network (one side rose, the other fell)"
+    beside = assets.get(first or "")
+    if beside is not None:
+        return f"{heads}, the transient starting at {first}, beside link {beside}: {splitting}"
+    return f"{heads}: {splitting}"
+
+
 class EventClassifier:
     """Classify one alarm's evidence as ``burst``, ``other`` or ``unsure`` (module docstring).
 
@@ -299,10 +319,7 @@ class EventClassifier:
             reason = "heads rose everywhere (a pump start, a valve opening or a demand falling)"
             return Classification("other", reason, evidence_json)
         if f["rising"]:
-            reason = (
-                f"heads rose at {', '.join(f['rising'][:3])} and fell at "
-                f"{', '.join(f['falling'][:3])} (a valve operation)"
-            )
+            reason = _split_reason(f["rising"], f["falling"], f["first_meter"], cfg.asset_nodes)
             return Classification("other", reason, evidence_json)
         first = f["first_meter"] or ""
         asset = cfg.asset_nodes.get(first)
