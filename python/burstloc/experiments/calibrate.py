@@ -29,8 +29,8 @@ so a multiplier of 3 needs ``W >= 11``; with ``N = 10`` a step's first reading s
 ``travel_spread`` is the longest wave travel time between two meters. The signature localizer
 decides ``decision_delay`` = 150 s after the onset (the time budget for a decision on the
 lasting drop); the arrival localizer ``max(median pipe length / wave speed, 2 * dt)`` after the
-first alarm: by then the wave has
-reached both end nodes of the burst pipe, the meters that matter most.
+first alarm: by then the wave has reached both end nodes of the burst pipe, the meters that
+matter most.
 
 **Configuration file.** The result is a :class:`burstloc.localize.config.Calibration` (the stored
 configuration lives in the localize layer, which the live monitor reads without this module):
