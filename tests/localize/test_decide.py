@@ -204,12 +204,14 @@ def test_a_decision_knows_its_first_alarm_and_prints_as_json() -> None:
 
 
 def test_a_late_fused_answer_takes_its_position_from_the_arrivals_at_their_time() -> None:
-    # With a tiny tau the arrivals weigh nothing at 0.05 s: the fused localizer answers at the
-    # signature's time (60 s). The burst is 100 m along p01: m3's wave comes 1.33 s after the
-    # first alarm, after the arrivals' 1 s window; at 60 s it would count as silent (no wave
-    # before 59.9 s) and no point would fit. The position comes from the arrivals at 1 s.
+    # With every pipe crossed in 10 ms the arrivals time none at 0.05 s: the fused localizer
+    # answers at the signature's time (60 s). The burst is 100 m along p01: m3's wave comes
+    # 1.33 s after the first alarm, after the arrivals' 1 s window; at 60 s it would count as
+    # silent (no wave before 59.9 s) and no point would fit. The position comes from the
+    # arrivals at 1 s.
     localizers = _localizers(tau=0.01)
-    assert localizers.fused.weights(0.05)[0] < 0.5
+    localizers.fused.longest_travel = 0.01
+    assert not localizers.fused.resolves(0.05)
     decision, _, _ = _decide("fused", 100.0, MATRIX[0], localizers)
     assert decision.time > 50.0 and decision.pipe == "p01"
     at = decision.position

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from burstloc.exceptions import ConfigError, InputError
+from burstloc.localize.arrival import ArrivalLocalizer, PipeGeometry
 from burstloc.localize.evidence import BurstEvidence, MeterAlarm, RankedPipe, Ranking
 from burstloc.localize.fused import FusedLocalizer, arrival_loglik, signature_loglik
 from line_network import METERS, WAVE, line_arrival, line_signature
@@ -87,3 +88,22 @@ def test_logliks_are_zero_at_the_best_pipe() -> None:
     arr = arrival_loglik(ranking)
     assert arr["a"] == 0.0 and arr["b"] == pytest.approx(-0.004)
     assert signature_loglik(Ranking([])) == {}
+
+
+def test_the_arrivals_are_looked_at_early_while_the_longest_pipe_can_be_timed() -> None:
+    # Pipes of 60, 60 and 3 000 m (median 60 m, 50 ms of wave travel): the median's weight at
+    # 0.2 s is small, but a wave along the 3 km pipe (2.5 s) is timed at 0.2 s and even at 1 s;
+    # at 4 s no pipe is.
+    line = line_arrival()
+    lengths = {"p01": 60.0, "p12": 60.0, "p23": 3000.0}
+    pipes = [PipeGeometry(p.pipe, p.start, p.end, lengths[p.pipe]) for p in line.pipes]
+    distances = {n: np.zeros(len(line.meters)) for n in line.meters}
+    arrival = ArrivalLocalizer(pipes, line.meters, distances, wave_speed=line.wave_speed)
+    fused = FusedLocalizer(arrival, line_signature(np.eye(3, 4) + 0.1))
+    assert fused.weights(0.2)[0] < 0.5
+    assert fused.longest_travel == pytest.approx(3000.0 / line.wave_speed)
+    assert fused.resolves(0.2) and fused.resolves(1.0) and not fused.resolves(4.0)
+    assert fused.decision_delay(0.2) == arrival.decision_delay
+    assert fused.decision_delay(4.0) == 60.0
+    with pytest.raises(InputError):
+        fused.resolves(0.0)

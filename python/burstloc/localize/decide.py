@@ -7,13 +7,13 @@ live caller holding the readings so far):
   ``arrival_decision_delay`` (about one wave travel time along a pipe);
 * ``signature``: at the onset (the earliest alarm start, the last reading before the change) plus
   the calibrated ``decision_delay`` (150 s: the lasting drop needs settled readings);
-* ``fused``: where arrivals carry most of the weight (``w_arrival >= 0.5``, short capture
-  intervals) it first ranks at the arrival time. If that ranking is *decisive* (the runner-up's
-  log-likelihood is at least :attr:`burstloc.localize.fused.FusedLocalizer.margin` below the best)
-  that is
-  the answer; otherwise (a burst near a junction fits several of the junction's pipes almost
-  equally well in time) it waits for the signature's decision time and answers with both. At
-  coarse intervals it answers at the signature's time.
+* ``fused``: where the capture interval is short enough for the arrivals to time the wave along
+  some candidate pipe (:meth:`burstloc.localize.fused.FusedLocalizer.resolves`) it first ranks
+  at the arrival time. If that ranking is *decisive* (the runner-up's log-likelihood is at least
+  :attr:`burstloc.localize.fused.FusedLocalizer.margin` below the best) that is the answer;
+  otherwise (a burst near a junction fits several of the junction's pipes almost equally well in
+  time) it waits for the signature's decision time and answers with both. At coarse intervals
+  it answers at the signature's time.
 
 Every answer of the arrival and fused localizers carries the burst's position on the named pipe
 (metres from its flow-direction start node, with an interval) from the arrival fit at the arrival
@@ -154,9 +154,7 @@ def _arrival_first(
     localizer: str, calibration: IntervalCalibration, fused: FusedLocalizer | None
 ) -> bool:
     return localizer == "arrival" or (
-        localizer == "fused"
-        and fused is not None
-        and fused.weights(calibration.capture_interval)[0] >= 0.5
+        localizer == "fused" and fused is not None and fused.resolves(calibration.capture_interval)
     )
 
 
@@ -169,7 +167,7 @@ def decision_time(
 ) -> float:
     """When a ranking localizer first looks at the evidence (no truth used).
 
-    ``arrival`` (and ``fused`` while its arrival weight is at least 0.5): the first alarm's
+    ``arrival`` (and ``fused`` where the arrivals can resolve some pipe): the first alarm's
     reading time plus ``calibration.arrival_decision_delay``. ``signature`` (and ``fused``
     otherwise): the onset plus ``calibration.decision_delay``, so the answer comes within that
     delay of the burst itself. (:func:`rank_alarms` may defer a fused answer; see the module.)

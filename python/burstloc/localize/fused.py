@@ -20,15 +20,17 @@ Each localizer's ranking is turned into a log-likelihood-like score that is 0 fo
 The fused score is ``w_arrival * L_arrival + w_signature * L_signature``.
 
 When the localizer answers: signatures need ``settle`` seconds of settled readings, so the fused
-localizer answers at the arrival localizer's (short) delay when arrivals carry most of the weight
-(``w_arrival >= 0.5``) and they are *decisive* (:meth:`FusedLocalizer.decisive`: the runner-up is
-at least ``margin`` log-likelihood units behind, by default the quantisation noise of the RMS
-arrival misfit, :func:`quantisation_margin`), and at the signature localizer's delay otherwise,
-with the arrival ranking taken at the early time (:func:`burstloc.localize.decide.rank_alarms`). A
-burst
-near a junction fits every pipe at that junction about equally well in time; the lasting drop then
-tells them apart. Numpy only; on the live path.
-"""
+localizer first looks at the arrivals at the arrival localizer's (short) delay where they can time
+the wave along some candidate pipe (:meth:`FusedLocalizer.resolves`: ``exp(-dt / T) >= 0.5`` with
+``T`` the wave's travel time along the longest pipe; networks mix pipes of 30 m and 3 km, and
+with meters at most junctions the arrivals tell even a short pipe from its neighbours by the
+order in which the meters beyond its ends hear the wave). It answers then if they are *decisive*
+(:meth:`FusedLocalizer.decisive`: the runner-up is at least ``margin`` log-likelihood units
+behind, by default the quantisation noise of the RMS arrival misfit,
+:func:`quantisation_margin`), and at the signature localizer's delay otherwise, with the arrival
+ranking taken at the early time (:func:`burstloc.localize.decide.rank_alarms`). A burst near a
+junction fits every pipe at that junction about equally well in time; the lasting drop then tells
+them apart. Numpy only; on the live path."""
 
 from __future__ import annotations
 
@@ -113,6 +115,8 @@ class FusedLocalizer:
         self.arrival = arrival
         self.signature = signature
         self.tau = float(tau)
+        self.longest_travel = max(p.length for p in arrival.pipes) / arrival.wave_speed
+        """Wave travel time (s) along the arrival localizer's longest pipe."""
 
     def weights(self, capture_interval: float) -> tuple[float, float]:
         """``(w_arrival, w_signature)`` at a capture interval (s)."""
@@ -121,10 +125,19 @@ class FusedLocalizer:
         w_arrival = math.exp(-capture_interval / self.tau)
         return w_arrival, 1.0 - w_arrival
 
+    def resolves(self, capture_interval: float) -> bool:
+        """Whether arrivals captured every ``capture_interval`` s can time the wave along the
+        longest candidate pipe (``exp(-dt / travel) >= 0.5``): the condition for looking at them
+        early."""
+        if not (math.isfinite(capture_interval) and capture_interval > 0):
+            raise InputError(f"capture_interval must be > 0, got {capture_interval}")
+        return math.exp(-capture_interval / self.longest_travel) >= 0.5
+
     def decision_delay(self, capture_interval: float) -> float:
-        """Seconds after the onset at which the fused localizer answers at this interval."""
-        w_arrival, _ = self.weights(capture_interval)
-        if w_arrival >= 0.5:
+        """Seconds after the first alarm (arrivals) or the onset (signatures) at which the fused
+        localizer first looks at the evidence at this interval: the arrival localizer's delay
+        where the arrivals can resolve some pipe (:meth:`resolves`), else the signature's."""
+        if self.resolves(capture_interval):
             return self.arrival.decision_delay
         return self.signature.decision_delay
 
