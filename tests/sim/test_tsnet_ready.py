@@ -14,6 +14,7 @@ import pytest
 
 from burstloc import network
 from burstloc._diagnostics import capture_diagnostics
+from burstloc.exceptions import SimulationError
 from burstloc.sim.scenario import BurstScenario
 from burstloc.sim.steady import STEADY_TOLERANCE, steady_start
 from burstloc.sim.time_step import expected_time_step
@@ -221,14 +222,16 @@ def test_a_supply_junction_becomes_a_fixed_inflow_with_the_same_steady_state(
     assert prepare_for_tsnet(kept, keep=("S",)).supply_boundaries == []
 
 
-def _burst_pressures(path: Path, prepare: Callable[[Any], object]) -> tuple[Any, list[str]]:
-    """Pressure heads (T, 4) of a 20 s TSNet run with a burst mid-P3 from 1 s (coefficient
-    0.002, about 13 L/s), after ``prepare(network)``, and the junctions TSNet reported at
-    negative pressure."""
+def _burst_pressures(
+    path: Path, prepare: Callable[[Any], object], also: tuple[str, ...] = ()
+) -> tuple[Any, list[str]]:
+    """Pressure heads (T, M) of the junctions and the nodes ``also`` in a 20 s TSNet run with a
+    burst mid-P3 from 1 s (coefficient 0.002, about 13 L/s), after ``prepare(network)``, and
+    the junctions TSNet reported at negative pressure."""
     source = os.path.abspath(path)
     with isolated_run() as tmp, capture_diagnostics() as diag:
         wn = network.load_network(source)
-        meters = network.junction_names(wn)
+        meters = [*network.junction_names(wn), *also]
         split = network.split_pipe(wn, "P3", 0.5)
         prepare(split.network)
         settings = TransientSettings(1200.0, 20.0, None, "PDD", "steady")
@@ -271,3 +274,60 @@ def test_a_burst_simulation_records_its_supplies(supply: Path) -> None:
     result = simulate_burst(BurstScenario(supply, "P3", burst_start=1.0, duration=2.0))
     assert [s["junction"] for s in result.metadata["supply_boundaries"]] == ["S"]
     assert list(result.junctions) == ["S", "J1", "J2", "J3"]  # the source is no meter
+
+
+#: A reservoir R feeds J1; the tank T is joined by two pipes (P4, P5), which TSNet 0.3.1 solves
+#: as a junction with a pressure-dependent demand instead of a fixed head.
+TANK_AT_BRANCH_INP = """\
+[JUNCTIONS]
+ J1  5   10
+ J2  8   10
+ J3  6    5
+
+[RESERVOIRS]
+ R  60
+
+[TANKS]
+ T   40  10  0  20  15  0
+
+[PIPES]
+ P1  R   J1  600  300  100  0  Open
+ P2  J1  J2  400  250  100  0  Open
+ P3  J2  J3  300  200  100  0  Open
+ P4  J1  T   500  200  100  0  Open
+ P5  J3  T   200  300  100  0  Open
+
+[OPTIONS]
+ Units  LPS
+ Headloss  H-W
+ Required Pressure  0.1
+
+[END]
+"""
+
+
+def test_a_tank_at_a_branch_gets_a_connector_and_holds_its_head(tmp_path: Path) -> None:
+    path = tmp_path / "tank_at_branch.inp"
+    path.write_text(TANK_AT_BRANCH_INP, encoding="utf-8")
+    wn = network.load_network(path)
+    assert add_connectors(wn) == [Connector("T", "T", "T_C", "T_CP", 200.0, 0.3)]
+    assert sorted(wn.get_links_for_node("T_C")) == ["P4", "P5", "T_CP"]
+    assert wn.get_links_for_node("T") == ["T_CP"]
+    assert wn.get_node("T_C").elevation == wn.get_node("T").elevation
+    # as TSNet has it, the 15 m wide tank's level falls by metres within seconds
+    heads, _ = _burst_pressures(path, lambda wn: None, also=("T",))
+    assert abs(heads[:, -1] - heads[0, -1]).max() > 1.0
+    heads, _ = _burst_pressures(path, prepare_for_tsnet, also=("T",))
+    assert abs(heads[:, -1] - heads[0, -1]).max() < 1e-6
+
+
+def test_a_reservoir_at_a_branch_gets_a_connector_and_runs(tmp_path: Path) -> None:
+    path = tmp_path / "reservoir_at_branch.inp"
+    text = TANK_AT_BRANCH_INP.replace(" P5  J3", " P6  R   J2  700  200  100  0  Open\n P5  J3")
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(SimulationError, match="'Reservoir' object has no attribute 'elevation'"):
+        _burst_pressures(path, lambda wn: None)
+    wn = network.load_network(path)
+    assert [(c.link, c.node) for c in prepare_for_tsnet(wn).connectors] == [("T", "T"), ("R", "R")]
+    assert wn.get_node("R_C").elevation == 5.0  # J1, the lower of R's neighbours
+    assert _pre_event_movement(path, prepare_for_tsnet) < STEADY_TOLERANCE

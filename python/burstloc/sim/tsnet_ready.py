@@ -26,6 +26,15 @@ state is recomputed with it, so the transient starts steady. Reservoirs and tank
 or valve's end need nothing. The meters stay the original junctions; the simulation's metadata
 lists the connectors (``connectors``) and the removed links (``removed_closed_links``).
 
+TSNet holds a tank's or reservoir's head only where it ends a single pipe (``rev_end``); one
+joined by several links it solves as a junction (``add_leakage``): a tank then takes a
+pressure-dependent "demand", its EPANET net inflow scaled by the square root of its depth (the
+head of a 15 m wide tank moved 6.3 m within 9 s of a small network's burst), and a reservoir, which
+has no elevation, stops TSNet ("'Reservoir' object has no attribute 'elevation'").
+:func:`add_connectors` gives such a tank or reservoir one connector pipe first: its links move
+to a new junction (the tank's elevation; a reservoir's lowest neighbour's) at the connector's
+far end. (No network shipped or fetched has one.)
+
 A supply junction (a negative demand at the start: water entering, as Net2's pump station at
 junction 1) is, for EPANET, a fixed inflow. TSNet 0.3.1 scales every junction's demand with the
 square root of its pressure during the transient (``Q = k sqrt(p)``, ``k`` from the steady
@@ -68,7 +77,8 @@ __all__ = [
 
 @dataclass(frozen=True)
 class Connector:
-    """A connector pipe: ``link`` (a pump or valve) now ends at ``junction`` instead of
+    """A connector pipe: ``link`` (a pump or valve; or, where ``node`` is a tank or reservoir,
+    ``link`` is ``node`` and stands for all its links) now ends at ``junction`` instead of
     ``node``, and ``pipe`` (``length`` m, ``diameter`` m) joins ``junction`` to ``node``."""
 
     link: str
@@ -99,40 +109,71 @@ def _template(wn: Any, node_name: str) -> Any:
     return max(pool, key=lambda pipe: pipe.diameter)
 
 
+def _elevation(wn: Any, node_name: str) -> float:
+    """A node's elevation; a reservoir's (it has none): the lowest of its neighbours'."""
+    node = wn.get_node(node_name)
+    if node.node_type != "Reservoir":
+        return float(node.elevation)
+    ends: set[str] = set()
+    for name in wn.get_links_for_node(node_name):
+        link = wn.get_link(name)
+        ends.update((link.start_node_name, link.end_node_name))
+    levels = [float(wn.get_node(n).elevation) for n in ends if hasattr(wn.get_node(n), "elevation")]
+    return min(levels, default=0.0)
+
+
+def _connect(wn: Any, node_name: str, moved: list[str], name: str, length: float) -> Connector:
+    """Move the ends of the links ``moved`` at ``node_name`` to a new junction (``name``, no
+    demand) joined to the node by a connector pipe (``length``, the widest pipe at the node)."""
+    node = wn.get_node(node_name)
+    template = _template(wn, node_name)
+    junction = _fresh_name(name, set(wn.node_name_list), "CJ")
+    pipe = _fresh_name(f"{name}P", set(wn.link_name_list), "CP")
+    wn.add_junction(
+        junction,
+        base_demand=0.0,
+        elevation=_elevation(wn, node_name),
+        coordinates=node.coordinates,
+    )
+    starts = []
+    for link_name in moved:
+        link = wn.get_link(link_name)
+        for side in ("start", "end"):
+            if getattr(link, f"{side}_node_name") == node_name:
+                setattr(link, f"{side}_node", wn.get_node(junction))
+                starts.append(side == "start")
+    start, end = (node_name, junction) if all(starts) else (junction, node_name)
+    wn.add_pipe(
+        pipe,
+        start,
+        end,
+        length=length,
+        diameter=template.diameter,
+        roughness=template.roughness,
+        minor_loss=0.0,
+    )
+    link = moved[0] if len(moved) == 1 else node_name
+    return Connector(link, node_name, junction, pipe, length, float(template.diameter))
+
+
 def add_connectors(wn: Any, edges: Collection[str] = ()) -> list[Connector]:
-    """Add a connector pipe wherever a pump or valve of ``wn`` (changed in place) does not meet
-    a single pipe at a junction end, except at the junctions ``edges`` (a supply's source, the
-    network's edge on purpose); return what was added (empty: nothing needed)."""
+    """Add a connector pipe wherever a tank or reservoir of ``wn`` (changed in place) is joined
+    by more than one link (its links then meet at the connector's far end), then wherever a pump
+    or valve does not meet a single pipe at a junction end, except at the junctions ``edges`` (a
+    supply's source, the network's edge on purpose); return what was added (empty: nothing
+    needed)."""
     length = min(float(pipe.length) for _, pipe in wn.pipes())
     added: list[Connector] = []
-    links = [name for name, _ in wn.pumps()] + [name for name, _ in wn.valves()]
-    for link_name in links:
+    for name in [*wn.tank_name_list, *wn.reservoir_name_list]:
+        links = list(wn.get_links_for_node(name))
+        if len(links) > 1:
+            added.append(_connect(wn, name, links, f"{name}_C", length))
+    for link_name in [name for name, _ in wn.pumps()] + [name for name, _ in wn.valves()]:
         for side in ("start", "end"):
-            link = wn.get_link(link_name)
-            node_name = getattr(link, f"{side}_node_name")
-            if not _needs_connector(wn, link_name, node_name, edges):
-                continue
-            node = wn.get_node(node_name)
-            template = _template(wn, node_name)
-            junction = _fresh_name(f"{link_name}_{side[0].upper()}", set(wn.node_name_list), "CJ")
-            pipe = _fresh_name(f"{link_name}_{side[0].upper()}P", set(wn.link_name_list), "CP")
-            wn.add_junction(
-                junction, base_demand=0.0, elevation=node.elevation, coordinates=node.coordinates
-            )
-            setattr(link, f"{side}_node", wn.get_node(junction))
-            start, end = (node_name, junction) if side == "start" else (junction, node_name)
-            wn.add_pipe(
-                pipe,
-                start,
-                end,
-                length=length,
-                diameter=template.diameter,
-                roughness=template.roughness,
-                minor_loss=0.0,
-            )
-            added.append(
-                Connector(link_name, node_name, junction, pipe, length, float(template.diameter))
-            )
+            node_name = getattr(wn.get_link(link_name), f"{side}_node_name")
+            if _needs_connector(wn, link_name, node_name, edges):
+                name = f"{link_name}_{side[0].upper()}"
+                added.append(_connect(wn, node_name, [link_name], name, length))
     return added
 
 
