@@ -8,9 +8,9 @@ TSNet's time step to the network's shortest pipe) at ``--onset`` s, simulated ``
 beyond it; printed as a Markdown table row:
 
 * the network's junctions, pipes, pumps / valves / tanks / reservoirs and shortest pipe;
-* what :mod:`burstloc.sim.tsnet_ready` changes (closed pipes and pumps removed, connector pipes for
-  pumps and valves at a branch), and the largest change it makes to a junction's steady head
-  (EPANET, pressure-driven);
+* what :mod:`burstloc.sim.tsnet_ready` changes (closed pipes and pumps removed, supply junctions
+  made fixed inflows, connector pipes for pumps and valves at a branch), and the largest change
+  it makes to a junction's steady head (EPANET, pressure-driven);
 * TSNet's time step (:func:`burstloc.sim.time_step.expected_time_step`, before running);
 * the steady-start check (:mod:`burstloc.sim.steady`): the largest movement of a junction's
   pressure head before the onset, where and when; or the error that stopped the run;
@@ -49,6 +49,7 @@ def describe(path: Path) -> dict[str, Any]:
     return {
         "connectors": "; ".join(
             [f"closed {p} removed" for p in prepared.removed_closed_links]
+            + [f"supply {s.junction} a fixed inflow" for s in prepared.supply_boundaries]
             + [f"{c.link} at {c.node}" for c in prepared.connectors]
         )
         or "none",

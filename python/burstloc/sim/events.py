@@ -61,8 +61,9 @@ EVENT_KINDS = {
     "demand-step": "junction",
 }
 
-#: Cache namespace; bump when a change to this module changes what an event simulates.
-SCHEMA = "event-scenario/1"
+#: Cache namespace; bump when a change changes what an event simulates (2: supply junctions
+#: are fixed inflows, :func:`burstloc.sim.tsnet_ready.add_supply_boundaries`).
+SCHEMA = "event-scenario/2"
 
 #: TSNet's closure constant ``m``: the opening changes linearly in time.
 _LINEAR = 1.0

@@ -63,8 +63,9 @@ DEFAULT_OPENING_TIME = 1.0
 DEFAULT_BURST_COEFF = 0.01
 
 
-#: Cache namespace; bump when a change to this module changes what a scenario simulates.
-SCHEMA = "burst-scenario/1"
+#: Cache namespace; bump when a change changes what a scenario simulates (2: supply junctions
+#: are fixed inflows, :func:`burstloc.sim.tsnet_ready.add_supply_boundaries`).
+SCHEMA = "burst-scenario/2"
 
 
 _ENGINES = ("PDD", "DD")

@@ -25,6 +25,32 @@ widest pipe at the node (diameter and roughness), so its head loss is small; EPA
 state is recomputed with it, so the transient starts steady. Reservoirs and tanks at a pump's
 or valve's end need nothing. The meters stay the original junctions; the simulation's metadata
 lists the connectors (``connectors``) and the removed links (``removed_closed_links``).
+
+TSNet holds a tank's or reservoir's head only where it ends a single pipe (``rev_end``); one
+joined by several links it solves as a junction (``add_leakage``): a tank then takes a
+pressure-dependent "demand", its EPANET net inflow scaled by the square root of its depth (the
+head of a 15 m wide tank moved 6.3 m within 9 s of a small network's burst), and a reservoir, which
+has no elevation, stops TSNet ("'Reservoir' object has no attribute 'elevation'").
+:func:`add_connectors` gives such a tank or reservoir one connector pipe first: its links move
+to a new junction (the tank's elevation; a reservoir's lowest neighbour's) at the connector's
+far end. (No network shipped or fetched has one.)
+
+A supply junction (a negative demand at the start: water entering, as Net2's pump station at
+junction 1) is, for EPANET, a fixed inflow. TSNet 0.3.1 scales every junction's demand with the
+square root of its pressure during the transient (``Q = k sqrt(p)``, ``k`` from the steady
+state), a negative ``k`` included: the inflow then falls as the pressure falls, a negative
+resistance that reflects every pressure wave reaching it *amplified* (by ``(R + B) / (R - B)``,
+``R = 2 sqrt(p) / |k|``, ``B = a / (g A)`` the pipe's impedance; 2.6 at Net2's junction 1). Any
+burst then grows without bound: on Net2 junction 1's pressure fell until TSNet's dead-end
+equation had no real root ("no real solution (dead end)"), after which TSNet holds its head
+constant, downstream heads swung by over 100 m and most junctions were reported at negative
+pressure. :func:`add_supply_boundaries` (called by :func:`prepare_for_tsnet`) gives TSNet
+EPANET's meaning instead: the demands move to a new junction (same elevation) joined to the
+supply junction by an open valve (TCV, no loss, as wide as the widest pipe there). TSNet takes
+a valve with nothing beyond it as the network's edge and holds its steady flow (``valve_end``):
+a fixed inflow. The supply junction stays a meter (its head is what is measured), EPANET's
+steady state is unchanged (the valve loses no head), and the metadata lists the supplies
+(``supply_boundaries``).
 """
 
 from __future__ import annotations
@@ -39,16 +65,20 @@ from burstloc.sim.scenario import BurstScenario
 
 __all__ = [
     "Connector",
+    "SupplyBoundary",
     "TsnetPreparation",
     "add_connectors",
+    "add_supply_boundaries",
     "prepare_for_tsnet",
+    "supply_junctions",
     "transient_model",
 ]
 
 
 @dataclass(frozen=True)
 class Connector:
-    """A connector pipe: ``link`` (a pump or valve) now ends at ``junction`` instead of
+    """A connector pipe: ``link`` (a pump or valve; or, where ``node`` is a tank or reservoir,
+    ``link`` is ``node`` and stands for all its links) now ends at ``junction`` instead of
     ``node``, and ``pipe`` (``length`` m, ``diameter`` m) joins ``junction`` to ``node``."""
 
     link: str
@@ -63,10 +93,10 @@ class Connector:
         return asdict(self)
 
 
-def _needs_connector(wn: Any, link_name: str, node_name: str) -> bool:
+def _needs_connector(wn: Any, link_name: str, node_name: str, edges: Collection[str]) -> bool:
     node = wn.get_node(node_name)
-    if node.node_type != "Junction":
-        return False  # a reservoir or tank is a boundary TSNet handles
+    if node.node_type != "Junction" or node_name in edges:
+        return False  # a reservoir, a tank or a supply's source is a boundary TSNet handles
     others = [name for name in wn.get_links_for_node(node_name) if name != link_name]
     return len(others) != 1 or wn.get_link(others[0]).link_type != "Pipe"
 
@@ -79,54 +109,150 @@ def _template(wn: Any, node_name: str) -> Any:
     return max(pool, key=lambda pipe: pipe.diameter)
 
 
-def add_connectors(wn: Any) -> list[Connector]:
-    """Add a connector pipe wherever a pump or valve of ``wn`` (changed in place) does not meet
-    a single pipe at a junction end; return what was added (empty: nothing needed)."""
+def _elevation(wn: Any, node_name: str) -> float:
+    """A node's elevation; a reservoir's (it has none): the lowest of its neighbours'."""
+    node = wn.get_node(node_name)
+    if node.node_type != "Reservoir":
+        return float(node.elevation)
+    ends: set[str] = set()
+    for name in wn.get_links_for_node(node_name):
+        link = wn.get_link(name)
+        ends.update((link.start_node_name, link.end_node_name))
+    levels = [float(wn.get_node(n).elevation) for n in ends if hasattr(wn.get_node(n), "elevation")]
+    return min(levels, default=0.0)
+
+
+def _connect(wn: Any, node_name: str, moved: list[str], name: str, length: float) -> Connector:
+    """Move the ends of the links ``moved`` at ``node_name`` to a new junction (``name``, no
+    demand) joined to the node by a connector pipe (``length``, the widest pipe at the node)."""
+    node = wn.get_node(node_name)
+    template = _template(wn, node_name)
+    junction = _fresh_name(name, set(wn.node_name_list), "CJ")
+    pipe = _fresh_name(f"{name}P", set(wn.link_name_list), "CP")
+    wn.add_junction(
+        junction,
+        base_demand=0.0,
+        elevation=_elevation(wn, node_name),
+        coordinates=node.coordinates,
+    )
+    starts = []
+    for link_name in moved:
+        link = wn.get_link(link_name)
+        for side in ("start", "end"):
+            if getattr(link, f"{side}_node_name") == node_name:
+                setattr(link, f"{side}_node", wn.get_node(junction))
+                starts.append(side == "start")
+    start, end = (node_name, junction) if all(starts) else (junction, node_name)
+    wn.add_pipe(
+        pipe,
+        start,
+        end,
+        length=length,
+        diameter=template.diameter,
+        roughness=template.roughness,
+        minor_loss=0.0,
+    )
+    link = moved[0] if len(moved) == 1 else node_name
+    return Connector(link, node_name, junction, pipe, length, float(template.diameter))
+
+
+def add_connectors(wn: Any, edges: Collection[str] = ()) -> list[Connector]:
+    """Add a connector pipe wherever a tank or reservoir of ``wn`` (changed in place) is joined
+    by more than one link (its links then meet at the connector's far end), then wherever a pump
+    or valve does not meet a single pipe at a junction end, except at the junctions ``edges`` (a
+    supply's source, the network's edge on purpose); return what was added (empty: nothing
+    needed)."""
     length = min(float(pipe.length) for _, pipe in wn.pipes())
     added: list[Connector] = []
-    links = [name for name, _ in wn.pumps()] + [name for name, _ in wn.valves()]
-    for link_name in links:
+    for name in [*wn.tank_name_list, *wn.reservoir_name_list]:
+        links = list(wn.get_links_for_node(name))
+        if len(links) > 1:
+            added.append(_connect(wn, name, links, f"{name}_C", length))
+    for link_name in [name for name, _ in wn.pumps()] + [name for name, _ in wn.valves()]:
         for side in ("start", "end"):
-            link = wn.get_link(link_name)
-            node_name = getattr(link, f"{side}_node_name")
-            if not _needs_connector(wn, link_name, node_name):
-                continue
-            node = wn.get_node(node_name)
-            template = _template(wn, node_name)
-            junction = _fresh_name(f"{link_name}_{side[0].upper()}", set(wn.node_name_list), "CJ")
-            pipe = _fresh_name(f"{link_name}_{side[0].upper()}P", set(wn.link_name_list), "CP")
-            wn.add_junction(
-                junction, base_demand=0.0, elevation=node.elevation, coordinates=node.coordinates
-            )
-            setattr(link, f"{side}_node", wn.get_node(junction))
-            start, end = (node_name, junction) if side == "start" else (junction, node_name)
-            wn.add_pipe(
-                pipe,
-                start,
-                end,
-                length=length,
-                diameter=template.diameter,
-                roughness=template.roughness,
-                minor_loss=0.0,
-            )
-            added.append(
-                Connector(link_name, node_name, junction, pipe, length, float(template.diameter))
-            )
+            node_name = getattr(wn.get_link(link_name), f"{side}_node_name")
+            if _needs_connector(wn, link_name, node_name, edges):
+                name = f"{link_name}_{side[0].upper()}"
+                added.append(_connect(wn, node_name, [link_name], name, length))
+    return added
+
+
+@dataclass(frozen=True)
+class SupplyBoundary:
+    """A supply junction given to TSNet as a fixed inflow: ``inflow`` (m³/s, EPANET's at the
+    start) enters ``junction`` through ``valve`` (an open TCV) from ``source`` (a new junction,
+    same elevation), which now holds the junction's demands."""
+
+    junction: str
+    source: str
+    valve: str
+    inflow: float
+
+    def as_metadata(self) -> dict[str, Any]:
+        """The record stored in a simulation's metadata."""
+        return asdict(self)
+
+
+def supply_junctions(wn: Any) -> dict[str, float]:
+    """The junctions of ``wn`` with a negative demand at time 0 (patterns and the demand
+    multiplier applied, as EPANET's steady state at the start): name -> inflow (m³/s, > 0)."""
+    multiplier = wn.options.hydraulic.demand_multiplier
+    found = {}
+    for name, junction in wn.junctions():
+        demand = float(junction.demand_timeseries_list.at(0.0, multiplier=multiplier))
+        if demand < 0.0 and wn.get_links_for_node(name):
+            found[name] = -demand
+    return found
+
+
+def add_supply_boundaries(wn: Any, keep: Collection[str] = ()) -> list[SupplyBoundary]:
+    """Give every supply junction of ``wn`` (changed in place; :func:`supply_junctions`) except
+    those in ``keep`` a fixed inflow TSNet holds: its demands move to a new junction joined to
+    it by an open valve (see the module's description); return what was added."""
+    added = []
+    for name, inflow in supply_junctions(wn).items():
+        if name in keep:
+            continue
+        junction = wn.get_node(name)
+        source = _fresh_name(f"{name}_S", set(wn.node_name_list), "SUPPLY")
+        valve = _fresh_name(f"{name}_SV", set(wn.link_name_list), "SUPPLYV")
+        wn.add_junction(
+            source, base_demand=0.0, elevation=junction.elevation, coordinates=junction.coordinates
+        )
+        demands = wn.get_node(source).demand_timeseries_list
+        demands.clear()
+        for demand in junction.demand_timeseries_list:
+            demands.append((demand.base_value, demand.pattern, demand.category))
+        junction.demand_timeseries_list.clear()
+        wn.add_valve(
+            valve,
+            source,
+            name,
+            diameter=_template(wn, name).diameter,
+            valve_type="TCV",
+            minor_loss=0.0,
+            initial_setting=0.0,
+            initial_status="Open",
+        )
+        added.append(SupplyBoundary(name, source, valve, inflow))
     return added
 
 
 @dataclass(frozen=True)
 class TsnetPreparation:
-    """What :func:`prepare_for_tsnet` changed: the closed links removed, the connectors added."""
+    """What :func:`prepare_for_tsnet` changed: the closed links removed, the supplies made
+    fixed inflows, the connectors added."""
 
     removed_closed_links: list[str]
     connectors: list[Connector]
+    supply_boundaries: list[SupplyBoundary]
 
     def as_metadata(self) -> dict[str, Any]:
         """The records stored in a simulation's metadata."""
         return {
             "removed_closed_links": list(self.removed_closed_links),
             "connectors": [c.as_metadata() for c in self.connectors],
+            "supply_boundaries": [s.as_metadata() for s in self.supply_boundaries],
         }
 
 
@@ -154,10 +280,13 @@ def remove_closed_links(wn: Any, keep: Collection[str] = ()) -> list[str]:
 
 def prepare_for_tsnet(wn: Any, keep: Collection[str] = ()) -> TsnetPreparation:
     """Make ``wn`` (changed in place) a network TSNet simulates as EPANET solves it: closed
-    pipes and pumps removed except ``keep`` (:func:`remove_closed_links`), then connectors
+    pipes and pumps removed except ``keep`` (:func:`remove_closed_links`), supply junctions
+    except ``keep`` made fixed inflows (:func:`add_supply_boundaries`), then connectors
     (:func:`add_connectors`)."""
     removed = remove_closed_links(wn, keep)
-    return TsnetPreparation(removed, add_connectors(wn))
+    supplies = add_supply_boundaries(wn, keep)
+    connectors = add_connectors(wn, edges=[s.source for s in supplies])
+    return TsnetPreparation(removed, connectors, supplies)
 
 
 def transient_model(
