@@ -7,7 +7,7 @@ use alloc::vec::Vec;
 #[cfg(feature = "serde")]
 use serde::{Deserialize, Serialize};
 
-use super::shewhart_tiles::{alarm_of, chunk, gather, Chunk, Lanes};
+use super::shewhart_tiles::{chunk, Chunk, Lanes};
 use super::{check_channels, check_matrix, checked_step, Kernel};
 use crate::alarm::ChannelAlarm;
 #[cfg(feature = "serde")]
@@ -15,7 +15,7 @@ use crate::error::ensure;
 use crate::error::{filled, Error};
 #[cfg(feature = "serde")]
 use crate::shewhart::check_restored;
-use crate::shewhart::{ShewhartConfig, Sums, REBUILD_MIN};
+use crate::shewhart::{ShewhartConfig, REBUILD_MIN};
 
 /// `N` independent [`crate::Shewhart`] detectors with one config, stepped together.
 ///
@@ -160,8 +160,8 @@ impl ShewhartBank {
     }
 
     /// Steps every row of a validated row-major matrix, a chunk of rows at a time (see
-    /// `shewhart_tiles`): the rows up to the next ring wrap, then the wrap's row alone,
-    /// followed by the rebuild and the screening of every channel, as row by row.
+    /// `shewhart_tiles`): the rows up to the next ring wrap, then the wrap's row alone (the
+    /// step, the rebuild of the sums, then the screening, channel by channel, as row by row).
     fn advance_many(&mut self, matrix: &[f64], out: &mut Vec<ChannelAlarm>) {
         let (w, n) = (self.config.window(), self.channels);
         let mut rows = matrix;
@@ -187,15 +187,18 @@ impl ShewhartBank {
             let (now, rest) = rows.split_at(len * n);
             rows = rest;
             let start = out.len();
+            // At a ring wrap, every channel is rebuilt periodically, and off-centre ones always.
+            let rebuild_all = wrap && self.since_rebuild + 1 >= REBUILD_MIN;
             let k = Chunk {
                 rows: now,
                 channels: n,
                 first: i,
                 slot,
+                rebuild_all,
                 config: &self.config,
             };
             let mut lanes = Lanes {
-                reference: &self.reference,
+                reference: &mut self.reference,
                 s1: &mut self.s1,
                 c1: &mut self.c1,
                 s2: &mut self.s2,
@@ -203,75 +206,21 @@ impl ShewhartBank {
                 ring: &mut self.ring,
             };
             match (full, wrap) {
-                (true, false) => chunk::<true, true>(&mut lanes, &k, out),
-                (true, true) => chunk::<true, false>(&mut lanes, &k, out),
-                (false, _) => chunk::<false, false>(&mut lanes, &k, out),
+                (true, false) => chunk::<true, false>(&mut lanes, &k, out),
+                (true, true) => chunk::<true, true>(&mut lanes, &k, out),
+                (false, false) => chunk::<false, false>(&mut lanes, &k, out),
+                (false, true) => chunk::<false, true>(&mut lanes, &k, out),
             }
             // Tiles ran one after another: put the chunk's alarms back in step, then channel,
             // order (each pair is unique), as stepping row by row appends them.
             out[start..].sort_unstable_by_key(|a| (a.alarm.index, a.channel));
             self.steps = i + len as u64;
-            self.since_rebuild += len as u64;
+            self.since_rebuild = if rebuild_all {
+                0
+            } else {
+                self.since_rebuild + len as u64
+            };
             self.pos = if slot + len == w { 0 } else { slot + len };
-            if wrap {
-                // At a ring wrap, every channel is rebuilt periodically, and off-centre ones
-                // always; then the samples are screened against the rebuilt sums.
-                self.rebuild(self.since_rebuild >= REBUILD_MIN);
-                if self.steps >= w as u64 {
-                    self.screen_all(now, i, out);
-                }
-            }
-        }
-    }
-
-    /// The window of channel `c`, oldest first, as a getter (valid right after a step).
-    fn window_of(&self, c: usize) -> impl Fn(usize) -> f64 + '_ {
-        let (w, n, pos) = (self.config.window(), self.channels, self.pos);
-        move |k| {
-            let slot = if pos + k < w { pos + k } else { pos + k - w };
-            self.ring[slot * n + c]
-        }
-    }
-
-    /// The sums of channel `c`.
-    fn sums(&self, c: usize) -> Sums {
-        gather([&self.reference, &self.s1, &self.c1, &self.s2, &self.c2], c)
-    }
-
-    /// At a wrap: rebuilds the sums of every channel (`all`) or of the off-centre ones.
-    #[cold]
-    #[inline(never)]
-    fn rebuild(&mut self, all: bool) {
-        let (w, n) = (self.config.window(), self.channels);
-        let inv_w = self.config.derived().inv_w;
-        for c in 0..n {
-            let mut sums = self.sums(c);
-            if !all && !sums.off_centre(inv_w) {
-                continue;
-            }
-            let ring = &self.ring;
-            sums.rebuild(w, inv_w, |k| ring[k * n + c]);
-            self.reference[c] = sums.reference;
-            self.s1[c] = sums.s1;
-            self.c1[c] = sums.c1;
-            self.s2[c] = sums.s2;
-            self.c2[c] = sums.c2;
-        }
-        if all {
-            self.since_rebuild = 0;
-        }
-    }
-
-    /// The screening of a wrap's row, after the rebuild: every channel that the cheap test
-    /// does not pass is decided (rare), in channel order.
-    fn screen_all(&self, readings: &[f64], i: u64, out: &mut Vec<ChannelAlarm>) {
-        let d = self.config.derived();
-        let thr = self.config.threshold();
-        for (c, &x) in readings.iter().enumerate() {
-            let sums = self.sums(c);
-            if !sums.surely_in_control(x, d, thr) {
-                out.extend(alarm_of(&sums, c, x, i, self.window_of(c), &self.config));
-            }
         }
     }
 

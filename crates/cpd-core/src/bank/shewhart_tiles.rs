@@ -20,7 +20,7 @@ use crate::alarm::{Alarm, ChannelAlarm};
 use crate::shewhart::{exact_decision, Lane, ShewhartConfig, Sums};
 
 /// A vector of channels: the lane type of the kernel and its memory operations.
-pub(super) trait Vector: Lane {
+trait Vector: Lane {
     /// Channels per vector.
     const N: usize;
     /// The first `N` values of `a`.
@@ -112,7 +112,7 @@ const AHEAD: usize = 2 * TILE;
 
 /// The bank's per-channel state, borrowed as separate slices (the ring `[W][channels]`).
 pub(super) struct Lanes<'a> {
-    pub reference: &'a [f64],
+    pub reference: &'a mut [f64],
     pub s1: &'a mut [f64],
     pub c1: &'a mut [f64],
     pub s2: &'a mut [f64],
@@ -130,7 +130,8 @@ impl Lanes<'_> {
     /// The sums of channels `c..c + V::N`, as one vector per sum.
     #[inline(always)]
     fn load<V: Vector>(&self, c: usize) -> Sums<V> {
-        gather([self.reference, self.s1, self.c1, self.s2, self.c2], c)
+        let a: [&[f64]; 5] = [self.reference, self.s1, self.c1, self.s2, self.c2];
+        gather(a, c)
     }
 
     /// Back to channels `c..c + V::N` (the reference does not change within a chunk).
@@ -145,7 +146,7 @@ impl Lanes<'_> {
 
 /// The sums of channels `c..c + V::N` from the state arrays `[reference, s1, c1, s2, c2]`.
 #[inline(always)]
-pub(super) fn gather<V: Vector>(a: [&[f64]; 5], c: usize) -> Sums<V> {
+fn gather<V: Vector>(a: [&[f64]; 5], c: usize) -> Sums<V> {
     Sums {
         reference: V::load(&a[0][c..]),
         s1: V::load(&a[1][c..]),
@@ -165,6 +166,9 @@ pub(super) struct Chunk<'m> {
     pub first: u64,
     /// The ring slot of the chunk's first row (the rows' slots follow without a wrap).
     pub slot: usize,
+    /// At a ring wrap (a chunk of one row): every channel's sums are rebuilt, not only those
+    /// off centre.
+    pub rebuild_all: bool,
     pub config: &'m ShewhartConfig,
 }
 
@@ -173,7 +177,7 @@ pub(super) struct Chunk<'m> {
 /// a tie. Called for the rare samples the screen does not pass.
 #[cold]
 #[inline(never)]
-pub(super) fn alarm_of(
+fn alarm_of(
     sums: &Sums,
     c: usize,
     x: f64,
@@ -223,13 +227,70 @@ fn collect(
     }
 }
 
+/// The cold part of a wrap: the sums of the channels `c + k` (bit `k` of `redo`) rebuilt from
+/// the ring, if `all` or if off centre (the scalar test; the vector one may flag more).
+#[cold]
+#[inline(never)]
+fn rebuild(l: &mut Lanes<'_>, c: usize, mut redo: u32, all: bool, k: &Chunk<'_>) {
+    let (n, w, inv_w) = (k.channels, k.config.window(), k.config.derived().inv_w);
+    while redo != 0 {
+        let ch = c + redo.trailing_zeros() as usize;
+        redo &= redo - 1;
+        let mut sums = l.sums(ch);
+        if all || sums.off_centre(inv_w) {
+            let ring = &*l.ring;
+            sums.rebuild(w, inv_w, |j| ring[j * n + ch]);
+            l.reference[ch] = sums.reference;
+            l.store(ch, &sums);
+        }
+    }
+}
+
+/// A ring wrap for the channels `c..c + GV * V::N`, after their step (a chunk of one row):
+/// their samples into the ring, their sums rebuilt where off centre (all of them every
+/// [`crate::shewhart::REBUILD_MIN`] steps or so), then the screen on the rebuilt sums and the
+/// rare alarms appended to `out`: per channel, what the bank always did at a wrap.
+#[inline(always)]
+fn wrap<V: Vector, const GV: usize>(
+    l: &mut Lanes<'_>,
+    c: usize,
+    k: &Chunk<'_>,
+    out: &mut Vec<ChannelAlarm>,
+) {
+    let width = GV * V::N;
+    let at = k.slot * k.channels + c;
+    l.ring[at..at + width].copy_from_slice(&k.rows[c..c + width]);
+    let d = k.config.derived();
+    let (inv_w, thr) = (V::splat(d.inv_w), V::splat(k.config.threshold()));
+    let mut redo = 0;
+    for g in 0..GV {
+        let (a, b) = l.load::<V>(c + g * V::N).centring(inv_w);
+        redo |= a.over(b) << (g * V::N);
+    }
+    if k.rebuild_all {
+        redo = u32::MAX >> (32 - width);
+    }
+    if redo != 0 {
+        rebuild(l, c, redo, k.rebuild_all, k);
+    }
+    let mut flags = 0;
+    for g in 0..GV {
+        let x = V::load(&k.rows[c + g * V::N..]);
+        flags |= l.load::<V>(c + g * V::N).screen(x, inv_w).over(thr) << (g * V::N);
+    }
+    if flags != 0 {
+        collect(l, c, flags, 0, k, out);
+    }
+}
+
 /// Runs the channels `c..c + GV * V::N` over every row of the chunk with their sums in
 /// registers: the sums slid (`FULL`: the oldest sample read from the ring) or pushed, and
-/// (`SCREEN`) the rare alarms appended to `out`, in row order. The ring is not written here:
-/// storing each row into the ring, 8 KiB below the one about to be loaded at 1 024 channels,
-/// would make the loads wait on the CPU's 4 KiB address check.
+/// the rare alarms appended to `out`, in row order: screened in the same pass, or (`WRAP`, a
+/// chunk of one row) after the rebuild of [`wrap`]. The ring is not written here: storing
+/// each row into the ring, 8 KiB below the one about to be loaded at 1 024 channels, would
+/// make the loads wait on the CPU's 4 KiB address check.
 #[inline(always)]
-fn tile<V: Vector, const GV: usize, const FULL: bool, const SCREEN: bool>(
+fn tile<V: Vector, const GV: usize, const FULL: bool, const WRAP: bool>(
     l: &mut Lanes<'_>,
     c: usize,
     k: &Chunk<'_>,
@@ -237,6 +298,8 @@ fn tile<V: Vector, const GV: usize, const FULL: bool, const SCREEN: bool>(
 ) {
     let n = k.channels;
     let width = GV * V::N;
+    // The window is full and no wrap: screen in the same pass.
+    let screen = FULL && !WRAP;
     let d = k.config.derived();
     let (inv_w, thr) = (V::splat(d.inv_w), V::splat(k.config.threshold()));
     let mut s: [Sums<V>; GV] = core::array::from_fn(|g| l.load(c + g * V::N));
@@ -265,11 +328,11 @@ fn tile<V: Vector, const GV: usize, const FULL: bool, const SCREEN: bool>(
             } else {
                 sums.push(x);
             }
-            if SCREEN {
+            if screen {
                 flags |= sums.screen(x, inv_w).over(thr) << (g * V::N);
             }
         }
-        if SCREEN && flags != 0 {
+        if screen && flags != 0 {
             for (g, sums) in s.iter().enumerate() {
                 l.store(c + g * V::N, sums);
             }
@@ -279,24 +342,27 @@ fn tile<V: Vector, const GV: usize, const FULL: bool, const SCREEN: bool>(
     for (g, sums) in s.iter().enumerate() {
         l.store(c + g * V::N, sums);
     }
+    if WRAP {
+        wrap::<V, GV>(l, c, k, out);
+    }
 }
 
 /// Runs every channel over the chunk: whole tiles as vectors, the rest one by one, then copies
 /// the chunk's rows into their ring slots (one block: the slots follow each other). The alarms
 /// are appended tile after tile (each in row order): the caller puts them back in step order.
 #[inline(never)]
-pub(super) fn chunk<const FULL: bool, const SCREEN: bool>(
+pub(super) fn chunk<const FULL: bool, const WRAP: bool>(
     l: &mut Lanes<'_>,
     k: &Chunk<'_>,
     out: &mut Vec<ChannelAlarm>,
 ) {
     let mut c = 0;
     while c + TILE <= k.channels {
-        tile::<F, G, FULL, SCREEN>(l, c, k, out);
+        tile::<F, G, FULL, WRAP>(l, c, k, out);
         c += TILE;
     }
     while c < k.channels {
-        tile::<f64, 1, FULL, SCREEN>(l, c, k, out);
+        tile::<f64, 1, FULL, WRAP>(l, c, k, out);
         c += 1;
     }
     let at = k.slot * k.channels;

@@ -125,6 +125,15 @@ impl<T: Lane> Sums<T> {
         ((self.s1 + self.c1) * inv_w, (self.s2 + self.c2) * inv_w)
     }
 
+    /// The two sides of the off-centre test: off centre when the first is `>` the second
+    /// (`mean(y)²` and [`CANCELLATION`] `· var`).
+    #[inline(always)]
+    pub(crate) fn centring(&self, inv_w: T) -> (T, T) {
+        let (mu_y, m2) = self.moments(inv_w);
+        let var = m2 - mu_y * mu_y;
+        (mu_y * mu_y, T::splat(CANCELLATION) * var)
+    }
+
     /// The statistic of the cheap first test for the newest sample `x` (see
     /// [`Sums::surely_in_control`]); branch-free.
     #[inline(always)]
@@ -160,9 +169,8 @@ impl Sums {
     /// [`CANCELLATION`]).
     #[inline(always)]
     pub(crate) fn off_centre(&self, inv_w: f64) -> bool {
-        let (mu_y, m2) = self.moments(inv_w);
-        let var = m2 - mu_y * mu_y;
-        mu_y * mu_y > CANCELLATION * var
+        let (a, b) = self.centring(inv_w);
+        a > b
     }
 
     /// `x - μ` from the running sums (the fast amplitude).
