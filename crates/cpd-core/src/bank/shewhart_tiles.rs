@@ -101,8 +101,13 @@ fn prefetch(x: &f64) {
 #[inline(always)]
 fn prefetch(_: &f64) {}
 
-/// Vectors per tile: two chains of sums in flight.
+/// Vectors per tile: with AVX-512, two chains of sums in flight; otherwise one (with 16
+/// registers, the sums of two vectors would not stay in them).
+#[cfg(target_feature = "avx512f")]
 const G: usize = 2;
+/// See the AVX-512 version.
+#[cfg(not(target_feature = "avx512f"))]
+const G: usize = 1;
 
 /// Channels per tile.
 pub(super) const TILE: usize = G * <F as Vector>::N;
@@ -247,8 +252,8 @@ fn rebuild(l: &mut Lanes<'_>, c: usize, mut redo: u32, all: bool, k: &Chunk<'_>)
     }
 }
 
-/// A ring wrap for the channels `c..c + GV * V::N`, after their step (a chunk of one row):
-/// their samples into the ring, their sums rebuilt where off centre (all of them every
+/// A ring wrap for the channels `c..c + GV * V::N`, after their step (a chunk of one row, its
+/// samples already in the ring): their sums rebuilt where off centre (all of them every
 /// [`crate::shewhart::REBUILD_MIN`] steps or so), then the screen on the rebuilt sums and the
 /// rare alarms appended to `out`: per channel, what the bank always did at a wrap.
 #[inline(always)]
@@ -259,8 +264,6 @@ fn wrap<V: Vector, const GV: usize>(
     out: &mut Vec<ChannelAlarm>,
 ) {
     let width = GV * V::N;
-    let at = k.slot * k.channels + c;
-    l.ring[at..at + width].copy_from_slice(&k.rows[c..c + width]);
     let d = k.config.derived();
     let (inv_w, thr) = (V::splat(d.inv_w), V::splat(k.config.threshold()));
     let mut redo = 0;
@@ -287,9 +290,9 @@ fn wrap<V: Vector, const GV: usize>(
 /// Runs the channels `c..c + GV * V::N` over every row of the chunk with their sums in
 /// registers: the sums slid (`FULL`: the oldest sample read from the ring) or pushed, and
 /// the rare alarms appended to `out`, in row order: screened in the same pass, or (`WRAP`, a
-/// chunk of one row) after the rebuild of [`wrap`]. The ring is not written here: storing
-/// each row into the ring, 8 KiB below the one about to be loaded at 1 024 channels, would
-/// make the loads wait on the CPU's 4 KiB address check.
+/// chunk of one row) after the rebuild of [`wrap`]. The ring is written here only for a chunk
+/// of one row: storing each row into the ring, 8 KiB below the one about to be loaded at
+/// 1 024 channels, would make the loads wait on the CPU's 4 KiB address check.
 #[inline(always)]
 fn tile<V: Vector, const GV: usize, const FULL: bool, const WRAP: bool>(
     l: &mut Lanes<'_>,
@@ -301,6 +304,8 @@ fn tile<V: Vector, const GV: usize, const FULL: bool, const WRAP: bool>(
     let width = GV * V::N;
     // The window is full and no wrap: screen in the same pass.
     let screen = FULL && !WRAP;
+    // A chunk of one row writes the ring here, while its line is in the cache.
+    let one_row = k.rows.len() == n;
     let d = k.config.derived();
     let (inv_w, thr) = (V::splat(d.inv_w), V::splat(k.config.threshold()));
     let mut s: [Sums<V>; GV] = core::array::from_fn(|g| l.load(c + g * V::N));
@@ -320,14 +325,18 @@ fn tile<V: Vector, const GV: usize, const FULL: bool, const WRAP: bool>(
                 }
             }
         }
-        let ring = &l.ring[at..at + width];
+        let ring = &mut l.ring[at..at + width];
         let mut flags = 0;
         for (g, sums) in s.iter_mut().enumerate() {
             let x = V::load(&xs[g * V::N..]);
+            let old = &mut ring[g * V::N..];
             if FULL {
-                sums.slide(x, V::load(&ring[g * V::N..]));
+                sums.slide(x, V::load(old));
             } else {
                 sums.push(x);
+            }
+            if one_row {
+                x.store(old);
             }
             if screen {
                 flags |= sums.screen(x, inv_w).over(thr) << (g * V::N);
@@ -349,7 +358,8 @@ fn tile<V: Vector, const GV: usize, const FULL: bool, const WRAP: bool>(
 }
 
 /// Runs every channel over the chunk: whole tiles as vectors, the rest one by one, then copies
-/// the chunk's rows into their ring slots (one block: the slots follow each other). The alarms
+/// the chunk's rows into their ring slots (one block: the slots follow each other; a chunk of
+/// one row is written by the tiles). The alarms
 /// are appended tile after tile (each in row order): the caller puts them back in step order.
 #[inline(never)]
 pub(super) fn chunk<const FULL: bool, const WRAP: bool>(
@@ -366,6 +376,8 @@ pub(super) fn chunk<const FULL: bool, const WRAP: bool>(
         tile::<f64, 1, FULL, WRAP>(l, c, k, out);
         c += 1;
     }
-    let at = k.slot * k.channels;
-    l.ring[at..at + k.rows.len()].copy_from_slice(k.rows);
+    if k.rows.len() > k.channels {
+        let at = k.slot * k.channels;
+        l.ring[at..at + k.rows.len()].copy_from_slice(k.rows);
+    }
 }
