@@ -1,13 +1,15 @@
 //! The Shewhart bank's kernel: tiles of channels over chunks of rows, the sums in registers.
 //!
 //! A chunk is a run of rows with no ring wrap among them (so no rebuild) and one kind of step
-//! (the window filling or full, screened or not): at most `W - 1` rows. For each tile of
-//! [`TILE`] channels, the kernel loads the five sums once, steps them over every row of the
-//! chunk in vector registers (the ring row of each step is contiguous for the tile) and stores
-//! them once; per row and per vector of channels it reads the readings and the ring's oldest
-//! samples, writes the readings into the ring and does arithmetic only. The screen's outcome
-//! is one branch per row and tile, taken only when a channel is not surely in control: the
-//! rare slow path stores the sums and decides those channels exactly as the bank always did.
+//! (the window filling or full): at most `W - 1` rows; a wrap's row is a chunk of its own
+//! (the step, the rebuilds, then the screen). For each tile of [`TILE`] channels, the kernel
+//! loads the five sums once, steps them over every row of the chunk in vector registers (the
+//! ring row of each step is contiguous for the tile) and stores them once; per row and per
+//! vector of channels it reads the readings and the ring's oldest samples and does arithmetic
+//! only (the chunk's rows are copied into the ring afterwards, in one block). The screen's
+//! outcome is one branch per row and tile, taken only when a channel is not surely in
+//! control: the rare slow path stores the sums and decides those channels exactly as the bank
+//! always did.
 //!
 //! The arithmetic is [`Sums`]'s, generic over [`Lane`]: with AVX-512, vectors of 8 channels
 //! (`wide::f64x8`), otherwise of 4; the channels past the last whole tile run one by one on
