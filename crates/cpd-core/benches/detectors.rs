@@ -200,11 +200,7 @@ fn banks(c: &mut Criterion<CpuTime>) {
             // The same fresh matrix in one call: the time-blocked kernel.
             let id = BenchmarkId::new(format!("{name}_step_many"), channels);
             let mut bank = Bank::from(bank);
-            let input = Input {
-                rows: steps,
-                channels,
-                size: BatchSize::LargeInput,
-            };
+            let input = Input::fresh(steps, channels);
             step_many(&mut group, id, &mut traces, &mut bank, input);
         }
         let mut bank = ShewhartBank::new(channels, shewhart_config(50)).unwrap();
@@ -221,6 +217,16 @@ fn banks(c: &mut Criterion<CpuTime>) {
                 BatchSize::LargeInput,
             )
         });
+        // The same fresh matrix in one call.
+        let id = BenchmarkId::new("shewhart_w50_step_many", channels);
+        let mut bank = Bank::from(bank);
+        step_many(
+            &mut group,
+            id,
+            &mut traces,
+            &mut bank,
+            Input::fresh(steps, channels),
+        );
     }
     group.finish();
 }
@@ -231,6 +237,17 @@ struct Input {
     rows: usize,
     channels: usize,
     size: BatchSize,
+}
+
+impl Input {
+    /// `rows x channels` matrices too large for the cache, set up in batches.
+    fn fresh(rows: usize, channels: usize) -> Self {
+        Input {
+            rows,
+            channels,
+            size: BatchSize::LargeInput,
+        }
+    }
 }
 
 /// Times `bank.step_many` on a fresh `input.rows x input.channels` matrix per iteration.

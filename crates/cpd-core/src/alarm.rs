@@ -27,6 +27,18 @@ pub struct Alarm {
     pub amplitude: f64,
 }
 
+impl Alarm {
+    /// A change detected at the sample it starts at (Shewhart's alarms): `start == index`.
+    pub(crate) fn at(index: u64, (direction, amplitude): (Direction, f64)) -> Self {
+        Self {
+            index,
+            start: index,
+            direction,
+            amplitude,
+        }
+    }
+}
+
 /// An alarm raised by one channel of a bank.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(Serialize, Deserialize))]

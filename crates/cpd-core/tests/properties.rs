@@ -272,6 +272,32 @@ proptest! {
     }
 
     #[test]
+    fn shewhart_bank_many_rows_equals_row_by_row(
+        channels in 1usize..40, steps in 0usize..1300, split in 0usize..1300,
+        seed in any::<u64>(), (w, sigma, thr) in shewhart_params()
+    ) {
+        // Crosses the tile of channels and the chunks of rows (ring wraps, rebuilds) of the
+        // time-blocked kernel, and splits the feed in two calls (the second mid-chunk): the
+        // alarms are the independent detectors', the state that of stepping row by row.
+        let m = matrix(channels, steps, seed);
+        let cfg = ShewhartConfig::new(w, sigma, thr).unwrap();
+        let want = independent(channels, &m, || Shewhart::new(cfg).unwrap(), |d, v| d.update(v).unwrap());
+        let mut by_row = ShewhartBank::new(channels, cfg).unwrap();
+        let mut rows_out = Vec::new();
+        for row in m.chunks_exact(channels) {
+            by_row.step(row, &mut rows_out).unwrap();
+        }
+        prop_assert_eq!(&rows_out, &want);
+        let (head, tail) = m.split_at(split.min(steps) * channels);
+        let mut many = ShewhartBank::new(channels, cfg).unwrap();
+        let mut got = Vec::new();
+        many.step_many(head, &mut got).unwrap();
+        many.step_many(tail, &mut got).unwrap();
+        prop_assert_eq!(&got, &want);
+        prop_assert_eq!(&many, &by_row);
+    }
+
+    #[test]
     fn shewhart_bank_crossing_blocks_equals_independent_detectors(
         channels in 255usize..262, steps in 0usize..80, seed in any::<u64>(),
         (w, sigma, thr) in shewhart_params()

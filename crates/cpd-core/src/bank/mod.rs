@@ -1,14 +1,16 @@
 //! Multi-channel banks: one detector per pressure meter, one call per time step.
 //!
 //! State is kept as structure-of-arrays (one `Vec` per state variable, indexed by channel) and
-//! updated with branch-free per-channel kernels shared with the single-channel detectors, so the
-//! compiler vectorizes across channels and a bank is bit-for-bit equal to `N` independent
-//! detectors. Channels that alarm are handled afterwards on a rare slow path.
+//! updated with branch-free per-channel arithmetic shared with the single-channel detectors,
+//! on explicit vectors across channels (tiles of channels over chunks of rows), so a bank is
+//! bit-for-bit equal to `N` independent detectors. Channels that alarm are handled afterwards
+//! on a rare slow path.
 
 mod cusum;
 mod cusum_resident;
 mod cusum_tiles;
 mod shewhart;
+mod shewhart_tiles;
 
 use alloc::vec::Vec;
 
@@ -20,9 +22,6 @@ pub use shewhart::ShewhartBank;
 
 use crate::alarm::ChannelAlarm;
 use crate::error::{first_non_finite, Error};
-
-/// Channels processed per block: the alarm flags of a block live on the stack.
-const BLOCK: usize = 256;
 
 fn check_channels(channels: usize) -> Result<usize, Error> {
     if channels == 0 {
@@ -66,20 +65,6 @@ fn checked_step<K: Kernel>(
 ) -> Result<(), Error> {
     check_readings(readings, bank.width())?;
     bank.step_unchecked(readings, out);
-    Ok(())
-}
-
-/// Validates a whole row-major matrix, then runs the kernel row by row.
-fn checked_step_many<K: Kernel>(
-    bank: &mut K,
-    matrix: &[f64],
-    out: &mut Vec<ChannelAlarm>,
-) -> Result<(), Error> {
-    let channels = bank.width();
-    check_matrix(matrix, channels)?;
-    for row in matrix.chunks_exact(channels) {
-        bank.step_unchecked(row, out);
-    }
     Ok(())
 }
 

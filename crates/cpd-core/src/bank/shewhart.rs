@@ -1,85 +1,21 @@
-//! The Shewhart bank: running sums per channel, a `[W][channels]` ring, one branch-free kernel
-//! per block of channels and a rare slow path for the channels it flags.
+//! The Shewhart bank: running sums per channel, a `[W][channels]` ring, a kernel that steps
+//! tiles of channels over chunks of rows (`shewhart_tiles`), the rebuilds at ring wraps, and a
+//! rare slow path for the channels that the screen flags.
 
 use alloc::vec::Vec;
 
 #[cfg(feature = "serde")]
 use serde::{Deserialize, Serialize};
 
-use super::{check_channels, checked_step, checked_step_many, Kernel, BLOCK};
-use crate::alarm::{Alarm, ChannelAlarm};
+use super::shewhart_tiles::{chunk, Chunk, Lanes};
+use super::{check_channels, check_matrix, checked_step, Kernel};
+use crate::alarm::ChannelAlarm;
 #[cfg(feature = "serde")]
 use crate::error::ensure;
 use crate::error::{filled, Error};
 #[cfg(feature = "serde")]
 use crate::shewhart::check_restored;
-use crate::shewhart::{exact_decision, Derived, ShewhartConfig, Sums, REBUILD_MIN};
-
-/// The state of a block of channels, borrowed for one step (disjoint slices: the kernel's
-/// loop vectorizes).
-struct Block<'a> {
-    /// The ring row of the current time slot.
-    row: &'a mut [f64],
-    reference: &'a [f64],
-    s1: &'a mut [f64],
-    c1: &'a mut [f64],
-    s2: &'a mut [f64],
-    c2: &'a mut [f64],
-}
-
-/// What one step needs besides the state.
-#[derive(Clone, Copy)]
-struct Step {
-    /// The window is full: slide instead of push.
-    full: bool,
-    /// Screen the samples in the same pass (false at a ring wrap, screened after the rebuild).
-    screen: bool,
-    derived: Derived,
-    threshold: f64,
-}
-
-/// One Shewhart step for the block's channels (readings `xs`): writes the samples into the ring
-/// row, updates the running sums and (when `screen`) flags the samples that the cheap test
-/// cannot prove in control. Returns the OR of the flags. Branch-free per channel, so the loop
-/// vectorizes.
-#[inline(never)]
-fn kernel(xs: &[f64], s: Block<'_>, flags: &mut [u8], p: Step) -> u8 {
-    let m = xs.len();
-    let (row, reference, flags) = (&mut s.row[..m], &s.reference[..m], &mut flags[..m]);
-    let (s1, c1, s2, c2) = (
-        &mut s.s1[..m],
-        &mut s.c1[..m],
-        &mut s.s2[..m],
-        &mut s.c2[..m],
-    );
-    let (full, screen, d, thr) = (p.full, p.screen, &p.derived, p.threshold);
-    let mut any = 0u8;
-    for k in 0..m {
-        let x = xs[k];
-        let mut sums = Sums {
-            reference: reference[k],
-            s1: s1[k],
-            c1: c1[k],
-            s2: s2[k],
-            c2: c2[k],
-        };
-        let old = row[k];
-        row[k] = x;
-        if full {
-            sums.slide(x, old);
-        } else {
-            sums.push(x);
-        }
-        s1[k] = sums.s1;
-        c1[k] = sums.c1;
-        s2[k] = sums.s2;
-        c2[k] = sums.c2;
-        let f = (screen && !sums.surely_in_control(x, d, thr)) as u8;
-        flags[k] = f;
-        any |= f;
-    }
-    any
-}
+use crate::shewhart::{ShewhartConfig, REBUILD_MIN};
 
 /// `N` independent [`crate::Shewhart`] detectors with one config, stepped together.
 ///
@@ -158,13 +94,21 @@ impl TryFrom<ShewhartBankRepr> for ShewhartBank {
     }
 }
 
+/// Rows per chunk for `channels` channels (a ring wrap ends a chunk sooner): about 512 KiB of
+/// readings, at most 512 rows; one row from 65 536 channels on, whose ring row is then written
+/// while in the cache (measured at 65 536 channels against 16 rows: 5.7 -> 5.3 ns in a
+/// portable build, as fast with AVX-512).
+fn rows_per_chunk(channels: usize) -> usize {
+    (65_536 / channels).clamp(1, 512)
+}
+
 impl Kernel for ShewhartBank {
     fn width(&self) -> usize {
         self.channels
     }
     #[inline]
     fn step_unchecked(&mut self, readings: &[f64], out: &mut Vec<ChannelAlarm>) {
-        self.advance(readings, out);
+        self.advance_many(readings, out);
     }
 }
 
@@ -208,151 +152,77 @@ impl ShewhartBank {
     }
 
     /// Feeds a row-major `T x channels` matrix (one row per time step), appending the alarms
-    /// step by step. The whole matrix is validated first; on error the bank is unchanged.
+    /// in step order (then channel order), exactly as `T` calls of [`ShewhartBank::step`]
+    /// would. The whole matrix is validated first; on error the bank is unchanged. Faster than
+    /// stepping row by row: each channel's sums stay in registers over a chunk of rows.
     pub fn step_many(&mut self, matrix: &[f64], out: &mut Vec<ChannelAlarm>) -> Result<(), Error> {
-        checked_step_many(self, matrix, out)
+        check_matrix(matrix, self.channels)?;
+        self.advance_many(matrix, out);
+        Ok(())
     }
 
-    fn advance(&mut self, readings: &[f64], out: &mut Vec<ChannelAlarm>) {
-        let w = self.config.window();
-        let n = self.channels;
-        let i = self.steps;
-        if i == 0 {
-            self.reference.copy_from_slice(readings);
-        }
-        let full = i >= w as u64;
-        let slot = self.pos;
-        self.pos = if slot + 1 == w { 0 } else { slot + 1 };
-        self.steps = i + 1;
-        self.since_rebuild += 1;
-        // At a ring wrap, every channel is rebuilt periodically, and off-centre ones always.
-        let wrap = self.pos == 0;
-        let rebuild_all = wrap && self.since_rebuild >= REBUILD_MIN;
-        let decide = self.steps >= w as u64;
-        // One pass: slide the window and (except at wraps) screen the samples in the same loop.
-        let fused = full && !wrap;
-        let p = Step {
-            full,
-            screen: fused,
-            derived: *self.config.derived(),
-            threshold: self.config.threshold(),
-        };
-        let mut flags = [0u8; BLOCK];
-        let mut b = 0;
-        while b < n {
-            let e = (b + BLOCK).min(n);
-            let flags = &mut flags[..e - b];
-            let block = Block {
-                row: &mut self.ring[slot * n + b..slot * n + e],
-                reference: &self.reference[b..e],
-                s1: &mut self.s1[b..e],
-                c1: &mut self.c1[b..e],
-                s2: &mut self.s2[b..e],
-                c2: &mut self.c2[b..e],
-            };
-            let any = kernel(&readings[b..e], block, flags, p);
-            if any != 0 {
-                self.collect(b, flags, &readings[b..e], i, out);
-            }
-            b = e;
-        }
-        if wrap {
-            self.rebuild(rebuild_all);
-        }
-        if decide && !fused {
-            self.screen_all(readings, i, out);
-        }
-    }
-
-    /// The window of channel `c`, oldest first, as a getter (valid right after a step).
-    fn window_of(&self, c: usize) -> impl Fn(usize) -> f64 + '_ {
-        let (w, n, pos) = (self.config.window(), self.channels, self.pos);
-        move |k| {
-            let slot = if pos + k < w { pos + k } else { pos + k - w };
-            self.ring[slot * n + c]
-        }
-    }
-
-    fn sums(&self, c: usize) -> Sums {
-        Sums {
-            reference: self.reference[c],
-            s1: self.s1[c],
-            c1: self.c1[c],
-            s2: self.s2[c],
-            c2: self.c2[c],
-        }
-    }
-
-    /// At a wrap: rebuilds the sums of every channel (`all`) or of the off-centre ones.
-    #[cold]
-    #[inline(never)]
-    fn rebuild(&mut self, all: bool) {
+    /// Steps every row of a validated row-major matrix, a chunk of rows at a time (see
+    /// `shewhart_tiles`): the rows up to the next ring wrap, then the wrap's row alone (the
+    /// step, the rebuild of the sums, then the screening, channel by channel, as row by row).
+    fn advance_many(&mut self, matrix: &[f64], out: &mut Vec<ChannelAlarm>) {
         let (w, n) = (self.config.window(), self.channels);
-        let inv_w = self.config.derived().inv_w;
-        for c in 0..n {
-            let mut sums = self.sums(c);
-            if !all && !sums.off_centre(inv_w) {
-                continue;
+        let mut rows = matrix;
+        while !rows.is_empty() {
+            let i = self.steps;
+            if i == 0 {
+                self.reference.copy_from_slice(&rows[..n]);
             }
-            let ring = &self.ring;
-            sums.rebuild(w, inv_w, |k| ring[k * n + c]);
-            self.reference[c] = sums.reference;
-            self.s1[c] = sums.s1;
-            self.c1[c] = sums.c1;
-            self.s2[c] = sums.s2;
-            self.c2[c] = sums.c2;
-        }
-        if all {
-            self.since_rebuild = 0;
-        }
-    }
-
-    /// Screening pass for the steps where it cannot be fused with the update.
-    fn screen_all(&self, readings: &[f64], i: u64, out: &mut Vec<ChannelAlarm>) {
-        let d = *self.config.derived();
-        let thr = self.config.threshold();
-        let mut b = 0;
-        while b < self.channels {
-            let e = (b + BLOCK).min(self.channels);
-            let mut flags = [0u8; BLOCK];
-            let mut any = 0u8;
-            for (k, f) in flags[..e - b].iter_mut().enumerate() {
-                *f = !self.sums(b + k).surely_in_control(readings[b + k], &d, thr) as u8;
-                any |= *f;
+            let slot = self.pos;
+            let full = i >= w as u64;
+            // The row whose slot is the ring's last one wraps the ring.
+            let wrap = slot + 1 == w;
+            let len = if wrap {
+                1
+            } else {
+                // Up to the wrap, without it, and all filling or all full.
+                let filling = if full { w } else { (w as u64 - i) as usize };
+                (w - 1 - slot)
+                    .min(filling)
+                    .min(rows_per_chunk(n))
+                    .min(rows.len() / n)
+            };
+            let (now, rest) = rows.split_at(len * n);
+            rows = rest;
+            let start = out.len();
+            // At a ring wrap, every channel is rebuilt periodically, and off-centre ones always.
+            let rebuild_all = wrap && self.since_rebuild + 1 >= REBUILD_MIN;
+            let k = Chunk {
+                rows: now,
+                channels: n,
+                first: i,
+                slot,
+                rebuild_all,
+                config: &self.config,
+            };
+            let mut lanes = Lanes {
+                reference: &mut self.reference,
+                s1: &mut self.s1,
+                c1: &mut self.c1,
+                s2: &mut self.s2,
+                c2: &mut self.c2,
+                ring: &mut self.ring,
+            };
+            match (full, wrap) {
+                (true, false) => chunk::<true, false>(&mut lanes, &k, out),
+                (true, true) => chunk::<true, true>(&mut lanes, &k, out),
+                (false, false) => chunk::<false, false>(&mut lanes, &k, out),
+                (false, true) => chunk::<false, true>(&mut lanes, &k, out),
             }
-            if any != 0 {
-                self.collect(b, &flags[..e - b], &readings[b..e], i, out);
-            }
-            b = e;
-        }
-    }
-
-    /// Decides the channels flagged by the screening (rare): fast classification, or the exact
-    /// window scan near a tie.
-    #[cold]
-    #[inline(never)]
-    fn collect(&self, b: usize, flags: &[u8], xs: &[f64], i: u64, out: &mut Vec<ChannelAlarm>) {
-        for (k, &f) in flags.iter().enumerate() {
-            if f == 0 {
-                continue;
-            }
-            let c = b + k;
-            let x = xs[k];
-            let sums = self.sums(c);
-            let decision = sums.decide(x, &self.config, || {
-                exact_decision(x, self.config.window(), self.window_of(c), &self.config)
-            });
-            if let Some((direction, amplitude)) = decision {
-                out.push(ChannelAlarm {
-                    channel: c,
-                    alarm: Alarm {
-                        index: i,
-                        start: i,
-                        direction,
-                        amplitude,
-                    },
-                });
-            }
+            // Tiles ran one after another: put the chunk's alarms back in step, then channel,
+            // order (each pair is unique), as stepping row by row appends them.
+            out[start..].sort_unstable_by_key(|a| (a.alarm.index, a.channel));
+            self.steps = i + len as u64;
+            self.since_rebuild = if rebuild_all {
+                0
+            } else {
+                self.since_rebuild + len as u64
+            };
+            self.pos = if slot + len == w { 0 } else { slot + len };
         }
     }
 

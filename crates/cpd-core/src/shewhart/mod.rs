@@ -27,7 +27,7 @@ mod sums;
 
 pub use config::ShewhartConfig;
 
-pub(crate) use sums::{exact_decision, Derived, Sums};
+pub(crate) use sums::{exact_decision, Lane, Sums};
 use sums::{PairedSums, RunningSums};
 
 use crate::alarm::{Alarm, Direction};
@@ -87,12 +87,7 @@ impl<S: RunningSums> Cursor<S> {
         let decision = sums
             .into()
             .decide(x, config, || exact_in_ring(ring, pos, x, config));
-        decision.map(|(direction, amplitude)| Alarm {
-            index: i,
-            start: i,
-            direction,
-            amplitude,
-        })
+        decision.map(|d| Alarm::at(i, d))
     }
 }
 

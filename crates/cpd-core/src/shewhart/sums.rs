@@ -1,7 +1,7 @@
 //! The running window sums of one Shewhart channel and the decision made from them, shared by
 //! the detector and the bank (see the parent module's docs for the numerics).
 
-use core::ops::{Add, Sub};
+use core::ops::{Add, Mul, Neg, Sub};
 
 use wide::f64x2;
 
@@ -39,6 +39,29 @@ pub(crate) struct Derived {
     pub sigma2_lo: f64,
 }
 
+/// The arithmetic of the running sums and of the cheap screen, on one channel (`f64`) or on a
+/// vector of channels (the bank's kernel): IEEE additions, subtractions, multiplications and
+/// sign operations, exact lane by lane, so a vector's lanes are the scalar results bit for bit.
+pub(crate) trait Lane:
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Neg<Output = Self>
+{
+    /// `x` in every lane.
+    fn splat(x: f64) -> Self;
+    /// `|self|` (the sign bit cleared).
+    fn abs(self) -> Self;
+}
+
+impl Lane for f64 {
+    #[inline(always)]
+    fn splat(x: f64) -> Self {
+        x
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        abs(self)
+    }
+}
+
 /// Adds `v` to the compensated sum `(s, c)` (Knuth's TwoSum; branch-free), on scalars or lane
 /// by lane on vectors (exact lane by lane: each lane is the scalar result, bit for bit).
 #[inline(always)]
@@ -49,28 +72,74 @@ fn acc<T: Copy + Add<Output = T> + Sub<Output = T>>(s: T, c: T, v: T) -> (T, T) 
     (t, c + err)
 }
 
-/// The cheap in-control test of [`Sums::surely_in_control`] from the sample `x`, the reference
-/// and the window moments `(mu_y, m2) = (Σy / W, Σy² / W)`.
+/// The statistic of the cheap in-control test ([`Sums::surely_in_control`]: in control when
+/// it is `<= threshold`) from the sample `x`, the reference and the window moments
+/// `(mu_y, m2) = (Σy / W, Σy² / W)`: `|x - μ|` plus its worst-case error.
 #[inline(always)]
-fn surely_in_control(x: f64, reference: f64, (mu_y, m2): (f64, f64), threshold: f64) -> bool {
+fn screen<T: Lane>(x: T, reference: T, (mu_y, m2): (T, T)) -> T {
     let y = x - reference;
-    let ad = abs(y - mu_y);
-    let ed = MARGIN * (abs(x) + abs(reference) + abs(y) + 1.0 + abs(m2) + ad);
-    ad + ed <= threshold
+    let ad = (y - mu_y).abs();
+    let ed =
+        T::splat(MARGIN) * (x.abs() + reference.abs() + y.abs() + T::splat(1.0) + m2.abs() + ad);
+    ad + ed
 }
 
-/// Running window sums of one channel, shared by the detector and the bank.
+/// Running window sums of one channel (or, with `T` a vector, of one lane per channel: the
+/// bank's kernel), shared by the detector and the bank.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(Serialize, Deserialize))]
-pub(crate) struct Sums {
+pub(crate) struct Sums<T = f64> {
     /// Reference subtracted from every sample.
-    pub reference: f64,
+    pub reference: T,
     /// Σy and its compensation.
-    pub s1: f64,
-    pub c1: f64,
+    pub s1: T,
+    pub c1: T,
     /// Σy² and its compensation.
-    pub s2: f64,
-    pub c2: f64,
+    pub s2: T,
+    pub c2: T,
+}
+
+impl<T: Lane> Sums<T> {
+    /// Adds a sample while the window is filling.
+    #[inline(always)]
+    pub(crate) fn push(&mut self, x: T) {
+        let y = x - self.reference;
+        (self.s1, self.c1) = acc(self.s1, self.c1, y);
+        (self.s2, self.c2) = acc(self.s2, self.c2, y * y);
+    }
+
+    /// Adds `x` and removes `old` (the window is full).
+    #[inline(always)]
+    pub(crate) fn slide(&mut self, x: T, old: T) {
+        let y = x - self.reference;
+        let yo = old - self.reference;
+        let (s1, c1) = acc(self.s1, self.c1, y);
+        (self.s1, self.c1) = acc(s1, c1, -yo);
+        let (s2, c2) = acc(self.s2, self.c2, y * y);
+        (self.s2, self.c2) = acc(s2, c2, -(yo * yo));
+    }
+
+    /// `(Σy / W, Σy² / W)` from the compensated sums.
+    #[inline(always)]
+    fn moments(&self, inv_w: T) -> (T, T) {
+        ((self.s1 + self.c1) * inv_w, (self.s2 + self.c2) * inv_w)
+    }
+
+    /// The two sides of the off-centre test: off centre when the first is `>` the second
+    /// (`mean(y)²` and [`CANCELLATION`] `· var`).
+    #[inline(always)]
+    pub(crate) fn centring(&self, inv_w: T) -> (T, T) {
+        let (mu_y, m2) = self.moments(inv_w);
+        let var = m2 - mu_y * mu_y;
+        (mu_y * mu_y, T::splat(CANCELLATION) * var)
+    }
+
+    /// The statistic of the cheap first test for the newest sample `x` (see
+    /// [`Sums::surely_in_control`]); branch-free.
+    #[inline(always)]
+    pub(crate) fn screen(&self, x: T, inv_w: T) -> T {
+        screen(x, self.reference, self.moments(inv_w))
+    }
 }
 
 impl Sums {
@@ -81,25 +150,6 @@ impl Sums {
         s2: 0.0,
         c2: 0.0,
     };
-
-    /// Adds a sample while the window is filling.
-    #[inline(always)]
-    pub(crate) fn push(&mut self, x: f64) {
-        let y = x - self.reference;
-        (self.s1, self.c1) = acc(self.s1, self.c1, y);
-        (self.s2, self.c2) = acc(self.s2, self.c2, y * y);
-    }
-
-    /// Adds `x` and removes `old` (the window is full).
-    #[inline(always)]
-    pub(crate) fn slide(&mut self, x: f64, old: f64) {
-        let y = x - self.reference;
-        let yo = old - self.reference;
-        let (s1, c1) = acc(self.s1, self.c1, y);
-        (self.s1, self.c1) = acc(s1, c1, -yo);
-        let (s2, c2) = acc(self.s2, self.c2, y * y);
-        (self.s2, self.c2) = acc(s2, c2, -(yo * yo));
-    }
 
     /// Recomputes the sums of the `n` window values `get(0..n)` around their mean.
     #[inline]
@@ -119,9 +169,8 @@ impl Sums {
     /// [`CANCELLATION`]).
     #[inline(always)]
     pub(crate) fn off_centre(&self, inv_w: f64) -> bool {
-        let (mu_y, m2) = self.moments(inv_w);
-        let var = m2 - mu_y * mu_y;
-        mu_y * mu_y > CANCELLATION * var
+        let (a, b) = self.centring(inv_w);
+        a > b
     }
 
     /// `x - μ` from the running sums (the fast amplitude).
@@ -130,18 +179,12 @@ impl Sums {
         (x - self.reference) - (self.s1 + self.c1) * inv_w
     }
 
-    /// `(Σy / W, Σy² / W)` from the compensated sums.
-    #[inline(always)]
-    fn moments(&self, inv_w: f64) -> (f64, f64) {
-        ((self.s1 + self.c1) * inv_w, (self.s2 + self.c2) * inv_w)
-    }
-
     /// Cheap first test, true for most in-control samples: `|x - μ| <= threshold` holds even
     /// with the worst-case error of the running sums. Uses `sqrt(m2) <= 1 + m2` instead of a
     /// square root, so it implies the [`Sums::classify`] outcome [`NONE`]; branch-free.
     #[inline(always)]
     pub(crate) fn surely_in_control(&self, x: f64, d: &Derived, threshold: f64) -> bool {
-        surely_in_control(x, self.reference, self.moments(d.inv_w), threshold)
+        self.screen(x, d.inv_w) <= threshold
     }
 
     /// Fast classification of the newest sample `x` of a full window:
@@ -289,7 +332,7 @@ impl RunningSums for PairedSums {
     #[inline(always)]
     fn surely_in_control(&self, x: f64, d: &Derived, threshold: f64) -> bool {
         let [mu_y, m2] = ((self.s + self.c) * f64x2::splat(d.inv_w)).to_array();
-        surely_in_control(x, self.reference, (mu_y, m2), threshold)
+        screen(x, self.reference, (mu_y, m2)) <= threshold
     }
 }
 
