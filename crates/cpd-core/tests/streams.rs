@@ -264,3 +264,42 @@ fn deserialization_rejects_invalid_configs_and_corrupt_state() {
     json["tap"] = serde_json::json!([0, 0, 0]);
     assert!(serde_json::from_value::<CusumBank>(json).is_err());
 }
+
+/// A bad reading late in a large matrix (past the kernels' first chunks of rows) leaves the
+/// bank and the alarms given so far exactly as they were, and is named by its row.
+#[test]
+fn a_bad_reading_late_in_a_large_matrix_changes_nothing() {
+    let channels = 1024;
+    let rows = 300; // over four chunks of 64 rows at 1 024 channels
+    let mut rng = Rng::new(7);
+    let mut matrix: Vec<f64> = (0..rows * channels)
+        .map(|k| 200.0 - if k / channels >= 100 { 2.0 } else { 0.0 } + 0.01 * rng.uniform())
+        .collect();
+    let (bad_row, bad_channel) = (250, 7);
+    matrix[bad_row * channels + bad_channel] = f64::NAN;
+    let banks = [
+        Bank::from(CusumBank::new(channels, CusumConfig::new(0.3, 0.0).unwrap()).unwrap()),
+        Bank::from(
+            ShewhartBank::new(channels, ShewhartConfig::new(50, 3.0, 0.2).unwrap()).unwrap(),
+        ),
+    ];
+    for mut bank in banks {
+        let mut out = Vec::new();
+        bank.step_many(&matrix[..10 * channels], &mut out).unwrap();
+        let (before, given) = (bank.clone(), out.clone());
+        let err = bank.step_many(&matrix, &mut out).unwrap_err();
+        assert!(
+            matches!(err, Error::NonFiniteMatrixReading { row, channel, .. }
+                if row == bad_row && channel == bad_channel),
+            "{err:?}"
+        );
+        assert_eq!(bank, before);
+        assert_eq!(out, given);
+        // Without the bad reading the same call steps every row, and the drop at row 100 alarms.
+        matrix[bad_row * channels + bad_channel] = 200.0;
+        bank.step_many(&matrix, &mut out).unwrap();
+        assert_eq!(bank.steps_seen(), 10 + rows as u64);
+        assert!(out.len() > given.len());
+        matrix[bad_row * channels + bad_channel] = f64::NAN;
+    }
+}
