@@ -48,7 +48,8 @@ def test_decision_time_per_localizer() -> None:
     assert decision_time("arrival", alarms, times, cal) == 10.0 + 1.5  # first alarm + delay
     # A start equal to the alarm reading (Shewhart) counts from the reading before it.
     assert decision_time("signature", alarms, times, cal) == 6.0 + 150.0  # onset + delay
-    fused = SimpleNamespace(weights=lambda dt: (0.9, 0.1) if dt < 1 else (0.0, 1.0))
+    # a fused localizer whose arrivals can time the wave along some pipe below 1 s intervals
+    fused = SimpleNamespace(resolves=lambda dt: dt < 1)
     assert decision_time("fused", alarms, times, cal, fused) == 156.0
     fast = SimpleNamespace(capture_interval=0.2, arrival_decision_delay=0.5, decision_delay=150.0)
     assert decision_time("fused", alarms, times, fast, fused) == 10.5
