@@ -1,5 +1,5 @@
 """``python -m burstloc``: the same as the ``burstloc`` command."""
 
-from burstloc.cli import main
+from burstloc.cli import run
 
-raise SystemExit(main())
+run()

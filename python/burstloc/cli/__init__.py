@@ -21,10 +21,12 @@ nothing more is printed).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import os
 import sys
 from collections.abc import Sequence
+from typing import NoReturn
 
 from burstloc.exceptions import (
     ConfigError,
@@ -34,7 +36,7 @@ from burstloc.exceptions import (
     SimulationError,
 )
 
-__all__ = ["build_parser", "main"]
+__all__ = ["build_parser", "main", "run"]
 
 #: The subcommands (modules of this package), in the order ``burstloc --help`` lists them.
 SUBCOMMANDS = ("simulate", "evaluate", "calibrate", "monitor", "study", "place")
@@ -78,6 +80,21 @@ def main(argv: Sequence[str] | None = None) -> int:
         where = f"{exc.filename}: " if exc.filename else ""
         print(f"burstloc: error: {where}{exc.strerror or exc}", file=sys.stderr)
         return 2
+
+
+def run() -> NoReturn:
+    """The ``burstloc`` command and ``python -m burstloc``: :func:`main`, then exit with its
+    status. After Ctrl-C the process ends at once (``os._exit``) once its streams are flushed:
+    the interpreter's exit hooks would still wake the stopped worker pool's manager thread, and
+    on Python 3.13 that can print a traceback (a closed wake-up pipe) after
+    ``burstloc: interrupted``. Outputs are already safe: files are written atomically."""
+    status = main()
+    if status == INTERRUPTED:
+        for stream in (sys.stdout, sys.stderr):
+            with contextlib.suppress(OSError, ValueError):
+                stream.flush()
+        os._exit(status)
+    raise SystemExit(status)
 
 
 def _silence_stdout() -> None:
