@@ -84,6 +84,14 @@ def signature_loglik(ranking: Ranking) -> dict[str, float]:
     return {p.pipe: -(p.score**2 - best.score**2) / (2 * sigma**2) for p in ranking}
 
 
+def _arrival_weight(capture_interval: float, travel: float) -> float:
+    """``exp(-dt / travel)``: how far arrivals captured every ``dt`` s can time a wave that
+    takes ``travel`` s (validates ``dt``)."""
+    if not (math.isfinite(capture_interval) and capture_interval > 0):
+        raise InputError(f"capture_interval must be > 0, got {capture_interval}")
+    return math.exp(-capture_interval / travel)
+
+
 class FusedLocalizer:
     """Combine an :class:`ArrivalLocalizer` and a :class:`SignatureLocalizer` (module docstring).
 
@@ -120,18 +128,14 @@ class FusedLocalizer:
 
     def weights(self, capture_interval: float) -> tuple[float, float]:
         """``(w_arrival, w_signature)`` at a capture interval (s)."""
-        if not (math.isfinite(capture_interval) and capture_interval > 0):
-            raise InputError(f"capture_interval must be > 0, got {capture_interval}")
-        w_arrival = math.exp(-capture_interval / self.tau)
+        w_arrival = _arrival_weight(capture_interval, self.tau)
         return w_arrival, 1.0 - w_arrival
 
     def resolves(self, capture_interval: float) -> bool:
         """Whether arrivals captured every ``capture_interval`` s can time the wave along the
         longest candidate pipe (``exp(-dt / travel) >= 0.5``): the condition for looking at them
         early."""
-        if not (math.isfinite(capture_interval) and capture_interval > 0):
-            raise InputError(f"capture_interval must be > 0, got {capture_interval}")
-        return math.exp(-capture_interval / self.longest_travel) >= 0.5
+        return _arrival_weight(capture_interval, self.longest_travel) >= 0.5
 
     def decision_delay(self, capture_interval: float) -> float:
         """Seconds after the first alarm (arrivals) or the onset (signatures) at which the fused

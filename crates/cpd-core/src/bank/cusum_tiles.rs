@@ -311,19 +311,18 @@ impl CusumBank {
             let mut lanes = self.block(0, n);
             let one_row = chunk_rows.len() == n;
             let mut c = 0;
-            if !one_row {
+            // Several rows: the state in registers (`cusum_resident`); one row (a `step`): the
+            // state stepped in memory, its start values blended in place.
+            if one_row {
+                while c + TILE <= n {
+                    tile::<TILE, true>(&mut lanes, c, chunk, out);
+                    c += TILE;
+                }
+            } else {
                 while c + TILE_R <= n {
                     tile_resident(&mut lanes, c, &chunk, out);
                     c += TILE_R;
                 }
-            }
-            while c + TILE <= n {
-                if one_row {
-                    tile::<TILE, true>(&mut lanes, c, chunk, out);
-                } else {
-                    tile::<TILE, false>(&mut lanes, c, chunk, out);
-                }
-                c += TILE;
             }
             while c < n {
                 tile::<1, false>(&mut lanes, c, chunk, out);
