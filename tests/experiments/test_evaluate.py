@@ -112,10 +112,13 @@ def test_evaluate_short_real_sweep(short_evaluation) -> None:
 def test_negative_pressure_warning_names_the_burst_point_as_a_user_knows_it(
     tmp_path: Path,
 ) -> None:
-    # A large, instant burst on the tiny network's pipe B: TSNet reports negative pressure at
-    # the junction it inserted on B (named "B_B" inside the simulation) and at J1-J3.
+    # A large, instant burst on the tiny network's pipe B: TSNet's solver reports negative
+    # pressure at the junction it inserted on B (named "B_B" inside the simulation) and at J1-J3
+    # (TSNet names a pipe's start node when its end is below zero: J2 after B_B -> J2).
     runs = [RunSpec(DetectorConfig("cusum", 0.3), 0.2, 5, Mode.WINDOW, "S_C1")]
-    scenario = paper.ScenarioConfig(burst_start=0.2, opening_time=0.0, burst_coeff=0.02)
+    scenario = paper.ScenarioConfig(
+        burst_start=0.2, opening_time=0.0, burst_coeff=0.02, solver="tsnet"
+    )
     tiny = write_tiny(tmp_path / "tiny.inp")
     ev = evaluate(tiny, runs, pipes=["B"], phases=1, scenario=scenario, workers=1, progress=False)
     meta = ev.results["B"].metadata

@@ -54,6 +54,7 @@ def test_key_covers_every_scenario_parameter(paper15: Path) -> None:
         "duration": 100.0,
         "engine": "DD",
         "time_step": 0.05,
+        "solver": "tsnet",
     }
     assert set(changes) == set(base.parameters())
     keys = {

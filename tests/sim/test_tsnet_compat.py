@@ -39,17 +39,25 @@ REFERENCE = Path(__file__).with_name("tsnet_reference.npz")
 NUMPY2_ATOL = 1e-3
 #: Largest head difference (m) allowed between the pinned stack here and the stored reference.
 MACHINE_ATOL = 1e-4
-SHORT = {"burst_start": 0.5, "duration": 3.0}
+#: TSNet's own solver: this file checks TSNet (tests/sim/test_moc.py checks the vectorized one).
+SHORT = {"burst_start": 0.5, "duration": 3.0, "solver": "tsnet"}
 
-#: The tiny network of conftest plus a dead-end branch J4 -> J5 without demand (no flow in F).
-BRANCH_INP = (
-    TINY_INP.format(head=60.0)
-    .replace("\n\n[RESERVOIRS]", "\n J5   0      0\n\n[RESERVOIRS]")
-    .replace(
-        "\n\n[OPTIONS]", "\n F    J4     J5     120     100       100        0   Open\n\n[OPTIONS]"
+
+def with_dead_end(elevation: float) -> str:
+    """The tiny network of conftest plus a dead-end branch J4 -> J5 (J5 at ``elevation``, m,
+    without demand: no flow in F)."""
+    return (
+        TINY_INP.format(head=60.0)
+        .replace("\n\n[RESERVOIRS]", f"\n J5   {elevation:g}      0\n\n[RESERVOIRS]")
+        .replace(
+            "\n\n[OPTIONS]",
+            "\n F    J4     J5     120     100       100        0   Open\n\n[OPTIONS]",
+        )
+        .replace("\n\n[END]", "\n J5   800   -100\n\n[END]")
     )
-    .replace("\n\n[END]", "\n J5   800   -100\n\n[END]")
-)
+
+
+BRANCH_INP = with_dead_end(0.0)
 
 #: The patched functions: the module attribute TSNet calls, by the key of its original.
 PATCHES = {
@@ -58,6 +66,15 @@ PATCHES = {
     "add_leakage": ("tsnet.simulation.single", "add_leakage"),
     "cal_roughness_coef": ("tsnet.simulation.initialize", "cal_roughness_coef"),
 }
+#: The patches that let TSNet start below atmospheric pressure (a junction without demand).
+NEGATIVE_PRESSURE_PATCHES = {
+    "cal_demand_coef": ("tsnet.simulation.initialize", "cal_demand_coef"),
+    "dead_end": ("tsnet.simulation.single", "dead_end"),
+}
+#: J5 at 70 m, above the reservoir's 60 m grade: a dead end without demand at about -10 m of
+#: pressure (EPANET's steady state), as Net3's junction 10.
+ABOVE_GRADE_INP = with_dead_end(70.0)
+
 #: The patches that make TSNet's valve and pump operations run (tests/sim/test_events.py runs
 #: them): the attribute of the module or class TSNet calls, by the key of its original.
 OPERATION_PATCHES = {
@@ -131,8 +148,9 @@ def without(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> 
 def test_the_patches_are_the_functions_tsnet_calls() -> None:
     _tsnet_compat.load()
     assert _tsnet_compat.applied()
-    assert set(_tsnet_compat._ORIGINALS) == set(PATCHES) | set(OPERATION_PATCHES)
-    for name, (module, attribute) in {**PATCHES, **OPERATION_PATCHES}.items():
+    every = {**PATCHES, **OPERATION_PATCHES, **NEGATIVE_PRESSURE_PATCHES}
+    assert set(_tsnet_compat._ORIGINALS) == set(every)
+    for name, (module, attribute) in every.items():
         patched: Any = sys.modules[module]
         for part in attribute.split("."):
             patched = getattr(patched, part)
@@ -185,6 +203,39 @@ def test_each_patch_is_needed_and_changes_no_number(
     else:
         with pytest.raises(SimulationError):
             heads(bursts[name])
+
+
+@pytest.fixture(scope="module")
+def above_grade(tmp_path_factory: pytest.TempPathFactory) -> BurstScenario:
+    path = tmp_path_factory.mktemp("above") / "above_grade.inp"
+    path.write_text(ABOVE_GRADE_INP, encoding="utf-8")
+    return BurstScenario(path, "E", **SHORT)
+
+
+def test_a_dead_end_below_atmospheric_pressure_starts_steady(above_grade: BurstScenario) -> None:
+    result = simulate_burst(above_grade, cache=False)
+    j5 = result.heads[:, result.junctions.index("J5")]
+    assert np.isfinite(result.heads).all()
+    assert -12.0 < j5[0] < -8.0  # EPANET's steady state: below atmospheric pressure
+    before = result.time < above_grade.burst_start
+    assert np.ptp(j5[before]) < 1e-3  # held, not pulled up to the elevation
+    assert j5.max() < 0  # it stays below: nothing is drawn from a dead end without demand
+    assert not np.array_equal(result.heads[-1], result.heads[0])  # the burst is simulated
+
+
+@pytest.mark.parametrize(
+    ("patch", "error"), [("cal_demand_coef", "non-finite"), ("dead_end", "before the")]
+)
+def test_each_negative_pressure_patch_is_needed(
+    patch: str, error: str, above_grade: BurstScenario, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Without the demand patch TSNet's heads turn NaN; without the dead-end patch the dead end
+    jumps 10 m to its elevation at the first step, and the steady-start check refuses it."""
+    _tsnet_compat.load()
+    module, attribute = NEGATIVE_PRESSURE_PATCHES[patch]
+    monkeypatch.setattr(sys.modules[module], attribute, _tsnet_compat._ORIGINALS[patch])
+    with pytest.raises(SimulationError, match=error):
+        simulate_burst(above_grade, cache=False)
 
 
 def write_reference(directory: Path) -> None:

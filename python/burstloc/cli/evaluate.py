@@ -12,6 +12,7 @@ from burstloc.cli._options import (
     add_meters_file_option,
     add_min_pipe_length_option,
     add_run_options,
+    add_solver_option,
     add_time_step_option,
     cache_of,
     check_run_options,
@@ -121,6 +122,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "can be more than a small network's whole demand)",
     )
     add_min_pipe_length_option(parser)
+    add_solver_option(parser)
     parser.add_argument(
         "--phases", type=int, default=5, metavar="N", help="clock phases per burst (default 5)"
     )
@@ -211,6 +213,7 @@ def run(args: argparse.Namespace) -> int:
         scenario = replace(scenario, position=args.position)
     if args.min_pipe_length is not None:
         scenario = replace(scenario, min_pipe_length=args.min_pipe_length)
+    scenario = replace(scenario, solver=args.solver)
     if args.burst_coeff is not None:
         if not (math.isfinite(args.burst_coeff) and args.burst_coeff > 0):
             raise ConfigError(f"--burst-coeff must be a positive number, got {args.burst_coeff}")
@@ -275,6 +278,7 @@ def _events(args: argparse.Namespace, ev: Any, cache: Any) -> None:
         normal_hours=args.normal_hours,
         cache=cache,
         progress=not args.quiet,
+        solver=args.solver,
     )
     ev.specificity = spec.to_json()
     print(spec.format_table(), end="")

@@ -11,6 +11,7 @@ from burstloc._atomic import check_output
 from burstloc.cli._options import (
     add_min_pipe_length_option,
     add_run_options,
+    add_solver_option,
     cache_of,
     check_run_options,
 )
@@ -94,6 +95,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "--time-step", type=float, default=None, metavar="S", help="default: TSNet's largest"
     )
     add_min_pipe_length_option(parser)
+    add_solver_option(parser)
     parser.add_argument(
         "--capture-interval",
         type=float,
@@ -128,6 +130,7 @@ def run(args: argparse.Namespace) -> int:
         duration=args.duration,
         time_step=args.time_step,
         min_pipe_length=args.min_pipe_length,
+        solver=args.solver,
     )
     cache = cache_of(args)
     report = simulate_many(
@@ -171,6 +174,7 @@ def _event(args: argparse.Namespace) -> int:
         wave_speed=args.wave_speed,
         duration=args.duration,
         time_step=args.time_step,
+        solver=args.solver,
     )
     result = simulate_event(scenario, cache=cache_of(args))
     if args.capture_interval is not None:

@@ -193,7 +193,8 @@ def study_grid(
 
 
 def point_scenarios(point: StudyPoint, settings: StudySettings) -> list[Any]:
-    """The point's bursts, one per pipe, with the time step rule of :func:`study_time_step`."""
+    """The point's bursts, one per pipe, with the time step rule of :func:`study_time_step`;
+    the vectorized solver at steady friction, TSNet's for the other friction models."""
     from burstloc.network import load_network, pipe_names
     from burstloc.sim.scenario import BurstScenario
 
@@ -206,6 +207,7 @@ def point_scenarios(point: StudyPoint, settings: StudySettings) -> list[Any]:
             position=f.position,
             burst_coeff=f.burst_coeff,
             friction=f.friction,
+            solver="vectorized" if f.friction == "steady" else "tsnet",
             duration=settings.duration,
             time_step=settings.time_step,
         )

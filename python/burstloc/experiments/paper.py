@@ -191,7 +191,8 @@ class ScenarioConfig:
     rounded up to a second (220 s for the paper's experiment with :data:`SCENARIO`: 10 s
     onset + 21 x 10 s); an explicit duration too short for a run is an error.
     ``min_pipe_length`` (m, ``None`` = the network as it is) simulates the transient-ready
-    model (``BurstScenario.min_pipe_length``, :mod:`burstloc.skeleton`).
+    model (``BurstScenario.min_pipe_length``, :mod:`burstloc.skeleton`). ``solver``: the
+    transient solver (``BurstScenario.solver``: ``"vectorized"`` or ``"tsnet"``).
     """
 
     burst_start: float = 10.0
@@ -201,8 +202,9 @@ class ScenarioConfig:
     wave_speed: float = WAVE_SPEED
     duration: float | None = None
     min_pipe_length: float | None = None
+    solver: str = "vectorized"
 
-    def parameters(self) -> dict[str, float | None]:
+    def parameters(self) -> dict[str, float | str | None]:
         """The scenario fields as keyword arguments of ``burstloc.sim.scenario.BurstScenario``
         (``min_pipe_length`` only when set)."""
         extra = {} if self.min_pipe_length is None else {"min_pipe_length": self.min_pipe_length}
@@ -213,6 +215,7 @@ class ScenarioConfig:
             "position": self.position,
             "wave_speed": self.wave_speed,
             "duration": self.duration,
+            "solver": self.solver,
             **extra,
         }
 

@@ -95,9 +95,12 @@ PUMP_EVENTS: tuple[tuple[str, dict[str, float]], ...] = (
 DEMAND_JUNCTIONS = 4
 
 
-def default_events(network: str | os.PathLike[str], duration: float) -> list[EventScenario]:
+def default_events(
+    network: str | os.PathLike[str], duration: float, solver: str = "vectorized"
+) -> list[EventScenario]:
     """The events of the evaluation on ``network``: :data:`VALVE_EVENTS` on every valve,
-    :data:`PUMP_EVENTS` on every pump, demand steps at :data:`DEMAND_JUNCTIONS` junctions."""
+    :data:`PUMP_EVENTS` on every pump, demand steps at :data:`DEMAND_JUNCTIONS` junctions
+    (simulated by ``solver``)."""
     from burstloc import network as netmod
 
     path = os.fspath(network)
@@ -115,7 +118,7 @@ def default_events(network: str | os.PathLike[str], duration: float) -> list[Eve
     if largest:
         out.append(("demand-step", largest[0], {"demand_change": -demands[largest[0]] / 2}))
     return [
-        EventScenario(path, kind, asset, duration=duration, **kw)  # type: ignore[arg-type]
+        EventScenario(path, kind, asset, duration=duration, solver=solver, **kw)  # type: ignore[arg-type]
         for kind, asset, kw in out
     ]
 
@@ -384,13 +387,15 @@ def evaluate_events(
     normal_hours: float = 24.0,
     cache: Any = True,
     progress: bool = True,
+    solver: str = "vectorized",
 ) -> tuple[Specificity, ClassifierConfig]:
     """Classify ``bursts`` (pipe -> its burst on ``network``) and :func:`default_events` at each
     capture interval, with a classifier calibrated on ``calibration_bursts`` (of
     ``calibration_network``); every event also with its operation declared; and
     ``normal_hours`` of normal operation
     (:func:`burstloc.experiments.normal_day.normal_operation`; 0: none). ``setup``: the
-    localizers and calibration of ``network`` (default: calibrated here)."""
+    localizers and calibration of ``network`` (default: calibrated here); ``solver`` simulates
+    the events."""
     import sys
 
     from burstloc.experiments.normal_day import normal_operation
@@ -410,7 +415,7 @@ def evaluate_events(
     assert isinstance(signature, SignatureLocalizer)
     classifier = EventClassifier(config, signature)
     events = []
-    for scenario in default_events(network, duration):
+    for scenario in default_events(network, duration, solver):
         if progress:
             print(f"simulating {scenario.label}", file=sys.stderr)
         events.append((scenario, simulate_event(scenario, cache=cache)))

@@ -38,6 +38,22 @@ Two more make TSNet's valve and pump operations run (they failed on every WNTR w
   (which replaces the one nearest the operating point with that point, so the transient starts
   from EPANET's steady state).
 
+And one makes a network with a junction below atmospheric pressure at the start simulate:
+
+* ``tsnet.simulation.initialize.cal_demand_coef`` divides each end node's demand by the square
+  root of its pressure; a junction without demand at a negative pressure (EPANET's Net3: junction
+  10, behind the closed Lake pump) gets ``0 / sqrt(-0.45)``, NaN, and every head of the network
+  turns NaN within a few steps. Patched: a node without demand has coefficient 0, as TSNet gives
+  it at any positive pressure; every other case runs TSNet's code.
+* ``tsnet.simulation.solver.dead_end`` solves a dead end's head from ``Q = k sqrt(p)`` with
+  ``sqrt(p)`` as the unknown; without demand (``k = 0``) below atmospheric pressure it has no
+  root, and TSNet holds the head at the elevation (zero pressure, its floor): junction 10
+  jumped 0.45 m at the first step. Patched (where ``single`` calls it): a dead end without
+  demand that *starts* below atmospheric pressure has its floor at that starting pressure
+  instead; above it, the head is TSNet's own expression continued below zero pressure,
+  ``elevation - cq`` (its root ``elevation + (sqrt(-cq))**2`` where ``cq <= 0``), the closed
+  end's characteristic. Every other dead end, and any with a root, runs TSNet's code.
+
 Nothing else changes: on the pinned stack (numpy 1.26, WNTR 1.3.2) the patched TSNet gives
 bit-identical heads (``tests/sim/test_tsnet_compat.py`` checks this, and checks numpy 2 against
 heads stored from the pinned stack). TSNet is MIT-licensed; the thresholds below are TSNet's.
@@ -90,7 +106,11 @@ def load() -> ModuleType:
         _ORIGINALS["cal_N"] = discretize.cal_N
         _ORIGINALS["adjust_wavev"] = discretize.adjust_wavev
         _ORIGINALS["cal_roughness_coef"] = initialize.cal_roughness_coef
+        _ORIGINALS["cal_demand_coef"] = initialize.cal_demand_coef
+        initialize.cal_demand_coef = _cal_demand_coef
         _ORIGINALS["add_leakage"] = single.add_leakage
+        _ORIGINALS["dead_end"] = single.dead_end
+        single.dead_end = _dead_end
         discretize.cal_N = _cal_n
         discretize.adjust_wavev = _adjust_wavev
         initialize.cal_roughness_coef = _cal_roughness_coef
@@ -130,6 +150,60 @@ def _cal_roughness_coef(pipe: Any, velocity: Any, head_loss: Any) -> Any:
     pipe._roughness = 0  # TSNet's "no friction"; WNTR >= 1.4's setter refuses 0
     pipe.roughness_height = 0
     return pipe
+
+
+def _cal_demand_coef(demand: Any, pipe: Any, hs: Any, he: Any, t0: float = 0.0) -> Any:
+    """TSNet's ``cal_demand_coef``; a node without demand gets coefficient 0 whatever its
+    pressure (TSNet: ``0 / sqrt(p)``, NaN below atmospheric pressure)."""
+    with np.errstate(invalid="ignore"):  # 0 / sqrt(p < 0), mended below
+        pipe = _ORIGINALS["cal_demand_coef"](demand, pipe, hs, he, t0)
+    if demand[0] == 0:
+        pipe.start_node.demand_coeff = 0.0
+    if demand[1] == 0:
+        pipe.end_node.demand_coeff = 0.0
+    return pipe
+
+
+def _dead_end(
+    linkp: Any,
+    H1: Any,
+    V1: Any,
+    elev: Any,
+    nn: int,
+    a: Any,
+    g: Any,
+    f: Any,
+    D: Any,
+    dt: Any,
+    KD: Any,
+    friction: Any,
+    dVdx1: Any,
+    dVdt1: Any,
+) -> tuple[Any, Any]:
+    """TSNet's ``dead_end``; a dead end without demand that starts below atmospheric pressure
+    keeps the closed end's head ``elevation - cq`` (not below its start) where TSNet has no
+    root, instead of the elevation."""
+    from tsnet.simulation.solver import cal_friction
+
+    args = (linkp, H1, V1, elev, nn, a, g, f, D, dt, KD, friction, dVdx1, dVdt1)
+    node = linkp.start_node if nn == 0 else linkp.end_node
+    if node.demand_coeff + node.emitter_coeff != 0:
+        return _ORIGINALS["dead_end"](*args)
+    J = cal_friction(friction, f, D, V1, KD, dt, dVdt1, dVdx1, a, g)
+    if nn == 0:
+        cq = a / g * V1 - a / g * J - H1 - g / a * dt * V1 * linkp.theta + elev
+    else:
+        cq = -a / g * V1 + a / g * J - H1 - g / a * dt * V1 * linkp.theta + elev
+    floor = min(elev, node.initial_head)
+    if cq <= 0 or floor >= elev:  # a root, or a dead end that starts above zero pressure
+        return _ORIGINALS["dead_end"](*args)
+    HP = max(elev - cq, floor)
+    loss = f * dt / (2.0 * D) * V1 * abs(V1)
+    if nn == 0:
+        VP = V1 - g / a * H1 - loss + g / a * HP - g / a * dt * V1 * linkp.theta
+    else:
+        VP = V1 + g / a * H1 - loss - g / a * HP + g / a * dt * V1 * linkp.theta
+    return HP, VP
 
 
 def _add_leakage(*args: Any, **kwargs: Any) -> tuple[Any, np.float64]:

@@ -39,7 +39,12 @@ from burstloc._diagnostics import capture_diagnostics
 from burstloc.constants import SCENARIO_DURATION, WAVE_SPEED
 from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.sim.cache import DiskCache, file_sha256, network_cache_key
-from burstloc.sim.scenario import DEFAULT_BURST_START, FRICTION_MODELS, ScenarioResult
+from burstloc.sim.scenario import (
+    DEFAULT_BURST_START,
+    FRICTION_MODELS,
+    ScenarioResult,
+    check_solver,
+)
 from burstloc.sim.steady import check_steady_start
 from burstloc.sim.tsnet import (
     TransientSettings,
@@ -90,7 +95,7 @@ class EventScenario:
         setting: a valve's final fraction open, in [0, 1) for a closure, (0, 1] for an
             opening; unused otherwise.
         demand_change: a demand step's change, m³/s (non-zero); unused otherwise.
-        wave_speed, duration, engine, time_step, friction: as for a burst
+        wave_speed, duration, engine, time_step, friction, solver: as for a burst
             (:class:`~burstloc.sim.scenario.BurstScenario`).
 
     Raises:
@@ -109,6 +114,7 @@ class EventScenario:
     engine: str = "PDD"
     time_step: float | None = None
     friction: str = "steady"
+    solver: str = "vectorized"
 
     def __post_init__(self) -> None:
         put = object.__setattr__
@@ -142,15 +148,20 @@ class EventScenario:
             raise ConfigError(f"engine must be 'PDD' or 'DD', got {self.engine!r}")
         if self.friction not in FRICTION_MODELS:
             raise ConfigError(f"friction must be one of {FRICTION_MODELS}, got {self.friction!r}")
+        check_solver(self.solver, self.friction)
         if self.time_step is not None:
             put(self, "time_step", _finite("time_step", self.time_step))
             if self.time_step <= 0:  # type: ignore[operator]
                 raise ConfigError(f"time_step must be > 0 s, got {self.time_step}")
 
     def parameters(self) -> dict[str, Any]:
-        """Every field except the network path (the cache hashes the file's bytes)."""
+        """Every field except the network path (the cache hashes the file's bytes); the
+        ``"tsnet"`` solver is left out, so events cached before the field existed keep their
+        keys (TSNet's results)."""
         params = asdict(self)
         del params["network"]
+        if params["solver"] == "tsnet":
+            del params["solver"]
         return params
 
     @property
@@ -250,6 +261,7 @@ def _simulate(scenario: EventScenario) -> ScenarioResult:
         "network": scenario.network,
         "network_sha256": file_sha256(scenario.network),
         **scenario.parameters(),
+        "solver": scenario.solver,
         "event": scenario.kind,
         "asset_nodes": nodes,
         "label": scenario.label,
