@@ -335,9 +335,12 @@ def test_a_junction_below_atmospheric_pressure_at_the_start(tmp_path: Path) -> N
         result = simulate_burst(scenario, cache=False)
         j3 = result.heads[:, result.junctions.index("J3")]
         assert j3[0] == pytest.approx(-20.5, abs=0.1) and np.ptp(j3) < 0.01
-        # TSNet's own warning names the pipe's start node (J2) for its end (J3)
-        named = "J3" if solver == "vectorized" else "J2"
-        assert result.metadata["negative_pressure_nodes"] == [named]
+        warned = result.metadata["negative_pressure_nodes"]
+        if solver == "vectorized":  # said as where it starts, not as the burst's doing
+            assert warned == []
+            assert any("Node J3 starts below" in w for w in result.metadata["warnings"])
+        else:  # TSNet warns at every step, naming the pipe's start node (J2) for its end (J3)
+            assert warned == ["J2"]
     inp.write_text(text.format(demand=1), encoding="utf-8")
     with pytest.raises(SimulationError, match=r"negative pressure .*'J3' -20\.\d m"):
         simulate_burst(

@@ -15,7 +15,8 @@ the pipes in another order (a few units in the last place, measured in the tests
 
 :func:`solve` leaves its results where TSNet's solver does (each node's ``head`` series,
 ``tm.simulation_timestamps``), and reports what TSNet warns of through :mod:`warnings`, once
-per node with a count: negative pressure at a junction, and a junction or dead-end equation
+per node with a count: negative pressure at a junction (one that starts below atmospheric
+pressure in EPANET's steady state is said so instead), and a junction or dead-end equation
 without a real root.
 """
 
@@ -250,7 +251,15 @@ def _report(
     for column, node in enumerate(lay.record_nodes):
         if node.transient_node_type != "Junction":
             continue
-        low = int(np.count_nonzero(heads[:, column] - node.elevation <= 0))
+        pressure = heads[:, column] - node.elevation
+        if pressure[0] <= 0:  # EPANET's steady state put it there: not the event's doing
+            warnings.warn(
+                f"Node {node.name} starts below atmospheric pressure: {pressure[0]:.3g} m in "
+                f"EPANET's steady state (lowest {pressure.min():.3g} m during the simulation)",
+                stacklevel=2,
+            )
+            continue
+        low = int(np.count_nonzero(pressure <= 0))
         if low:
             warnings.warn(
                 f"Negative pressure on node {node.name}. ({low} of {lay.steps} time steps; "
