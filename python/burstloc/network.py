@@ -40,6 +40,7 @@ if TYPE_CHECKING:
 __all__ = [
     "SplitPipe",
     "SteadyState",
+    "closed_pipes",
     "flow_direction_graph",
     "junction_names",
     "load_network",
@@ -106,21 +107,33 @@ def pipe_names(wn: WaterNetworkModel) -> list[str]:
     return list(wn.pipe_name_list)
 
 
+def closed_pipes(wn: WaterNetworkModel) -> list[str]:
+    """The pipes whose initial status is Closed (no water flows in them: nothing to burst)."""
+    return [name for name, pipe in wn.pipes() if pipe.initial_status.name == "Closed"]
+
+
 def _source(wn: WaterNetworkModel) -> str:
     name = getattr(wn, "name", None)
     return f" in {name}" if name else ""
 
 
-def require_pipe(wn: WaterNetworkModel, pipe: str) -> Any:
+def require_pipe(wn: WaterNetworkModel, pipe: str, *, open_only: bool = False) -> Any:
     """Return the WNTR pipe named ``pipe``.
 
     Raises:
-        NetworkError: no pipe has that name (a valve or pump is not a pipe).
+        NetworkError: no pipe has that name (a valve or pump is not a pipe), or, with
+            ``open_only``, the pipe is closed in the network file.
     """
     if pipe not in wn.pipe_name_list:
         kind = "a valve or pump, not a pipe" if pipe in wn.link_name_list else "no such pipe"
         raise NetworkError(f"unknown pipe {pipe!r}{_source(wn)}: {kind}")
-    return wn.get_link(pipe)
+    link = wn.get_link(pipe)
+    if open_only and link.initial_status.name == "Closed":
+        raise NetworkError(
+            f"pipe {pipe!r}{_source(wn)} is closed (its initial status): no water reaches a "
+            "burst on it; choose an open pipe"
+        )
+    return link
 
 
 @dataclass(frozen=True)

@@ -159,3 +159,25 @@ def test_evaluate_rejects_bad_input_clearly(short_evaluation) -> None:
             progress=False,
             time_step=0.09,
         )
+
+
+def test_every_pipe_leaves_out_a_closed_pipe_and_says_so(tmp_path: Path) -> None:
+    # pipe D (J2 - J3) closed in the file: no water reaches a burst on it
+    tiny = write_tiny(tmp_path / "tiny.inp")
+    text = tiny.read_text(encoding="utf-8")
+    closed = tiny.with_name("closed.inp")
+    closed.write_text(
+        text.replace(
+            " D    J2     J3     150     150       100        0          Open",
+            " D    J2     J3     150     150       100        0          Closed",
+        ),
+        encoding="utf-8",
+    )
+    assert "Closed" in closed.read_text(encoding="utf-8")
+    runs = [RunSpec(DetectorConfig("cusum", 0.3), 0.2, 5, Mode.WINDOW, "S_C1")]
+    scenario = paper.ScenarioConfig(burst_start=0.2, opening_time=0.0, burst_coeff=0.02)
+    ev = evaluate(closed, runs, phases=1, scenario=scenario, workers=1, progress=False)
+    assert sorted(ev.results) == ["A", "B", "C", "E"]
+    assert "1 pipe(s) closed in the network file, not burst: D" in ev.warnings
+    with pytest.raises(NetworkError, match=r"pipe 'D' .* is closed"):
+        evaluate(closed, runs, pipes=["D"], phases=1, scenario=scenario, progress=False)

@@ -258,8 +258,11 @@ def evaluate(
     meter file's, :class:`burstloc.sim.placement.MeterSet`); the paper's rules read every
     junction, as in the paper.
 
+    With ``pipes=None`` (every pipe) the pipes closed in the network file are left out, and
+    said in the warnings.
+
     Raises:
-        NetworkError: missing or malformed network, unknown pipe.
+        NetworkError: missing or malformed network, unknown pipe, a named pipe that is closed.
         ConfigError: no runs, bad phases, a time step that is not a positive number of seconds,
             or a capture interval finer than the simulation's time step.
         SimulationError: a burst could not be simulated.
@@ -282,6 +285,14 @@ def evaluate(
     chosen = inp.choose_pipes(netmod.pipe_names(wn), pipes, path)
 
     warnings: list[str] = []
+    closed = netmod.closed_pipes(wn)
+    if pipes is None and closed:  # every pipe: those closed in the file carry no water
+        chosen = [p for p in chosen if p not in closed]
+        warnings.append(
+            f"{len(closed)} pipe(s) closed in the network file, not burst: {', '.join(closed)}"
+        )
+    for pipe in chosen:  # a pipe named closed: said before anything is simulated
+        netmod.require_pipe(wn, pipe, open_only=True)
     params: dict[str, Any] = scenario.parameters()
     needed = max(required_duration(s, scenario.burst_start) for s in runs)
     if params["duration"] is None:

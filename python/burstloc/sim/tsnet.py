@@ -94,7 +94,7 @@ def simulate_burst(
             ``False``/``None`` = always simulate, store nothing.
 
     Raises:
-        NetworkError: missing or malformed network file, unknown pipe.
+        NetworkError: missing or malformed network file, unknown or closed pipe.
         ConfigError: ``time_step`` above TSNet's stability limit for this network, or a
             ``duration`` shorter than TSNet's minimum of 10 time steps.
         SimulationError: TSNet failed, or produced non-finite heads.
@@ -142,7 +142,7 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
     source = os.path.abspath(scenario.network)  # before isolated_run changes directory
     with isolated_run() as tmp, capture_diagnostics() as diag:
         wn = network.load_network(source)
-        network.require_pipe(wn, scenario.pipe)
+        network.require_pipe(wn, scenario.pipe, open_only=True)
         flows = network.steady_state_flows(wn, scenario.engine)
         graph = network.flow_direction_graph(wn, flows)
         true_start, true_end = network.pipe_endpoints(graph, scenario.pipe)
