@@ -9,9 +9,12 @@ and runs the same equations over the whole network at once (:mod:`burstloc.sim.m
 interior points, junctions (pressure-dependent demand and the burst's emitter, ``Q = k
 sqrt(p)``), dead ends, reservoirs and tanks, valves leading nowhere; pumps and valves between
 pipes keep TSNet's own functions (:mod:`burstloc.sim.moc_elements`). Every expression keeps
-TSNet's order of operations; heads differ from TSNet's only where TSNet's junction sums add
-the pipes in another order (a few units in the last place, measured in the tests and in
-``benches/bench_moc.py``).
+TSNet's order of operations, down to the order in which ``np.dot`` adds a junction's pipes
+(:func:`~burstloc.sim.moc_layout.dot_order`, as OpenBLAS does with NumPy 1.26) and the C
+library's ``pow`` for squares: there the heads are TSNet's to the last bit. Where NumPy's BLAS
+adds in another order (NumPy 2) they differ by micrometres to millimetres: TSNet's junction
+equation is ill-conditioned at a junction without demand, and TSNet itself differs by as much
+between the two stacks (``tests/sim/test_moc.py``, ``benches/bench_moc.py``).
 
 :func:`solve` leaves its results where TSNet's solver does (each node's ``head`` series,
 ``tm.simulation_timestamps``), and reports what TSNet warns of through :mod:`warnings`, once
@@ -262,8 +265,7 @@ def _report(
         low = int(np.count_nonzero(pressure <= 0))
         if low:
             warnings.warn(
-                f"Negative pressure on node {node.name}. ({low} of {lay.steps} time steps; "
-                "its demand and emitter stopped)",
+                f"Negative pressure on node {node.name}. ({low} of {lay.steps} time steps)",
                 stacklevel=2,
             )
     failed: dict[str, int] = {}

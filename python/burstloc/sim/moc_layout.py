@@ -41,8 +41,11 @@ __all__ = ["ElementEnd", "G", "Layout", "dot_order", "layout"]
 
 @dataclass
 class _Group:
-    """Pipe ends of one kind, as parallel arrays (``out``: the end's point; ``near``: the
-    point next to it in the same pipe; ``pipe``: the pipe's index)."""
+    """Pipe ends of one kind, as parallel lists: ``out`` the end's point, ``near`` the point
+    next to it in the same pipe, ``pipe`` the pipe's index, ``node`` the node's index (junctions
+    and dead ends), ``value`` per kind (a junction end: its pipe's sign there, -1 at the pipe's
+    start, +1 at its end; a reservoir or tank: its head; a dead end: its floor, see
+    :func:`_floor`), ``series`` a valve end's velocity per step."""
 
     out: list[int] = field(default_factory=list)
     near: list[int] = field(default_factory=list)
