@@ -100,3 +100,37 @@ def test_evaluate_events_on_the_tiny_network(tiny: Path, tmp_path: Path, capsys)
     assert day["burst_reports"] == 0
     assert day["simulator_warnings"] == []  # the tiny network sets EPANET's required pressure
     assert "as burst" in capsys.readouterr().out
+
+
+def test_an_event_that_cannot_be_simulated_is_left_out_and_said(
+    tiny: Path, tmp_path: Path, capsys, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Anytown's pump start does not start steady (junction 20 moves 0.19 m before it): such an
+    event is left out, said and listed; the evaluation goes on."""
+    from burstloc.exceptions import UnsteadyStartError
+    from burstloc.sim import events
+
+    first = default_events(tiny, 40.0)[0]
+    real = events.simulate_event
+
+    def unsteady_first(scenario: events.EventScenario, cache: object = True) -> object:
+        if scenario.label == first.label:
+            raise UnsteadyStartError(str(tiny), "J3", 0.19, 6.4, 10.0, 0.05)
+        return real(scenario, cache=cache)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(events, "simulate_event", unsteady_first)
+    out = tmp_path / "ev.json"
+    args = ["evaluate", str(tiny), "--events", "--detector", "cusum", "--capture-interval", "2"]
+    args += ["--phases", "1", "--workers", "1", "--quiet", "--json", str(out)]
+    args += ["--normal-hours", "0"]
+    assert main(args) == 0
+    doc = json.loads(out.read_text())
+    jsonschema.validate(doc, SCHEMA)
+    spec = doc["specificity"]
+    [skipped] = spec["events_not_simulated"]
+    assert skipped["event"] == first.label and "does not start steady" in skipped["error"]
+    rows = {r["type"]: r for r in spec["table"]}
+    assert rows["demand-step"]["scenarios"] == 8  # nine steps, one left out
+    captured = capsys.readouterr()
+    assert f"{first.label} left out" in captured.err
+    assert f"left out, not simulated: {first.label}" in captured.out

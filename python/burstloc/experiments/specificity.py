@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from burstloc.exceptions import InputError
+from burstloc.exceptions import InputError, SimulationError, SimulatorMissingError
 from burstloc.experiments.calibrate import DEFAULT_NOISE_SIGMA
 from burstloc.experiments.harness import Clock, RankingSetup, capture_readings
 from burstloc.localize.classify import (
@@ -252,6 +252,7 @@ class Specificity:
     classifier: dict[str, Any] = field(default_factory=dict)
     normal: list[dict[str, Any]] = field(default_factory=list)
     missed: list[dict[str, Any]] = field(default_factory=list)
+    skipped: list[dict[str, str]] = field(default_factory=list)
 
     def add(
         self,
@@ -333,6 +334,7 @@ class Specificity:
             "classifier": dict(self.classifier),
             "normal_operation": list(self.normal),
             "bursts_not_reported": list(self.missed),
+            "events_not_simulated": list(self.skipped),
         }
 
     def format_table(self) -> str:
@@ -356,6 +358,8 @@ class Specificity:
             )
         for r in self.reported:
             lines.append(f"reported as a burst: {r['event']} at {r['capture_interval']:g} s")
+        for skipped in self.skipped:
+            lines.append(f"left out, not simulated: {skipped['event']}: {skipped['error']}")
         for m in self.missed:
             lines.append(
                 f"burst on {m['pipe']} at {m['capture_interval']:g} s: {m['class']}, {m['reason']}"
@@ -395,7 +399,8 @@ def evaluate_events(
     ``normal_hours`` of normal operation
     (:func:`burstloc.experiments.normal_day.normal_operation`; 0: none). ``setup``: the
     localizers and calibration of ``network`` (default: calibrated here); ``solver`` simulates
-    the events."""
+    the events. An event that cannot be simulated (one that does not start steady, say) is left
+    out, said on stderr and listed (``Specificity.skipped``, ``events_not_simulated``)."""
     import sys
 
     from burstloc.experiments.normal_day import normal_operation
@@ -415,11 +420,17 @@ def evaluate_events(
     assert isinstance(signature, SignatureLocalizer)
     classifier = EventClassifier(config, signature)
     events = []
+    out = Specificity(classifier=config.to_json())
     for scenario in default_events(network, duration, solver):
         if progress:
             print(f"simulating {scenario.label}", file=sys.stderr)
-        events.append((scenario, simulate_event(scenario, cache=cache)))
-    out = Specificity(classifier=config.to_json())
+        try:
+            events.append((scenario, simulate_event(scenario, cache=cache)))
+        except SimulatorMissingError:
+            raise
+        except SimulationError as exc:  # e.g. it does not start steady: counted and said
+            print(f"burstloc: {scenario.label} left out: {exc}", file=sys.stderr)
+            out.skipped.append({"event": scenario.label, "error": str(exc)})
     for ci in capture_intervals:
         for pipe, result in bursts.items():
             out.add("burst", ci, classify_result(result, setup, classifier, ci), pipe, pipe)
