@@ -54,10 +54,12 @@ from burstloc.constants import METER_MODELS, RANKING_LOCALIZERS, MeterModel
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.live.decision import LiveDecision
 from burstloc.live.subset import SubsetLocalizers
+from burstloc.localize.arrival import ArrivalLocalizer
 from burstloc.localize.classify import ClassifierConfig, EventClassifier, Operation, classify_alarms
 from burstloc.localize.config import Calibration, calibrated_bank
 from burstloc.localize.decide import (
     RankingLocalizers,
+    arrival_horizon,
     decision_time,
     fused_of,
     rank_alarms,
@@ -351,6 +353,9 @@ class BurstMonitor:
             raise InputError(
                 f"burst detected but not located at t = {times[-1]:g} s: {exc}"
             ) from exc
+        if decision.look_again is not None:
+            self._due = decision.look_again  # the arrivals are not decisive yet: more are due
+            return None
         alarmed = tuple(sorted({meters[a.channel] for a in alarms}, key=self.meters.index))
         excluded = tuple(m for m in self.meters if m in self.excluded)
         settled = decision_time("signature", alarms, times, cal)
@@ -374,8 +379,13 @@ class BurstMonitor:
         self._due = None
         self._announced = False
         self._quiet_until = float(times[-1]) + self.holdoff
+        arrival = localizers.get("arrival")
+        looked = (
+            arrival_horizon(arrival, cal)
+            if isinstance(arrival, ArrivalLocalizer)
+            else cal.arrival_decision_delay
+        )
         waited = decision.waited or (
-            decision.time - decision.first_alarm
-            > cal.arrival_decision_delay + cal.capture_interval + 1e-9
+            decision.time - decision.first_alarm > looked + cal.capture_interval + 1e-9
         )
         return LiveDecision(decision, self.localizer, tuple(meters), excluded, alarmed, waited)
