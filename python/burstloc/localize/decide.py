@@ -306,7 +306,8 @@ def _look(
 ) -> _Look:
     """Rank the arrivals at ``decided``, then once every capture interval, until the ranking is
     decisive (:func:`burstloc.localize.fused.decisive` by ``margin``) or the horizon
-    (:func:`arrival_horizon`) or the last reading is reached."""
+    (:func:`arrival_horizon`) is reached. A look due after the last reading is not taken: its
+    time is returned as ``again``, so that a caller with more readings takes the same looks."""
     dt = calibration.capture_interval
     horizon = first + arrival_horizon(arrival, calibration)
     at = min(decided, last)
@@ -316,9 +317,10 @@ def _look(
         settled = decisive(ranking, margin)
         if settled or at >= horizon - 1e-9:
             return _Look(ranking, seen, at, settled, None)
-        if at >= last - 1e-9:
-            return _Look(ranking, seen, at, settled, min(at + dt, horizon))
-        at = min(at + dt, horizon, last)
+        following = min(at + dt, horizon)
+        if following > last + 1e-9:
+            return _Look(ranking, seen, at, settled, following)
+        at = following
 
 
 def _position(
