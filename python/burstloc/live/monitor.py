@@ -7,7 +7,8 @@ configuration's stored localization model (:class:`burstloc.localize.model.Local
 and a bounded history of readings. Each :meth:`BurstMonitor.push` feeds one complete time step (a
 :class:`burstloc.readings.Step`: one reading per meter, in the configuration's meter order) to
 the bank; once a meter alarms, the monitor answers at the localizer's decision time with the same
-rule as ``burstloc evaluate`` (:func:`burstloc.localize.decide.rank_alarms`).
+rule as ``burstloc evaluate`` (:func:`burstloc.localize.decide.rank_alarms`), ranking again at
+the next look while the arrivals seen so far are not decisive (``Decision.look_again``).
 
 After a decision the monitor holds off for ``holdoff`` seconds (default: the calibrated
 signature delay, 150 s): a burst rings through the network for minutes; the readings still fill
