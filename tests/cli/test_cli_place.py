@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import jsonschema
@@ -11,6 +12,7 @@ import pytest
 
 from burstloc.cli import main
 from burstloc.localize.config import Calibration
+from burstloc.sim.placement import meter_separation
 from conftest import write_tiny
 
 SCHEMA = json.loads((Path(__file__).parents[1] / "evaluate_schema.json").read_text())
@@ -25,6 +27,9 @@ def test_place_then_calibrate_and_evaluate_with_the_meter_file(
     assert "3 of 4 junctions (arrival)" in out and f"wrote {meters_file}" in out
     chosen = json.loads(meters_file.read_text())["meters"]
     assert len(chosen) == 3
+    told = re.search(r"arrival separation at 0.2 s: (\d+) % of the candidate burst points", out)
+    assert told is not None
+    assert int(told.group(1)) == round(100 * meter_separation(tiny, chosen, resolution=0.2))
 
     config = tmp_path / "cal.json"
     argv = ["calibrate", str(tiny), "--out", str(config), "--capture-interval", "0.2"]

@@ -7,6 +7,7 @@ import json
 import math
 import subprocess
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -35,12 +36,11 @@ def config(tiny: Path) -> Calibration:
     return calibrate(tiny, capture_intervals=(0.2, 2.0), noise_sigma=0.01)
 
 
-@pytest.fixture(scope="module")
-def batch(tiny: Path, config: Calibration):
+def _evaluate(tiny: Path, config: Calibration, intervals: tuple[float, ...]):
     """``evaluate``'s answers (the batch reference) for bursts on two pipes."""
     runs = [
         RunSpec(DetectorConfig("cusum", 0.3), ci, 5, localizer=name)
-        for ci in (0.2, 2.0)
+        for ci in intervals
         for name in ("arrival", "fused")
     ]
     return evaluate(
@@ -53,6 +53,12 @@ def batch(tiny: Path, config: Calibration):
         workers=1,
         progress=False,
     )
+
+
+@pytest.fixture(scope="module")
+def batch(tiny: Path, config: Calibration):
+    """``evaluate``'s answers at 0.2 and 2 s."""
+    return _evaluate(tiny, config, (0.2, 2.0))
 
 
 def _steps(result, spec: RunSpec) -> list[Step]:
@@ -78,6 +84,28 @@ def test_the_live_loop_decides_what_evaluate_decides(tiny: Path, config: Calibra
             assert live.first_alarm <= live.time
             doc = live.to_json()
             assert [p["pipe"] for p in doc["pipes"]] == [r.pipe for r in expected.ranking.top(3)]
+
+
+def test_the_live_loop_looks_again_at_the_arrivals_as_evaluate_does(
+    tiny: Path, config: Calibration
+):
+    # the first look at the first alarm itself: one meter has heard the wave, and the answer
+    # comes at a later look (rank_alarms' look_again), live as in evaluate
+    eager = replace(
+        config,
+        intervals=tuple(replace(i, arrival_decision_delay=0.0) for i in config.intervals),
+    )
+    ev = _evaluate(tiny, eager, (0.2,))
+    later = 0
+    for run in ev.runs:
+        for pipe in run.pipes:
+            expected = run.attempts[pipe][0]
+            monitor = BurstMonitor(tiny, eager, capture_interval=0.2, localizer=run.spec.localizer)
+            live = next(iter(monitor.run(_steps(ev.results[pipe], run.spec))))
+            assert live.pipe == expected.predicted_pipe
+            assert math.isclose(live.time, expected.decided_at, abs_tol=1e-9)
+            later += live.time > live.first_alarm + 1e-9
+    assert later > 0
 
 
 def test_raw_readings_go_through_the_reading_stream(tiny: Path, config: Calibration, batch):

@@ -175,3 +175,19 @@ def test_position_tolerance_is_the_quantisation_noise_of_the_rms() -> None:
     assert position_tolerance(12) < position_tolerance(3)
     with pytest.raises(InputError, match="at least one alarm"):
         position_tolerance(0)
+
+
+def test_horizon_spans_the_reachable_meters_only() -> None:
+    # m9 is cut off (no path): it does not stretch the horizon. From p01's point nearest m0
+    # (10 % along) the wave travels 60 m to m0 and 1,140 m to m2: 1,080 m apart.
+    inf = math.inf
+    distances = {
+        "m0": np.array([0.0, 1200.0, inf]),
+        "m1": np.array([600.0, 600.0, inf]),
+        "m2": np.array([1200.0, 0.0, inf]),
+    }
+    pipes = [PipeGeometry("p01", "m0", "m1", 600.0), PipeGeometry("p12", "m1", "m2", 600.0)]
+    loc = ArrivalLocalizer(pipes, ("m0", "m2", "m9"), distances, wave_speed=1200.0)
+    assert loc.horizon == pytest.approx(1080.0 / 1200.0)
+    alone = ArrivalLocalizer(pipes, ("m9",), {n: np.array([inf]) for n in distances})
+    assert alone.horizon == 0.0

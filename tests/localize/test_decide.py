@@ -3,15 +3,17 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from burstloc.exceptions import ConfigError, InputError
+from burstloc.localize.arrival import ArrivalLocalizer
 from burstloc.localize.config import IntervalCalibration
 from burstloc.localize.decide import Decision, RankingLocalizers, decision_time, rank_alarms
-from burstloc.localize.evidence import IndexedAlarm, RankedPipe, Ranking
-from burstloc.localize.fused import FusedLocalizer, quantisation_margin
+from burstloc.localize.evidence import IndexedAlarm, RankedPipe, Ranking, evidence_at
+from burstloc.localize.fused import FusedLocalizer, decisive, quantisation_margin
 from line_network import METERS, WAVE, line_arrival, line_signature
 
 # signature rows: p01 and p12 differ only at m0 / m2, p23 is far from both
@@ -206,9 +208,9 @@ def test_a_decision_knows_its_first_alarm_and_prints_as_json() -> None:
 def test_a_late_fused_answer_takes_its_position_from_the_arrivals_at_their_time() -> None:
     # With every pipe crossed in 10 ms the arrivals time none at 0.05 s: the fused localizer
     # answers at the signature's time (60 s). The burst is 100 m along p01: m3's wave comes
-    # 1.33 s after the first alarm, after the arrivals' 1 s window; at 60 s it would count as
-    # silent (no wave before 59.9 s) and no point would fit. The position comes from the
-    # arrivals at 1 s.
+    # 1.33 s after the first alarm; at 60 s it would count as silent (no wave before 59.9 s)
+    # had its alarm been left out, and no point would fit. The position comes from the
+    # arrivals at their horizon (1.4 s), m3's included.
     localizers = _localizers(tau=0.01)
     localizers.fused.longest_travel = 0.01
     assert not localizers.fused.resolves(0.05)
@@ -218,3 +220,51 @@ def test_a_late_fused_answer_takes_its_position_from_the_arrivals_at_their_time(
     assert at is not None and at.pipe == "p01" and at.start == "m0"
     assert abs(at.metres - 100.0) <= 31.0
     assert at.low <= 100.0 <= at.high and at.high - at.low < 300.0
+
+
+def _two_meter_arrival() -> ArrivalLocalizer:
+    """The line's arrival localizer with meters at its two ends only (m0, m3)."""
+    full = line_arrival()
+    ends = [0, 3]
+    distances = {f"m{i}": np.array([abs(600.0 * i - 600.0 * j) for j in ends]) for i in range(4)}
+    return ArrivalLocalizer(full.pipes, ("m0", "m3"), distances, wave_speed=WAVE)
+
+
+def test_the_horizon_is_the_longest_spread_of_arrivals_at_the_meters() -> None:
+    # the candidate points nearest the line's ends (60 m from m0 or m3) reach the other end
+    # 1,680 m of travel later; meters between the ends change nothing
+    assert _two_meter_arrival().horizon == pytest.approx((1800.0 - 120.0) / WAVE)
+    assert line_arrival().horizon == pytest.approx((1800.0 - 120.0) / WAVE)
+
+
+def test_with_few_meters_the_arrivals_are_looked_at_again_until_decisive() -> None:
+    # 700 m along the line (p12), meters at its ends: m0 hears the wave at 0.58 s, m3 at 0.92 s.
+    # At the first look (0.1 s after the first alarm) only m0 has: p01 and p12 fit alike.
+    arrival = _two_meter_arrival()
+    t, readings, every = _burst(700.0, np.full(4, 0.5))
+    keep = [0, 3]
+    readings = readings[:, keep]
+    alarms = [
+        IndexedAlarm(keep.index(a.channel), a.index, a.start, a.amplitude)
+        for a in every
+        if a.channel in keep
+    ]
+    cal = replace(_calibration(), arrival_decision_delay=0.1)
+    first = min(float(t[a.index]) for a in alarms)
+    meters = ("m0", "m3")
+
+    def decide(until: float) -> Decision:
+        n = int(np.searchsorted(t, until + 1e-9, side="right"))  # the readings so far
+        seen = [a for a in alarms if a.index < n]
+        return rank_alarms(
+            "arrival", {"arrival": arrival}, meters, t[:n], readings[:n], seen, cal, "instantaneous"
+        )
+
+    early = evidence_at(first + 0.1, meters, t, readings, alarms, cal, "instantaneous")
+    assert not decisive(arrival.rank(early), quantisation_margin(2))
+    decision = decide(float(t[-1]))
+    assert decision.pipe == "p12" and decision.look_again is None
+    assert first + 0.1 < decision.time <= first + arrival.horizon + 1e-9
+    # live, with readings up to the first look only, the answer says when to look again
+    provisional = decide(first + 0.1)
+    assert provisional.look_again == pytest.approx(first + 0.15)

@@ -9,14 +9,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from burstloc.exceptions import ConfigError
+from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.localize.arrival import PipeGeometry
 from burstloc.localize.signature import SignatureSet
 from burstloc.sim.placement import (
     METERS_FORMAT,
     MeterSet,
     arrival_meters,
+    arrival_separation,
     coverage_meters,
+    meter_separation,
     place_meters,
 )
 from conftest import write_tiny
@@ -135,3 +137,30 @@ def test_coverage_placement_on_a_network_file(tmp_path: Path) -> None:
     assert placed.method == "coverage" and len(placed.meters) == 3
     with pytest.raises(ConfigError, match="meter count must be between 1 and 4"):
         place_meters(tiny, 5, method="coverage")
+
+
+def test_arrival_separation_counts_the_points_told_from_every_other_pipe() -> None:
+    # A line of four 500 m pipes, meters at both ends: the difference of their arrival times
+    # changes along the whole line. The points nearest an inner junction on its two pipes (10 %
+    # from it, 100 m apart) differ by 200 m of travel, 0.17 s: told apart at 0.1 s, not at 0.2 s
+    # (6 of the 36 points); a single meter tells nothing (the burst time is free).
+    pipes, _, distances = _line(5)
+    ends = {n: d[[0, 4]] for n, d in distances.items()}
+    assert arrival_separation(pipes, ends, resolution=0.1) == 1.0
+    assert arrival_separation(pipes, ends, resolution=0.2) == pytest.approx(30 / 36)
+    middle = {n: d[[2]] for n, d in distances.items()}
+    assert arrival_separation(pipes, middle, resolution=0.1) == 0.0
+    with pytest.raises(ConfigError, match="resolution"):
+        arrival_separation(pipes, ends, resolution=0.0)
+
+
+def test_meter_separation_on_the_paper_network(paper15: Path) -> None:
+    every = meter_separation(
+        paper15, [f"N{i}" for i in range(2, 9)] + [str(i) for i in range(1, 9)]
+    )
+    four = meter_separation(paper15, ["N4", "N7", "1", "8"])
+    assert 0.0 == meter_separation(paper15, ["N4"]) < four < every <= 1.0
+    with pytest.raises(NetworkError):
+        meter_separation(paper15, ["N4", "nowhere"])
+    with pytest.raises(ConfigError, match="no meters"):
+        meter_separation(paper15, [])

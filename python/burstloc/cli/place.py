@@ -22,7 +22,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         description="Choose K junctions for pressure meters from the network model alone (no "
         "burst is simulated). 'arrival' (default): greedy separation of the wave arrival-time "
         "patterns of bursts on different pipes, for the arrival and fused localizers; "
-        "'coverage': greedy separation of the steady-state burst signatures. The meter file "
+        "'coverage': greedy separation of the steady-state burst signatures. Prints the meters "
+        "and their arrival separation: the share of candidate burst points whose arrival "
+        "pattern is at least one capture interval from every other pipe's. The meter file "
         "(JSON, format burstloc-meters/1) is accepted by `evaluate`, `calibrate` and `study` "
         "with --meters-file.",
     )
@@ -67,7 +69,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Handle ``burstloc place``: print the meters; write the file with ``--out``."""
-    from burstloc.sim.placement import place_meters
+    from burstloc.sim.placement import meter_separation, place_meters
 
     if args.out:
         check_output(args.out)
@@ -83,6 +85,13 @@ def run(args: argparse.Namespace) -> int:
     print(
         f"{len(placed.meters)} of {placed.junctions} junctions ({placed.method}): "
         + " ".join(placed.meters)
+    )
+    told = meter_separation(
+        args.network, placed.meters, wave_speed=args.wave_speed, resolution=args.capture_interval
+    )
+    print(
+        f"arrival separation at {args.capture_interval:g} s: {100 * told:.0f} % of the candidate "
+        "burst points are at least one capture interval from every point of every other pipe"
     )
     if args.out:
         print(f"wrote {placed.save(args.out)}")

@@ -28,9 +28,10 @@ readings that includes the current one, ``|x - mean| / std`` can never exceed ``
 so a multiplier of 3 needs ``W >= 11``; with ``N = 10`` a step's first reading scores 4.4.
 ``travel_spread`` is the longest wave travel time between two meters. The signature localizer
 decides ``decision_delay`` = 150 s after the onset (the time budget for a decision on the
-lasting drop); the arrival localizer ``max(median pipe length / wave speed, 2 * dt)`` after the
-first alarm: by then the wave has reached both end nodes of the burst pipe, the meters that
-matter most.
+lasting drop); the arrival localizer first looks ``max(median pipe length / wave speed, 2 * dt)``
+after the first alarm: by then the wave has reached both end nodes of the burst pipe, the meters
+that matter most (with few meters it looks again until its answer is decisive or the wave has
+reached every meter: :func:`burstloc.localize.decide.rank_alarms`).
 
 **Configuration file.** The result is a :class:`burstloc.localize.config.Calibration` (the stored
 configuration lives in the localize layer, which the live monitor reads without this module):

@@ -16,7 +16,8 @@ class LiveDecision:
     """A decision as the monitor reports it: the localizer's :class:`Decision`, which meters
     took part (``meters``), which were excluded and which alarmed, and how long it waited after
     the first alarm. ``waited`` is true when the answer came later than the arrival localizer's
-    own delay (plus one capture interval): the monitor waited for settled readings. (The live
+    last look (:func:`burstloc.localize.decide.arrival_horizon`, plus one capture interval): the
+    monitor waited for settled readings. (The live
     loop adds the health record at decision time to :meth:`to_json`'s record.)
 
     With a classifier the answer comes in two records: a *transient* located as soon as the

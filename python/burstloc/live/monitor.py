@@ -7,7 +7,8 @@ configuration's stored localization model (:class:`burstloc.localize.model.Local
 and a bounded history of readings. Each :meth:`BurstMonitor.push` feeds one complete time step (a
 :class:`burstloc.readings.Step`: one reading per meter, in the configuration's meter order) to
 the bank; once a meter alarms, the monitor answers at the localizer's decision time with the same
-rule as ``burstloc evaluate`` (:func:`burstloc.localize.decide.rank_alarms`).
+rule as ``burstloc evaluate`` (:func:`burstloc.localize.decide.rank_alarms`), ranking again at
+the next look while the arrivals seen so far are not decisive (``Decision.look_again``).
 
 After a decision the monitor holds off for ``holdoff`` seconds (default: the calibrated
 signature delay, 150 s): a burst rings through the network for minutes; the readings still fill
@@ -54,10 +55,12 @@ from burstloc.constants import METER_MODELS, RANKING_LOCALIZERS, MeterModel
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.live.decision import LiveDecision
 from burstloc.live.subset import SubsetLocalizers
+from burstloc.localize.arrival import ArrivalLocalizer
 from burstloc.localize.classify import ClassifierConfig, EventClassifier, Operation, classify_alarms
 from burstloc.localize.config import Calibration, calibrated_bank
 from burstloc.localize.decide import (
     RankingLocalizers,
+    arrival_horizon,
     decision_time,
     fused_of,
     rank_alarms,
@@ -351,6 +354,9 @@ class BurstMonitor:
             raise InputError(
                 f"burst detected but not located at t = {times[-1]:g} s: {exc}"
             ) from exc
+        if decision.look_again is not None:
+            self._due = decision.look_again  # the arrivals are not decisive yet: more are due
+            return None
         alarmed = tuple(sorted({meters[a.channel] for a in alarms}, key=self.meters.index))
         excluded = tuple(m for m in self.meters if m in self.excluded)
         settled = decision_time("signature", alarms, times, cal)
@@ -374,8 +380,13 @@ class BurstMonitor:
         self._due = None
         self._announced = False
         self._quiet_until = float(times[-1]) + self.holdoff
+        arrival = localizers.get("arrival")
+        looked = (
+            arrival_horizon(arrival, cal)
+            if isinstance(arrival, ArrivalLocalizer)
+            else cal.arrival_decision_delay
+        )
         waited = decision.waited or (
-            decision.time - decision.first_alarm
-            > cal.arrival_decision_delay + cal.capture_interval + 1e-9
+            decision.time - decision.first_alarm > looked + cal.capture_interval + 1e-9
         )
         return LiveDecision(decision, self.localizer, tuple(meters), excluded, alarmed, waited)

@@ -109,6 +109,18 @@ class PipePosition:
         }
 
 
+def _horizon(dist: NDArray[np.float64]) -> float:
+    """The longest spread (m) of the path lengths from one candidate point to the meters it
+    reaches (``dist``: (pipes, points, meters); unreachable meters are infinite)."""
+    finite = np.isfinite(dist)
+    if not finite.any():
+        return 0.0
+    near = np.where(finite, dist, np.inf).min(axis=2)
+    far = np.where(finite, dist, -np.inf).max(axis=2)
+    spread = np.where(finite.any(axis=2), far - near, 0.0)
+    return float(spread.max())
+
+
 class ArrivalLocalizer:
     """Rank pipes by how well wave travel from a point on them explains the meters' alarm starts.
 
@@ -165,8 +177,12 @@ class ArrivalLocalizer:
         self.decision_delay = (
             float(decision_delay) if decision_delay is not None else self.pipe_travel
         )
-        """How long after the first alarm the localizer wants to answer (default:
+        """How long after the first alarm the localizer first looks at the arrivals (default:
         ``pipe_travel``: by then the wave has reached both ends of the burst pipe)."""
+        self.horizon = _horizon(self._dist) / self.wave_speed
+        """Wave travel time (s) from the first meter a burst's wave reaches to the last one it
+        reaches, the longest over the candidate points: the latest a look at the arrivals can
+        learn from (:func:`burstloc.localize.decide.rank_alarms` looks until then)."""
 
     def misfit(self, evidence: BurstEvidence) -> NDArray[np.float64]:
         """RMS arrival misfit (s) of every pipe's best candidate point, shape (pipes,).

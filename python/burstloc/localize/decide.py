@@ -3,21 +3,28 @@
 One place for the decision rule shared by ``burstloc evaluate`` and ``burstloc study`` (and any
 live caller holding the readings so far):
 
-* ``arrival``: at the first alarm's reading time plus the calibrated
-  ``arrival_decision_delay`` (about one wave travel time along a pipe);
+* ``arrival``: it first looks at the arrivals at the first alarm's reading time plus the
+  calibrated ``arrival_decision_delay`` (about one wave travel time along a pipe), then again
+  at every reading, and answers at the first look whose ranking is *decisive* (the runner-up's
+  log-likelihood is at least the margin below the best,
+  :func:`burstloc.localize.fused.decisive`; the fused localizer's
+  :attr:`~burstloc.localize.fused.FusedLocalizer.margin`), at the latest at the arrival
+  *horizon* (:func:`arrival_horizon`: by then the wave of a burst anywhere has reached every
+  meter it will reach). With meters at most junctions the first look is usually decisive; with
+  few meters, far apart, the wave has reached one or two of them by then, and the pipes that
+  fit those alone are many;
 * ``signature``: at the onset (the earliest alarm start, the last reading before the change) plus
   the calibrated ``decision_delay`` (150 s: the lasting drop needs settled readings);
 * ``fused``: where the capture interval is short enough for the arrivals to time the wave along
-  some candidate pipe (:meth:`burstloc.localize.fused.FusedLocalizer.resolves`) it first ranks
-  at the arrival time. If that ranking is *decisive* (the runner-up's log-likelihood is at least
-  :attr:`burstloc.localize.fused.FusedLocalizer.margin` below the best) that is the answer;
-  otherwise (a burst near a junction fits several of the junction's pipes almost equally well in
-  time) it waits for the signature's decision time and answers with both. At coarse intervals
-  it answers at the signature's time.
+  some candidate pipe (:meth:`burstloc.localize.fused.FusedLocalizer.resolves`) it looks at the
+  arrivals as the arrival localizer does. A decisive look is the answer; if none is by the
+  horizon (a burst near a junction fits several of the junction's pipes almost equally well in
+  time) it waits for the signature's decision time and answers with both, the arrivals as of
+  the horizon. At coarse intervals it answers at the signature's time.
 
 Every answer of the arrival and fused localizers carries the burst's position on the named pipe
-(metres from its flow-direction start node, with an interval) from the arrival fit at the arrival
-localizer's decision time, whenever the answer comes
+(metres from its flow-direction start node, with an interval) from the arrival fit at the last
+look at the arrivals, whenever the answer comes
 (:meth:`burstloc.localize.arrival.ArrivalLocalizer.position`).
 
 The localizers come as a :class:`RankingLocalizers` (built from a stored
@@ -28,7 +35,7 @@ mapping of names to :class:`burstloc.localize.evidence.Localizer`); every answer
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -38,7 +45,7 @@ from burstloc.constants import RANKING_LOCALIZERS, MeterModel
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.localize.arrival import ArrivalLocalizer, PipePosition
 from burstloc.localize.evidence import BurstEvidence, Localizer, Ranking, evidence_at
-from burstloc.localize.fused import FusedLocalizer
+from burstloc.localize.fused import FusedLocalizer, decisive, quantisation_margin
 from burstloc.localize.signature import SignatureLocalizer
 
 if TYPE_CHECKING:
@@ -46,7 +53,14 @@ if TYPE_CHECKING:
     from burstloc.localize.config import IntervalCalibration
     from burstloc.localize.model import LocalizationModel
 
-__all__ = ["Decision", "RankingLocalizers", "decision_time", "fused_of", "rank_alarms"]
+__all__ = [
+    "Decision",
+    "RankingLocalizers",
+    "arrival_horizon",
+    "decision_time",
+    "fused_of",
+    "rank_alarms",
+]
 
 
 @dataclass(frozen=True)
@@ -56,7 +70,10 @@ class Decision:
     arrivals were not decisive), where on the best pipe the burst is (from the arrival fit,
     :meth:`burstloc.localize.arrival.ArrivalLocalizer.position`; ``None`` for the signature
     localizer) and ``classification``, when the alarm was classified
-    (:mod:`burstloc.localize.classify`): burst, other event or unsure."""
+    (:mod:`burstloc.localize.classify`): burst, other event or unsure. ``look_again`` is set
+    when the answer is provisional: the readings ended before the arrivals were decisive or had
+    reached their horizon (:func:`arrival_horizon`); the caller ranks again once it has the
+    readings up to that reading time (the live monitor does)."""
 
     ranking: Ranking
     time: float
@@ -64,6 +81,7 @@ class Decision:
     waited: bool = False
     position: PipePosition | None = None
     classification: Classification | None = None
+    look_again: float | None = None
 
     @property
     def is_burst(self) -> bool:
@@ -170,7 +188,7 @@ def decision_time(
     ``arrival`` (and ``fused`` where the arrivals can resolve some pipe): the first alarm's
     reading time plus ``calibration.arrival_decision_delay``. ``signature`` (and ``fused``
     otherwise): the onset plus ``calibration.decision_delay``, so the answer comes within that
-    delay of the burst itself. (:func:`rank_alarms` may defer a fused answer; see the module.)
+    delay of the burst itself. (:func:`rank_alarms` may look again later; see the module.)
 
     Raises:
         InputError: no alarm.
@@ -209,35 +227,100 @@ def rank_alarms(
     fused = fused_of(localizers)
     chosen = localizers[localizer]
     last = float(times[-1])
+    first, onset = _first_and_onset(alarms, times)
 
     def evidence(decided: float) -> BurstEvidence:
         return evidence_at(decided, meters, times, readings, alarms, calibration, meter_model)
 
+    def arrivals(decided: float) -> BurstEvidence:  # every alarm up to a later look counts
+        window = max(calibration.arrival_decision_delay, decided - first)
+        return evidence_at(
+            decided, meters, times, readings, alarms, calibration, meter_model, alarm_window=window
+        )
+
     decided = decision_time(localizer, alarms, times, calibration, fused)
-    first, onset = _first_and_onset(alarms, times)
-    early = evidence(decided)
-    if fused is None or localizer != "fused":
-        ranking = chosen.rank(early)
-        at = _position(chosen if isinstance(chosen, ArrivalLocalizer) else None, early, ranking)
-        return Decision(ranking, min(decided, last), first, position=at)
-    if not _arrival_first(localizer, calibration, fused):
-        # at the signature's own decision time; the position from the arrivals at theirs (by
-        # the signature's time every meter's wave has come: none would count as silent)
+    arrival = chosen if isinstance(chosen, ArrivalLocalizer) else None
+    if localizer == "fused" and fused is not None and _arrival_first(localizer, calibration, fused):
+        arrival = fused.arrival
+    if arrival is None:
+        early = evidence(decided)
+        if fused is None or localizer != "fused":
+            return Decision(chosen.rank(early), min(decided, last), first)
+        # at the signature's own decision time; the position from the arrivals at their
+        # horizon (by the signature's time every meter's wave has come)
         ranking = fused.rank(early, signature_ranking=signature_ranking)
-        arrived = evidence(min(first + calibration.arrival_decision_delay, last))
+        arrived = arrivals(min(first + arrival_horizon(fused.arrival, calibration), last))
         at = _position(fused.arrival, arrived, ranking)
         return Decision(ranking, min(decided, last), first, position=at)
-    arrivals = fused.arrival.rank(early)
+    margin = quantisation_margin(len(arrival.meters)) if fused is None else fused.margin
+    look = _look(arrival, margin, arrivals, decided, first, last, calibration)
+    if fused is None or localizer != "fused":
+        return Decision(
+            look.ranking,
+            look.time,
+            first,
+            position=_position(arrival, look.evidence, look.ranking),
+            look_again=look.again,
+        )
     later = onset + calibration.decision_delay
-    if fused.decisive(arrivals) or later <= decided:
-        ranking = fused.rank(early, arrival_ranking=arrivals)
-        at = _position(fused.arrival, early, ranking)
-        return Decision(ranking, min(decided, last), first, position=at)
+    if look.decisive or look.again is not None or later <= look.time:
+        ranking = fused.rank(look.evidence, arrival_ranking=look.ranking)
+        at = _position(arrival, look.evidence, ranking)
+        return Decision(ranking, look.time, first, position=at, look_again=look.again)
     ranking = fused.rank(
-        evidence(later), arrival_ranking=arrivals, signature_ranking=signature_ranking
+        evidence(later), arrival_ranking=look.ranking, signature_ranking=signature_ranking
     )
-    at = _position(fused.arrival, early, ranking)
+    at = _position(arrival, look.evidence, ranking)
     return Decision(ranking, min(later, last), first, waited=True, position=at)
+
+
+def arrival_horizon(arrival: ArrivalLocalizer, calibration: IntervalCalibration) -> float:
+    """Seconds after the first alarm of the last look at the arrivals: the arrival localizer's
+    :attr:`~burstloc.localize.arrival.ArrivalLocalizer.horizon` (by then a burst's wave has
+    reached every meter it will reach), at least the calibrated first look
+    (``arrival_decision_delay``)."""
+    return max(calibration.arrival_decision_delay, arrival.horizon)
+
+
+@dataclass(frozen=True)
+class _Look:
+    """The arrivals as last looked at: the ranking, its evidence and reading time, whether it
+    was decisive, and the reading time of the next look if the readings ended before the
+    horizon (``None`` otherwise)."""
+
+    ranking: Ranking
+    evidence: BurstEvidence
+    time: float
+    decisive: bool
+    again: float | None
+
+
+def _look(
+    arrival: ArrivalLocalizer,
+    margin: float,
+    evidence: Callable[[float], BurstEvidence],
+    decided: float,
+    first: float,
+    last: float,
+    calibration: IntervalCalibration,
+) -> _Look:
+    """Rank the arrivals at ``decided``, then once every capture interval, until the ranking is
+    decisive (:func:`burstloc.localize.fused.decisive` by ``margin``) or the horizon
+    (:func:`arrival_horizon`) is reached. A look due after the last reading is not taken: its
+    time is returned as ``again``, so that a caller with more readings takes the same looks."""
+    dt = calibration.capture_interval
+    horizon = first + arrival_horizon(arrival, calibration)
+    at = min(decided, last)
+    while True:
+        seen = evidence(at)
+        ranking = arrival.rank(seen)
+        settled = decisive(ranking, margin)
+        if settled or at >= horizon - 1e-9:
+            return _Look(ranking, seen, at, settled, None)
+        following = min(at + dt, horizon)
+        if following > last + 1e-9:
+            return _Look(ranking, seen, at, settled, following)
+        at = following
 
 
 def _position(

@@ -326,10 +326,12 @@ def evidence_at(
     alarms: Iterable[Any],
     calibration: Any,
     meter_model: MeterModel,
+    *,
+    alarm_window: float | None = None,
 ) -> BurstEvidence:
     """:func:`evidence_from_alarms` at reading time ``decided`` with a calibration's capture
-    interval and alarm window (its ``arrival_decision_delay``): the evidence every ranking
-    localizer and the classifier read."""
+    interval and alarm window (``alarm_window`` s, default its ``arrival_decision_delay``): the
+    evidence every ranking localizer and the classifier read."""
     return evidence_from_alarms(
         meters,
         times,
@@ -338,5 +340,5 @@ def evidence_at(
         capture_interval=calibration.capture_interval,
         meter_model=meter_model,
         decision_time=decided,
-        alarm_window=calibration.arrival_decision_delay,
+        alarm_window=calibration.arrival_decision_delay if alarm_window is None else alarm_window,
     )

@@ -24,11 +24,13 @@ localizer first looks at the arrivals at the arrival localizer's (short) delay w
 the wave along some candidate pipe (:meth:`FusedLocalizer.resolves`: ``exp(-dt / T) >= 0.5`` with
 ``T`` the wave's travel time along the longest pipe; networks mix pipes of 30 m and 3 km, and
 with meters at most junctions the arrivals tell even a short pipe from its neighbours by the
-order in which the meters beyond its ends hear the wave). It answers then if they are *decisive*
-(:meth:`FusedLocalizer.decisive`: the runner-up is at least ``margin`` log-likelihood units
-behind, by default the quantisation noise of the RMS arrival misfit,
+order in which the meters beyond its ends hear the wave), and again at every reading until the
+arrival horizon (the wave of a burst anywhere has reached every meter it will reach: with few
+meters far apart, the first look sees one or two of them). It answers at the first look whose
+arrivals are *decisive* (:meth:`FusedLocalizer.decisive`: the runner-up is at least ``margin``
+log-likelihood units behind, by default the quantisation noise of the RMS arrival misfit,
 :func:`quantisation_margin`), and at the signature localizer's delay otherwise, with the arrival
-ranking taken at the early time (:func:`burstloc.localize.decide.rank_alarms`). A burst near a
+ranking of the last look (:func:`burstloc.localize.decide.rank_alarms`). A burst near a
 junction fits every pipe at that junction about equally well in time; the lasting drop then tells
 them apart. Numpy only; on the live path."""
 
@@ -44,7 +46,13 @@ from burstloc.localize.arrival import ArrivalLocalizer
 from burstloc.localize.evidence import BurstEvidence, RankedPipe, Ranking
 from burstloc.localize.signature import SignatureLocalizer
 
-__all__ = ["FusedLocalizer", "arrival_loglik", "quantisation_margin", "signature_loglik"]
+__all__ = [
+    "FusedLocalizer",
+    "arrival_loglik",
+    "decisive",
+    "quantisation_margin",
+    "signature_loglik",
+]
 
 ARRIVAL_SCALE = 0.5
 """Misfit (capture intervals) worth one unit of arrival log-likelihood."""
@@ -73,6 +81,13 @@ def arrival_loglik(ranking: Ranking) -> dict[str, float]:
     if best is None:
         return {}
     return {p.pipe: (p.score - best.score) / ARRIVAL_SCALE for p in ranking}
+
+
+def decisive(arrival_ranking: Ranking, margin: float) -> bool:
+    """Whether an arrival ranking's best pipe leads the runner-up by at least ``margin``
+    log-likelihood units (:func:`arrival_loglik`; a ranking of fewer than two pipes is)."""
+    loglik = sorted(arrival_loglik(arrival_ranking).values(), reverse=True)
+    return len(loglik) < 2 or loglik[0] - loglik[1] >= margin
 
 
 def signature_loglik(ranking: Ranking) -> dict[str, float]:
@@ -146,9 +161,9 @@ class FusedLocalizer:
         return self.signature.decision_delay
 
     def decisive(self, arrival_ranking: Ranking) -> bool:
-        """Whether an arrival ranking's best pipe leads the runner-up by at least ``margin``."""
-        loglik = sorted(arrival_loglik(arrival_ranking).values(), reverse=True)
-        return len(loglik) < 2 or loglik[0] - loglik[1] >= self.margin
+        """Whether an arrival ranking's best pipe leads the runner-up by at least ``margin``
+        (:func:`decisive`)."""
+        return decisive(arrival_ranking, self.margin)
 
     def _signature_ready(self, evidence: BurstEvidence) -> bool:
         settled = evidence.times >= evidence.onset + self.signature.settle
