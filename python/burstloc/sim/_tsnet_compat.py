@@ -55,8 +55,10 @@ And one makes a network with a junction below atmospheric pressure at the start 
   end's characteristic. Every other dead end, and any with a root, runs TSNet's code.
 
 Nothing else changes: on the pinned stack (numpy 1.26, WNTR 1.3.2) the patched TSNet gives
-bit-identical heads (``tests/sim/test_tsnet_compat.py`` checks this, and checks numpy 2 against
-heads stored from the pinned stack). TSNet is MIT-licensed; the thresholds below are TSNet's.
+bit-identical heads wherever no junction without demand starts below atmospheric pressure
+(``tests/sim/test_tsnet_compat.py`` checks this, checks numpy 2 against heads stored from the
+pinned stack, and shows each of the last two patches needed where one does). TSNet is
+MIT-licensed; the thresholds below are TSNet's.
 """
 
 from __future__ import annotations
