@@ -12,7 +12,7 @@ Every error is a typed subclass of a built-in exception, so callers can catch pr
   (with the file and line).
 * :class:`SimulationError` (``RuntimeError``): the transient simulation (TSNet) failed.
 * :class:`UnsteadyStartError` (``SimulationError``): the simulated heads moved before the event
-  (the network does not start steady under TSNet); the message names the junction, the
+  (the network does not start steady in the transient model); the message names the junction, the
   movement in metres and the network.
 * :class:`SimulatorMissingError` (``SimulationError``): a command needs the simulator (TSNet,
   WNTR: the ``sim`` extra), which is not installed; the message says how to install it.
@@ -72,7 +72,7 @@ class UnsteadyStartError(SimulationError):
         tolerance: float,
     ) -> None:
         super().__init__(
-            f"{network} does not start steady under TSNet: junction {junction!r} moved "
+            f"{network} does not start steady in the transient model: junction {junction!r} moved "
             f"{movement:.3g} m from its initial head by {time:.3g} s, before the event at "
             f"{onset:g} s (tolerance {tolerance:g} m)"
         )
