@@ -69,8 +69,8 @@ def add_solver_option(parser: argparse.ArgumentParser) -> None:
         choices=SOLVERS,
         default=SOLVERS[0],
         help="transient solver: 'vectorized' (default) solves TSNet's model with whole-network "
-        "array operations, the same heads as TSNet's own solver, 10-70 times faster; 'tsnet' "
-        "runs TSNet's MOCSimulator",
+        "array operations, the same heads as TSNet's own solver, its time loop 20-70 times "
+        "faster; 'tsnet' runs TSNet's MOCSimulator",
     )
 
 

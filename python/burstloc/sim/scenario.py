@@ -19,7 +19,7 @@ The defaults (see ``networks/README.md`` for the reasoning):
 ``time_step``             None       TSNet's largest stable step, as in the paper
 ``engine``                "PDD"      the paper's pressure-driven initial steady state
 ``solver``                vectorized burstloc's vectorized MOC solver (:mod:`burstloc.sim.moc`):
-                                     TSNet's model, TSNet's heads, 10-70 times faster
+                                     TSNet's model and heads, a 20-70x faster solve
 ========================  =========  ==================================================
 """
 

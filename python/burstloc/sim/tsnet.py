@@ -3,7 +3,7 @@
 :func:`simulate_burst` splits the pipe with a new junction (:func:`burstloc.network.split_pipe`),
 places TSNet's burst there, solves the initial steady state (pressure-driven demand, as the
 paper does) and runs the MOC transient simulation: TSNet's model, solved by burstloc's
-vectorized solver (:mod:`burstloc.sim.moc`, the default: TSNet's heads, 10-70 times faster) or
+vectorized solver (:mod:`burstloc.sim.moc`, the default: TSNet's heads, 20-70x faster) or
 by TSNet's own ``MOCSimulator`` (``solver="tsnet"``). Results are cached on disk by content
 (:mod:`burstloc.sim.cache`); :func:`simulate_many` sweeps scenarios over local processes or a
 Dask cluster (:mod:`burstloc.sim.sweep`).
