@@ -43,9 +43,9 @@ def solve_times(solver: str, scenario: Any) -> tuple[float, float, Any]:
     simulation (network preparation, steady state, discretization, solve), and the result."""
     from dataclasses import replace
 
-    from burstloc.sim import moc, tsnet
+    from burstloc.sim import _tsnet_compat, moc, tsnet
 
-    module = tsnet._tsnet_compat.load().simulation if solver == "tsnet" else moc
+    module = _tsnet_compat.load().simulation if solver == "tsnet" else moc
     attribute = "MOCSimulator" if solver == "tsnet" else "solve"
     original = getattr(module, attribute)
     spent: list[float] = []

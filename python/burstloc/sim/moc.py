@@ -48,7 +48,8 @@ class _Ends:
         self.near = np.asarray(group.near, dtype=np.int64)
         self.node = np.asarray(group.node, dtype=np.int64)
         self.value = np.asarray(group.value, dtype=np.float64)
-        self.series = group.series
+        velocities = [v for v in group.series if v is not None]  # valve ends: per step
+        self.series = np.column_stack(velocities) if velocities else np.zeros((0, 0))
         self.ga, self.ag, self.gadt = lay.ga[p], lay.ag[p], lay.gadt[p]
         self.theta, self.cf, self.cf2 = lay.theta[p], lay.cf[p], lay.cf2[p]
         self.area, self.area_dead = lay.area[p], lay.area_dead[p]
@@ -231,7 +232,7 @@ def solve(tm: Any, friction: str = "steady") -> Any:
         for e, side in valves:  # a valve leading nowhere holds a flow (TSNet's valve_end)
             if e.size:
                 V1, H1 = V[e.near], H[e.near]
-                Vb = np.array([s[ts] for s in e.series])
+                Vb = e.series[ts]
                 J = e.cf * Vb * np.abs(Vb)
                 HN[e.out] = H1 + side * (e.ag * (Vb - V1)) + side * (e.ag * J)
                 VN[e.out] = Vb

@@ -174,8 +174,7 @@ def valve_end_velocity(builder: Any, pn: int, at_start: bool, point: int) -> np.
     steps = int(builder.tm.simulation_period / builder.tm.time_step)
     steady = np.float64(pipe.initial_velocity[point])
     if getattr(valve, "operating", False):
-        rule = np.asarray(valve.operation_rule, dtype=np.float64)
-        return np.array([steady * rule[ts] for ts in range(steps)], dtype=np.float64)
+        return steady * np.asarray(valve.operation_rule, dtype=np.float64)[:steps]
     if valve.initial_status.name == "Open":
         return np.full(steps, steady)
     return np.zeros(steps)
