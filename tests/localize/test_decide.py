@@ -253,11 +253,19 @@ def test_with_few_meters_the_arrivals_are_looked_at_again_until_decisive() -> No
     first = min(float(t[a.index]) for a in alarms)
     meters = ("m0", "m3")
 
-    def decide(until: float) -> Decision:
+    def decide(until: float, resume: float | None = None) -> Decision:
         n = int(np.searchsorted(t, until + 1e-9, side="right"))  # the readings so far
         seen = [a for a in alarms if a.index < n]
         return rank_alarms(
-            "arrival", {"arrival": arrival}, meters, t[:n], readings[:n], seen, cal, "instantaneous"
+            "arrival",
+            {"arrival": arrival},
+            meters,
+            t[:n],
+            readings[:n],
+            seen,
+            cal,
+            "instantaneous",
+            resume=resume,
         )
 
     early = evidence_at(first + 0.1, meters, t, readings, alarms, cal, "instantaneous")
@@ -268,3 +276,14 @@ def test_with_few_meters_the_arrivals_are_looked_at_again_until_decisive() -> No
     # live, with readings up to the first look only, the answer says when to look again
     provisional = decide(first + 0.1)
     assert provisional.look_again == pytest.approx(first + 0.15)
+    # resumed at each look_again, as the live monitor does, the looks reach the same answer
+    # at the same time, one look per call
+    step = provisional
+    calls = 0
+    while step.look_again is not None:
+        calls += 1
+        step = decide(step.look_again, resume=step.look_again)
+    assert (step.pipe, step.look_again) == (decision.pipe, None)
+    assert step.time == pytest.approx(decision.time, abs=1e-9)  # the same reading
+    assert step.position == decision.position
+    assert calls == round((decision.time - (first + 0.1)) / cal.capture_interval)

@@ -179,6 +179,7 @@ class BurstMonitor:
         self._steps = 0  # steps fed in all
         self._alarms: list[IndexedAlarm] = []  # by bank index
         self._due: float | None = None
+        self._resume: float | None = None  # the next look at the arrivals (Decision.look_again)
         self._announced = False  # the pending decision's transient record has been given
         self._quiet_until: float | None = None  # end of the hold-off after a decision
         self._arming = 0  # alarm-free steps still needed after the hold-off
@@ -288,7 +289,7 @@ class BurstMonitor:
         alarmed = {a.channel for a in self._alarms}
         if len(alarmed) < min(self.corroborate, len(self.meters) - len(self.excluded)):
             self.dismissed += 1  # one meter alone: noise or a glitch, not a burst
-            self._alarms, self._due, self._announced = [], None, False
+            self._alarms, self._due, self._announced, self._resume = [], None, False, None
             return None
         return self._decide()
 
@@ -347,15 +348,24 @@ class BurstMonitor:
             if not alarms:
                 raise InputError("every meter that alarmed has gone silent")
             decision = rank_alarms(
-                self.localizer, localizers, meters, times, readings, alarms, cal, self.meter_model
+                self.localizer,
+                localizers,
+                meters,
+                times,
+                readings,
+                alarms,
+                cal,
+                self.meter_model,
+                resume=self._resume,
             )
         except InputError as exc:
-            self._alarms, self._due, self._announced = [], None, False
+            self._alarms, self._due, self._announced, self._resume = [], None, False, None
             raise InputError(
                 f"burst detected but not located at t = {times[-1]:g} s: {exc}"
             ) from exc
         if decision.look_again is not None:
             self._due = decision.look_again  # the arrivals are not decisive yet: more are due
+            self._resume = decision.look_again
             return None
         alarmed = tuple(sorted({meters[a.channel] for a in alarms}, key=self.meters.index))
         excluded = tuple(m for m in self.meters if m in self.excluded)
@@ -378,6 +388,7 @@ class BurstMonitor:
             decision = replace(decision, time=float(times[-1]), classification=kind)
         self._alarms = []
         self._due = None
+        self._resume = None
         self._announced = False
         self._quiet_until = float(times[-1]) + self.holdoff
         arrival = localizers.get("arrival")

@@ -34,6 +34,7 @@ def monitor_state(monitor: BurstMonitor) -> dict[str, Any]:
         "steps": m._steps,
         "alarms": [[a.channel, a.index, a.start, a.amplitude] for a in m._alarms],
         "due": m._due,
+        "resume": m._resume,
         "announced": m._announced,
         "quiet_until": m._quiet_until,
         "arming": m._arming,
@@ -67,6 +68,7 @@ def restore_monitor(monitor: BurstMonitor, state: Mapping[str, Any]) -> None:
     m._seen, m._steps = int(state["seen"]), int(state["steps"])
     m._alarms = [IndexedAlarm(int(c), int(i), int(s), float(a)) for c, i, s, a in state["alarms"]]
     m._due = state["due"]
+    m._resume = state.get("resume")  # states saved before: the looks are taken from the start
     m._announced = bool(state.get("announced", False))  # states saved before: False
     m._quiet_until = state["quiet_until"]
     m._arming = int(state["arming"])

@@ -212,6 +212,7 @@ def rank_alarms(
     meter_model: MeterModel,
     *,
     signature_ranking: Ranking | None = None,
+    resume: float | None = None,
 ) -> Decision:
     """Rank the pipes with ``localizers[localizer]`` at its decision time (module docstring).
 
@@ -219,7 +220,11 @@ def rank_alarms(
     calibrated bank's alarms on them. The decision time is capped at the last reading.
     ``signature_ranking``: for ``fused``, the ranking of the ``signature`` decision on these same
     readings and alarms, if the caller has it (the fused localizer looks at the signatures at
-    that same time, so it need not fit them again); ignored otherwise.
+    that same time, so it need not fit them again); ignored otherwise. ``resume``: the
+    ``look_again`` of an earlier call on the same burst, whose looks were not decisive: the looks
+    start there instead of being taken again (a look depends only on the readings up to it, so
+    the answer is the same; the live monitor, whose readings grow by one step per call, would
+    otherwise repeat every earlier look at every reading).
 
     Raises:
         InputError: no alarm, or the localizer cannot answer from this evidence.
@@ -253,7 +258,8 @@ def rank_alarms(
         at = _position(fused.arrival, arrived, ranking)
         return Decision(ranking, min(decided, last), first, position=at)
     margin = quantisation_margin(len(arrival.meters)) if fused is None else fused.margin
-    look = _look(arrival, margin, arrivals, decided, first, last, calibration)
+    start = decided if resume is None else max(decided, resume)
+    look = _look(arrival, margin, arrivals, start, first, last, calibration)
     if fused is None or localizer != "fused":
         return Decision(
             look.ranking,
