@@ -30,13 +30,13 @@ from typing import Any
 
 import numpy as np
 
-from burstloc.exceptions import SimulationError
+from burstloc.exceptions import ConfigError, SimulationError
 from burstloc.sim import moc_elements
 from burstloc.sim.moc_elements import ElementEnd, G
 
 _BOUNDARY_NODES = ("Reservoir", "Tank")
 
-__all__ = ["ElementEnd", "G", "Layout", "dot_order", "layout"]
+__all__ = ["Layout", "dot_order", "layout"]
 
 
 @dataclass
@@ -181,8 +181,6 @@ def layout(tm: Any, friction: str = "steady") -> Layout:
         ConfigError: a friction model other than TSNet's ``steady``.
         SimulationError: an element TSNet leaves unsimulated (see the module's docstring).
     """
-    from burstloc.exceptions import ConfigError
-
     if friction != "steady":
         raise ConfigError(
             f"the vectorized solver models steady friction only, got {friction!r}; "

@@ -88,10 +88,6 @@ class Connector:
     length: float
     diameter: float
 
-    def as_metadata(self) -> dict[str, Any]:
-        """The record stored in a simulation's metadata."""
-        return asdict(self)
-
 
 def _needs_connector(wn: Any, link_name: str, node_name: str, edges: Collection[str]) -> bool:
     node = wn.get_node(node_name)
@@ -188,10 +184,6 @@ class SupplyBoundary:
     valve: str
     inflow: float
 
-    def as_metadata(self) -> dict[str, Any]:
-        """The record stored in a simulation's metadata."""
-        return asdict(self)
-
 
 def supply_junctions(wn: Any) -> dict[str, float]:
     """The junctions of ``wn`` with a negative demand at time 0 (patterns and the demand
@@ -251,8 +243,8 @@ class TsnetPreparation:
         """The records stored in a simulation's metadata."""
         return {
             "removed_closed_links": list(self.removed_closed_links),
-            "connectors": [c.as_metadata() for c in self.connectors],
-            "supply_boundaries": [s.as_metadata() for s in self.supply_boundaries],
+            "connectors": [asdict(c) for c in self.connectors],
+            "supply_boundaries": [asdict(s) for s in self.supply_boundaries],
         }
 
 
