@@ -8,7 +8,6 @@ use serde::{Deserialize, Serialize};
 use super::{check_channels, check_matrix, checked_step, Kernel};
 use crate::alarm::ChannelAlarm;
 use crate::cusum::CusumConfig;
-#[cfg(feature = "serde")]
 use crate::cusum::CusumLane;
 use crate::error::{filled, Error};
 
@@ -190,8 +189,8 @@ impl CusumBank {
         self.x_tan.copy_from_slice(readings);
     }
 
-    #[cfg(feature = "serde")]
-    fn lane(&self, c: usize) -> CusumLane {
+    /// Channel `c`'s state as one detector's lane (its starts in the bank's step indices).
+    pub(crate) fn lane(&self, c: usize) -> CusumLane {
         CusumLane {
             x_prev: self.x_prev[c],
             gp: self.gp[c],

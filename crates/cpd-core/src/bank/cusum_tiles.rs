@@ -290,7 +290,7 @@ pub(super) fn collect<const W: usize>(
 
 impl CusumBank {
     /// Steps every row of a validated row-major matrix, a chunk of rows at a time, tile by tile.
-    pub(super) fn advance_many(&mut self, matrix: &[f64], out: &mut Vec<ChannelAlarm>) {
+    pub(crate) fn advance_many(&mut self, matrix: &[f64], out: &mut Vec<ChannelAlarm>) {
         let n = self.channels();
         let mut rows = matrix;
         if self.steps_seen() == 0 && !rows.is_empty() {

@@ -1,5 +1,7 @@
 //! Streaming two-sided CUSUM (the paper's eq. 1–2 and Algorithm 1; TSNet 0.3.1's online pass).
 
+mod segments;
+
 use alloc::vec::Vec;
 use core::hint::select_unpredictable;
 
@@ -82,6 +84,17 @@ struct Sides {
     threshold: f64,
     drift: f64,
     sign: u64,
+}
+
+impl Sides {
+    #[inline(always)]
+    fn new(threshold: f64, drift: f64) -> Self {
+        Self {
+            threshold,
+            drift,
+            sign: opaque_sign(),
+        }
+    }
 }
 
 /// Alarm flag bits returned by [`CusumLane::step`].
@@ -213,12 +226,7 @@ impl CusumLane {
     /// become a branch).
     #[inline(always)]
     pub(crate) fn step_scalar(&mut self, x: f64, i: u64, threshold: f64, drift: f64) -> u8 {
-        let sides = Sides {
-            threshold,
-            drift,
-            sign: opaque_sign(),
-        };
-        let (flags, reset_p, reset_n) = self.advance(x, i, sides);
+        let (flags, reset_p, reset_n) = self.advance(x, i, Sides::new(threshold, drift));
         let bits = x.to_bits();
         self.x_tap = f64::from_bits(select_unpredictable(reset_p, bits, self.x_tap.to_bits()));
         self.x_tan = f64::from_bits(select_unpredictable(reset_n, bits, self.x_tan.to_bits()));
@@ -245,11 +253,7 @@ impl CusumLane {
             }
         };
         let mut lane = *self;
-        let sides = Sides {
-            threshold: thr,
-            drift,
-            sign: opaque_sign(),
-        };
+        let sides = Sides::new(thr, drift);
         for (i, &x) in (base..).zip(xs) {
             let (flags, _, _) = lane.advance(x, i, sides);
             if flags != 0 {
@@ -432,9 +436,12 @@ impl Cusum {
         } else {
             xs
         };
-        // The state lives in locals (registers) for the whole slice.
+        // Whole blocks as a bank of segments (`segments`), the rest sample after sample with the
+        // state in locals (registers).
+        let done = segments::run(&mut self.lane, rest, self.seen, &self.config, out);
         let (thr, drift) = (self.config.threshold, self.config.drift);
-        self.lane.run(rest, self.seen, thr, drift, out);
+        self.lane
+            .run(&rest[done..], self.seen + done as u64, thr, drift, out);
         self.seen += rest.len() as u64;
         Ok(())
     }
