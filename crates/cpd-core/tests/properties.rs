@@ -338,17 +338,19 @@ proptest! {
 
     #[test]
     fn long_slice_equals_update_per_sample(
-        (kind, n, seed) in (0..KINDS + 2, 512usize..20_000, any::<u64>()),
+        (kind, n, seed) in (0..KINDS + 3, 512usize..20_000, any::<u64>()),
         lead in 0usize..40, (thr, drift) in cusum_params()
     ) {
         // Long slices run as segments guessed in a bank and joined to the true state: the
         // alarms and the end state must be those of the sample-by-sample run, from a fresh
         // detector and from one part-way through a stream (`lead` samples fed one by one).
-        // Kinds past the signal families: a ramp (one side never resets: the guess never
-        // meets the truth) and a constant (with drift 0 the sums stay 0 and never reset).
+        // Kinds past the signal families: a steep ramp (a side that never resets keeps its old
+        // start: the guess never meets the truth, the slice falls back to sequential), a slow
+        // one, and a constant (with drift 0 the sums stay 0 and never reset).
         let x: Vec<f64> = match kind {
             k if k < KINDS => signal(k, n, &mut Rng::new(seed)),
-            k if k == KINDS => (0..n).map(|i| 200.0 - 1e-3 * i as f64).collect(),
+            k if k == KINDS => (0..n).map(|i| 200.0 - 0.05 * i as f64).collect(),
+            k if k == KINDS + 1 => (0..n).map(|i| 200.0 - 1e-3 * i as f64).collect(),
             _ => vec![200.0; n],
         };
         let cc = CusumConfig::new(thr, drift).unwrap();
