@@ -59,6 +59,7 @@ __all__ = [
     "arrival_horizon",
     "decision_time",
     "fused_of",
+    "horizon_of",
     "rank_alarms",
 ]
 
@@ -286,6 +287,16 @@ def arrival_horizon(arrival: ArrivalLocalizer, calibration: IntervalCalibration)
     reached every meter it will reach), at least the calibrated first look
     (``arrival_decision_delay``)."""
     return max(calibration.arrival_decision_delay, arrival.horizon)
+
+
+def horizon_of(localizers: Mapping[str, Localizer], calibration: IntervalCalibration) -> float:
+    """Seconds after the first alarm of the last look at the arrivals with ``localizers``: their
+    ``"arrival"`` localizer's :func:`arrival_horizon`, without one the calibrated first look
+    (``arrival_decision_delay``)."""
+    arrival = localizers.get("arrival")
+    if isinstance(arrival, ArrivalLocalizer):
+        return arrival_horizon(arrival, calibration)
+    return calibration.arrival_decision_delay
 
 
 @dataclass(frozen=True)
