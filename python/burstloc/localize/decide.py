@@ -225,7 +225,9 @@ def rank_alarms(
     ``look_again`` of an earlier call on the same burst, whose looks were not decisive: the looks
     start there instead of being taken again (a look depends only on the readings up to it, so
     the answer is the same; the live monitor, whose readings grow by one step per call, would
-    otherwise repeat every earlier look at every reading).
+    otherwise repeat every earlier look at every reading); or a reading time before which no look
+    is taken (the monitor's, and the events evaluation's, first look at alarms that a second meter
+    corroborated after the decision time: :mod:`burstloc.localize.corroborate`).
 
     Raises:
         InputError: no alarm, or the localizer cannot answer from this evidence.
