@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from burstloc.localize.arrival import ArrivalLocalizer, PipeGeometry
+from burstloc.localize.config import IntervalCalibration
 from burstloc.localize.signature import SignatureLocalizer, SignatureSet
 
 METERS = ("m0", "m1", "m2", "m3")
@@ -18,6 +19,20 @@ def line_arrival() -> ArrivalLocalizer:
     distances = {n: np.array([abs(pos[n] - pos[m]) for m in METERS]) for n in METERS}
     pipes = [PipeGeometry(f"p{i}{i + 1}", f"m{i}", f"m{i + 1}", 600.0) for i in range(3)]
     return ArrivalLocalizer(pipes, METERS, distances, wave_speed=WAVE)
+
+
+def line_calibration(dt: float = 0.05, arrival_decision_delay: float = 1.0) -> IntervalCalibration:
+    """A calibration of capture interval ``dt`` (decision delay 60 s; no thresholds)."""
+    return IntervalCalibration(
+        capture_interval=dt,
+        localization_interval=10,
+        cusum_threshold={},
+        cusum_drift={},
+        shewhart_threshold={},
+        shewhart_sigma=3.0,
+        decision_delay=60.0,
+        arrival_decision_delay=arrival_decision_delay,
+    )
 
 
 def line_signature(matrix: np.ndarray) -> SignatureLocalizer:

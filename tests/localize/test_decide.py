@@ -10,11 +10,11 @@ import pytest
 
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.localize.arrival import ArrivalLocalizer
-from burstloc.localize.config import IntervalCalibration
 from burstloc.localize.decide import Decision, RankingLocalizers, decision_time, rank_alarms
 from burstloc.localize.evidence import IndexedAlarm, RankedPipe, Ranking, evidence_at
 from burstloc.localize.fused import FusedLocalizer, decisive, quantisation_margin
 from line_network import METERS, WAVE, line_arrival, line_signature
+from line_network import line_calibration as _calibration
 
 # signature rows: p01 and p12 differ only at m0 / m2, p23 is far from both
 MATRIX = np.array([[1.0, 1.0, 0.4, 0.2], [0.6, 1.0, 0.9, 0.4], [0.1, 0.3, 1.0, 1.0]])
@@ -33,19 +33,6 @@ def _burst(x: float, drop: np.ndarray, dt: float = 0.05, until: float = 80.0) ->
         index = int(np.searchsorted(t, a))
         alarms.append(IndexedAlarm(channel, index, index - 1, -float(drop[channel])))
     return t, readings, alarms
-
-
-def _calibration(dt: float = 0.05) -> IntervalCalibration:
-    return IntervalCalibration(
-        capture_interval=dt,
-        localization_interval=10,
-        cusum_threshold={},
-        cusum_drift={},
-        shewhart_threshold={},
-        shewhart_sigma=3.0,
-        decision_delay=60.0,
-        arrival_decision_delay=1.0,
-    )
 
 
 def _localizers(**fused_options: float) -> RankingLocalizers:

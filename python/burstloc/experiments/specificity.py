@@ -4,9 +4,11 @@ Each simulated scenario (bursts on every pipe, and the non-burst events of
 :func:`default_events`: every valve and pump operated, demand steps at the largest consumers;
 :mod:`burstloc.sim.events`) is captured at each capture interval
 (instantaneous readings, clock phase 0, with the warm-up of ``burstloc evaluate``), run through
-the calibrated CUSUM bank, and, when at least :data:`CORROBORATE` meters alarm (the monitor's
-rule), localized by the fused localizer and classified (:mod:`burstloc.localize.classify`) at
-the signature's decision time: the answer is ``quiet`` (no corroborated alarm), ``burst``,
+the calibrated CUSUM bank, and, when at least :data:`CORROBORATE` meters alarm by the
+corroboration deadline (the monitor's rule, :mod:`burstloc.localize.corroborate`), localized by
+the fused localizer (its looks at the arrivals from the reading that corroborated them, as the
+monitor's) and classified (:mod:`burstloc.localize.classify`) at the signature's decision time:
+the answer is ``quiet`` (no corroborated alarm), ``burst``,
 ``other`` or ``unsure``. Only ``burst`` is a burst report. Every event is also classified
 with its own operation declared (``asset, start, kind``). And a day of normal operation
 (:func:`burstloc.sim.normal.normal_day`: diurnal demand, sensor noise) runs through the live
@@ -44,6 +46,7 @@ from burstloc.localize.classify import (
     classify_alarms,
 )
 from burstloc.localize.config import calibrated_bank
+from burstloc.localize.corroborate import corroborated_at, corroboration_deadline
 from burstloc.localize.decide import decision_time, rank_alarms
 from burstloc.localize.signature import SignatureLocalizer
 from burstloc.sim.events import EventScenario
@@ -160,11 +163,23 @@ def classify_result(
     clock = Clock.at_offset(capture_interval, 0.0, 2 * cal.localization_interval)
     times, values = capture_readings(result, clock, "instantaneous", meters=setup.meters)
     alarms = calibrated_bank("cusum", len(setup.meters), cal).run(np.ascontiguousarray(values))
-    if len({a.channel for a in alarms}) < CORROBORATE:
+    if not alarms:
+        return Outcome("quiet")
+    by = corroboration_deadline("fused", setup.localizers, alarms, times, cal)
+    corroborated = corroborated_at(alarms, times, CORROBORATE, by)
+    if corroborated is None:
         return Outcome("quiet")
     try:
         decision = rank_alarms(
-            "fused", setup.localizers, setup.meters, times, values, alarms, cal, "instantaneous"
+            "fused",
+            setup.localizers,
+            setup.meters,
+            times,
+            values,
+            alarms,
+            cal,
+            "instantaneous",
+            resume=corroborated,
         )
         settled = decision_time("signature", alarms, times, cal)
         kind = classify_alarms(

@@ -18,9 +18,14 @@ and the count) and the ringing must have died down (the step-to-step changes of 
 :data:`QUIET_WINDOW` seconds back within :data:`QUIET_FACTOR` of the calibrated noise's, or one
 more hold-off gone by) before an alarm may start a new decision, so the tail of the ringing
 never becomes a phantom second burst. A second burst within the hold-off is not reported
-separately. A decision needs alarms from at least ``corroborate`` meters (default 2): a single
-meter's alarm (the calibrated false alarms of a noisy meter, the tail of the ringing after the
-hold-off) is dismissed and counted.
+separately. A decision needs alarms from at least ``corroborate`` meters (default 2;
+:mod:`burstloc.localize.corroborate`): alarms not corroborated by the first decision time are
+kept, with the first alarms of meters that alarm later (a burst on a large main reaches far
+meters late or below the threshold), until enough meters have alarmed (the monitor then decides,
+looking at the arrivals from the reading that corroborated them) or the arrival horizon after
+the first alarm has passed. A single meter's alarm (the calibrated false alarms of a noisy
+meter, the tail of the ringing after the hold-off) is dismissed and counted at that horizon,
+later than the first decision time (on EPANET's Net3, 19.8 s after the alarm).
 
 **Meters that do not report.** :attr:`BurstMonitor.excluded` (kept by the live loop from
 :mod:`burstloc.live.health`: silent meters) take no part: their alarms are ignored and the
@@ -35,7 +40,7 @@ and leaves the monitor exactly as it was. A configuration for another network or
 is refused by name; the network file is only hashed (:func:`burstloc.inp.network_hash`). Each
 decision is a :class:`~burstloc.live.decision.LiveDecision`.
 :mod:`burstloc.live.monitor_state` carries the whole state (bank snapshot, history, pending
-decision, hold-off) across a restart.
+decision and its corroboration deadline, hold-off) across a restart.
 
 Nothing here runs a hydraulic model: this module imports neither WNTR, EPANET, TSNet nor
 :mod:`burstloc.sim` or :mod:`burstloc.experiments`.
@@ -55,14 +60,14 @@ from burstloc.constants import METER_MODELS, RANKING_LOCALIZERS, MeterModel
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.live.decision import LiveDecision
 from burstloc.live.subset import SubsetLocalizers
-from burstloc.localize.arrival import ArrivalLocalizer
 from burstloc.localize.classify import ClassifierConfig, EventClassifier, Operation, classify_alarms
 from burstloc.localize.config import Calibration, calibrated_bank
+from burstloc.localize.corroborate import corroborated_at, corroboration_deadline
 from burstloc.localize.decide import (
     RankingLocalizers,
-    arrival_horizon,
     decision_time,
     fused_of,
+    horizon_of,
     rank_alarms,
 )
 from burstloc.localize.evidence import IndexedAlarm, Localizer
@@ -111,9 +116,11 @@ class BurstMonitor:
         Whether re-arming also waits for the ringing to die down (default: yes; module
         docstring).
     corroborate:
-        Meters that must have alarmed by the decision time (default 2; fewer when fewer meters
-        report). Alarms of fewer meters are dismissed (counted in :attr:`dismissed`): a burst
-        reaches every meter near it, a noise excursion or a glitch one.
+        Meters that must have alarmed (default 2; fewer when fewer meters report) by the later
+        of the decision time and the arrival horizon after the first alarm
+        (:func:`burstloc.localize.corroborate.corroboration_deadline`). Alarms of fewer meters
+        are dismissed then (counted in :attr:`dismissed`): a burst reaches every meter near it,
+        a noise excursion or a glitch one.
 
     Raises:
         ConfigError: a configuration for another network or other meters, no calibration for
@@ -179,6 +186,7 @@ class BurstMonitor:
         self._steps = 0  # steps fed in all
         self._alarms: list[IndexedAlarm] = []  # by bank index
         self._due: float | None = None
+        self._by: float | None = None  # corroborated by then, or dismissed (the deadline)
         self._resume: float | None = None  # the next look at the arrivals (Decision.look_again)
         self._announced = False  # the pending decision's transient record has been given
         self._quiet_until: float | None = None  # end of the hold-off after a decision
@@ -281,16 +289,24 @@ class BurstMonitor:
                     alarmed.add(channel)
         if self._alarms and self._due is None:
             times = np.fromiter(self._times, dtype=np.float64)
-            self._due = decision_time(
-                self.localizer, self._shifted(times.size), times, self.calibration, self._fused
-            )
+            shifted, cal = self._shifted(times.size), self.calibration
+            self._due = decision_time(self.localizer, shifted, times, cal, self._fused)
+            self._by = corroboration_deadline(self.localizer, self.localizers, shifted, times, cal)
         if self._due is None or t + 1e-9 < self._due:
             return None
-        alarmed = {a.channel for a in self._alarms}
-        if len(alarmed) < min(self.corroborate, len(self.meters) - len(self.excluded)):
+        times = np.fromiter(self._times, dtype=np.float64)
+        needed = min(self.corroborate, len(self.meters) - len(self.excluded))
+        by = self._due if self._by is None else self._by
+        corroborated = corroborated_at(self._shifted(times.size), times, needed, by)
+        if corroborated is None:
+            if t + 1e-9 < by:
+                return None  # more meters may still alarm: the wave is still on its way
             self.dismissed += 1  # one meter alone: noise or a glitch, not a burst
-            self._alarms, self._due, self._announced, self._resume = [], None, False, None
+            self._forget()
             return None
+        # no look at the arrivals before the reading that corroborated them
+        if self._resume is None or self._resume < corroborated:
+            self._resume = corroborated
         return self._decide()
 
     def run(self, steps: Iterable[Step]) -> Iterator[LiveDecision]:
@@ -313,6 +329,11 @@ class BurstMonitor:
         rms = np.sqrt(np.mean(np.diff(recent, axis=0) ** 2, axis=0))
         quiet = rms <= QUIET_FACTOR * math.sqrt(2.0) * self._noise
         return all(q or m in self.excluded for q, m in zip(quiet, self.meters, strict=True))
+
+    def _forget(self) -> None:
+        """Drop the pending alarms and their decision."""
+        self._alarms, self._announced = [], False
+        self._due = self._by = self._resume = None
 
     def _restart_bank(self) -> None:
         self.bank.reset()
@@ -359,7 +380,7 @@ class BurstMonitor:
                 resume=self._resume,
             )
         except InputError as exc:
-            self._alarms, self._due, self._announced, self._resume = [], None, False, None
+            self._forget()
             raise InputError(
                 f"burst detected but not located at t = {times[-1]:g} s: {exc}"
             ) from exc
@@ -386,17 +407,9 @@ class BurstMonitor:
             )
             # answered now, whatever time the ranking itself could have been given
             decision = replace(decision, time=float(times[-1]), classification=kind)
-        self._alarms = []
-        self._due = None
-        self._resume = None
-        self._announced = False
+        self._forget()
         self._quiet_until = float(times[-1]) + self.holdoff
-        arrival = localizers.get("arrival")
-        looked = (
-            arrival_horizon(arrival, cal)
-            if isinstance(arrival, ArrivalLocalizer)
-            else cal.arrival_decision_delay
-        )
+        looked = horizon_of(localizers, cal)
         waited = decision.waited or (
             decision.time - decision.first_alarm > looked + cal.capture_interval + 1e-9
         )

@@ -1,7 +1,7 @@
 """A :class:`~burstloc.live.monitor.BurstMonitor`'s state across a restart: the detector bank
-snapshot, the history ring, the pending decision, the hold-off and re-arming, the dismissed count
-and the meters excluded or in their grace period, as JSON-ready data (the live loop writes it in
-its state file, :mod:`burstloc.live.state`)."""
+snapshot, the history ring, the pending decision and its corroboration deadline, the hold-off
+and re-arming, the dismissed count and the meters excluded or in their grace period, as
+JSON-ready data (the live loop writes it in its state file, :mod:`burstloc.live.state`)."""
 
 from __future__ import annotations
 
@@ -34,6 +34,7 @@ def monitor_state(monitor: BurstMonitor) -> dict[str, Any]:
         "steps": m._steps,
         "alarms": [[a.channel, a.index, a.start, a.amplitude] for a in m._alarms],
         "due": m._due,
+        "corroborate_by": m._by,
         "resume": m._resume,
         "announced": m._announced,
         "quiet_until": m._quiet_until,
@@ -68,6 +69,8 @@ def restore_monitor(monitor: BurstMonitor, state: Mapping[str, Any]) -> None:
     m._seen, m._steps = int(state["seen"]), int(state["steps"])
     m._alarms = [IndexedAlarm(int(c), int(i), int(s), float(a)) for c, i, s, a in state["alarms"]]
     m._due = state["due"]
+    # states saved before: corroborated by the decision time, as the monitor then wanted
+    m._by = state.get("corroborate_by", m._due)
     m._resume = state.get("resume")  # states saved before: the looks are taken from the start
     m._announced = bool(state.get("announced", False))  # states saved before: False
     m._quiet_until = state["quiet_until"]

@@ -14,7 +14,8 @@ On the live path: nothing here runs a hydraulic model or imports the simulator.
 * :mod:`~burstloc.localize.config`: the stored configuration (calibrated detector settings and
   the model) that ``burstloc calibrate`` writes and the monitor reads;
 * :mod:`~burstloc.localize.decide`: the localizers built from a model, when a ranking localizer
-  answers, and what (a :class:`~burstloc.localize.decide.Decision`).
+  answers, and what (a :class:`~burstloc.localize.decide.Decision`);
+* :mod:`~burstloc.localize.corroborate`: how many meters make a burst, and until when.
 
 The results, one lineage: a ranking localizer answers a
 :class:`~burstloc.localize.evidence.Ranking`; a

@@ -59,6 +59,7 @@ __all__ = [
     "arrival_horizon",
     "decision_time",
     "fused_of",
+    "horizon_of",
     "rank_alarms",
 ]
 
@@ -224,7 +225,9 @@ def rank_alarms(
     ``look_again`` of an earlier call on the same burst, whose looks were not decisive: the looks
     start there instead of being taken again (a look depends only on the readings up to it, so
     the answer is the same; the live monitor, whose readings grow by one step per call, would
-    otherwise repeat every earlier look at every reading).
+    otherwise repeat every earlier look at every reading); or a reading time before which no look
+    is taken (the monitor's, and the events evaluation's, first look at alarms that a second meter
+    corroborated after the decision time: :mod:`burstloc.localize.corroborate`).
 
     Raises:
         InputError: no alarm, or the localizer cannot answer from this evidence.
@@ -286,6 +289,16 @@ def arrival_horizon(arrival: ArrivalLocalizer, calibration: IntervalCalibration)
     reached every meter it will reach), at least the calibrated first look
     (``arrival_decision_delay``)."""
     return max(calibration.arrival_decision_delay, arrival.horizon)
+
+
+def horizon_of(localizers: Mapping[str, Localizer], calibration: IntervalCalibration) -> float:
+    """Seconds after the first alarm of the last look at the arrivals with ``localizers``: their
+    ``"arrival"`` localizer's :func:`arrival_horizon`, without one the calibrated first look
+    (``arrival_decision_delay``)."""
+    arrival = localizers.get("arrival")
+    if isinstance(arrival, ArrivalLocalizer):
+        return arrival_horizon(arrival, calibration)
+    return calibration.arrival_decision_delay
 
 
 @dataclass(frozen=True)
