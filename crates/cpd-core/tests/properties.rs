@@ -369,6 +369,27 @@ proptest! {
     }
 
     #[test]
+    fn bad_sample_late_in_a_long_slice_changes_nothing(
+        (kind, n, seed) in (0..KINDS, 4_200usize..20_000, any::<u64>()), frac in 0.0f64..1.0,
+        lead in 0usize..3, bad in prop_oneof![Just(f64::NAN), Just(f64::INFINITY), Just(f64::NEG_INFINITY)]
+    ) {
+        // Long slices are checked block by block as they run: a bad sample after blocks have
+        // run (and raised alarms) must put their state and alarms back and name its index.
+        let mut x = signal(kind, n, &mut Rng::new(seed));
+        let pos = lead + ((n - 1 - lead) as f64 * frac) as usize;
+        let cc = CusumConfig::new(0.3, 0.01).unwrap();
+        let mut det = Cusum::new(cc);
+        let mut out = Vec::new();
+        det.update_slice(&x[..lead], &mut out).unwrap();
+        let (before, given) = (det.clone(), out.clone());
+        x[pos] = bad;
+        let err = det.update_slice(&x[lead..], &mut out).unwrap_err();
+        check!(matches!(err, Error::NonFiniteSample { index, .. } if index == pos as u64));
+        prop_assert_eq!(&det, &before);
+        prop_assert_eq!(&out, &given);
+    }
+
+    #[test]
     fn snapshot_restore_continues_identically(
         (kind, n, seed) in signal_spec(2500), cut in 0.0f64..1.0,
         (thr, drift) in cusum_params(), (w, sigma, sthr) in shewhart_params()

@@ -423,26 +423,43 @@ impl Cusum {
 
     /// Feeds a slice of samples, appending the alarms to `out`.
     ///
-    /// The whole slice is validated first: if any sample is non-finite, nothing is consumed,
-    /// the state is unchanged and the error names the first bad sample's stream index.
+    /// If any sample is non-finite, nothing is consumed: the state and `out` are as they were
+    /// and the error names the first bad sample's stream index.
     pub fn update_slice(&mut self, xs: &[f64], out: &mut Vec<Alarm>) -> Result<(), Error> {
-        check_samples(xs, self.seen)?;
-        let Some((&first, rest)) = xs.split_first() else {
-            return Ok(());
+        // Long slices are checked block by block as they run (each block read once from
+        // memory, then from the cache), so a bad sample late in the slice puts back the state
+        // and the alarms of the blocks before it.
+        let (before, given) = (self.lane, out.len());
+        let fed = self.feed(xs, out);
+        if fed.is_err() {
+            self.lane = before;
+            out.truncate(given);
+        }
+        fed
+    }
+
+    /// [`Cusum::update_slice`] without putting anything back on error: the segments check
+    /// their blocks, the rest is checked before it runs; `seen` is counted only on success.
+    fn feed(&mut self, xs: &[f64], out: &mut Vec<Alarm>) -> Result<(), Error> {
+        let (first, rest, seen) = match xs.split_first() {
+            None => return Ok(()),
+            Some((&x, rest)) if self.seen == 0 => {
+                check_sample(x, 0)?;
+                (Some(x), rest, 1)
+            }
+            Some(_) => (None, xs, self.seen),
         };
-        let rest = if self.seen == 0 {
-            self.update_unchecked(first);
-            rest
-        } else {
-            xs
-        };
+        if let Some(x) = first {
+            self.lane.prime(x);
+        }
         // Whole blocks as a bank of segments (`segments`), the rest sample after sample with the
         // state in locals (registers).
-        let done = segments::run(&mut self.lane, rest, self.seen, &self.config, out);
+        let done = segments::run(&mut self.lane, rest, seen, &self.config, out)?;
+        check_samples(&rest[done..], seen + done as u64)?;
         let (thr, drift) = (self.config.threshold, self.config.drift);
         self.lane
-            .run(&rest[done..], self.seen + done as u64, thr, drift, out);
-        self.seen += rest.len() as u64;
+            .run(&rest[done..], seen + done as u64, thr, drift, out);
+        self.seen = seen + rest.len() as u64;
         Ok(())
     }
 

@@ -21,6 +21,7 @@ use alloc::vec::Vec;
 use super::{CusumConfig, CusumLane, Sides};
 use crate::alarm::{Alarm, ChannelAlarm, Direction};
 use crate::bank::CusumBank;
+use crate::error::{check_samples, Error};
 
 /// Segments per block: one tile of the bank's register-resident kernel with AVX-512 (two tiles
 /// of 8 otherwise).
@@ -64,28 +65,30 @@ impl Slice<'_> {
 /// Feeds the longest run of whole blocks at the front of `xs` (stream indices from `base >= 1`)
 /// to `lane`, appending the alarms to `out` in index order, exactly as [`CusumLane::run`]
 /// would. Returns how many samples it consumed: 0 for a slice too short to gain (or when the
-/// bank's state cannot be allocated); the caller runs the rest sequentially.
+/// bank's state cannot be allocated); the caller runs the rest sequentially. Each block is
+/// checked before it runs: a non-finite sample stops the run with its error (blocks before it
+/// have run: the caller puts their state and alarms back).
 pub(super) fn run(
     lane: &mut CusumLane,
     xs: &[f64],
     base: u64,
     config: &CusumConfig,
     out: &mut Vec<Alarm>,
-) -> usize {
+) -> Result<usize, Error> {
     let len = (xs.len() / SEGMENTS).min(LEN);
     // Without drift the sums are random walks held at 0 that come back to it late (their mean
     // return time is unbounded): the guesses seldom meet the truth within a segment (measured:
     // the true run walked 92 % of the samples), so they would only add work.
     if len < MIN_LEN || config.drift() == 0.0 {
-        return 0;
+        return Ok(0);
     }
     let mut rows = Vec::new();
     if rows.try_reserve_exact((len + 1) * SEGMENTS).is_err() {
-        return 0;
+        return Ok(0);
     }
     rows.resize((len + 1) * SEGMENTS, 0.0);
     let Ok(mut bank) = CusumBank::new(SEGMENTS, *config) else {
-        return 0;
+        return Ok(0);
     };
     let slice = Slice {
         xs,
@@ -98,6 +101,7 @@ pub(super) fn run(
     let mut done = 0;
     while xs.len() - done >= SEGMENTS * len {
         let block = &xs[done..done + SEGMENTS * len];
+        check_samples(block, base + done as u64)?;
         let before = if done == 0 { lane.x_prev } else { xs[done - 1] };
         transpose(block, before, len, &mut rows);
         bank.reset();
@@ -123,7 +127,7 @@ pub(super) fn run(
     }
     lane.x_tap = slice.at(lane.tap, slice.x_tap0);
     lane.x_tan = slice.at(lane.tan, slice.x_tan0);
-    done
+    Ok(done)
 }
 
 /// The bank's rows for one block: row 0 the sample before each segment (the bank's priming
