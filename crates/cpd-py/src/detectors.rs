@@ -27,8 +27,8 @@ macro_rules! detector_methods {
 
             /// Feeds every sample of a 1-D float64 array, releasing the GIL; returns the alarms.
             ///
-            /// The array is validated first: a NaN or infinite sample anywhere raises
-            /// `InputError` and no sample is consumed. Another dtype or shape raises
+            /// A NaN or infinite sample anywhere raises `InputError` naming its index, and no
+            /// sample is consumed: the detector is as before the call. Another dtype or shape raises
             /// `InputError` too. While the samples are processed other Python threads run; a
             /// call on this same detector from one of them meanwhile raises `RuntimeError`.
             fn update_many(&mut self, py: Python<'_>, x: &Bound<'_, PyAny>) -> PyResult<Vec<PyAlarm>> {
