@@ -160,21 +160,82 @@ fn apply(bytes: &mut Vec<u8>, e: &Edit) {
 enum Op {
     Update(f64),
     Slice(Vec<f64>),
+    /// A long slice (the single CUSUM runs it as segments): a seeded head-like signal of `n`
+    /// samples with arbitrary values put in at a few places.
+    Long(u64, usize, Vec<(usize, f64)>),
     Reset,
     Restore,
+}
+
+impl Op {
+    /// The samples of a [`Op::Long`].
+    fn long(seed: u64, n: usize, spikes: &[(usize, f64)]) -> Vec<f64> {
+        let mut xs = signal(seed % 6, n, &mut Rng::new(seed));
+        for &(at, v) in spikes {
+            xs[at % n] = v;
+        }
+        xs
+    }
 }
 
 fn op() -> impl Strategy<Value = Op> {
     prop_oneof![
         6 => sample().prop_map(Op::Update),
         3 => prop::collection::vec(sample(), 0..12).prop_map(Op::Slice),
+        1 => (any::<u64>(), 512usize..3_000, prop::collection::vec((any::<usize>(), sample()), 0..4))
+            .prop_map(|(seed, n, spikes)| Op::Long(seed, n, spikes)),
         1 => Just(Op::Reset),
         1 => Just(Op::Restore),
     ]
 }
 
+/// A long slice fed to `det` (the single CUSUM runs it as segments): no panic; on error
+/// nothing changes, else the alarms and the state are the sample-by-sample ones, bit for bit.
+fn long_slice_as_one_by_one(det: &mut Cusum, xs: &[f64]) -> Result<(), TestCaseError> {
+    let before = det.clone();
+    let mut one = det.clone();
+    let mut want = Vec::new();
+    let stepped = xs.iter().try_for_each(|&v| {
+        want.extend(one.update(v)?);
+        Ok::<(), cpd_core::Error>(())
+    });
+    let mut got = Vec::new();
+    match det.update_slice(xs, &mut got) {
+        Err(_) => {
+            prop_assert!(stepped.is_err());
+            prop_assert!(same(&*det, &before) && got.is_empty());
+        }
+        Ok(()) => {
+            prop_assert!(stepped.is_ok());
+            prop_assert!(same(&*det, &one));
+            prop_assert_eq!(got.len(), want.len());
+            for (a, b) in got.iter().zip(&want) {
+                prop_assert_eq!(
+                    (a.index, a.start, a.direction),
+                    (b.index, b.start, b.direction)
+                );
+                prop_assert_eq!(a.amplitude.to_bits(), b.amplitude.to_bits());
+            }
+        }
+    }
+    Ok(())
+}
+
 proptest! {
     #![proptest_config(config())]
+
+    #[test]
+    fn long_slices_with_extreme_values_run_as_one_by_one(
+        seed in any::<u64>(), n in 512usize..6_000,
+        spikes in prop::collection::vec((any::<usize>(), sample()), 0..4),
+        thr in prop_oneof![Just(0.3), 1e-3f64..1e3], drift in prop_oneof![Just(0.01), 1e-6f64..10.0],
+        lead in 0usize..3
+    ) {
+        let mut det = Cusum::new(CusumConfig::new(thr, drift).unwrap());
+        let xs = Op::long(seed, n, &spikes);
+        det.update_slice(&xs[..lead], &mut Vec::new()).unwrap_or(());
+        long_slice_as_one_by_one(&mut det, &xs[lead..])?;
+    }
 
     #[test]
     fn snapshot_decoder_never_panics_on_arbitrary_bytes(
@@ -255,6 +316,13 @@ proptest! {
                     for b in banks.iter_mut() {
                         let before = b.clone();
                         if b.step_many(xs, &mut bank_out).is_err() { prop_assert!(same(&*b, &before)); }
+                    }
+                }
+                Op::Long(seed, n, spikes) => {
+                    // As a slice: no panic; on error nothing changes, else the result is the
+                    // sample-by-sample one, bit for bit (also with extreme values).
+                    if let Some(d) = c.as_mut() {
+                        long_slice_as_one_by_one(d, &Op::long(*seed, *n, spikes))?;
                     }
                 }
                 Op::Reset => {
