@@ -18,7 +18,8 @@
 
 use alloc::vec::Vec;
 
-use super::{CusumConfig, CusumLane, Sides};
+use super::lane::Sides;
+use super::{CusumConfig, CusumLane};
 use crate::alarm::{Alarm, ChannelAlarm, Direction};
 use crate::bank::CusumBank;
 use crate::error::{check_samples, Error};
