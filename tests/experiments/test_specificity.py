@@ -10,13 +10,8 @@ import jsonschema
 import pytest
 
 from burstloc.cli import main
-from burstloc.experiments.specificity import (
-    DEMAND_JUNCTIONS,
-    Outcome,
-    Specificity,
-    asset_nodes,
-    default_events,
-)
+from burstloc.experiments.event_set import DEMAND_JUNCTIONS, asset_nodes, default_events
+from burstloc.experiments.specificity import Outcome, Specificity
 
 REPO = Path(__file__).resolve().parents[2]
 SCHEMA = json.loads((REPO / "tests" / "evaluate_schema.json").read_text())

@@ -8,6 +8,9 @@ library imports it but :mod:`burstloc.cli`.
 * :mod:`~burstloc.experiments.harness`: the one harness both experiments score through
   (captured readings, the localizers' attempts, the tally);
 * :mod:`~burstloc.experiments.evaluate`: burst every pipe, replay, localize, score;
+* :mod:`~burstloc.experiments.event_set`, :mod:`~burstloc.experiments.specificity`: the
+  non-burst events operated on a network, and bursts and those events together (how often a
+  non-burst is reported as a burst; the classifier's calibration);
 * :mod:`~burstloc.experiments.grid`, :mod:`~burstloc.experiments.study`: the
   one-factor-at-a-time robustness grid and its scoring;
 * :mod:`~burstloc.experiments.report`, :mod:`~burstloc.experiments.plot`: tables, JSON, CSV,

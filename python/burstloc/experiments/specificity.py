@@ -1,13 +1,14 @@
 """Bursts and other events together: how often is a non-burst reported as a burst?
 
 Each simulated scenario (bursts on every pipe, and the non-burst events of
-:func:`default_events`: every valve and pump operated, demand steps at the largest consumers;
-:mod:`burstloc.sim.events`) is captured at each capture interval
+:func:`burstloc.experiments.event_set.default_events`: every valve and pump operated, demand
+steps at the largest consumers; :mod:`burstloc.sim.events`) is captured at each capture interval
 (instantaneous readings, clock phase 0, with the warm-up of ``burstloc evaluate``), run through
-the calibrated CUSUM bank, and, when at least :data:`CORROBORATE` meters alarm by the
-corroboration deadline (the monitor's rule, :mod:`burstloc.localize.corroborate`), localized by
-the fused localizer (its looks at the arrivals from the reading that corroborated them, as the
-monitor's) and classified (:mod:`burstloc.localize.classify`) at the signature's decision time:
+the calibrated CUSUM bank, and, when at least
+:data:`~burstloc.localize.corroborate.CORROBORATE` meters alarm by the corroboration deadline
+(the monitor's rule, :mod:`burstloc.localize.corroborate`), localized by the fused localizer
+(its looks at the arrivals from the reading that corroborated them, as the monitor's) and
+classified (:mod:`burstloc.localize.classify`) at the signature's decision time:
 the answer is ``quiet`` (no corroborated alarm), ``burst``,
 ``other`` or ``unsure``. Only ``burst`` is a burst report. Every event is also classified
 with its own operation declared (``asset, start, kind``). And a day of normal operation
@@ -37,6 +38,7 @@ import numpy as np
 
 from burstloc.exceptions import InputError, SimulationError, SimulatorMissingError
 from burstloc.experiments.calibrate import DEFAULT_NOISE_SIGMA
+from burstloc.experiments.event_set import asset_nodes, default_events
 from burstloc.experiments.harness import Clock, RankingSetup, capture_readings
 from burstloc.localize.classify import (
     CLASSES,
@@ -46,7 +48,7 @@ from burstloc.localize.classify import (
     classify_alarms,
 )
 from burstloc.localize.config import calibrated_bank
-from burstloc.localize.corroborate import corroborated_at, corroboration_deadline
+from burstloc.localize.corroborate import CORROBORATE, corroborated_at, corroboration_deadline
 from burstloc.localize.decide import decision_time, rank_alarms
 from burstloc.localize.signature import SignatureLocalizer
 from burstloc.sim.events import EventScenario
@@ -54,91 +56,19 @@ from burstloc.sim.scenario import ScenarioResult
 
 __all__ = [
     "ANSWERS",
-    "CORROBORATE",
-    "DEMAND_JUNCTIONS",
-    "PUMP_EVENTS",
-    "VALVE_EVENTS",
     "Outcome",
     "Specificity",
-    "asset_nodes",
     "calibrate_classifier",
     "classify_result",
-    "default_events",
     "evaluate_events",
 ]
 
 #: What a scenario can end as.
 ANSWERS = ("quiet", *CLASSES)
-#: Meters that must alarm for a decision (the monitor's default).
-CORROBORATE = 2
 #: The calibration's margins (module docstring).
 RESIDUAL_MARGIN = 1.5
 SCALE_FRACTION = 0.25
 RISE_MARGIN = 1.5
-
-#: The operations of each valve and pump: (kind, keyword arguments): fast (1-2 s) and slow
-#: (10-30 s), full and partial (to 30 % open).
-VALVE_EVENTS: tuple[tuple[str, dict[str, float]], ...] = (
-    ("valve-closure", {"operation_time": 1.0}),
-    ("valve-closure", {"operation_time": 30.0}),
-    ("valve-closure", {"operation_time": 1.0, "setting": 0.3}),
-    ("valve-closure", {"operation_time": 30.0, "setting": 0.3}),
-    ("valve-opening", {"operation_time": 1.0, "setting": 1.0}),
-    ("valve-opening", {"operation_time": 30.0, "setting": 1.0}),
-    ("valve-opening", {"operation_time": 1.0, "setting": 0.3}),
-)
-PUMP_EVENTS: tuple[tuple[str, dict[str, float]], ...] = (
-    ("pump-trip", {"operation_time": 1.0}),
-    ("pump-trip", {"operation_time": 10.0}),
-    ("pump-start", {"operation_time": 2.0}),
-    ("pump-start", {"operation_time": 10.0}),
-)
-#: Demand steps at the junctions of largest base demand: this many junctions, each doubling
-#: its demand in 1 s and adding a quarter of it in 5 s; the largest also halves in 1 s.
-DEMAND_JUNCTIONS = 4
-
-
-def default_events(
-    network: str | os.PathLike[str], duration: float, solver: str = "vectorized"
-) -> list[EventScenario]:
-    """The events of the evaluation on ``network``: :data:`VALVE_EVENTS` on every valve,
-    :data:`PUMP_EVENTS` on every pump, demand steps at :data:`DEMAND_JUNCTIONS` junctions
-    (simulated by ``solver``)."""
-    from burstloc import network as netmod
-
-    path = os.fspath(network)
-    wn = netmod.load_network(path)
-    out: list[tuple[str, str, dict[str, float]]] = []
-    for valve in wn.valve_name_list:
-        out += [(kind, valve, kw) for kind, kw in VALVE_EVENTS]
-    for pump in wn.pump_name_list:
-        out += [(kind, pump, kw) for kind, kw in PUMP_EVENTS]
-    demands = {j: float(wn.get_node(j).base_demand) for j in netmod.junction_names(wn)}
-    largest = sorted((j for j in demands if demands[j] > 0), key=lambda j: -demands[j])
-    for j in largest[:DEMAND_JUNCTIONS]:
-        out.append(("demand-step", j, {"demand_change": demands[j]}))
-        out.append(("demand-step", j, {"demand_change": demands[j] / 4, "operation_time": 5.0}))
-    if largest:
-        out.append(("demand-step", largest[0], {"demand_change": -demands[largest[0]] / 2}))
-    return [
-        EventScenario(path, kind, asset, duration=duration, solver=solver, **kw)  # type: ignore[arg-type]
-        for kind, asset, kw in out
-    ]
-
-
-def asset_nodes(network: str | os.PathLike[str]) -> dict[str, str]:
-    """Junction -> the valve or pump it is an end of."""
-    from burstloc import network as netmod
-
-    wn = netmod.load_network(os.fspath(network))
-    junctions = set(netmod.junction_names(wn))
-    out: dict[str, str] = {}
-    for name in list(wn.valve_name_list) + list(wn.pump_name_list):
-        link = wn.get_link(name)
-        for node in (link.start_node_name, link.end_node_name):
-            if node in junctions:
-                out[node] = name
-    return out
 
 
 @dataclass(frozen=True)

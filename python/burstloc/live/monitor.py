@@ -62,7 +62,7 @@ from burstloc.live.decision import LiveDecision
 from burstloc.live.subset import SubsetLocalizers
 from burstloc.localize.classify import ClassifierConfig, EventClassifier, Operation, classify_alarms
 from burstloc.localize.config import Calibration, calibrated_bank
-from burstloc.localize.corroborate import corroborated_at, corroboration_deadline
+from burstloc.localize.corroborate import CORROBORATE, corroborated_at, corroboration_deadline
 from burstloc.localize.decide import (
     RankingLocalizers,
     decision_time,
@@ -141,7 +141,7 @@ class BurstMonitor:
         localizers: Mapping[str, Localizer] | None = None,
         holdoff: float | None = None,
         rearm: int | None = None,
-        corroborate: int = 2,
+        corroborate: int = CORROBORATE,
         settle: bool = True,
         classify: ClassifierConfig | None = None,
         operations: Sequence[Operation] = (),

@@ -29,7 +29,10 @@ from burstloc.localize.evidence import Localizer
 if TYPE_CHECKING:
     from burstloc.localize.config import IntervalCalibration
 
-__all__ = ["corroborated_at", "corroboration_deadline"]
+__all__ = ["CORROBORATE", "corroborated_at", "corroboration_deadline"]
+
+#: Meters that must have alarmed for a decision, by default (fewer when fewer report).
+CORROBORATE = 2
 
 
 def corroboration_deadline(
