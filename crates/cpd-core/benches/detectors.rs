@@ -129,6 +129,22 @@ fn single_channel(c: &mut Criterion<CpuTime>) {
             )
         });
     }
+    // The same work in slices too short for the segments (under 512 samples): the sequential
+    // kernel, the alternative the segments are measured against in the same run.
+    let mut det = cusum(CUSUM_DRIFT);
+    group.bench_function("cusum_sequential_in_256_sample_slices", |b| {
+        b.iter_batched_ref(
+            || traces.heads(SAMPLES),
+            |x| {
+                out.clear();
+                for part in black_box(&x[..]).chunks(256) {
+                    det.update_slice(part, &mut out).unwrap();
+                }
+                out.len()
+            },
+            BatchSize::LargeInput,
+        )
+    });
     for w in WINDOWS {
         let mut det = Shewhart::new(shewhart_config(w)).unwrap();
         group.bench_with_input(BenchmarkId::new("shewhart", w), &w, |b, _| {
