@@ -2,8 +2,9 @@
 
 The arrival and signature localizers need facts about the network that only a hydraulic model
 gives: each pipe's end nodes in the steady-state flow direction and its length, the shortest path
-lengths from those end nodes to the meters, and the burst signatures (steady-state head drops at
-the meters, per pipe and position). ``burstloc calibrate`` computes them once, offline
+lengths from those end nodes to the meters, the wave front a burst on each pipe sends to each
+meter (relative: which silent meters should have heard it) and the burst signatures (steady-state
+head drops at the meters, per pipe and position). ``burstloc calibrate`` computes them once, offline
 (:func:`burstloc.sim.prepare.prepare_model`: WNTR and EPANET), and stores them in the
 configuration it writes (:class:`burstloc.localize.config.Calibration`); the live monitor builds
 its localizers from the stored model
