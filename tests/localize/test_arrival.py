@@ -191,3 +191,68 @@ def test_horizon_spans_the_reachable_meters_only() -> None:
     assert loc.horizon == pytest.approx(1080.0 / 1200.0)
     alone = ArrivalLocalizer(pipes, ("m9",), {n: np.array([inf]) for n in distances})
     assert alone.horizon == 0.0
+
+
+def test_silence_counts_where_the_front_is_at_least_an_alarmed_meters() -> None:
+    from burstloc.localize.arrival import silence_counts
+
+    fronts = np.array(
+        [
+            [1.0, 0.5, 0.2, 0.6, 0.1],  # weakest alarmed front 0.5: meters 3 (0.6) count, 4 not
+            [0.0, 0.3, 0.3, 0.2, 0.9],  # meter 0 gets no front: it says nothing of the size
+            [0.0, 0.0, 0.1, 0.2, 0.3],  # no front at any alarm: every silence counts, as before
+        ]
+    )
+    heard = silence_counts(fronts, [0, 1], [2, 3, 4])
+    assert heard.tolist() == [[False, True, False], [True, False, True], [True, True, True]]
+    # the burst's size cancels: scaling a candidate's fronts changes nothing
+    np.testing.assert_array_equal(silence_counts(fronts * 7.5, [0, 1], [2, 3, 4]), heard)
+
+
+def _silent_too(evidence: BurstEvidence, silent: list[str]) -> BurstEvidence:
+    """``evidence`` with ``silent`` meters that read (flat) but never alarmed."""
+    meters = evidence.meters + tuple(silent)
+    readings = np.zeros((evidence.times.size, len(meters)))
+    return BurstEvidence(
+        meters=meters,
+        times=evidence.times,
+        readings=readings,
+        onset=evidence.onset,
+        capture_interval=evidence.capture_interval,
+        alarms=evidence.alarms,
+    )
+
+
+def test_a_meter_too_weakly_reached_to_alarm_does_not_count_against_the_true_pipe(
+    tiny_network: Path,
+) -> None:
+    # A burst on E (J3 - J4, J4 a dead end): J4 and J3 alarm; J1 and J2, reached 0.4 s later
+    # through the 200 mm pipes, stay silent to the decision time at 5 s. Their fronts (J3's
+    # share of E's front times J1's or J2's share) are weaker than J3's: their silence says
+    # nothing, and E fits its alarms exactly. Counting them as "not reached" costs E misfit.
+    meters = ["J1", "J2", "J3", "J4"]
+    loc = arrival_localizer(tiny_network, meters, wave_speed=A)
+    blind = arrival_localizer(tiny_network, meters, wave_speed=A, fronts=None)
+    arrivals = _true_arrivals(loc, tiny_network, "E", 0.5, t0=1.0037)
+    seen = {m: arrivals[m] for m in ("J3", "J4")}
+    evidence = _silent_too(_evidence(seen, dt=0.01), ["J1", "J2"])
+    assert evidence.decision_time > max(arrivals.values()) + 1.0
+    e = [p.pipe for p in loc.pipes].index("E")
+    assert loc.misfit(evidence)[e] == pytest.approx(0.0, abs=1e-6)
+    assert blind.misfit(evidence)[e] > 0.05
+    best = loc.rank(evidence).best
+    assert best is not None and best.pipe == "E"
+
+
+def test_a_meter_that_should_have_heard_the_wave_still_counts(tiny_network: Path) -> None:
+    # A burst on C (J1 - J3): J1 and J3 alarm. J4 lies beyond J3 at a dead end (the front
+    # doubles there) and J2 beyond the 200/150 mm pipes: both fronts are at least J1's, so
+    # their silence to 5 s says the wave has not come, against C, with or without the fronts.
+    meters = ["J1", "J2", "J3", "J4"]
+    loc = arrival_localizer(tiny_network, meters, wave_speed=A)
+    blind = arrival_localizer(tiny_network, meters, wave_speed=A, fronts=None)
+    arrivals = _true_arrivals(loc, tiny_network, "C", 0.5, t0=1.0037)
+    evidence = _silent_too(_evidence({m: arrivals[m] for m in ("J1", "J3")}, dt=0.01), ["J2", "J4"])
+    c = [p.pipe for p in loc.pipes].index("C")
+    assert loc.misfit(evidence)[c] > 0.05
+    assert loc.misfit(evidence)[c] == pytest.approx(blind.misfit(evidence)[c])

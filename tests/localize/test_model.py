@@ -133,3 +133,35 @@ def test_malformed_documents_are_config_errors() -> None:
     broken["signature_sets"][0]["matrix"] = [[1.0]]
     with pytest.raises(ConfigError, match="malformed localization model"):
         LocalizationModel.from_json(broken)
+
+
+def _fronts(scale: float = 1.0) -> dict[str, np.ndarray]:
+    return {f"p{i}{i + 1}": scale * np.array([1.0, 0.5, 0.25, 0.125]) for i in range(3)}
+
+
+def test_wave_fronts_round_trip_and_reach_the_arrival_localizer() -> None:
+    model = _line_model(fronts=_fronts())
+    doc = json.loads(json.dumps(model.to_json(), allow_nan=False))
+    assert doc["fronts"]["p01"] == [1.0, 0.5, 0.25, 0.125]
+    back = LocalizationModel.from_json(doc)
+    assert back == model and back != _line_model(fronts=_fronts(2.0))
+    assert back.fronts is not None
+    np.testing.assert_array_equal(back.fronts["p12"], _fronts()["p12"])
+    arrival = RankingLocalizers.from_model(back).arrival
+    np.testing.assert_array_equal(arrival._fronts, np.stack(list(_fronts().values())))  # type: ignore[arg-type]
+    # a model stored without them loads, and every silent meter counts as before
+    older = LocalizationModel.from_json({k: v for k, v in doc.items() if k != "fronts"})
+    assert older.fronts is None and "fronts" not in older.to_json()
+    assert RankingLocalizers.from_model(older).arrival._fronts is None
+
+
+def test_wave_fronts_that_do_not_fit_are_refused() -> None:
+    with pytest.raises(ConfigError, match=r"fronts must have one row per pipe \(missing \['p23'\]"):
+        _line_model(fronts={k: v for k, v in _fronts().items() if k != "p23"})
+    with pytest.raises(ConfigError, match=r"fronts\.p01 must be 4 finite values >= 0"):
+        _line_model(fronts={**_fronts(), "p01": np.array([1.0, -0.5, 0.0, 0.0])})
+    with pytest.raises(ConfigError, match=r"fronts\.p12 must be 4 finite values"):
+        _line_model(fronts={**_fronts(), "p12": np.ones(3)})
+    doc = _line_model(fronts=_fronts()).to_json()
+    with pytest.raises(ConfigError, match="malformed localization model"):
+        LocalizationModel.from_json({**doc, "fronts": [1, 2]})

@@ -20,6 +20,7 @@ from burstloc.sim.prepare import (
     prepare_model,
     ranking_localizers,
     travel_time_spread,
+    wave_fronts,
 )
 from burstloc.sim.signatures import cached_signature_sets
 
@@ -88,3 +89,54 @@ def test_conveniences_build_what_the_model_builds(tiny_network: Path) -> None:
     assert built.arrival.pipes == direct.pipes
     np.testing.assert_array_equal(built.arrival._dist, direct._dist)
     assert built.signature.signatures.meters == ("J1", "J3")
+
+
+def _area(diameter_mm: float) -> float:
+    return math.pi * (diameter_mm / 1000.0) ** 2 / 4.0
+
+
+def test_wave_fronts_follow_the_junction_transmission_along_the_shortest_path(
+    tiny_network: Path,
+) -> None:
+    # tiny: A (300 mm) R1-J1; B, C (200 mm) J1-J2, J1-J3; D, E (150 mm) J2-J3, J3-J4 (dead end)
+    wn = load_network(tiny_network)
+    meters = ["J1", "J2", "J3", "J4"]
+    pipes, _ = arrival_geometry(wn, meters)
+    fronts = wave_fronts(wn, meters, pipes)
+    a, b, d = _area(300), _area(200), _area(150)
+    at_j1, at_j2, at_j3 = a + 2 * b, b + d, b + 2 * d  # cross-sections meeting at each node
+
+    def share(entering: float, total: float) -> float:
+        return 2 * entering / total
+
+    e = dict(zip(meters, fronts["E"], strict=True))
+    assert e["J4"] == pytest.approx(2.0)  # a dead end doubles the front
+    assert e["J3"] == pytest.approx(share(d, at_j3))
+    assert e["J2"] == pytest.approx(share(d, at_j3) * share(d, at_j2))  # J3 -> J2 along D
+    assert e["J1"] == pytest.approx(share(d, at_j3) * share(b, at_j1))  # J3 -> J1 along C
+    # the reservoir holds its head: a burst on A reaches the meters through J1 only
+    assert fronts["A"][0] == pytest.approx(share(a, at_j1))
+    assert fronts["A"][1] == pytest.approx(share(a, at_j1) * share(b, at_j2))
+    # a closed pipe carries no front: with C closed, the path the arrivals are timed along
+    # (J3 -> J1 by C) brings J1 nothing of E's wave, and J3 shares the front with D and E only
+    from wntr.network.base import LinkStatus
+
+    wn.get_link("C").initial_status = LinkStatus.Closed
+    closed = dict(zip(meters, wave_fronts(wn, meters, pipes)["E"], strict=True))
+    assert closed["J1"] == 0.0
+    assert closed["J3"] == pytest.approx(share(d, 2 * d))
+
+
+def test_the_model_and_the_arrival_localizer_carry_the_fronts(
+    tiny_network: Path, tmp_path: Path
+) -> None:
+    wn = load_network(tiny_network)
+    pipes, _ = arrival_geometry(wn, ["J4", "J2"])
+    expected = wave_fronts(wn, ["J4", "J2"], pipes)
+    model = prepare_model(tiny_network, ["J4", "J2"], cache_dir=tmp_path)
+    assert model.fronts is not None and set(model.fronts) == set(expected)
+    for pipe, row in expected.items():
+        np.testing.assert_array_equal(model.fronts[pipe], row)
+    built = RankingLocalizers.from_model(model).arrival
+    direct = arrival_localizer(tiny_network, ["J4", "J2"])
+    np.testing.assert_array_equal(built._fronts, direct._fronts)  # type: ignore[arg-type]

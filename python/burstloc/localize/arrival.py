@@ -8,7 +8,10 @@ to a capture interval ``dt`` (a start stamp ``tau`` means the change arrived bet
 ``tau + dt``), so the misfit of meter ``m`` is the distance from ``t0 + dist / a`` to the interval
 ``[tau_m, tau_m + dt]``. Meters that read but stay silent until the decision time ``T`` add a
 one-sided constraint: their wave must not have arrived before ``T - 2 dt`` (this is what tells a
-pipe from its neighbours when only one end node has a meter). ``t0`` minimises the sum of squared
+pipe from its neighbours when only one end node has a meter), but only those that would have
+heard the candidate's wave (:func:`silence_counts`): a burst on a large main moves far heads by
+less than the detectors' threshold, and their silence then says nothing about when the wave came.
+``t0`` minimises the sum of squared
 misfits (a convex problem, solved by bisection on its derivative). A pipe's candidate points are
 interior points along it (default ``0.1, 0.2, ..., 0.9`` of its length); the pipe keeps its best
 point.
@@ -50,6 +53,7 @@ __all__ = [
     "PipeGeometry",
     "PipePosition",
     "position_tolerance",
+    "silence_counts",
 ]
 
 DEFAULT_POSITIONS = CANDIDATE_POSITIONS
@@ -109,6 +113,32 @@ class PipePosition:
         }
 
 
+def silence_counts(
+    fronts: NDArray[np.float64], alarmed: Sequence[int], silent: Sequence[int]
+) -> NDArray[np.bool_]:
+    """Which silent meters would have heard each candidate's wave, had it reached them.
+
+    ``fronts`` (candidates, meters): the wave front a burst on each candidate sends to each meter,
+    relative to the others (:func:`burstloc.sim.prepare.wave_fronts`); ``alarmed`` and
+    ``silent``: meter columns. Returns (candidates, len(silent)): ``True`` where the silent
+    meter's silence counts against the candidate (its wave has not reached it yet).
+
+    The detector bank runs one threshold at every meter (:func:`burstloc.localize.config.
+    calibrated_bank`), and every alarmed meter saw a change of at least that threshold. So, for
+    a burst on the candidate, a silent meter whose front is at least that of some alarmed meter
+    would have alarmed too once the wave reached it: its silence says the wave has not. A silent
+    meter with a weaker front than every alarmed one may have been reached and not moved enough
+    to alarm: its silence says nothing about the candidate. The burst's size, unknown, cancels.
+    Alarmed meters that the candidate sends no front to (beyond a tank) say nothing of its size;
+    when none is left, every silence counts (the candidate explains no alarm by its front).
+    """
+    rows = np.asarray(fronts, dtype=np.float64)
+    at_alarms = rows[:, list(alarmed)]
+    weakest = np.where(at_alarms > 0, at_alarms, np.inf).min(axis=1, initial=np.inf)
+    weakest = np.where(np.isfinite(weakest), weakest, 0.0)
+    return np.asarray(rows[:, list(silent)] >= weakest[:, None], dtype=np.bool_)
+
+
 def _horizon(dist: NDArray[np.float64]) -> float:
     """The longest spread (m) of the path lengths from one candidate point to the meters it
     reaches (``dist``: (pipes, points, meters); unreachable meters are infinite)."""
@@ -141,6 +171,7 @@ class ArrivalLocalizer:
         amplitude_weight: float = 0.05,
         decision_delay: float | None = None,
         silence: bool = True,
+        fronts: Mapping[str, NDArray[np.float64]] | None = None,
     ) -> None:
         if not (math.isfinite(wave_speed) and wave_speed > 0):
             raise ConfigError(f"wave_speed must be > 0 m/s, got {wave_speed}")
@@ -168,6 +199,14 @@ class ArrivalLocalizer:
         d_end = np.array([node_distances[p.end] for p in self.pipes], dtype=np.float64)
         length = np.array([p.length for p in self.pipes], dtype=np.float64)
         self._ends = list(zip(d_start, d_end, strict=True))
+        self._fronts: NDArray[np.float64] | None = None
+        if fronts is not None:
+            missing = [p.pipe for p in self.pipes if p.pipe not in fronts]
+            if missing:
+                raise ConfigError(f"no wave fronts for pipe(s) {missing[:5]}")
+            self._fronts = np.array([fronts[p.pipe] for p in self.pipes], dtype=np.float64)
+            if self._fronts.shape != (len(self.pipes), len(self.meters)):
+                raise ConfigError("wave fronts must have one value per meter")
         along = pos[None, :, None] * length[:, None, None]
         self._dist = np.minimum(
             along + d_start[:, None, :], (length[:, None, None] - along) + d_end[:, None, :]
@@ -190,14 +229,23 @@ class ArrivalLocalizer:
         Alarmed meters contribute their distance to ``[tau, tau + dt]``. With ``silence`` on, a
         meter that reads but has not alarmed by the decision time ``T`` says the wave has not
         reached it before ``T - 2 dt`` (one interval for the stamp, one for the detector): a
-        candidate whose wave would have arrived earlier pays the difference. Needs at least
-        one alarm among the meters.
+        candidate whose wave would have arrived earlier pays the difference. With wave fronts
+        (``fronts``), only the silent meters that would have heard the candidate's wave do
+        (:func:`silence_counts`); the others add no misfit (and still count in the mean, so
+        that every candidate's RMS is over the same meters). Needs at least one alarm among the
+        meters.
         """
         return np.asarray(self._rms(self._dist, evidence).min(axis=1), dtype=np.float64)
 
-    def _rms(self, dist: NDArray[np.float64], evidence: BurstEvidence) -> NDArray[np.float64]:
+    def _rms(
+        self,
+        dist: NDArray[np.float64],
+        evidence: BurstEvidence,
+        rows: slice | list[int] = slice(None),
+    ) -> NDArray[np.float64]:
         """RMS misfit (s) of candidate points whose path lengths to the meters are ``dist``
-        (shape ``(pipes, points, meters)``), shape ``(pipes, points)`` (see :meth:`misfit`)."""
+        (shape ``(pipes, points, meters)``; the pipes are ``self.pipes[rows]``), shape
+        ``(pipes, points)`` (see :meth:`misfit`)."""
         alarmed = [j for j, m in enumerate(self.meters) if m in evidence.alarms]
         if not alarmed:
             raise InputError("no meter of the arrival model has alarmed: nothing to localize")
@@ -205,6 +253,7 @@ class ArrivalLocalizer:
         tau = np.array([evidence.alarms[self.meters[j]].start for j in alarmed])
         lo_parts = [tau[None, None, :] - dist[:, :, alarmed] / self.wave_speed]
         hi_parts = [lo_parts[0] + dt]
+        silent: list[int] = []
         if self.silence:
             reading = set(evidence.meters)
             silent = [
@@ -217,6 +266,11 @@ class ArrivalLocalizer:
         lo = np.concatenate(lo_parts, axis=2)  # t0 values that put each arrival in its window
         hi = np.concatenate(hi_parts, axis=2)
         finite = np.isfinite(lo)
+        if self._fronts is not None and silent:
+            heard = silence_counts(self._fronts[rows], alarmed, silent)
+            lo[:, :, len(alarmed) :] = np.where(
+                heard[:, None, :], lo[:, :, len(alarmed) :], -np.inf
+            )
         lo_f = np.where(finite, lo, -np.inf)
         hi_f = np.where(finite, hi, np.inf)
         first = np.isfinite(lo[:, :, : len(alarmed)])
@@ -266,7 +320,7 @@ class ArrivalLocalizer:
         along = np.linspace(0.0, geo.length, count)
         d_start, d_end = self._ends[index[pipe]]
         dist = np.minimum(along[:, None] + d_start, (geo.length - along)[:, None] + d_end)
-        rms = self._rms(dist[None], evidence)[0]
+        rms = self._rms(dist[None], evidence, [index[pipe]])[0]
         best = float(rms.min())
         dt = evidence.capture_interval
         if not math.isfinite(best):

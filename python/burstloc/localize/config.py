@@ -8,9 +8,9 @@ writes a :class:`Calibration` as a named JSON document (format :data:`CALIBRATIO
   the localization interval and the decision delays;
 * the noise model and false-alarm target it was calibrated for, and its provenance;
 * ``model``: the :class:`burstloc.localize.model.LocalizationModel` (flow-direction end nodes and
-  lengths of the pipes, path lengths to the meters, burst signatures), computed offline with the
-  hydraulic model, so that whoever loads the configuration (``burstloc monitor`` on a gateway)
-  builds its localizers without WNTR, EPANET or TSNet.
+  lengths of the pipes, path lengths to the meters, wave fronts, burst signatures), computed
+  offline with the hydraulic model, so that whoever loads the configuration (``burstloc
+  monitor`` on a gateway) builds its localizers without WNTR, EPANET or TSNet.
 
 :meth:`Calibration.check` refuses, by name, a configuration for another network or other meters;
 the stored model must match the configuration's network and meters. A configuration written by an

@@ -130,7 +130,11 @@ class RankingLocalizers(Mapping[str, Localizer]):
             ConfigError: the model's parts do not make localizers (e.g. no shared pipe).
         """
         arrival = ArrivalLocalizer(
-            model.pipes, model.meters, model.node_distances, wave_speed=model.wave_speed
+            model.pipes,
+            model.meters,
+            model.node_distances,
+            wave_speed=model.wave_speed,
+            fronts=model.fronts,
         )
         signature = SignatureLocalizer(model.signature_sets)
         return cls(arrival, signature, FusedLocalizer(arrival, signature))

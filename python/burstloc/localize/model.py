@@ -2,8 +2,9 @@
 
 The arrival and signature localizers need facts about the network that only a hydraulic model
 gives: each pipe's end nodes in the steady-state flow direction and its length, the shortest path
-lengths from those end nodes to the meters, and the burst signatures (steady-state head drops at
-the meters, per pipe and position). ``burstloc calibrate`` computes them once, offline
+lengths from those end nodes to the meters, the wave front a burst on each pipe sends to each
+meter (relative: which silent meters should have heard it) and the burst signatures (steady-state
+head drops at the meters, per pipe and position). ``burstloc calibrate`` computes them once, offline
 (:func:`burstloc.sim.prepare.prepare_model`: WNTR and EPANET), and stores them in the
 configuration it writes (:class:`burstloc.localize.config.Calibration`); the live monitor builds
 its localizers from the stored model
@@ -12,7 +13,8 @@ its localizers from the stored model
 A model is bound to one network file (its SHA-256, :func:`burstloc.inp.network_hash`) and one
 ordered list of meters: :meth:`LocalizationModel.check` refuses, by name, a model for another
 network or other meters. The JSON document carries the format tag :data:`MODEL_FORMAT`; a
-distance to an unreachable meter is stored as ``null``. Numpy only; on the live path.
+distance to an unreachable meter is stored as ``null``; ``fronts`` may be absent (a model written
+before they were stored). Numpy only; on the live path.
 """
 
 from __future__ import annotations
@@ -55,6 +57,10 @@ class LocalizationModel:
     node of a candidate pipe) to ``meters[j]`` (``inf`` when there is no path).
     ``signature_sets``: the burst signatures at ``meters``, one set per position along the pipes.
     ``wave_speed``: the pressure-wave speed (m/s) the arrival localizer assumes.
+    ``fronts[pipe][j]``: the wave front a burst on ``pipe`` sends to ``meters[j]``, relative to
+    the others (:func:`burstloc.sim.prepare.wave_fronts`): which silent meters should have
+    heard it (:class:`burstloc.localize.arrival.ArrivalLocalizer`). ``None`` (a model stored
+    without them): every silent meter counts as not yet reached.
 
     Raises:
         ConfigError: the parts do not fit together (a pipe end without distances, signatures of
@@ -67,6 +73,7 @@ class LocalizationModel:
     node_distances: Mapping[str, NDArray[np.float64]]
     signature_sets: tuple[SignatureSet, ...]
     wave_speed: float = WAVE_SPEED
+    fronts: Mapping[str, NDArray[np.float64]] | None = None
 
     def __post_init__(self) -> None:
         meters = check_names(self.meters, "meters", high=MAX_METERS)
@@ -103,6 +110,28 @@ class LocalizationModel:
         object.__setattr__(self, "node_distances", distances)
         object.__setattr__(self, "signature_sets", tuple(self.signature_sets))
         object.__setattr__(self, "wave_speed", float(self.wave_speed))
+        if self.fronts is not None:
+            object.__setattr__(self, "fronts", self._checked_fronts(self.fronts))
+
+    def _checked_fronts(
+        self, fronts: Mapping[str, NDArray[np.float64]]
+    ) -> dict[str, NDArray[np.float64]]:
+        """One row of ``len(meters)`` finite fronts >= 0 for every candidate pipe, read-only."""
+        names = [p.pipe for p in self.pipes]
+        if set(fronts) != set(names):
+            missing = sorted(set(names) - set(fronts))[:5]
+            extra = sorted(set(fronts) - set(names))[:5]
+            raise FieldError(
+                "fronts", f"must have one row per pipe (missing {missing}, extra {extra})"
+            )
+        rows: dict[str, NDArray[np.float64]] = {}
+        for name in names:
+            row = np.array(fronts[name], dtype=np.float64)
+            if row.shape != (len(self.meters),) or not np.all(np.isfinite(row)) or np.any(row < 0):
+                raise FieldError(f"fronts.{name}", f"must be {len(self.meters)} finite values >= 0")
+            row.setflags(write=False)
+            rows[name] = row
+        return rows
 
     def __eq__(self, other: object) -> bool:
         """Equal when the stored documents are (arrays compared element by element)."""
@@ -141,6 +170,11 @@ class LocalizationModel:
                 for node, row in self.node_distances.items()
             },
             "signature_sets": [s.to_json() for s in self.signature_sets],
+            **(
+                {}
+                if self.fronts is None
+                else {"fronts": {p: [float(f) for f in row] for p, row in self.fronts.items()}}
+            ),
         }
 
     @classmethod
@@ -167,6 +201,13 @@ class LocalizationModel:
                     for node, row in data["node_distances"].items()
                 },
                 signature_sets=tuple(SignatureSet.from_json(s) for s in data["signature_sets"]),
+                fronts=(
+                    None
+                    if data.get("fronts") is None
+                    else {
+                        str(p): np.array(row, dtype=np.float64) for p, row in data["fronts"].items()
+                    }
+                ),
             )
         except ConfigError:
             raise

@@ -41,6 +41,7 @@ __all__ = [
     "prepare_model",
     "ranking_localizers",
     "travel_time_spread",
+    "wave_fronts",
 ]
 
 
@@ -115,6 +116,78 @@ def arrival_geometry(
     return pipes, node_distances
 
 
+def _link_area(link: Any) -> float:
+    """Cross-section (m^2) a wave front crosses in ``link``: 0 when it is closed; a pump, which
+    has no diameter, passes the wave (it gets the largest area, :func:`wave_fronts`)."""
+    if getattr(link, "initial_status", None) is not None and link.initial_status.name == "Closed":
+        return 0.0
+    diameter = getattr(link, "diameter", None)
+    if diameter is None:
+        return math.inf
+    return math.pi * float(diameter) ** 2 / 4.0
+
+
+def wave_fronts(
+    wn: WaterNetworkModel, meters: Sequence[str], pipes: Sequence[PipeGeometry]
+) -> dict[str, NDArray[np.float64]]:
+    """Per pipe, the head step at each meter, relative to the step a burst on the pipe starts,
+    of the first wave front to reach it (``fronts[pipe][j]`` for ``meters[j]``).
+
+    The front travels along the shortest path (the one the arrival localizer times, on
+    :func:`length_graph`), frictionless; at each node ``k`` it enters from link ``q`` a share
+    ``2 A_q / sum(A)`` passes (the junction transmission coefficient of pipes of one wave speed:
+    ``A`` the cross-sections of the links at ``k``; 2 at a dead end, where the front doubles); a
+    reservoir or tank holds its head (0: nothing passes it), a closed link carries nothing and a
+    pump passes the front whole. The front at meter ``m`` for a burst on ``p`` comes through, of
+    ``p``'s two end nodes, the one nearer ``m`` (the first front; the larger on a tie): the
+    product of the shares along the path, the end node's own share of a front coming from ``p``
+    included. Friction, demands, fronts along other paths and the reflections that follow are
+    left out: this is the *shape* the arrival localizer compares between meters, not a head in
+    metres (:func:`burstloc.localize.arrival.silence_counts`).
+    """
+    graph = length_graph(wn)
+    areas = {name: _link_area(wn.get_link(name)) for name in wn.link_name_list}
+    finite = [a for a in areas.values() if math.isfinite(a)]
+    widest = max(finite, default=1.0)
+    areas = {name: (widest if math.isinf(a) else a) for name, a in areas.items()}
+    total: dict[str, float] = {n: 0.0 for n in wn.node_name_list}
+    for name in wn.link_name_list:
+        link = wn.get_link(name)
+        total[link.start_node_name] += areas[name]
+        total[link.end_node_name] += areas[name]
+    fixed = set(wn.reservoir_name_list) | set(wn.tank_name_list)
+
+    def share(node: str, link: str) -> float:
+        if node in fixed or total[node] <= 0:
+            return 0.0
+        return 2.0 * areas[link] / total[node]
+
+    ends = dict.fromkeys(n for p in pipes for n in (p.start, p.end))
+    reach = {n: np.zeros(len(meters)) for n in ends}  # front at meter j of a unit step at n
+    far = {n: np.full(len(meters), math.inf) for n in ends}  # and its path length (m)
+    for j, meter in enumerate(meters):
+        preds, dist = nx.dijkstra_predecessor_and_distance(graph, meter, weight="length")
+        front = {meter: 1.0}
+        for node in dist:  # in the order Dijkstra settled them: a node's first pred is done
+            if node != meter:
+                front[node] = max(
+                    share(toward, graph[node][toward]["link"]) * front[toward]
+                    for toward in preds[node]
+                    if toward in front  # across a 0-length link (pump, valve) ties go both ways
+                )
+        for n in ends:
+            reach[n][j] = front.get(n, 0.0)
+            far[n][j] = dist.get(n, math.inf)
+    fronts = {}
+    for p in pipes:
+        start = share(p.start, p.pipe) * reach[p.start]
+        end = share(p.end, p.pipe) * reach[p.end]
+        # the first front comes through the nearer end (from the pipe's middle); a tie, either
+        nearer = np.where(far[p.start] < far[p.end], start, end)
+        fronts[p.pipe] = np.where(far[p.start] == far[p.end], np.maximum(start, end), nearer)
+    return fronts
+
+
 def arrival_localizer(
     network: str | os.PathLike[str] | WaterNetworkModel,
     meters: Sequence[str] | None = None,
@@ -134,6 +207,7 @@ def arrival_localizer(
     wn = _model_of(network)
     meter_list = _meters_of(wn, meters)
     pipes, node_distances = arrival_geometry(wn, meter_list)
+    options.setdefault("fronts", wave_fronts(wn, meter_list, pipes))
     return ArrivalLocalizer(
         pipes, meter_list, node_distances, wave_speed=wave_speed, positions=positions, **options
     )
@@ -167,6 +241,7 @@ def prepare_model(
             network, meter_list, positions=positions, cache_dir=cache_dir
         ),
         wave_speed=wave_speed,
+        fronts=wave_fronts(model, meter_list, pipes),
     )
 
 
