@@ -46,6 +46,51 @@ pub(crate) const RISE: u8 = 1;
 /// `gn_real` crossed the threshold.
 pub(crate) const DROP: u8 = 2;
 
+/// Where the start values come from while a lane steps a slice `xs` (stream indices from
+/// `base`): a start inside the slice reads its sample there, one before it keeps the value the
+/// lane held when the slice began. They are brought up to date only where they are read (at an
+/// alarm, at the end of the slice), not sample by sample.
+#[derive(Clone, Copy)]
+pub(super) struct Starts<'a> {
+    xs: &'a [f64],
+    base: u64,
+    x_tap0: f64,
+    x_tan0: f64,
+}
+
+impl<'a> Starts<'a> {
+    /// The start values of `lane` about to step `xs` from `base`.
+    #[inline(always)]
+    pub(super) fn of(lane: &CusumLane, xs: &'a [f64], base: u64) -> Self {
+        Self {
+            xs,
+            base,
+            x_tap0: lane.x_tap,
+            x_tan0: lane.x_tan,
+        }
+    }
+
+    /// The start value of a change of `direction` that started at stream index `t`.
+    #[inline(always)]
+    pub(super) fn value(&self, t: u64, direction: Direction) -> f64 {
+        if t >= self.base {
+            self.xs[(t - self.base) as usize]
+        } else {
+            match direction {
+                Direction::Rise => self.x_tap0,
+                Direction::Drop => self.x_tan0,
+            }
+        }
+    }
+
+    /// `lane`'s start values for its current starts.
+    #[inline(always)]
+    pub(super) fn set(&self, lane: &mut CusumLane) {
+        lane.x_tap = self.value(lane.tap, Direction::Rise);
+        lane.x_tan = self.value(lane.tan, Direction::Drop);
+    }
+}
+
 /// The per-channel CUSUM state; the single detector and the bank share its arithmetic,
 /// so both are bit-for-bit identical to TSNet.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -188,26 +233,17 @@ impl CusumLane {
         drift: f64,
         out: &mut Vec<Alarm>,
     ) {
-        let (x_tap0, x_tan0) = (self.x_tap, self.x_tan);
-        let at = |t: u64, before: f64| {
-            if t >= base {
-                xs[(t - base) as usize]
-            } else {
-                before
-            }
-        };
+        let starts = Starts::of(self, xs, base);
         let mut lane = *self;
         let sides = Sides::new(thr, drift);
         for (i, &x) in (base..).zip(xs) {
             let (flags, _, _) = lane.advance(x, i, sides);
             if flags != 0 {
-                lane.x_tap = at(lane.tap, x_tap0);
-                lane.x_tan = at(lane.tan, x_tan0);
+                starts.set(&mut lane);
                 out.push(lane.alarm(flags, i, x));
             }
         }
-        lane.x_tap = at(lane.tap, x_tap0);
-        lane.x_tan = at(lane.tan, x_tan0);
+        starts.set(&mut lane);
         *self = lane;
     }
 

@@ -18,9 +18,9 @@
 
 use alloc::vec::Vec;
 
-use super::lane::Sides;
+use super::lane::{Sides, Starts};
 use super::{CusumConfig, CusumLane};
-use crate::alarm::{Alarm, ChannelAlarm, Direction};
+use crate::alarm::{Alarm, ChannelAlarm};
 use crate::bank::CusumBank;
 use crate::error::{check_samples, Error};
 
@@ -35,30 +35,19 @@ const LEN: usize = 256;
 /// Below this many samples per segment the joins' share outweighs the gain: run sequentially.
 const MIN_LEN: usize = 32;
 
-/// What the joins of one call share: the slice, its first stream index and the start values
-/// the detector held before it (a start before the slice reads them, as in the sequential run).
+/// What the joins of one call share: the slice, its first stream index, where its start values
+/// come from (as in the sequential run) and the config's sides.
 struct Slice<'a> {
     xs: &'a [f64],
     base: u64,
-    x_tap0: f64,
-    x_tan0: f64,
+    starts: Starts<'a>,
     sides: Sides,
 }
 
 impl Slice<'_> {
-    /// The sample at stream index `t`, or `before` for a start before the slice.
-    fn at(&self, t: u64, before: f64) -> f64 {
-        if t >= self.base {
-            self.xs[(t - self.base) as usize]
-        } else {
-            before
-        }
-    }
-
     /// The alarm the sequential run raises with `lane` at stream index `i` (sample `x`).
     fn alarm(&self, lane: &mut CusumLane, flags: u8, i: u64, x: f64) -> Alarm {
-        lane.x_tap = self.at(lane.tap, self.x_tap0);
-        lane.x_tan = self.at(lane.tan, self.x_tan0);
+        self.starts.set(lane);
         lane.alarm(flags, i, x)
     }
 }
@@ -94,8 +83,7 @@ pub(super) fn run(
     let slice = Slice {
         xs,
         base,
-        x_tap0: lane.x_tap,
-        x_tan0: lane.x_tan,
+        starts: Starts::of(lane, xs, base),
         sides: Sides::new(config.threshold(), config.drift()),
     };
     let mut guessed = Vec::new();
@@ -126,8 +114,7 @@ pub(super) fn run(
             break;
         }
     }
-    lane.x_tap = slice.at(lane.tap, slice.x_tap0);
-    lane.x_tan = slice.at(lane.tan, slice.x_tan0);
+    slice.starts.set(lane);
     Ok(done)
 }
 
@@ -268,15 +255,11 @@ fn join(
         if index >= from {
             let start = guess.index(a.alarm.start);
             let x = slice.xs[(index - slice.base) as usize];
-            let before = match a.alarm.direction {
-                Direction::Rise => slice.x_tap0,
-                Direction::Drop => slice.x_tan0,
-            };
             out.push(Alarm {
                 index,
                 start,
                 direction: a.alarm.direction,
-                amplitude: x - slice.at(start, before),
+                amplitude: x - slice.starts.value(start, a.alarm.direction),
             });
         }
     }
