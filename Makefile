@@ -16,7 +16,7 @@ PYTHON313  ?= $(shell for p in "$$(command -v python3.13)" \
 VENV313 := .venv313
 BIN313  := $(VENV313)/bin
 
-.PHONY: setup setup313 networks paper study test test-rust test-python test-python313 lint bench bench-rust clean
+.PHONY: setup services setup313 networks paper study test test-rust test-python test-python313 lint bench bench-rust clean
 
 ## setup: create .venv (the default Python), build burstloc's wheel, install it with its
 ## sim/dev/bench extras
@@ -42,6 +42,11 @@ EXTRAS       := sim,dev,bench,river
 EXT_RUSTFLAGS ?= -C target-cpu=native
 
 setup: $(VENV)/.installed networks/todini6.inp networks
+
+## services: what the tests need beside Python (not the main job): Mosquitto, the MQTT broker the
+## monitor's integration tests start on a loopback port; installed where missing (as root with
+## apt-get), else named with the command that installs it
+services:
 	scripts/install-mosquitto.sh
 
 ## networks: EPANET's Net1, Net2, Net3 and Anytown in networks/public/ (not committed), from the
@@ -105,7 +110,7 @@ study: setup
 
 ## test: every test and lint (Rust and Python); the Python suite on the default Python and on
 ## Python 3.13 with numpy 2
-test: setup setup313 lint test-rust test-python test-python313
+test: setup setup313 services lint test-rust test-python test-python313
 
 lint:
 	cargo fmt --all --check

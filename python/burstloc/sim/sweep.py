@@ -14,6 +14,7 @@ items must be picklable for the parallel modes (a module-level function, plain d
 
 from __future__ import annotations
 
+import gc
 import os
 import signal
 import sys
@@ -241,9 +242,19 @@ def _run_processes(func: Callable[[T], R], todo: list[T], workers: int, done: _D
             exc = future.exception()
             done(futures[future], None if exc else future.result(), exc)
     except BaseException:
-        pool.shutdown(wait=False, cancel_futures=True)
-        for child in active_children():
+        # Workers stopped first: the pool's own thread then sees them gone, fails what is
+        # pending and ends, and the shutdown waits for it and frees the pool's queues here.
+        # (A shutdown without waiting would leave that thread, and the queues' semaphores, to
+        # the end of the process, and Python's resource tracker would warn of them after the
+        # run's last line.)
+        children = active_children()
+        for child in children:
             child.terminate()
+        for child in children:
+            child.join()
+        pool.shutdown(wait=True, cancel_futures=True)
+        del pool
+        gc.collect()
         raise
     pool.shutdown()
 
