@@ -105,9 +105,31 @@ def _run_title(r: RunResult) -> str:
     return f"{name} {r.spec.capture_interval:g}s"
 
 
+def noise_line(ev: Evaluation) -> str:
+    """What noise the readings carried (``ev.scenario["noise"]``), in one line."""
+    noise = ev.scenario.get("noise") or {}
+
+    def said(sigma: Any) -> str:
+        if isinstance(sigma, dict):
+            levels = sorted(set(sigma.values()))
+            if not levels or levels == [0.0]:
+                return "none"
+            span = f"{levels[0]:g} m" if len(levels) == 1 else f"{levels[0]:g}-{levels[-1]:g} m"
+            return f"the calibrated sigma = {span}"
+        return "none" if not sigma else f"sigma = {sigma:g} m"
+
+    parts = []
+    if any(r.spec.localizer == "paper" for r in ev.runs):
+        parts.append(f"paper's rules: {said(noise.get('paper'))}")
+    if any(r.spec.localizer != "paper" for r in ev.runs):
+        parts.append(f"ranking localizers: {said(noise.get('ranking'))}")
+    seed = ev.scenario.get("noise_seed", 0)
+    return f"Sensor noise on the readings ({'; '.join(parts)}; seed {seed}; --noise sets it)"
+
+
 def format_tables(ev: Evaluation) -> str:
     """The per-pipe tables and the Table V summary as text (``*`` marks a correct pipe)."""
-    out: list[str] = []
+    out: list[str] = [noise_line(ev)]
     for kind, mode, runs in _groups(ev):
         number, name = _TABLE_NAMES[kind]
         pipes = _pipe_order(runs[0].pipes)
