@@ -232,14 +232,23 @@ def test_restore_rejects_foreign_or_corrupt_snapshots() -> None:
         Cusum.restore(negative)
 
 
-def test_snapshots_keep_non_finite_window_sums() -> None:
-    """Finite samples near 1e160 overflow a window's sum of squares; snapshots must keep it."""
-    x = np.array([1e160, -1e160, 3e160, 1.0, 2.0, 5e159, 7e159, -2e160])
+def test_samples_beyond_1e100_are_refused_and_window_sums_stay_finite() -> None:
+    """Samples near 1e160 would overflow a window's sum of squares, leaving a state no snapshot
+    check could tell from a corrupt one: they are refused like a NaN, the state unchanged. The
+    largest samples taken keep every sum finite, through a snapshot and on."""
     det = Shewhart(window=5, threshold=1.0)
-    det.update_many(x[:6])
+    det.update_many(np.array([1.0, 2.0]))
+    before = det.snapshot()
+    with pytest.raises(InputError, match=r"out-of-range .*sample 1e160 at index 2"):
+        det.update(1e160)
+    with pytest.raises(InputError, match=r"sample -1e160 at index 3"):
+        det.update_many(np.array([1.0, -1e160]))
+    assert det.snapshot() == before
+    x = np.tile([1e100, -1e100, 1e100, 1.0, -1e100, 2.0, 1e100, -1e100], 200)
+    det.update_many(x[:900])
     restored = pickle.loads(pickle.dumps(det))
     assert restored.snapshot() == det.snapshot()
-    assert restored.update_many(x[6:]) == det.update_many(x[6:])
+    assert restored.update_many(x[900:]) == det.update_many(x[900:])
 
 
 # --- Bad input ---------------------------------------------------------------------------

@@ -99,7 +99,7 @@ impl TryFrom<CusumBankRepr> for CusumBank {
             x_tan: r.x_tan,
         };
         for c in 0..n {
-            bank.lane(c).check(bank.steps, &bank.config)?;
+            bank.lane(c).check(bank.steps, &bank.config, Some(c))?;
         }
         Ok(bank)
     }
