@@ -8,6 +8,7 @@ and that bad input raises the documented exception and changes nothing.
 from __future__ import annotations
 
 import copy
+import math
 import pickle
 import re
 import struct
@@ -23,6 +24,7 @@ from hypothesis import strategies as st
 
 import burstloc
 from burstloc import Alarm, ConfigError, Cusum, InputError, Shewhart
+from burstloc.constants import MAX_SAMPLE
 from reference import RefAlarm, amplitude_tolerance, cusum_online, shewhart_streaming
 from signals import build_signal, cusum_parameters, pressure_signals
 
@@ -230,6 +232,18 @@ def test_restore_rejects_foreign_or_corrupt_snapshots() -> None:
     negative = cusum.replace(threshold, b"\xfb" + struct.pack(">d", -0.1234567))
     with pytest.raises(InputError, match="threshold"):
         Cusum.restore(negative)
+
+
+def test_the_packages_max_sample_is_the_detectors() -> None:
+    above = math.nextafter(MAX_SAMPLE, math.inf)
+    for x, ok in ((MAX_SAMPLE, True), (-MAX_SAMPLE, True), (above, False), (-above, False)):
+        for det in (Cusum(threshold=0.5), Shewhart(window=2, threshold=0.5)):
+            if ok:
+                det.update(x)
+            else:
+                with pytest.raises(InputError, match="out-of-range"):
+                    det.update(x)
+                assert det.samples_seen == 0
 
 
 def test_samples_beyond_1e100_are_refused_and_window_sums_stay_finite() -> None:
