@@ -19,6 +19,7 @@ import json
 import os
 import stat
 import tempfile
+import zipfile
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import IO, Any
@@ -157,5 +158,17 @@ def write_json(path: str | os.PathLike[str], document: Any, *, indent: int | Non
 
 
 def write_npz(path: str | os.PathLike[str], arrays: Mapping[str, np.ndarray]) -> Path:
-    """Write ``arrays`` to an ``.npz`` file atomically."""
-    return atomic_write(path, lambda f: np.savez(f, **arrays))
+    """Write ``arrays`` to an ``.npz`` file atomically (the layout of ``np.savez``).
+
+    The archive is closed whatever happens (``np.savez`` leaves it open when a write fails, and
+    the garbage collector's late ``ZipFile.close`` then writes into the closed file: "Exception
+    ignored ... seek of closed file" after the error).
+    """
+
+    def write(f: IO[bytes]) -> None:
+        with zipfile.ZipFile(f, mode="w", compression=zipfile.ZIP_STORED) as archive:
+            for name, array in arrays.items():
+                with archive.open(f"{name}.npy", mode="w", force_zip64=True) as member:
+                    np.lib.format.write_array(member, np.asanyarray(array), allow_pickle=False)
+
+    return atomic_write(path, write)

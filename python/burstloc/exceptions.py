@@ -4,9 +4,10 @@ Every error is a typed subclass of a built-in exception, so callers can catch pr
 
 * :class:`ConfigError` (``ValueError``): a detector parameter is invalid; the message names
   the parameter and its value.
-* :class:`InputError` (``ValueError``): a detector was fed bad input (a NaN or infinite sample,
-  a wrong dtype, shape or channel count); the message names the sample index, channel or
-  argument. The detector's state is left unchanged.
+* :class:`InputError` (``ValueError``): a detector was fed bad input (a NaN, infinite or
+  out-of-range sample, beyond +-1e100; a wrong dtype, shape or channel count; a snapshot holding
+  a state no detector reaches); the message names the sample index, channel, argument or state
+  field. The detector's state is left unchanged.
 * :class:`StreamError` (``InputError``): bad or out-of-order readings in a live stream.
 * :class:`NetworkError` (``ValueError``): an unknown node or pipe, or a malformed INP file
   (with the file and line).

@@ -136,3 +136,23 @@ def test_classify_and_operations_options(tiny: Path, cfg: Path, tmp_path: Path) 
     ops.write_text("asset,time,action\nJ1,soon,demand on\n")
     bad = _monitor(tiny, cfg, "--classify", str(path), "--operations", str(ops))
     assert bad.returncode != 0 and b"line 2" in bad.stderr
+
+
+@pytest.mark.parametrize("node", ["R1", "J9"])
+def test_a_configuration_whose_meter_is_not_a_junction_is_refused_by_name(
+    tiny: Path, cfg: Path, tmp_path: Path, node: str
+) -> None:
+    """A configuration edited by hand: meter J4 renamed everywhere (so the file is consistent
+    and still bound to the network's SHA-256) to the reservoir R1 or to a node the network does
+    not have. The monitor refuses it before reading anything, as `calibrate` refuses such
+    meters."""
+    edited = tmp_path / "edited.json"
+    edited.write_text(cfg.read_text().replace('"J4"', f'"{node}"'))
+    assert node in json.loads(edited.read_text())["meters"]
+    done = _monitor(tiny, edited, stdin=_steady(50))
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.decode().splitlines() == [
+        f"burstloc: error: meter(s) ['{node}'] are not junctions of {tiny} (in configuration "
+        "'tiny-calibrated')"
+    ]
+    assert done.stdout == b""

@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import json
+import os
+import resource
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -152,3 +155,30 @@ def test_command_line_process(tiny_network: Path, tmp_path: Path) -> None:
     )
     assert done.returncode == 2
     assert "unknown pipe(s) ['Nope']" in done.stderr and done.stdout == ""
+
+
+def _small_file_limit() -> None:
+    """In the child: files may not grow past 8 KiB, and a write past it fails (EFBIG) instead of
+    killing the process (SIGXFSZ ignored), as a full disk fails a write with ENOSPC."""
+    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    resource.setrlimit(resource.RLIMIT_FSIZE, (8192, 8192))
+
+
+def test_a_failed_write_prints_one_error_and_no_traceback(
+    tiny_network: Path, tmp_path: Path
+) -> None:
+    """A scenario file of ~12 KB whose write the OS refuses midway: the clear error and exit 2,
+    nothing after it (no "Exception ignored" from an archive left open)."""
+    out = tmp_path / "out"
+    done = subprocess.run(
+        [sys.executable, "-m", "burstloc.cli", "simulate", str(tiny_network), "--pipe", "A",
+         "--out", str(out), "--no-cache", "--burst-start", "0.2", "--duration", "10", "--quiet",
+         "--workers", "1"],
+        capture_output=True, text=True, check=False, preexec_fn=_small_file_limit,
+        env={**os.environ, "PYTHONDONTWRITEBYTECODE": "1"},
+    )  # fmt: skip
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.splitlines() == [
+        f"burstloc: error: cannot write {out / 'tiny_pipe-A.npz'}: File too large"
+    ]
+    assert list(out.iterdir()) == []

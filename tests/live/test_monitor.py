@@ -227,8 +227,14 @@ def test_bad_steps_are_refused_by_name_and_leave_the_monitor_as_it_was(
     m = len(fed.meters)
     nan = steps[split].values.copy()
     nan[1] = np.nan
+    huge = steps[split].values.copy()
+    huge[2] = -1e150  # finite, but beyond what a detector takes
     bad = [
         (Step(steps[split].timestamp, nan), f"non-finite reading nan from meter {fed.meters[1]!r}"),
+        (
+            Step(steps[split].timestamp, huge),
+            f"out-of-range reading -1e\\+150 from meter {fed.meters[2]!r}",
+        ),
         (Step(steps[split].timestamp, np.ones(m + 1)), f"values for {m} meters"),
         (Step(steps[split - 1].timestamp, steps[split].values), "is not after the previous"),
         (Step(math.inf, steps[split].values), "not finite"),

@@ -25,6 +25,7 @@ import contextlib
 import importlib
 import os
 import sys
+import warnings
 from collections.abc import Sequence
 from typing import NoReturn
 
@@ -64,7 +65,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         args_list = list(sys.argv[1:] if argv is None else argv)
         command = args_list[0] if args_list and args_list[0] in SUBCOMMANDS else None
         args = build_parser(command).parse_args(args_list)
-        status = int(args.handler(args))
+        with warnings.catch_warnings():
+            _each_warning_once()
+            status = int(args.handler(args))
         sys.stdout.flush()  # a closed stdout is found here, not at interpreter exit
         return status
     except KeyboardInterrupt:
@@ -80,6 +83,24 @@ def main(argv: Sequence[str] | None = None) -> int:
         where = f"{exc.filename}: " if exc.filename else ""
         print(f"burstloc: error: {where}{exc.strerror or exc}", file=sys.stderr)
         return 2
+
+
+def _each_warning_once() -> None:
+    """Say each distinct warning (category and text) once per run. WNTR warns each time it reads
+    a network (once per candidate position, per split pipe), and Python's "once per place" goes
+    blind whenever anything changes the warning filters (every ``catch_warnings`` block empties
+    the registries, even for the ``once`` action); so repeats are dropped where warnings are
+    shown. Call inside ``catch_warnings``, which puts the previous ``showwarning`` back."""
+    said: set[tuple[type[Warning], str]] = set()
+    show = warnings.showwarning
+
+    def once(message, category, filename, lineno, file=None, line=None):  # type: ignore[no-untyped-def]
+        key = (category, str(message))
+        if key not in said:
+            said.add(key)
+            show(message, category, filename, lineno, file, line)
+
+    warnings.showwarning = once
 
 
 def run() -> NoReturn:

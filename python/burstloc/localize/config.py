@@ -42,7 +42,7 @@ from burstloc._validate import (
     read_json,
 )
 from burstloc.exceptions import ConfigError
-from burstloc.inp import network_hash
+from burstloc.inp import check_meters, junction_names_in_file, network_hash
 from burstloc.localize.model import LocalizationModel
 
 __all__ = ["CALIBRATION_FORMAT", "Calibration", "IntervalCalibration", "calibrated_bank"]
@@ -250,13 +250,16 @@ class Calibration:
         )
 
     def check(self, network: str | os.PathLike[str], meters: Sequence[str] | None = None) -> None:
-        """Refuse (ConfigError) to be used with another network or another set of meters."""
+        """Refuse (ConfigError) to be used with another network or another set of meters, or
+        with meters that are not junctions of ``network`` (a configuration edited by hand)."""
         digest = network_hash(network)
         if digest != self.network_hash:
             raise ConfigError(
                 f"configuration {self.name!r} was calibrated for network {self.network!r} "
                 f"({self.network_hash}), not for {os.fspath(network)!r} ({digest})"
             )
+        where = f"{os.fspath(network)} (in configuration {self.name!r})"
+        check_meters(self.meters, junction_names_in_file(network), where, ConfigError)
         if meters is not None and tuple(meters) != self.meters:
             missing = sorted(set(self.meters) - set(meters))
             extra = sorted(set(meters) - set(self.meters))

@@ -23,8 +23,8 @@ from typing import Literal
 import numpy as np
 
 from burstloc.constants import CANDIDATE_POSITIONS
-from burstloc.exceptions import ConfigError, InputError, NetworkError
-from burstloc.inp import network_hash
+from burstloc.exceptions import ConfigError, InputError
+from burstloc.inp import check_meters, network_hash
 from burstloc.localize.signature import SIGNATURE_FORMAT, SignatureSet
 from burstloc.network import load_network, split_pipe, steady_state
 from burstloc.sim.cache import cache_key, default_cache_dir, drop_corrupt
@@ -76,10 +76,7 @@ def compute_signatures(
         raise ConfigError(f"unknown demand model {demand_model!r}; use 'pdd' or 'emitter'")
     wn = load_network(network)
     junctions = list(wn.junction_name_list)
-    meter_list = list(junctions if meters is None else meters)
-    unknown = [m for m in meter_list if m not in junctions]
-    if unknown:
-        raise NetworkError(f"meter(s) {unknown} are not junctions of {network}")
+    meter_list = check_meters(junctions if meters is None else meters, junctions, network)
     if not meter_list:
         raise InputError("at least one meter is needed")
     if demand_model == "emitter":
