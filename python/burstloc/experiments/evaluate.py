@@ -357,10 +357,7 @@ def evaluate(
     setup = None
     if ranked:
         junctions = list(next(iter(results.values())).junctions)
-        unknown = [m for m in meters or () if m not in junctions]
-        if unknown:
-            raise NetworkError(f"meter(s) {unknown} are not junctions of {path}")
-        metered = list(meters) if meters else junctions
+        metered = inp.check_meters(meters, junctions, path) if meters else junctions
         intervals = sorted({spec.capture_interval for spec in ranked})
         setup = RankingSetup.build(path, metered, intervals, config)
     sensors = _sensors(noise, noise_seed, setup)

@@ -39,9 +39,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from burstloc.constants import MeterModel
-from burstloc.exceptions import ConfigError, InputError, NetworkError
+from burstloc.exceptions import ConfigError, InputError
 from burstloc.experiments.calibrate import calibrate
 from burstloc.experiments.runs import RunSpec
+from burstloc.inp import check_meters
 from burstloc.live.monitor import BurstMonitor
 from burstloc.live.paper_locator import BurstLocator
 from burstloc.live.windows import replay
@@ -140,10 +141,9 @@ def capture_readings(
         ConfigError: the clock's interval is finer than the simulation's time step.
     """
     junctions = list(result.junctions)
-    names = junctions if meters is None else list(meters)
-    unknown = [m for m in names if m not in junctions]
-    if unknown:
-        raise NetworkError(f"meter(s) {unknown} are not junctions of the simulated network")
+    names = (
+        junctions if meters is None else check_meters(meters, junctions, "the simulated network")
+    )
     columns = [junctions.index(m) for m in names]
     heads = result.heads if meters is None else result.heads[:, columns]
     ci = clock.capture_interval
