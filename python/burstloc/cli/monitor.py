@@ -226,6 +226,9 @@ def run(args: argparse.Namespace) -> int:
     if flags["stop"]:
         saved_to = f"; state saved to {args.state}" if args.state else ""
         print(f"burstloc monitor: stopped by SIGTERM{saved_to}", file=sys.stderr)
+    elif link is None and loop.readings == 0:
+        source = "stdin" if args.readings == "-" else repr(args.readings)
+        raise InputError(f"no usable readings in {source}: nothing was monitored")
     return 0
 
 

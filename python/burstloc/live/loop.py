@@ -290,6 +290,11 @@ class LiveLoop:
         if self.state is not None and time.monotonic() - self._last_save >= self.save_every:
             self.save()
 
+    @property
+    def readings(self) -> int:
+        """Items fed so far that were readings of a configured meter (bad ones not counted)."""
+        return self._readings
+
     def tick(self) -> None:
         """Periodic work without input (silence, health, state save): call when idle."""
         self._tick()
