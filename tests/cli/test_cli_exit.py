@@ -64,3 +64,29 @@ def test_simulate_help_shows_defaults_and_the_paper_burst(
 def test_bad_input_exits_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert cli.main(["simulate", str(tmp_path / "missing.inp"), "--pipe", "P1"]) == 2
     assert capsys.readouterr().err.startswith("burstloc: error: ")
+
+
+@pytest.mark.parametrize("command", cli.SUBCOMMANDS)
+def test_every_option_with_a_default_shows_it_in_help(command: str) -> None:
+    from burstloc.cli._options import DefaultsFormatter
+
+    parser = cli.build_parser(command)
+    (sub,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    formatter = DefaultsFormatter("burstloc")
+    missing = [
+        action.option_strings[0]
+        for action in sub.choices[command]._actions
+        if action.option_strings
+        and action.default not in (None, False, [], argparse.SUPPRESS)
+        and "default" not in (formatter._get_help_string(action) or "")
+    ]
+    assert missing == []
+
+
+def test_the_monitor_help_names_its_defaults(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit):
+        cli.main(["monitor", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    for shown in ["default: cusum", "(default: burstloc/decisions)", "(default: burstloc/health)"]:
+        assert shown in text
+    assert '"score"' in text  # what a decision's score means

@@ -56,9 +56,15 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"burstloc {__version__}")
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    from burstloc.cli._options import DefaultsFormatter
+
     for name in SUBCOMMANDS:
         if only is None or name == only:
-            importlib.import_module(f"burstloc.cli.{name}").add_parser(subparsers)
+            sub = importlib.import_module(f"burstloc.cli.{name}").add_parser(subparsers)
+            sub.formatter_class = DefaultsFormatter  # every option's default in --help
+            for action in sub._actions:  # an option without help: a line for its default
+                if action.help is None and action.option_strings and action.default is not None:
+                    action.help = "default: %(default)s"
     return parser
 
 

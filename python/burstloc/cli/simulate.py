@@ -11,7 +11,6 @@ from typing import Any
 
 from burstloc._atomic import check_output
 from burstloc.cli._options import (
-    DefaultsFormatter,
     add_min_pipe_length_option,
     add_run_options,
     add_solver_option,
@@ -47,7 +46,6 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
             "timestamp: seconds from the simulation's start, or with --start an ISO 8601 time; "
             "meter: the junction; value: pressure head, m (0.1 mm), with --noise."
         ),
-        formatter_class=DefaultsFormatter,
     )
     parser.add_argument("network", metavar="NETWORK.inp", help="EPANET INP file")
     which = parser.add_mutually_exclusive_group(required=True)

@@ -320,6 +320,14 @@ class LiveLoop:
         if it was), save the state."""
         for step in self.stream.flush():
             self._step(step)
+        replaying = self.health.replaying()
+        if replaying:  # a replay is said when a newer reading ends it: this one never ended
+            self.report(
+                "replay",
+                f"the feed ended in its replay: {sum(replaying.values())} readings of "
+                f"{len(replaying)} meter(s) sent again after the restart (seen before it) "
+                "skipped, none newer",
+            )
         if self._items == 0:
             self.report("input", "the feed held no readings: nothing was monitored")
         elif self._readings == 0:
