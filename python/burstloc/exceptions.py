@@ -91,14 +91,30 @@ class SimulatorMissingError(SimulationError):
         cause: the ``ImportError`` raised importing it; its message is kept in this one.
     """
 
-    #: How to install the simulator (the end of every message).
+    #: How to install the simulator (the end of the message when it is not installed).
     INSTALL = "pip install 'burstloc[sim]'"
 
+    #: The simulator's own packages: when one of them is missing, the simulator is not installed;
+    #: any other missing module is a dependency of theirs, named as such.
+    PACKAGES = ("tsnet", "wntr")
+
     def __init__(self, cause: ImportError) -> None:
-        super().__init__(
-            f"this command needs the simulator, which is not installed ({cause}): {self.INSTALL}"
-        )
-        self.package = cause.name
+        name = cause.name
+        if name is None or name.split(".")[0] in self.PACKAGES:
+            message = f"this command needs the simulator, which is not installed ({cause}): "
+            message += self.INSTALL
+        elif name.split(".")[0] == "pkg_resources":
+            message = (
+                f"the simulator cannot be imported: WNTR 1.3 imports pkg_resources, which "
+                f"setuptools 81 and later no longer provide ({cause}): pip install 'setuptools<81'"
+            )
+        else:
+            message = (
+                f"the simulator cannot be imported: its dependency {name!r} is missing ({cause}): "
+                f"reinstall it with {self.INSTALL}"
+            )
+        super().__init__(message)
+        self.package = name
 
 
 class OutputError(ValueError):

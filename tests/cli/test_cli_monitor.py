@@ -47,7 +47,7 @@ def test_garbage_of_every_kind_is_reported_and_skipped(tiny: Path, cfg: Path) ->
     for text in [
         "line 2: value is not a finite number",
         "line 3: value is not a finite number",
-        "line 4: timestamp is not a finite number",
+        "line 4: ISO 8601 timestamp without a UTC offset",
         "line 5: want 'timestamp,meter,value'",
         "line 6: unknown meter 'J9'",
         "2 more bad-input messages not shown",  # at most 5 of a kind per 10 s; none silent
@@ -76,17 +76,18 @@ def test_an_overlong_line_is_one_bad_reading_and_the_lines_after_it_count(
 
 
 @pytest.mark.parametrize("feed", [b"", b"timestamp,meter,value\n", b"# only a comment\n\n"])
-def test_an_empty_feed_is_said(tiny: Path, cfg: Path, feed: bytes) -> None:
+def test_an_empty_feed_is_said_and_is_bad_input(tiny: Path, cfg: Path, feed: bytes) -> None:
     done = _monitor(tiny, cfg, stdin=feed)
-    assert done.returncode == 0, done.stderr
+    assert done.returncode == 2, done.stderr  # was 0: a run that monitored nothing "succeeded"
     assert "the feed held no readings: nothing was monitored" in done.stderr.decode()
+    assert "burstloc: error: no usable readings in stdin" in done.stderr.decode()
     assert done.stdout == b""
 
 
 def test_a_feed_of_only_bad_readings_is_said(tiny: Path, cfg: Path) -> None:
     feed = b"t,meter,value\n0.0,J9,60.0\n\xff\xfe0,J1,\x9960\n"
     done = _monitor(tiny, cfg, stdin=feed)
-    assert done.returncode == 0, done.stderr
+    assert done.returncode == 2, done.stderr
     err = done.stderr.decode()
     assert "the feed held no usable readings (3 bad, skipped): nothing was monitored" in err, err
     assert "line 3: not UTF-8 text" in err, err

@@ -75,6 +75,27 @@ def test_format_tables_sets_each_run_beside_the_paper(small: Evaluation) -> None
     assert lines[-1] == "warning: a warning to print"
 
 
+def test_another_network_is_not_framed_as_the_papers_tables(small: Evaluation, tiny: Path) -> None:
+    # Before, any network got "Table III / Table V" and an empty "paper" column.
+    runs = [RunSpec(DetectorConfig("cusum", 0.3), 0.2, 5, Mode.WINDOW, "S_C1")]
+    ev = evaluate(
+        tiny,
+        runs,
+        pipes=["C"],
+        phases=1,
+        scenario=paper.ScenarioConfig(burst_start=2.0),
+        workers=1,
+        progress=False,
+    )
+    text = format_tables(ev)
+    assert "Table" not in text and "S_C1" not in text, text
+    headers = [line.split() for line in text.splitlines() if line.startswith(("pipe", "detector"))]
+    assert len(headers) == 2 and not any("paper" in header for header in headers), text
+    assert text.startswith("CUSUM, detection mode 'window'") and "Summary: accuracy" in text
+    assert "Table III" in format_tables(ev, paper_tables=True)  # when asked
+    assert "Table III" in format_tables(small)  # the paper's network, some of its pipes
+
+
 def test_write_json_is_the_schema_document(small: Evaluation, tmp_path: Path) -> None:
     path = write_json(small, tmp_path / "deep" / "r.json")
     assert path == tmp_path / "deep" / "r.json"

@@ -230,12 +230,17 @@ class BurstMonitor:
         """Feed one complete time step; return the decision it completes, if any.
 
         Raises:
-            InputError: wrong number of values, a non-finite or out-of-range value (beyond
-                :data:`~burstloc.constants.MAX_SAMPLE`) of a meter that is neither
-                excluded nor filled, a timestamp not after the previous one, or a burst that the
-                localizer cannot place (the pending decision is then dropped); the monitor is
-                otherwise unchanged.
+            InputError: not a :class:`Step`, wrong number of values, a non-finite or
+                out-of-range value (beyond :data:`~burstloc.constants.MAX_SAMPLE`) of a meter
+                that is neither excluded nor filled, a timestamp not after the previous one, or
+                a burst that the localizer cannot place (the pending decision is then dropped);
+                the monitor is otherwise unchanged.
         """
+        if not isinstance(step, Step):  # e.g. a ReadingStream's Window: name the fix
+            raise InputError(
+                f"push takes a complete time step (burstloc.Step, from a burstloc.StepFeed), "
+                f"got {type(step).__name__}"
+            )
         t = float(step.timestamp)
         values = np.array(step.values, dtype=np.float64)
         if values.shape != (len(self.meters),):

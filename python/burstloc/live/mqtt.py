@@ -4,7 +4,9 @@ One :class:`MqttLink` is one paho-mqtt 2.x client (``CallbackAPIVersion.VERSION2
 QoS 1 both ways) with a persistent session (``clean_session=False`` and a stable client id):
 while the monitor is down or reconnecting, the broker keeps the readings for it. Lost
 connections are retried with backoff (1 s doubling to 30 s); every (re)connection subscribes
-again.
+again. Each connection made and each one lost is reported (``connected to broker ...``,
+``lost broker ...; reconnecting``); closing the link (:meth:`MqttLink.close`, e.g. on SIGTERM)
+is not a lost connection and is not reported as one.
 
 * **In**: every message on ``topic`` (MQTT wildcards allowed) goes into a bounded queue; the
   live loop takes messages from it (:meth:`MqttLink.messages`) and parses them
@@ -85,6 +87,7 @@ class MqttLink:
         self._client.loop_start()
         self._address = f"{host}:{port}"
         self._last: mqtt.MQTTMessageInfo | None = None
+        self._closing = False
 
     # ------------------------------------------------------- network thread
     def _on_connect(self, client: Any, userdata: Any, flags: Any, reason: Any, props: Any) -> None:
@@ -93,6 +96,7 @@ class MqttLink:
             return
         client.subscribe(self.topic, qos=1)
         self.connected.set()
+        self.report("mqtt", f"connected to broker {self._address}, subscribed to {self.topic}")
 
     def _on_connect_fail(self, client: Any, userdata: Any) -> None:
         self.report("mqtt", f"cannot reach broker {self._address}; retrying")
@@ -101,7 +105,8 @@ class MqttLink:
         self, client: Any, userdata: Any, flags: Any, reason: Any, props: Any
     ) -> None:
         self.connected.clear()
-        self.report("mqtt", f"lost broker {self._address} ({reason}); reconnecting")
+        if not self._closing:
+            self.report("mqtt", f"lost broker {self._address} ({reason}); reconnecting")
 
     def _on_message(self, client: Any, userdata: Any, message: Any) -> None:
         self.received += 1
@@ -137,5 +142,6 @@ class MqttLink:
         if self._last is not None and self._last.rc == mqtt.MQTT_ERR_SUCCESS:
             with contextlib.suppress(RuntimeError, ValueError):
                 self._last.wait_for_publish(timeout)
+        self._closing = True
         self._client.disconnect()
         self._client.loop_stop()
