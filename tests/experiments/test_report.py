@@ -50,7 +50,9 @@ def small() -> Evaluation:
 def test_format_tables_sets_each_run_beside_the_paper(small: Evaluation) -> None:
     text = format_tables(small)
     lines = text.splitlines()
-    assert lines[0].startswith("Table III (CUSUM, detection mode 'window')")
+    # what the readings carried comes first: the paper's rules read noiseless readings
+    assert lines[0] == "Sensor noise on the readings (paper's rules: none; seed 0; --noise sets it)"
+    assert lines[1] == "" and lines[2].startswith("Table III (CUSUM, detection mode 'window')")
     assert any(line.startswith("Table IV (Shewhart, detection mode 'window')") for line in lines)
     # the paper's pipe order, whatever the order asked for
     rows = [line for line in lines if line.startswith(("P4 ", "12 "))]
@@ -91,7 +93,9 @@ def test_another_network_is_not_framed_as_the_papers_tables(small: Evaluation, t
     assert "Table" not in text and "S_C1" not in text, text
     headers = [line.split() for line in text.splitlines() if line.startswith(("pipe", "detector"))]
     assert len(headers) == 2 and not any("paper" in header for header in headers), text
-    assert text.startswith("CUSUM, detection mode 'window'") and "Summary: accuracy" in text
+    assert text.startswith("Sensor noise on the readings (paper's rules: none;")
+    assert text.splitlines()[2].startswith("CUSUM, detection mode 'window'")
+    assert "Summary: accuracy" in text
     assert "Table III" in format_tables(ev, paper_tables=True)  # when asked
     assert "Table III" in format_tables(small)  # the paper's network, some of its pipes
 
