@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import queue
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -20,7 +21,7 @@ from paho.mqtt.enums import CallbackAPIVersion
 
 from burstloc.exceptions import ConfigError
 from burstloc.experiments.calibrate import calibrate
-from burstloc.live.mqtt import parse_address
+from burstloc.live.mqtt import MqttLink, parse_address
 
 PIPE = "C"
 #: Seconds after which a test that waits for the monitor gives up: a guard against a hang, far
@@ -110,3 +111,24 @@ def test_broker_address_is_checked() -> None:
     for bad in ("host:0", ":1883", "host:x", "host:70000"):
         with pytest.raises(ConfigError, match="HOST:PORT"):
             parse_address(bad)
+
+
+def test_the_link_sends_small_records_without_nagle_delay(mqtt_port: int) -> None:
+    # A decision is one small packet: with Nagle's algorithm on (paho's default) it could wait
+    # for the broker's delayed acknowledgement of the previous one before leaving.
+    messages: list[str] = []
+    link = MqttLink(
+        "127.0.0.1",
+        mqtt_port,
+        "plant/readings/#",
+        client_id="nodelay-check",
+        report=lambda kind, text: messages.append(text),
+    )
+    try:
+        assert link.wait_connected(HANG_GUARD), messages
+        sock = link._client.socket()
+        assert sock is not None
+        assert sock.getsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY) != 0
+    finally:
+        link.close()
+    assert not any("Nagle" in text for text in messages), messages

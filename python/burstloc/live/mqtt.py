@@ -18,6 +18,11 @@ is not a lost connection and is not reported as one.
   counted in :attr:`MqttLink.unsent` and reported.
 * **Out**: :meth:`MqttLink.publish` sends a record as JSON (QoS 1). Decisions and health go to
   their own topics through the same non-blocking queue: neither waits for the other.
+* **Latency**: the client's socket has Nagle's algorithm off (``TCP_NODELAY``; paho leaves it
+  on): a decision is a small packet written while the readings' acknowledgements flow, and with
+  Nagle's algorithm it could wait for the broker's delayed ACK (40 ms and more on Linux) before
+  leaving. The broker's own sockets are the broker's to configure (Mosquitto:
+  ``set_tcp_nodelay true``).
 """
 
 from __future__ import annotations
@@ -25,6 +30,7 @@ from __future__ import annotations
 import contextlib
 import json
 import queue
+import socket
 import threading
 from collections.abc import Callable, Iterator
 from typing import Any
@@ -79,6 +85,7 @@ class MqttLink:
         )
         self._client.reconnect_delay_set(min_delay=1, max_delay=30)
         self._client.max_queued_messages_set(queue_size)
+        self._client.on_socket_open = self._on_socket_open
         self._client.on_connect = self._on_connect
         self._client.on_disconnect = self._on_disconnect
         self._client.on_connect_fail = self._on_connect_fail
@@ -90,6 +97,13 @@ class MqttLink:
         self._closing = False
 
     # ------------------------------------------------------- network thread
+    def _on_socket_open(self, client: Any, userdata: Any, sock: Any) -> None:
+        if isinstance(sock, socket.socket) and sock.family in (socket.AF_INET, socket.AF_INET6):
+            try:
+                sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            except OSError as exc:  # the link still works, only slower to send small records
+                self.report("mqtt", f"cannot turn Nagle's algorithm off ({exc}); records may lag")
+
     def _on_connect(self, client: Any, userdata: Any, flags: Any, reason: Any, props: Any) -> None:
         if reason.is_failure:
             self.report("mqtt", f"broker {self._address} refused the connection: {reason}")
