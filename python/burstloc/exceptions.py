@@ -75,7 +75,9 @@ class UnsteadyStartError(SimulationError):
         super().__init__(
             f"{network} does not start steady in the transient model: junction {junction!r} moved "
             f"{movement:.3g} m from its initial head by {time:.3g} s, before the event at "
-            f"{onset:g} s (tolerance {tolerance:g} m)"
+            f"{onset:g} s (tolerance {tolerance:g} m): the transient model does not hold an "
+            "element near it at its steady state (a valve, pump, tank or control): no burst on "
+            "this network can be told from that movement, so none is simulated"
         )
         self.network = network
         self.junction = junction

@@ -194,8 +194,8 @@ def run(args: argparse.Namespace) -> int:
         written += 1
         _write_feed(args, result, start)
     print(f"wrote {written} scenario file(s) to {args.out}")
-    for failure in report.failures:
-        print(f"burstloc: failed: {failure}", file=sys.stderr)
+    for line in report.failure_lines():
+        print(f"burstloc: failed: {line}", file=sys.stderr)
     return 0 if report.ok else 1
 
 

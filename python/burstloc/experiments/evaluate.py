@@ -324,7 +324,7 @@ def evaluate(
     if report.failures:
         from burstloc.exceptions import SimulationError
 
-        raise SimulationError("; ".join(str(f) for f in report.failures))
+        raise SimulationError("; ".join(report.failure_lines()))
     results = {s.pipe: r for s, r in zip(scenarios, report.results, strict=True) if r is not None}
 
     dt = max(r.time_step for r in results.values())

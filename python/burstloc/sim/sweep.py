@@ -84,6 +84,24 @@ class SweepReport(Generic[T, R]):
         """True when every item succeeded."""
         return not self.failures
 
+    def failure_lines(self) -> list[str]:
+        """The failures, one line per distinct error: ``"pipes 1, 2 and 3 of N: Type:
+        message"`` (a network that cannot be simulated fails every pipe the same way: said
+        once, not once per pipe)."""
+        groups: dict[tuple[str, str], list[str]] = {}
+        for failure in self.failures:
+            groups.setdefault((failure.error_type, failure.message), []).append(failure.label)
+        lines = []
+        for (kind, message), labels in groups.items():
+            if len(labels) == 1:
+                lines.append(f"{labels[0]}: {kind}: {message}")
+                continue
+            listed = ", ".join(labels[:5]) + (
+                f" and {len(labels) - 5} more" if len(labels) > 5 else ""
+            )
+            lines.append(f"{len(labels)} of {len(self.items)} ({listed}): {kind}: {message}")
+        return lines
+
     def succeeded(self) -> list[tuple[T, R]]:
         """Return ``(item, result)`` for the items that succeeded, in input order."""
         failed = {f.index for f in self.failures}
