@@ -64,6 +64,8 @@ class InPlaceSplitter:
         self._tmp: tempfile.TemporaryDirectory[str] | None = None
         self._en: Any = None
         self._ph: Any = None
+        self._pipes = frozenset(wn.pipe_name_list)
+        self._index_cache: dict[tuple[str, ...], list[int]] = {}
 
     # --- opening and closing -------------------------------------------------------------------
     def __enter__(self) -> InPlaceSplitter:
@@ -141,6 +143,13 @@ class InPlaceSplitter:
                 f"EPANET error {code} {what}: {buf.value.decode(errors='replace')}"
             )
 
+    def _indices(self, nodes: Sequence[str]) -> list[int]:
+        """Toolkit indices of ``nodes`` (kept: nodes are never added or deleted once open)."""
+        key = tuple(nodes)
+        if key not in self._index_cache:
+            self._index_cache = {key: [self._node_index(n) for n in nodes]}
+        return self._index_cache[key]
+
     def _node_index(self, name: str) -> int:
         index = ctypes.c_int()
         code = self._lib.EN_getnodeindex(self._ph, name.encode(), ctypes.byref(index))
@@ -177,7 +186,12 @@ class InPlaceSplitter:
             self._check(lib.EN_initH(ph, _EN_INITFLOW), "initialising the hydraulics")
             t = ctypes.c_long()
             self._check(lib.EN_runH(ph, ctypes.byref(t)), "solving the steady state")
-            heads = [self._node_value(i, _EN_HEAD) for i in nodes]
+            value, get, byref = ctypes.c_double(), lib.EN_getnodevalue, ctypes.byref
+            heads = []
+            for i in nodes:  # the hot loop: one toolkit call per node, errors checked after
+                if get(ph, i, _EN_HEAD, byref(value)):
+                    self._check(get(ph, i, _EN_HEAD, byref(value)), "reading a head")
+                heads.append(value.value)
         finally:
             lib.EN_closeH(ph)
         return np.asarray(
@@ -188,7 +202,7 @@ class InPlaceSplitter:
     # --- the public part -----------------------------------------------------------------------
     def heads(self, nodes: Sequence[str]) -> NDArray[np.float64]:
         """Steady heads (m) at ``nodes`` of the unmodified network."""
-        return self._solve([self._node_index(n) for n in nodes])
+        return self._solve(self._indices(nodes))
 
     def split_heads(
         self, pipe: str, fraction: float, emitter: float, nodes: Sequence[str]
@@ -204,10 +218,10 @@ class InPlaceSplitter:
         if not 0.0 < fraction < 1.0:
             raise ConfigError(f"position must be strictly between 0 and 1, got {fraction!r}")
         wn = self._wn
-        link = wn.get_link(pipe) if pipe in wn.pipe_name_list else None
+        link = wn.get_link(pipe) if pipe in self._pipes else None
         if link is None:
             raise NetworkError(f"unknown pipe {pipe!r}")
-        indices = [self._node_index(n) for n in nodes]
+        indices = self._indices(nodes)
         lib, ph = self._lib, self._ph
         li = self._link_index(pipe)
         start, end = link.start_node, link.end_node
