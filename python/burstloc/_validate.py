@@ -7,6 +7,8 @@ signature sets): one reader, errors that name the file and the field.
 * :class:`Fields` walks one JSON object: required fields, nested objects and lists of objects,
   each error naming the file and the field's path (``intervals[0].cusum.threshold``), and
   :meth:`Fields.checking` names them in the errors of the checks a constructor runs.
+* :func:`read_npz` reads the binary companion of a document (large matrices, NumPy's ``.npz``,
+  never pickled objects): each array present, of the expected kind and rank, floats finite.
 * :func:`check_number`, :func:`check_count`, :func:`check_names`, :func:`check_string`: the
   type and range checks themselves (a :class:`FieldError` naming the field), used by the classes
   that validate at construction, so each range is written once, where the class is.
@@ -22,6 +24,8 @@ import os
 from collections.abc import Iterator, Mapping, Sequence
 from typing import Any
 
+import numpy as np
+
 from burstloc.exceptions import ConfigError
 
 __all__ = [
@@ -34,6 +38,7 @@ __all__ = [
     "check_string",
     "find_non_finite",
     "read_json",
+    "read_npz",
 ]
 
 #: The largest JSON file burstloc reads (bytes): far above any configuration it writes.
@@ -70,6 +75,46 @@ def read_json(path: str | os.PathLike[str], what: str) -> Any:
     if field:
         raise ConfigError(f"{where}: field {field} is {value} (numbers must be finite)")
     return document
+
+
+def read_npz(
+    path: str | os.PathLike[str], what: str, arrays: Mapping[str, tuple[str, int]]
+) -> dict[str, np.ndarray]:
+    """Read the ``.npz`` file ``path``: ``arrays`` maps each required array's name to its kind
+    (``"f"`` float, ``"U"`` text, ``"i"`` integer: NumPy's dtype kinds) and its number of
+    dimensions. No pickled object is ever loaded; float arrays must be finite; other arrays in
+    the file are ignored.
+
+    Raises:
+        ConfigError: the file cannot be read or is not an ``.npz`` file, or an array is missing,
+            of another kind or rank, or holds NaN or an infinite value; the message names
+            ``what``, the file and the array.
+    """
+    import zipfile
+
+    where = f"{what} {os.fspath(path)}"
+    try:
+        if os.path.getsize(path) > MAX_JSON_BYTES * 8:
+            raise ConfigError(f"cannot read {where}: larger than {MAX_JSON_BYTES * 8} bytes")
+        with np.load(path, allow_pickle=False) as data:
+            missing = [name for name in arrays if name not in data.files]
+            if missing:
+                raise ConfigError(f"{where}: no array {missing[0]!r}")
+            found = {name: data[name] for name in arrays}
+    except OSError as exc:
+        raise ConfigError(f"cannot read {where}: {exc.strerror or exc}") from None
+    except (ValueError, EOFError, zipfile.BadZipFile) as exc:
+        raise ConfigError(f"cannot read {where}: not an .npz file ({exc})") from None
+    for name, (kind, ndim) in arrays.items():
+        array = found[name]
+        if array.dtype.kind != kind or array.ndim != ndim:
+            raise ConfigError(
+                f"{where}: array {name!r} must be {ndim}-dimensional of kind {kind!r}, got "
+                f"{array.ndim}-dimensional {array.dtype}"
+            )
+        if kind == "f" and not np.isfinite(array).all():
+            raise ConfigError(f"{where}: array {name!r} holds NaN or infinite values")
+    return found
 
 
 def find_non_finite(document: Any, where: str = "") -> tuple[str, str]:

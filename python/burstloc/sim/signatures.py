@@ -6,8 +6,8 @@ meters caused by a reference burst (an emitter) at ``x``: what the signature loc
 :func:`compute_signatures` runs one EPANET steady state (pressure-driven demand, the engine TSNet
 initialises from) for the base state and one per pipe, in one EPANET project edited in place
 (:mod:`burstloc.sim.epanet_inplace`);
-:func:`cached_signatures` / :func:`cached_signature_sets` keep the result on disk (one small JSON
-file per position in burstloc's cache directory).
+:func:`cached_signatures` / :func:`cached_signature_sets` keep the result on disk (one
+``.npz`` file per position in burstloc's cache directory).
 
 Only ``burstloc calibrate`` and the experiments call this: the stored configuration carries the
 signatures (:class:`burstloc.localize.model.LocalizationModel`), so the live path never runs it.
@@ -142,7 +142,7 @@ def cached_signatures(
         files=[network],
     )
     folder = Path(cache_dir) if cache_dir is not None else default_cache_dir() / "signatures"
-    path = folder / f"{Path(network).stem}-{key[:24]}.json"
+    path = folder / f"{Path(network).stem}-{key[:24]}.npz"
     full: SignatureSet | None = None
     if path.exists():
         try:
