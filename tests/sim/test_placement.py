@@ -248,3 +248,26 @@ def test_arrival_placement_equals_the_direct_greedy_on_a_symmetric_grid() -> Non
             expected = _reference_arrival_meters(pipes, names, distances, count, resolution)
             got = arrival_meters(pipes, names, distances, count, resolution=resolution)
             assert got == expected, (resolution, count)
+
+
+def test_arrival_separation_equals_the_direct_evaluation(paper15: Path) -> None:
+    """The k-d tree's candidate pairs miss no pair closer than the capture interval: the same
+    share as comparing every point with every other point."""
+    from burstloc.constants import CANDIDATE_POSITIONS, WAVE_SPEED
+    from burstloc.sim.placement import _travel
+    from burstloc.sim.prepare import arrival_geometry
+
+    shares = []
+    for meters in (["N4", "N7", "1", "8"], ["N3", "5"], ["N2", "N5", "N8", "2", "4", "6", "7"]):
+        pipes, distances = arrival_geometry(paper15, meters)
+        travel = _travel(pipes, distances, CANDIDATE_POSITIONS, WAVE_SPEED)
+        owner = np.repeat(np.arange(len(pipes)), len(CANDIDATE_POSITIONS))
+        diff = travel[:, None, :] - travel[None, :, :]
+        spread = diff.max(axis=2) - diff.min(axis=2)
+        spread[owner[:, None] == owner[None, :]] = np.inf
+        for resolution in (0.05, 0.2, 1.0):
+            expected = float((spread.min(axis=1) >= resolution).mean())
+            got = arrival_separation(pipes, distances, resolution=resolution)
+            assert got == expected, (meters, resolution)
+            shares.append(expected)
+    assert len({*shares}) > 3  # neither all told nor none: the comparisons mean something

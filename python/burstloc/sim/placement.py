@@ -338,15 +338,25 @@ def arrival_separation(
         raise ConfigError(f"resolution must be > 0 s, got {resolution}")
     if not pipes:
         raise ConfigError("no pipes to separate")
+    from scipy.spatial import cKDTree
+
     travel = _travel(pipes, node_distances, CANDIDATE_POSITIONS, wave_speed)
     owner = np.repeat(np.arange(len(pipes)), len(CANDIDATE_POSITIONS))
+    # The spread of d = t_a - t_b is at least |d_j - d_0| for every meter j: only points whose
+    # travel times relative to the first meter lie within ``resolution`` of each other (a k-d
+    # tree query, maximum norm) can be closer than that; their spread is then computed exactly.
+    relative = travel - travel[:, :1]
+    a, b = cKDTree(relative).query_pairs(resolution * (1 + 1e-9), p=np.inf, output_type="ndarray").T
+    other = owner[a] != owner[b]
+    a, b = a[other], b[other]
     told = np.ones(owner.size, dtype=bool)
-    block = max(1, 2_000_000 // max(1, travel.size))  # rows per step: bounded memory
-    for lo in range(0, owner.size, block):
-        diff = travel[lo : lo + block, None, :] - travel[None, :, :]
-        spread = diff.max(axis=2) - diff.min(axis=2)
-        spread[owner[lo : lo + block, None] == owner[None, :]] = np.inf
-        told[lo : lo + block] = spread.min(axis=1) >= resolution
+    block = max(1, 4_000_000 // max(1, travel.shape[1]))  # pairs per step: bounded memory
+    for lo in range(0, a.size, block):
+        ra, rb = a[lo : lo + block], b[lo : lo + block]
+        diff = travel[ra] - travel[rb]
+        near = diff.max(axis=1) - diff.min(axis=1) < resolution
+        told[ra[near]] = False
+        told[rb[near]] = False
     return float(told.mean())
 
 
