@@ -78,3 +78,9 @@ def test_bad_pipe_or_position_is_refused(tiny_network: Path) -> None:
             splitter.heads(["Q"])
     with pytest.raises(ConfigError, match="engine"):
         InPlaceSplitter(wn, engine="XX")
+    # a name the spare junction needs is taken: refused, the model as it was
+    wn.add_junction("~burst~", base_demand=0.0, elevation=0.0)
+    before = (wn.options.hydraulic.demand_model, wn.options.time.duration, wn.num_nodes)
+    with pytest.raises(NetworkError, match="no element named '~burst~'"), InPlaceSplitter(wn):
+        pass
+    assert (wn.options.hydraulic.demand_model, wn.options.time.duration, wn.num_nodes) == before

@@ -37,7 +37,6 @@ __all__ = ["InPlaceSplitter"]
 # EPANET 2.2 toolkit codes (epanet2_enums.h)
 _EN_ELEVATION, _EN_EMITTER, _EN_HEAD = 0, 3, 10
 _EN_DIAMETER, _EN_LENGTH, _EN_ROUGHNESS, _EN_MINORLOSS, _EN_INITSTATUS = 0, 1, 2, 3, 4
-_EN_JUNCTION, _EN_RESERVOIR = 0, 1
 _EN_CVPIPE, _EN_PIPE = 0, 1
 _EN_UNCONDITIONAL = 0
 _EN_INITFLOW = 10
@@ -48,11 +47,12 @@ class InPlaceSplitter:
     """Steady heads of a network with one pipe split by a bursting junction, without a copy.
 
     Use as a context manager (the EPANET project and its scratch files live until the block
-    ends). ``wn`` is read when the splitter opens and not changed; ``engine`` is the demand model
-    (``"PDD"`` or ``"DD"``) as in :func:`burstloc.network.steady_state`.
+    ends). ``wn`` is written out when the splitter opens and left as it was; ``engine`` is the
+    demand model (``"PDD"`` or ``"DD"``) as in :func:`burstloc.network.steady_state`.
 
     Raises:
         ConfigError: an unknown ``engine``.
+        NetworkError: no junction, or an element already named like the spare ones.
         SimulationError: EPANET refuses the model or fails to solve it.
     """
 
@@ -71,50 +71,66 @@ class InPlaceSplitter:
     def __enter__(self) -> InPlaceSplitter:
         from wntr.epanet.toolkit import ENepanet
         from wntr.epanet.util import FlowUnits, HydParam, from_si, to_si
-        from wntr.network.io import write_inpfile
 
         wn = self._wn
         units = str(wn.options.hydraulic.inpfile_units).upper()
         self._units = FlowUnits[units]
         self._from_si, self._to_si, self._param = from_si, to_si, HydParam
+        anchor = wn.junction_name_list[0] if wn.num_junctions else None
+        if anchor is None or _BURST_NODE in wn.node_name_list or _BURST_LINK in wn.link_name_list:
+            raise NetworkError(
+                f"the network needs a junction (and no element named {_BURST_NODE!r} or "
+                f"{_BURST_LINK!r}) for the burst signatures"
+            )
         self._tmp = tempfile.TemporaryDirectory(prefix="burstloc-inplace-")
-        prefix = os.path.join(self._tmp.name, "model")
+        try:
+            prefix = os.path.join(self._tmp.name, "model")
+            self._write(prefix + ".inp", units, anchor)
+            self._en = ENepanet(version=2.2)
+            self._lib = self._en.ENlib
+            self._ph = self._en._project
+            self._lib.EN_createproject(ctypes.byref(self._ph))
+            self._check(
+                self._lib.EN_open(
+                    self._ph,
+                    (prefix + ".inp").encode(),
+                    (prefix + ".rpt").encode(),
+                    (prefix + ".bin").encode(),
+                ),
+                "opening the model",
+            )
+        except BaseException:
+            self.close()
+            raise
+        return self
+
+    def _write(self, path: str, units: str, anchor: str) -> None:
+        """The model as :func:`burstloc.network.steady_state` writes it, plus the spare junction
+        and the spare closed pipe (to ``anchor``); ``wn`` is left as it was."""
+        from wntr.network.io import write_inpfile
+
+        wn = self._wn
         hydraulic, times = wn.options.hydraulic, wn.options.time
         saved = (hydraulic.demand_model, times.duration)
         hydraulic.demand_model, times.duration = self._engine, 0
-        anchor = wn.junction_name_list[0] if wn.num_junctions else None
-        if anchor is None or _BURST_NODE in wn.node_name_list or _BURST_LINK in wn.link_name_list:
-            raise NetworkError("the network needs a junction (and no node named '~burst~')")
         wn.add_junction(_BURST_NODE, base_demand=0.0, elevation=wn.get_node(anchor).elevation)
-        wn.add_pipe(
-            _BURST_LINK,
-            _BURST_NODE,
-            anchor,
-            length=1.0,
-            diameter=0.1,
-            roughness=100.0,
-            initial_status="CLOSED",
-        )
         try:
-            write_inpfile(wn, prefix + ".inp", units=units, version=2.2)
+            wn.add_pipe(
+                _BURST_LINK,
+                _BURST_NODE,
+                anchor,
+                length=1.0,
+                diameter=0.1,
+                roughness=100.0,
+                initial_status="CLOSED",
+            )
+            try:
+                write_inpfile(wn, path, units=units, version=2.2)
+            finally:
+                wn.remove_link(_BURST_LINK)
         finally:
-            hydraulic.demand_model, times.duration = saved
-            wn.remove_link(_BURST_LINK)
             wn.remove_node(_BURST_NODE)
-        self._en = ENepanet(version=2.2)
-        self._lib = self._en.ENlib
-        self._ph = self._en._project
-        self._lib.EN_createproject(ctypes.byref(self._ph))
-        self._check(
-            self._lib.EN_open(
-                self._ph,
-                (prefix + ".inp").encode(),
-                (prefix + ".rpt").encode(),
-                (prefix + ".bin").encode(),
-            ),
-            "opening the model",
-        )
-        return self
+            hydraulic.demand_model, times.duration = saved
 
     def __exit__(
         self,
