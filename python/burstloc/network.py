@@ -7,7 +7,8 @@
   what EPANET warns is captured, never printed). The flow-direction graph and the burst
   signatures (:mod:`burstloc.sim.signatures`) both use it.
 * :func:`flow_direction_graph` is the paper's directed graph (section IV.B): one edge per link,
-  pointing downstream in the steady state.
+  keyed by the link's name (parallel links are edges of their own), pointing downstream in the
+  steady state.
 * :func:`split_pipe` cuts a pipe into two at a fraction of its length with a new junction
   between them, where a burst can then be placed (TSNet bursts only at junctions).
 
@@ -187,24 +188,23 @@ def steady_state_flows(wn: WaterNetworkModel, engine: str = "PDD") -> dict[str, 
 
 def flow_direction_graph(
     wn: WaterNetworkModel, flows: dict[str, float] | None = None, engine: str = "PDD"
-) -> nx.DiGraph:
+) -> nx.MultiDiGraph:
     """Return the paper's flow-direction graph (IV.B): every edge points downstream.
 
     As in the paper, link weights are the signs of the steady-state flows and WNTR's
     ``to_graph(link_weight=..., modify_direction=True)`` turns the links with negative weight
-    around. Edge attributes: ``pipe`` (the link name, pipes, valves and pumps alike), ``flow``
-    (|steady-state flow| in m³/s) and ``link_type``. A link with zero flow keeps its INP
-    orientation. ``graph.graph["edges_by_pipe"]`` maps each link name to its ``(start, end)``.
+    around. The graph is a networkx ``MultiDiGraph`` keyed by link name, as WNTR's own: parallel
+    links (two mains side by side, a pump beside its bypass, a valve beside a pipe) are edges of
+    their own (``graph.edges[start, end, link]``). Edge attributes: ``pipe`` (the link name,
+    pipes, valves and pumps alike), ``flow`` (|steady-state flow| in m³/s) and ``link_type``. A
+    link with zero flow keeps its INP orientation. ``graph.graph["edges_by_pipe"]`` maps each
+    link name to its ``(start, end)``.
 
     Args:
         wn: the network.
         flows: steady-state flows by link (m³/s, INP orientation); solved with ``engine`` when
             omitted (see :func:`steady_state_flows`).
         engine: ``"PDD"`` (the paper's) or ``"DD"``.
-
-    Raises:
-        NetworkError: two links join the same two nodes in the same flow direction (a DiGraph
-            holds one edge per ordered node pair).
     """
     import pandas as pd
 
@@ -212,19 +212,18 @@ def flow_direction_graph(
         flows = steady_state_flows(wn, engine)
     sign = pd.Series({name: float(np.sign(flows[name])) for name in wn.link_name_list})
     multi = wn.to_graph(link_weight=sign, modify_direction=True)
-    graph = nx.DiGraph()
+    graph = nx.MultiDiGraph()
     graph.add_nodes_from(multi.nodes(data=True))
     by_pipe: dict[str, tuple[str, str]] = {}
     for start, end, name in multi.edges(keys=True):
-        if graph.has_edge(start, end):
-            other = graph.edges[start, end]["pipe"]
-            raise NetworkError(
-                f"links {other!r} and {name!r} both carry flow {start} -> {end}; parallel "
-                "links are not supported by the flow-direction graph"
-            )
         link = wn.get_link(name)
         graph.add_edge(
-            start, end, pipe=name, flow=abs(flows[name]), link_type=link.link_type.lower()
+            start,
+            end,
+            key=name,
+            pipe=name,
+            flow=abs(flows[name]),
+            link_type=link.link_type.lower(),
         )
         by_pipe[name] = (start, end)
     graph.graph["edges_by_pipe"] = by_pipe
@@ -232,7 +231,7 @@ def flow_direction_graph(
     return graph
 
 
-def pipe_endpoints(graph: nx.DiGraph, pipe: str) -> tuple[str, str]:
+def pipe_endpoints(graph: nx.MultiDiGraph, pipe: str) -> tuple[str, str]:
     """Return ``(start, end)`` of a pipe in steady-state flow direction.
 
     Raises:
