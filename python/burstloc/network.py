@@ -34,6 +34,7 @@ import numpy as np
 from burstloc._diagnostics import capture_diagnostics
 from burstloc.exceptions import ConfigError, NetworkError, SimulatorMissingError
 from burstloc.inp import pipe_names_in_file
+from burstloc.inp_hydraulic import hydraulic_text
 
 if TYPE_CHECKING:
     from wntr.network import WaterNetworkModel
@@ -82,8 +83,22 @@ def load_network(path: str | os.PathLike[str]) -> WaterNetworkModel:
 
     file = Path(path)
     pipe_names_in_file(file)  # names a malformed file's line before WNTR reads it
+    text = hydraulic_text(file, file.read_text(encoding="utf-8"))
+    if text is None:
+        wn = _read(wntr, file, file)
+    else:  # times and water quality rewritten, every line in its place
+        with tempfile.TemporaryDirectory(prefix="burstloc-inp-") as tmp:
+            read = Path(tmp) / file.name
+            read.write_text(text, encoding="utf-8")
+            wn = _read(wntr, read, file)
+    wn.name = str(file)
+    return wn
+
+
+def _read(wntr: Any, read: Path, file: Path) -> WaterNetworkModel:
+    """WNTR's model of ``read`` (the text of ``file``); its errors name ``file`` and the line."""
     try:
-        return wntr.network.WaterNetworkModel(str(file))
+        return wntr.network.WaterNetworkModel(str(read))
     except Exception as exc:  # WNTR raises many types for bad input; name file and line
         detail = str(exc)
         line = None
@@ -95,6 +110,7 @@ def load_network(path: str | os.PathLike[str]) -> WaterNetworkModel:
                 detail = str(cause)
             cause = cause.__cause__
         where = f"{file}:{line}" if line else f"{file}"
+        detail = detail.replace(str(read), str(file))
         raise NetworkError(f"{where}: malformed INP file: {type(exc).__name__}: {detail}") from exc
 
 

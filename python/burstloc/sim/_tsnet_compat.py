@@ -69,6 +69,7 @@ from typing import Any
 
 import numpy as np
 
+from burstloc.constants import PRESSURE_NOISE
 from burstloc.exceptions import SimulatorMissingError
 
 __all__ = ["applied", "load"]
@@ -156,12 +157,14 @@ def _cal_roughness_coef(pipe: Any, velocity: Any, head_loss: Any) -> Any:
 
 def _cal_demand_coef(demand: Any, pipe: Any, hs: Any, he: Any, t0: float = 0.0) -> Any:
     """TSNet's ``cal_demand_coef``; a node without demand gets coefficient 0 whatever its
-    pressure (TSNet: ``0 / sqrt(p)``, NaN below atmospheric pressure)."""
-    with np.errstate(invalid="ignore"):  # 0 / sqrt(p < 0), mended below
+    pressure (TSNet: ``0 / sqrt(p)``, NaN below atmospheric pressure), and so does a node at
+    zero pressure within :data:`~burstloc.constants.PRESSURE_NOISE` (TSNet: ``q / sqrt(0)``,
+    infinite, or NaN a micrometre below)."""
+    with np.errstate(invalid="ignore", divide="ignore"):  # q / sqrt(p <= 0), mended below
         pipe = _ORIGINALS["cal_demand_coef"](demand, pipe, hs, he, t0)
-    if demand[0] == 0:
+    if demand[0] == 0 or -PRESSURE_NOISE <= hs <= 0:
         pipe.start_node.demand_coeff = 0.0
-    if demand[1] == 0:
+    if demand[1] == 0 or -PRESSURE_NOISE <= he <= 0:
         pipe.end_node.demand_coeff = 0.0
     return pipe
 

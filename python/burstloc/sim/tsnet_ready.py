@@ -56,12 +56,13 @@ steady state is unchanged (the valve loses no head), and the metadata lists the 
 from __future__ import annotations
 
 from collections.abc import Collection
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from typing import Any
 
 from burstloc import network, skeleton
 from burstloc.network import _fresh_name
 from burstloc.sim.scenario import BurstScenario
+from burstloc.sim.tsnet_elements import PowerPumpCurve, power_pumps_as_curves
 
 __all__ = [
     "Connector",
@@ -89,12 +90,27 @@ class Connector:
     diameter: float
 
 
-def _needs_connector(wn: Any, link_name: str, node_name: str, edges: Collection[str]) -> bool:
+def _needs_connector(
+    wn: Any, link_name: str, node_name: str, edges: Collection[str], side: str
+) -> bool:
     node = wn.get_node(node_name)
     if node.node_type != "Junction" or node_name in edges:
         return False  # a reservoir, a tank or a supply's source is a boundary TSNet handles
     others = [name for name in wn.get_links_for_node(node_name) if name != link_name]
-    return len(others) != 1 or wn.get_link(others[0]).link_type != "Pipe"
+    if len(others) != 1 or wn.get_link(others[0]).link_type != "Pipe":
+        return True
+    if wn.get_link(link_name).link_type != "Valve":
+        return False  # TSNet's pump equation knows its suction side
+    # TSNet's valve equation takes the pipe at a valve's start to end there and the pipe at
+    # its end to start there (pipe -> valve -> pipe); a pipe the other way round is solved with
+    # the wrong characteristic (L-TOWN's PRV-2: 0.5 m before any burst); and it has no demand
+    # at the valve's nodes (L-TOWN's PRV-3 at junction n229: 0.27 m)
+    if any(demand.base_value != 0 for demand in node.demand_timeseries_list):
+        return True
+    pipe = wn.get_link(others[0])
+    return bool(
+        pipe.end_node_name != node_name if side == "start" else pipe.start_node_name != node_name
+    )
 
 
 def _template(wn: Any, node_name: str) -> Any:
@@ -155,7 +171,8 @@ def _connect(wn: Any, node_name: str, moved: list[str], name: str, length: float
 def add_connectors(wn: Any, edges: Collection[str] = ()) -> list[Connector]:
     """Add a connector pipe wherever a tank or reservoir of ``wn`` (changed in place) is joined
     by more than one link (its links then meet at the connector's far end), then wherever a pump
-    or valve does not meet a single pipe at a junction end, except at the junctions ``edges`` (a
+    or valve does not meet a single pipe at a junction end (for a valve: a pipe ending at its
+    start, starting at its end), except at the junctions ``edges`` (a
     supply's source, the network's edge on purpose); return what was added (empty: nothing
     needed)."""
     length = min(float(pipe.length) for _, pipe in wn.pipes())
@@ -167,7 +184,7 @@ def add_connectors(wn: Any, edges: Collection[str] = ()) -> list[Connector]:
     for link_name in [name for name, _ in wn.pumps()] + [name for name, _ in wn.valves()]:
         for side in ("start", "end"):
             node_name = getattr(wn.get_link(link_name), f"{side}_node_name")
-            if _needs_connector(wn, link_name, node_name, edges):
+            if _needs_connector(wn, link_name, node_name, edges, side):
                 name = f"{link_name}_{side[0].upper()}"
                 added.append(_connect(wn, node_name, [link_name], name, length))
     return added
@@ -233,11 +250,12 @@ def add_supply_boundaries(wn: Any, keep: Collection[str] = ()) -> list[SupplyBou
 @dataclass(frozen=True)
 class TsnetPreparation:
     """What :func:`prepare_for_tsnet` changed: the closed links removed, the supplies made
-    fixed inflows, the connectors added."""
+    fixed inflows, the connectors added, the power pumps given curves."""
 
     removed_closed_links: list[str]
     connectors: list[Connector]
     supply_boundaries: list[SupplyBoundary]
+    power_pumps: list[PowerPumpCurve] = field(default_factory=list)
 
     def as_metadata(self) -> dict[str, Any]:
         """The records stored in a simulation's metadata."""
@@ -245,6 +263,7 @@ class TsnetPreparation:
             "removed_closed_links": list(self.removed_closed_links),
             "connectors": [asdict(c) for c in self.connectors],
             "supply_boundaries": [asdict(s) for s in self.supply_boundaries],
+            **({"power_pumps": [asdict(p) for p in self.power_pumps]} if self.power_pumps else {}),
         }
 
 
@@ -270,15 +289,19 @@ def remove_closed_links(wn: Any, keep: Collection[str] = ()) -> list[str]:
     return closed
 
 
-def prepare_for_tsnet(wn: Any, keep: Collection[str] = ()) -> TsnetPreparation:
+def prepare_for_tsnet(wn: Any, keep: Collection[str] = (), engine: str = "PDD") -> TsnetPreparation:
     """Make ``wn`` (changed in place) a network TSNet simulates as EPANET solves it: closed
-    pipes and pumps removed except ``keep`` (:func:`remove_closed_links`), supply junctions
-    except ``keep`` made fixed inflows (:func:`add_supply_boundaries`), then connectors
+    pipes and pumps removed except ``keep`` (:func:`remove_closed_links`), pumps given by their
+    power made head pumps at their operating point (solved with ``engine``;
+    :func:`burstloc.sim.tsnet_elements.power_pumps_as_curves`), supply junctions except
+    ``keep`` made fixed inflows (:func:`add_supply_boundaries`), then connectors
     (:func:`add_connectors`)."""
     removed = remove_closed_links(wn, keep)
+    pumps = power_pumps_as_curves(wn, engine)
+    removed += [p.pump for p in pumps if p.removed]
     supplies = add_supply_boundaries(wn, keep)
     connectors = add_connectors(wn, edges=[s.source for s in supplies])
-    return TsnetPreparation(removed, connectors, supplies)
+    return TsnetPreparation(removed, connectors, supplies, [p for p in pumps if not p.removed])
 
 
 def transient_model(

@@ -1,0 +1,151 @@
+"""Pumps given by their power and valves EPANET controls, as TSNet can simulate them.
+
+TSNet 0.3.1 knows a pump only by its head curve (``get_pump_curve``) and a valve only by its
+opening (a gate valve's loss at 100 % or 0 % open); EPANET knows two more kinds of element:
+
+* **A pump given by its power** (``POWER`` in [PUMPS]: a constant power ``P`` adding the head
+  ``H = P / (rho g Q)``; the Kentucky networks KY1, KY3, KY10, ...) stopped TSNet
+  ("'PowerPump' object has no attribute 'get_pump_curve'"). :func:`power_pumps_as_curves`
+  (called by :func:`burstloc.sim.tsnet_ready.prepare_for_tsnet`) turns each into a head pump whose
+  curve agrees with the constant-power hyperbola at EPANET's operating point ``(Q0, H0)`` in head
+  and slope (``dH/dQ = -H0 / Q0``): the parabola ``H = 1.5 H0 - H0 Q^2 / (2 Q0^2)`` through
+  ``(0, 1.5 H0)``, ``(Q0, H0)`` and ``(sqrt(3) Q0, 0)``. The steady state is unchanged (the
+  curve passes through the operating point) and a small transient sees the pump respond as the
+  constant-power pump does to first order. A power pump that EPANET gives no flow at the start
+  is removed, as a closed pump is.
+* **A valve EPANET controls** (PRV, PSV, PBV, FCV, TCV or GPV with status ``Active``: EPANET sets
+  its loss to hold a pressure or flow) TSNet takes as closed (only ``Open`` and ``Closed`` have a
+  loss in its MOC): L-TOWN's PRVs moved junction n336 by 114 m within 0.044 s, before any burst.
+  :func:`hold_active_valves` (called once TSNet's initializer has EPANET's steady state) opens
+  each such valve with the fixed loss it has in that state, ``dH0 = V^2 / (2 g K)`` (``V`` the
+  velocity of the pipe after the valve, TSNet's valve equation), so the transient starts where
+  EPANET's state is and the valve then acts as a fixed loss: over the seconds a burst is
+  localized in, a pressure-reducing valve's pilot does not move. A valve EPANET closed (no flow)
+  stays closed. Valves with status ``Open`` or ``Closed`` in the file keep TSNet's own model.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from burstloc import network
+from burstloc.exceptions import NetworkError
+from burstloc.network import _fresh_name
+from burstloc.sim.moc_elements import G
+
+__all__ = ["HeldValve", "PowerPumpCurve", "hold_active_valves", "power_pumps_as_curves"]
+
+#: Below this flow (m³/s) a pump or valve is taken as carrying none at the start.
+NO_FLOW = 1e-9
+#: The largest inverse loss coefficient a held valve gets (TSNet's fully open gate valve has 5):
+#: a valve EPANET gives (almost) no loss loses ``V^2 / (2 g 1e4)``, 0.005 mm at 1 m/s.
+MAX_INVERSE_LOSS = 1e4
+
+
+@dataclass(frozen=True)
+class PowerPumpCurve:
+    """A pump given by ``power`` (W) as a head pump: ``curve`` (the new curve's name) through
+    EPANET's operating point ``flow`` (m³/s) and ``head`` (m); ``removed`` when EPANET gave it no
+    flow at the start."""
+
+    pump: str
+    power: float
+    flow: float
+    head: float
+    curve: str | None
+    removed: bool = False
+
+
+def power_pumps_as_curves(wn: Any, engine: str = "PDD") -> list[PowerPumpCurve]:
+    """Turn every power pump of ``wn`` (changed in place) into a head pump with the equivalent
+    curve at EPANET's operating point (see the module's description); return what changed.
+
+    Raises:
+        NetworkError: a power pump whose steady state has it run backwards or add no head.
+    """
+    from wntr.network.elements import HeadPump
+
+    pumps = [name for name, pump in wn.pumps() if pump.pump_type == "POWER"]
+    if not pumps:
+        return []
+    state = network.steady_state(wn, engine)
+    changed = []
+    for name in pumps:
+        pump = wn.get_link(name)
+        flow = state.flows[name]
+        head = state.heads[pump.end_node_name] - state.heads[pump.start_node_name]
+        power = float(pump.power)
+        if abs(flow) < NO_FLOW:
+            wn.remove_link(name, with_control=True)
+            changed.append(PowerPumpCurve(name, power, 0.0, head, None, removed=True))
+            continue
+        if flow < 0 or head <= 0:
+            raise NetworkError(
+                f"pump {name!r} (power {power:g} W) runs at {flow:.4g} m³/s and {head:.4g} m in "
+                "EPANET's steady state: a pump must lift water forwards"
+            )
+        curve = _fresh_name(f"{name}_P", set(wn.curve_name_list), "POWERCURVE")
+        wn.add_curve(curve, "HEAD", [(0.0, 1.5 * head), (flow, head), (math.sqrt(3.0) * flow, 0.0)])
+        registry = wn._link_reg  # WNTR files each pump under its type
+        pump.__class__ = HeadPump  # same object: the controls naming it keep working
+        pump._pump_curve_name = None  # a head pump's own attribute
+        pump.pump_curve_name = curve
+        pump.base_speed = 1.0
+        registry._power_pumps.discard(name)
+        registry._head_pumps.add(name)
+        changed.append(PowerPumpCurve(name, power, flow, head, curve))
+    return changed
+
+
+@dataclass(frozen=True)
+class HeldValve:
+    """An active valve held at its steady state: ``loss`` (m) at ``flow`` (m³/s), TSNet's inverse
+    loss coefficient ``inverse_loss`` (0: closed)."""
+
+    valve: str
+    valve_type: str
+    flow: float
+    loss: float
+    inverse_loss: float
+
+
+def _pipe_area(tm: Any, node: str, valve: str) -> float | None:
+    """Cross-section (m²) of the one pipe beyond ``valve`` at ``node`` (None: not one pipe)."""
+    pipes = [
+        tm.get_link(name)
+        for name in tm.get_links_for_node(node)
+        if name != valve and tm.get_link(name).link_type == "Pipe"
+    ]
+    if len(pipes) != 1:
+        return None
+    return math.pi * float(pipes[0].diameter) ** 2 / 4.0
+
+
+def hold_active_valves(tm: Any) -> list[HeldValve]:
+    """Open every active valve of TSNet's model ``tm`` (after its initializer; not one an event
+    operates) with the fixed loss it has in EPANET's steady state; return them."""
+    from wntr.network.base import LinkStatus
+
+    held = []
+    for name, valve in tm.valves():
+        if getattr(valve, "operating", False) or valve.initial_status.name != "Active":
+            continue
+        flow = float(valve.initial_flow)
+        start, end = valve.start_node, valve.end_node
+        loss = float(start.initial_head) - float(end.initial_head)
+        area = _pipe_area(tm, end.name if flow >= 0 else start.name, name)
+        if area is None:
+            continue  # a valve at the network's edge: TSNet holds its flow (valve_end)
+        velocity = abs(flow) / area
+        if abs(flow) < NO_FLOW:
+            inverse = 0.0
+        elif loss * math.copysign(1.0, flow) <= 0:
+            inverse = MAX_INVERSE_LOSS
+        else:
+            inverse = min(velocity**2 / (2 * G * abs(loss)), MAX_INVERSE_LOSS)
+        valve.valve_coeff = [[100.0, 0.0], [inverse, 0.0]]
+        valve.initial_status = LinkStatus.Open if inverse > 0 else LinkStatus.Closed
+        held.append(HeldValve(name, valve.valve_type, flow, loss, inverse))
+    return held
