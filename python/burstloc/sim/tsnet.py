@@ -36,7 +36,7 @@ from burstloc.sim.cache import DiskCache, file_sha256, package_versions
 from burstloc.sim.scenario import SCHEMA, BurstScenario, ScenarioResult
 from burstloc.sim.steady import check_steady_start
 from burstloc.sim.sweep import SweepReport, sweep
-from burstloc.sim.tsnet_elements import hold_active_valves
+from burstloc.sim.tsnet_elements import hold_valves
 from burstloc.sim.tsnet_ready import prepare_for_tsnet, transient_model
 
 __all__ = [
@@ -314,7 +314,7 @@ def _run_tsnet(
     try:
         operate(tm)
         tm = tsnet.simulation.Initializer(tm, 0.0, settings.engine)
-        hold_active_valves(tm)
+        hold_valves(tm)
         if settings.solver == "vectorized":
             return moc.solve(tm, settings.friction)
         return tsnet.simulation.MOCSimulator(tm, results_obj="no", friction=settings.friction)

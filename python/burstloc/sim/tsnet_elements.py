@@ -5,28 +5,34 @@ opening (a gate valve's loss at 100 % or 0 % open); EPANET knows two more kinds 
 
 * **A pump given by its power** (``POWER`` in [PUMPS]: a constant power ``P`` adding the head
   ``H = P / (rho g Q)``; the Kentucky networks KY1, KY3, KY10, ...) stopped TSNet
-  ("'PowerPump' object has no attribute 'get_pump_curve'"). :func:`power_pumps_as_curves`
+  ("'PowerPump' object has no attribute 'get_pump_curve'"). :func:`settle_pumps_and_check_valves`
   (called by :func:`burstloc.sim.tsnet_ready.prepare_for_tsnet`) turns each into a head pump whose
   curve agrees with the constant-power hyperbola at EPANET's operating point ``(Q0, H0)`` in head
   and slope (``dH/dQ = -H0 / Q0``): the parabola ``H = 1.5 H0 - H0 Q^2 / (2 Q0^2)`` through
   ``(0, 1.5 H0)``, ``(Q0, H0)`` and ``(sqrt(3) Q0, 0)``. The steady state is unchanged (the
   curve passes through the operating point) and a small transient sees the pump respond as the
-  constant-power pump does to first order. A power pump that EPANET gives no flow at the start
-  is removed, as a closed pump is.
+  constant-power pump does to first order.
+* **A pump or a check-valve pipe EPANET gives no flow at the start** (a pump a control stops at
+  the start, a check valve held shut by the heads: MICROPOLIS's 52 of 54) TSNet would run as
+  open: :func:`settle_pumps_and_check_valves` removes them, as closed ones are removed.
 * **A valve EPANET controls** (PRV, PSV, PBV, FCV, TCV or GPV with status ``Active``: EPANET sets
   its loss to hold a pressure or flow) TSNet takes as closed (only ``Open`` and ``Closed`` have a
   loss in its MOC): L-TOWN's PRVs moved junction n336 by 114 m within 0.044 s, before any burst.
-  :func:`hold_active_valves` (called once TSNet's initializer has EPANET's steady state) opens
-  each such valve with the fixed loss it has in that state, ``dH0 = V^2 / (2 g K)`` (``V`` the
-  velocity of the pipe after the valve, TSNet's valve equation), so the transient starts where
-  EPANET's state is and the valve then acts as a fixed loss: over the seconds a burst is
-  localized in, a pressure-reducing valve's pilot does not move. A valve EPANET closed (no flow)
-  stays closed. Valves with status ``Open`` or ``Closed`` in the file keep TSNet's own model.
+  And an ``Open`` valve it gives a fully open gate valve's loss (``V^2 / (10 g)``), not EPANET's
+  (a TCV's setting, a minor loss): MICROPOLIS's 200 TCVs moved its heads by metres.
+  :func:`hold_valves` (called once TSNet's initializer has EPANET's steady state) gives each such
+  valve the fixed loss it has in that state, ``dH0 = V^2 / (2 g K)`` (``V`` the velocity of the
+  pipe after the valve, TSNet's valve equation), so the transient starts where EPANET's state
+  is and the valve then acts as a fixed loss: over the seconds a burst is localized in, a
+  pressure-reducing valve's pilot does not move. A valve EPANET gives no flow is closed; a
+  valve an event operates (``burstloc simulate --event``) and a ``Closed`` one keep TSNet's own
+  model.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Collection
 from dataclasses import dataclass
 from typing import Any
 
@@ -35,7 +41,7 @@ from burstloc.exceptions import NetworkError
 from burstloc.network import _fresh_name
 from burstloc.sim.moc_elements import G
 
-__all__ = ["HeldValve", "PowerPumpCurve", "hold_active_valves", "power_pumps_as_curves"]
+__all__ = ["HeldValve", "PowerPumpCurve", "hold_valves", "settle_pumps_and_check_valves"]
 
 #: Below this flow (m³/s) a pump or valve is taken as carrying none at the start.
 NO_FLOW = 1e-9
@@ -54,49 +60,64 @@ class PowerPumpCurve:
     power: float
     flow: float
     head: float
-    curve: str | None
-    removed: bool = False
+    curve: str
 
 
-def power_pumps_as_curves(wn: Any, engine: str = "PDD") -> list[PowerPumpCurve]:
-    """Turn every power pump of ``wn`` (changed in place) into a head pump with the equivalent
-    curve at EPANET's operating point (see the module's description); return what changed.
+def settle_pumps_and_check_valves(
+    wn: Any, keep: Collection[str] = (), engine: str = "PDD"
+) -> tuple[list[str], list[PowerPumpCurve]]:
+    """Give ``wn`` (changed in place) EPANET's state at the start where TSNet would not: remove
+    the pumps and the check-valve pipes that carry no flow in it (stopped by a control at the
+    start, or a check valve held shut: TSNet would run them), except ``keep``, and turn every
+    power pump into a head pump with the equivalent curve at its operating point (see the
+    module's description). Return the removed links and the power pumps' curves.
 
     Raises:
         NetworkError: a power pump whose steady state has it run backwards or add no head.
     """
+    checks = [name for name, pipe in wn.pipes() if pipe.check_valve]
+    if not wn.num_pumps and not checks:
+        return [], []
+    state = network.steady_state(wn, engine)
+    at_rest = []
+    for name in [*wn.pump_name_list, *checks]:
+        link = wn.get_link(name)
+        ends = (link.start_node_name, link.end_node_name)
+        if abs(state.flows[name]) >= NO_FLOW or name in keep:
+            continue
+        if any(len(wn.get_links_for_node(node)) < 2 for node in ends):
+            continue  # its node would be left with no link, which EPANET refuses
+        wn.remove_link(name, with_control=True)
+        at_rest.append(name)
+    curves = [
+        _power_curve(wn, name, state) for name, pump in wn.pumps() if pump.pump_type == "POWER"
+    ]
+    return at_rest, curves
+
+
+def _power_curve(wn: Any, name: str, state: network.SteadyState) -> PowerPumpCurve:
+    """Make the power pump ``name`` a head pump through its operating point in ``state``."""
     from wntr.network.elements import HeadPump
 
-    pumps = [name for name, pump in wn.pumps() if pump.pump_type == "POWER"]
-    if not pumps:
-        return []
-    state = network.steady_state(wn, engine)
-    changed = []
-    for name in pumps:
-        pump = wn.get_link(name)
-        flow = state.flows[name]
-        head = state.heads[pump.end_node_name] - state.heads[pump.start_node_name]
-        power = float(pump.power)
-        if abs(flow) < NO_FLOW:
-            wn.remove_link(name, with_control=True)
-            changed.append(PowerPumpCurve(name, power, 0.0, head, None, removed=True))
-            continue
-        if flow < 0 or head <= 0:
-            raise NetworkError(
-                f"pump {name!r} (power {power:g} W) runs at {flow:.4g} m³/s and {head:.4g} m in "
-                "EPANET's steady state: a pump must lift water forwards"
-            )
-        curve = _fresh_name(f"{name}_P", set(wn.curve_name_list), "POWERCURVE")
-        wn.add_curve(curve, "HEAD", [(0.0, 1.5 * head), (flow, head), (math.sqrt(3.0) * flow, 0.0)])
-        registry = wn._link_reg  # WNTR files each pump under its type
-        pump.__class__ = HeadPump  # same object: the controls naming it keep working
-        pump._pump_curve_name = None  # a head pump's own attribute
-        pump.pump_curve_name = curve
-        pump.base_speed = 1.0
-        registry._power_pumps.discard(name)
-        registry._head_pumps.add(name)
-        changed.append(PowerPumpCurve(name, power, flow, head, curve))
-    return changed
+    pump = wn.get_link(name)
+    flow = state.flows[name]
+    head = state.heads[pump.end_node_name] - state.heads[pump.start_node_name]
+    power = float(pump.power)
+    if flow <= 0 or head <= 0:
+        raise NetworkError(
+            f"pump {name!r} (power {power:g} W) runs at {flow:.4g} m³/s and {head:.4g} m in "
+            "EPANET's steady state: a pump must lift water forwards"
+        )
+    curve = _fresh_name(f"{name}_P", set(wn.curve_name_list), "POWERCURVE")
+    wn.add_curve(curve, "HEAD", [(0.0, 1.5 * head), (flow, head), (math.sqrt(3.0) * flow, 0.0)])
+    registry = wn._link_reg  # WNTR files each pump under its type
+    pump.__class__ = HeadPump  # same object: the controls naming it keep working
+    pump._pump_curve_name = None  # a head pump's own attribute
+    pump.pump_curve_name = curve
+    pump.base_speed = 1.0
+    registry._power_pumps.discard(name)
+    registry._head_pumps.add(name)
+    return PowerPumpCurve(name, power, flow, head, curve)
 
 
 @dataclass(frozen=True)
@@ -123,14 +144,14 @@ def _pipe_area(tm: Any, node: str, valve: str) -> float | None:
     return math.pi * float(pipes[0].diameter) ** 2 / 4.0
 
 
-def hold_active_valves(tm: Any) -> list[HeldValve]:
-    """Open every active valve of TSNet's model ``tm`` (after its initializer; not one an event
-    operates) with the fixed loss it has in EPANET's steady state; return them."""
+def hold_valves(tm: Any) -> list[HeldValve]:
+    """Give every valve of TSNet's model ``tm`` (after its initializer) that is active or open,
+    and that no event operates, the fixed loss it has in EPANET's steady state; return them."""
     from wntr.network.base import LinkStatus
 
     held = []
     for name, valve in tm.valves():
-        if getattr(valve, "operating", False) or valve.initial_status.name != "Active":
+        if getattr(valve, "operating", False) or valve.initial_status.name == "Closed":
             continue
         flow = float(valve.initial_flow)
         start, end = valve.start_node, valve.end_node

@@ -62,7 +62,7 @@ from typing import Any
 from burstloc import network, skeleton
 from burstloc.network import _fresh_name
 from burstloc.sim.scenario import BurstScenario
-from burstloc.sim.tsnet_elements import PowerPumpCurve, power_pumps_as_curves
+from burstloc.sim.tsnet_elements import PowerPumpCurve, settle_pumps_and_check_valves
 
 __all__ = [
     "Connector",
@@ -291,17 +291,17 @@ def remove_closed_links(wn: Any, keep: Collection[str] = ()) -> list[str]:
 
 def prepare_for_tsnet(wn: Any, keep: Collection[str] = (), engine: str = "PDD") -> TsnetPreparation:
     """Make ``wn`` (changed in place) a network TSNet simulates as EPANET solves it: closed
-    pipes and pumps removed except ``keep`` (:func:`remove_closed_links`), pumps given by their
-    power made head pumps at their operating point (solved with ``engine``;
-    :func:`burstloc.sim.tsnet_elements.power_pumps_as_curves`), supply junctions except
+    pipes and pumps removed except ``keep`` (:func:`remove_closed_links`), so are the pumps and
+    check-valve pipes EPANET's steady state (solved with ``engine``) gives no flow, and pumps
+    given by their power made head pumps at their operating point
+    (:func:`burstloc.sim.tsnet_elements.settle_pumps_and_check_valves`), supply junctions except
     ``keep`` made fixed inflows (:func:`add_supply_boundaries`), then connectors
     (:func:`add_connectors`)."""
     removed = remove_closed_links(wn, keep)
-    pumps = power_pumps_as_curves(wn, engine)
-    removed += [p.pump for p in pumps if p.removed]
+    at_rest, pumps = settle_pumps_and_check_valves(wn, keep, engine)
     supplies = add_supply_boundaries(wn, keep)
     connectors = add_connectors(wn, edges=[s.source for s in supplies])
-    return TsnetPreparation(removed, connectors, supplies, [p for p in pumps if not p.removed])
+    return TsnetPreparation(removed + at_rest, connectors, supplies, pumps)
 
 
 def transient_model(
