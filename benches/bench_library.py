@@ -18,8 +18,9 @@ open: a closed pipe has nothing to burst) and the row says:
   reason, or ``timeout``;
 * the wall-clock seconds of the child (loading, preparation, simulation).
 
-The last line gives the share simulated, beside the same count before this benchmark's first
-run (7 of 34, counted by hand with the CLI).
+The last line gives the share simulated. ``--json`` keeps the rows; ``--before ROWS.json`` (the
+rows of an earlier run, e.g. of an older burstloc: ``PYTHONPATH=OLD/python``) adds its outcome
+as a column and its share to the last line.
 """
 
 from __future__ import annotations
@@ -43,8 +44,6 @@ MIN_PIPES = 30
 #: The scenario: ``--min-pipe-length 30 --duration 20`` (burst at burstloc's default onset).
 MIN_PIPE_LENGTH = 30.0
 DURATION = 20.0
-#: Counted before this benchmark existed (the same scenario, by hand with the CLI).
-BEFORE = (7, 34)
 
 
 def epanet_solves(path: Path) -> str | None:
@@ -130,7 +129,16 @@ def run_one(path: Path, timeout: float) -> dict[str, Any]:
     else:
         row = queue.get()
     row["seconds"] = time.perf_counter() - started
+    if "reason" in row:  # the model's file name is enough
+        row["reason"] = row["reason"].replace(f"{path.parent}{os.sep}", "")
     return row
+
+
+def _outcome(row: dict[str, Any]) -> str:
+    """A row's outcome as one table cell."""
+    if row["outcome"] == "simulated":
+        return f"simulated (pipe {row['pipe']}{_movement(row['steady'])})"
+    return f"{row['outcome']}: {row['reason']}".replace("|", "/").replace("\n", " ")
 
 
 def _movement(steady: dict[str, Any]) -> str:
@@ -145,7 +153,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--library", type=Path, default=LIBRARY)
     parser.add_argument("--timeout", type=float, default=600.0, help="per model (s)")
     parser.add_argument("--json", type=Path, help="also write the rows here")
+    parser.add_argument("--before", type=Path, help="rows of an earlier run (its --json)")
     args = parser.parse_args(argv)
+    before = (
+        {r["model"]: r for r in json.loads(args.before.read_text(encoding="utf-8"))}
+        if args.before
+        else {}
+    )
     files = sorted(args.library.rglob("*.inp"), key=lambda p: p.name.lower())
     if args.names:
         files = [f for f in files if f.name in set(args.names)]
@@ -158,9 +172,9 @@ def main(argv: list[str] | None = None) -> int:
     rows = []
     print(
         "| model | junctions | pipes | pumps | valves | sources | parallel links | outcome | "
-        "time (s) |"
+        f"time (s) |{' before |' if before else ''}"
     )
-    print("|---|---|---|---|---|---|---|---|---|")
+    print(f"|---|---|---|---|---|---|---|---|---|{'---|' if before else ''}")
     skipped = []
     for path in files:
         error = epanet_solves(path)
@@ -173,25 +187,27 @@ def main(argv: list[str] | None = None) -> int:
             continue
         row = {"model": path.name, **counts, **run_one(path, args.timeout)}
         rows.append(row)
-        if row["outcome"] == "simulated":
-            outcome = f"simulated (pipe {row['pipe']}{_movement(row['steady'])})"
-        else:
-            outcome = f"{row['outcome']}: {row['reason']}".replace("|", "/").replace("\n", " ")
         cells = [
             counts.get(k, "?")
             for k in ("junctions", "pipes", "pumps", "valves", "sources", "parallel")
         ]
+        then = f" {_outcome(before[path.name])} |" if path.name in before else ""
         print(
-            f"| {path.name} | {' | '.join(map(str, cells))} | {outcome} | {row['seconds']:.1f} |",
+            f"| {path.name} | {' | '.join(map(str, cells))} | {_outcome(row)} | "
+            f"{row['seconds']:.1f} |{then}",
             flush=True,
         )
     done = sum(r["outcome"] == "simulated" for r in rows)
-    print(
-        f"\nsimulated from a steady start: {done} of {len(rows)} "
-        f"({100 * done / max(len(rows), 1):.0f} %); before: {BEFORE[0]} of {BEFORE[1]}"
-    )
-    for line in skipped:
-        print(f"not judged: {line}")
+    share = 100 * done / max(len(rows), 1)
+    summary = f"\nsimulated from a steady start: {done} of {len(rows)} ({share:.0f} %)"
+    if before:
+        then = sum(
+            before[r["model"]]["outcome"] == "simulated" for r in rows if r["model"] in before
+        )
+        summary += f"; before: {then} of {len(rows)}"
+    print(summary)
+    for reason in skipped:
+        print(f"not judged: {reason}")
     if args.json:
         args.json.write_text(json.dumps(rows, indent=1, default=str) + "\n", encoding="utf-8")
     return 0

@@ -88,6 +88,10 @@ def settle_pumps_and_check_valves(
         if any(len(wn.get_links_for_node(node)) < 2 for node in ends):
             continue  # its node would be left with no link, which EPANET refuses
         wn.remove_link(name, with_control=True)
+        for subset in ("_pumps", "_head_pumps", "_power_pumps", "_pipes"):
+            # WNTR 1.3's registry stops half-way for a pump with no speed pattern (a KeyError it
+            # swallows): the pump stays listed under its type, and wn.pumps() then fails
+            getattr(wn._link_reg, subset).discard(name)
         at_rest.append(name)
     curves = [
         _power_curve(wn, name, state) for name, pump in wn.pumps() if pump.pump_type == "POWER"
