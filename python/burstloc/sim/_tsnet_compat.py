@@ -77,6 +77,10 @@ __all__ = ["applied", "load"]
 #: TSNet's thresholds in ``cal_roughness_coef``: below either, the pipe has no friction.
 _V_TOL = 1e-5
 _H_TOL = 1e-3
+#: TSNet's gravity (m/s²) and its cap on a Darcy-Weisbach friction factor in
+#: ``cal_roughness_coef`` (above it TSNet warns and takes 0.03).
+_G = 9.8
+_MAX_FRICTION = 0.08
 
 #: TSNet's ``pumpclosing`` keeps a "closed" pump at this speed (its curve scaled by zero speed
 #: is three identical points, which no parabola fits); ``pumpopening`` did not: now it does.
@@ -147,8 +151,18 @@ def _adjust_wavev(tm: Any) -> Any:
 
 
 def _cal_roughness_coef(pipe: Any, velocity: Any, head_loss: Any) -> Any:
-    """TSNet's ``cal_roughness_coef``; a pipe without steady flow gets roughness 0 past WNTR."""
+    """TSNet's ``cal_roughness_coef``; a pipe without steady flow gets roughness 0 past WNTR;
+    a pipe with a minor loss keeps the friction factor of its steady head loss above TSNet's
+    cap of 0.08 (which sets 0.03 instead: BWSN_Network_1's pump suction main, minor loss 800,
+    then lost a fraction of EPANET's head and its pump moved 22 m before any burst)."""
     if abs(velocity) >= _V_TOL and head_loss >= _H_TOL:
+        factor = head_loss / (pipe.length / pipe.diameter) / (velocity**2 / 2 / _G)
+        if factor > _MAX_FRICTION and float(getattr(pipe, "minor_loss", 0.0) or 0.0) > 0:
+            pipe.roughness = factor
+            pipe.roughness_height = max(
+                10 ** (-1 / 1.8 / np.sqrt(factor)) - 6.9 / pipe.initial_Re, 0
+            )
+            return pipe
         return _ORIGINALS["cal_roughness_coef"](pipe, velocity, head_loss)
     pipe._roughness = 0  # TSNet's "no friction"; WNTR >= 1.4's setter refuses 0
     pipe.roughness_height = 0
