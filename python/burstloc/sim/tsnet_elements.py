@@ -14,7 +14,7 @@ opening (a gate valve's loss at 100 % or 0 % open); EPANET knows two more kinds 
   constant-power pump does to first order.
 * **A pump or a check-valve pipe EPANET gives no flow at the start** (a pump a control stops at
   the start, a check valve held shut by the heads: MICROPOLIS's 52 of 54) TSNet would run as
-  open: :func:`settle_pumps_and_check_valves` removes them, as closed ones are removed.
+  open: :func:`settle_pumps_and_check_valves` makes each a closed valve, which TSNet keeps shut.
 * **A valve EPANET controls** (PRV, PSV, PBV, FCV, TCV or GPV with status ``Active``: EPANET sets
   its loss to hold a pressure or flow) TSNet takes as closed (only ``Open`` and ``Closed`` have a
   loss in its MOC): L-TOWN's PRVs moved junction n336 by 114 m within 0.044 s, before any burst.
@@ -43,8 +43,9 @@ from burstloc.sim.moc_elements import G
 
 __all__ = ["HeldValve", "PowerPumpCurve", "hold_valves", "settle_pumps_and_check_valves"]
 
-#: Below this flow (m³/s) a pump or valve is taken as carrying none at the start.
-NO_FLOW = 1e-9
+#: Below this flow (m³/s) a pump, valve or check-valve pipe is taken as carrying none at the
+#: start: EPANET gives a link it closes a flow of 1e-6 ft³/s (2.8e-8 m³/s), not zero.
+NO_FLOW = 1e-6
 #: The largest inverse loss coefficient a held valve gets (TSNet's fully open gate valve has 5):
 #: a valve EPANET gives (almost) no loss loses ``V^2 / (2 g 1e4)``, 0.005 mm at 1 m/s.
 MAX_INVERSE_LOSS = 1e4
@@ -66,11 +67,13 @@ class PowerPumpCurve:
 def settle_pumps_and_check_valves(
     wn: Any, keep: Collection[str] = (), engine: str = "PDD"
 ) -> tuple[list[str], list[PowerPumpCurve]]:
-    """Give ``wn`` (changed in place) EPANET's state at the start where TSNet would not: remove
-    the pumps and the check-valve pipes that carry no flow in it (stopped by a control at the
-    start, or a check valve held shut: TSNet would run them), except ``keep``, and turn every
-    power pump into a head pump with the equivalent curve at its operating point (see the
-    module's description). Return the removed links and the power pumps' curves.
+    """Give ``wn`` (changed in place) EPANET's state at the start where TSNet would not: the
+    pumps and the check-valve pipes that carry no flow in it (stopped by a control at the start,
+    or a check valve held shut: TSNet would run them), except ``keep``, become closed valves
+    of the same name (TSNet keeps a closed valve shut; removed, they could cut a part of the
+    network off its sources), and every power pump becomes a head pump with the equivalent
+    curve at its operating point (see the module's description). Return the links closed and
+    the power pumps' curves.
 
     Raises:
         NetworkError: a power pump whose steady state has it run backwards or add no head.
@@ -79,24 +82,47 @@ def settle_pumps_and_check_valves(
     if not wn.num_pumps and not checks:
         return [], []
     state = network.steady_state(wn, engine)
-    at_rest = []
-    for name in [*wn.pump_name_list, *checks]:
-        link = wn.get_link(name)
-        ends = (link.start_node_name, link.end_node_name)
-        if abs(state.flows[name]) >= NO_FLOW or name in keep:
-            continue
-        if any(len(wn.get_links_for_node(node)) < 2 for node in ends):
-            continue  # its node would be left with no link, which EPANET refuses
-        wn.remove_link(name, with_control=True)
-        for subset in ("_pumps", "_head_pumps", "_power_pumps", "_pipes"):
-            # WNTR 1.3's registry stops half-way for a pump with no speed pattern (a KeyError it
-            # swallows): the pump stays listed under its type, and wn.pumps() then fails
-            getattr(wn._link_reg, subset).discard(name)
-        at_rest.append(name)
+    at_rest = [
+        name
+        for name in [*wn.pump_name_list, *checks]
+        if abs(state.flows[name]) < NO_FLOW and name not in keep
+    ]
+    for name in at_rest:
+        _close(wn, name)
     curves = [
         _power_curve(wn, name, state) for name, pump in wn.pumps() if pump.pump_type == "POWER"
     ]
     return at_rest, curves
+
+
+def _close(wn: Any, name: str) -> None:
+    """Replace the link ``name`` by a closed valve (TCV) of the same name between its nodes."""
+    link = wn.get_link(name)
+    start, end = link.start_node_name, link.end_node_name
+    diameter = float(getattr(link, "diameter", 0.0) or 0.0)
+    if diameter <= 0:  # a pump: as wide as the widest pipe at its nodes
+        pipes = [
+            wn.get_link(n)
+            for node in (start, end)
+            for n in wn.get_links_for_node(node)
+            if wn.get_link(n).link_type == "Pipe"
+        ]
+        diameter = max((float(p.diameter) for p in pipes), default=0.3)
+    wn.remove_link(name, with_control=True)
+    for subset in ("_pumps", "_head_pumps", "_power_pumps", "_pipes"):
+        # WNTR 1.3's registry stops half-way for a pump with no speed pattern (a KeyError it
+        # swallows): the pump stays listed under its type, and wn.pumps() then fails
+        getattr(wn._link_reg, subset).discard(name)
+    wn.add_valve(
+        name,
+        start,
+        end,
+        diameter=diameter,
+        valve_type="TCV",
+        minor_loss=0.0,
+        initial_setting=0.0,
+        initial_status="Closed",
+    )
 
 
 def _power_curve(wn: Any, name: str, state: network.SteadyState) -> PowerPumpCurve:

@@ -99,12 +99,10 @@ def _needs_connector(
     others = [name for name in wn.get_links_for_node(node_name) if name != link_name]
     if len(others) != 1 or wn.get_link(others[0]).link_type != "Pipe":
         return True
-    if wn.get_link(link_name).link_type != "Valve":
-        return False  # TSNet's pump equation knows its suction side
-    # TSNet's valve equation takes the pipe at a valve's start to end there and the pipe at
-    # its end to start there (pipe -> valve -> pipe); a pipe the other way round is solved with
-    # the wrong characteristic (L-TOWN's PRV-2: 0.5 m before any burst); and it has no demand
-    # at the valve's nodes (L-TOWN's PRV-3 at junction n229: 0.27 m)
+    # TSNet's valve and pump equations take the pipe at the link's start to end there and the
+    # pipe at its end to start there (pipe -> valve -> pipe); a pipe the other way round is
+    # solved with the wrong characteristic (L-TOWN's PRV-2: 0.5 m before any burst; KY13's
+    # Pump-3: 62 m); and they have no demand at the link's nodes (L-TOWN's PRV-3 at n229: 0.27 m)
     if any(demand.base_value != 0 for demand in node.demand_timeseries_list):
         return True
     pipe = wn.get_link(others[0])
@@ -171,8 +169,8 @@ def _connect(wn: Any, node_name: str, moved: list[str], name: str, length: float
 def add_connectors(wn: Any, edges: Collection[str] = ()) -> list[Connector]:
     """Add a connector pipe wherever a tank or reservoir of ``wn`` (changed in place) is joined
     by more than one link (its links then meet at the connector's far end), then wherever a pump
-    or valve does not meet a single pipe at a junction end (for a valve: a pipe ending at its
-    start, starting at its end), except at the junctions ``edges`` (a
+    or valve does not meet a single pipe at a junction end (a pipe ending at its start,
+    starting at its end, at a junction without demand), except at the junctions ``edges`` (a
     supply's source, the network's edge on purpose); return what was added (empty: nothing
     needed)."""
     length = min(float(pipe.length) for _, pipe in wn.pipes())
@@ -250,12 +248,14 @@ def add_supply_boundaries(wn: Any, keep: Collection[str] = ()) -> list[SupplyBou
 @dataclass(frozen=True)
 class TsnetPreparation:
     """What :func:`prepare_for_tsnet` changed: the closed links removed, the supplies made
-    fixed inflows, the connectors added, the power pumps given curves."""
+    fixed inflows, the connectors added, the power pumps given curves, the pumps and check-valve
+    pipes at rest made closed valves."""
 
     removed_closed_links: list[str]
     connectors: list[Connector]
     supply_boundaries: list[SupplyBoundary]
     power_pumps: list[PowerPumpCurve] = field(default_factory=list)
+    closed_at_rest: list[str] = field(default_factory=list)
 
     def as_metadata(self) -> dict[str, Any]:
         """The records stored in a simulation's metadata."""
@@ -264,6 +264,7 @@ class TsnetPreparation:
             "connectors": [asdict(c) for c in self.connectors],
             "supply_boundaries": [asdict(s) for s in self.supply_boundaries],
             **({"power_pumps": [asdict(p) for p in self.power_pumps]} if self.power_pumps else {}),
+            **({"closed_at_rest": list(self.closed_at_rest)} if self.closed_at_rest else {}),
         }
 
 
@@ -291,8 +292,9 @@ def remove_closed_links(wn: Any, keep: Collection[str] = ()) -> list[str]:
 
 def prepare_for_tsnet(wn: Any, keep: Collection[str] = (), engine: str = "PDD") -> TsnetPreparation:
     """Make ``wn`` (changed in place) a network TSNet simulates as EPANET solves it: closed
-    pipes and pumps removed except ``keep`` (:func:`remove_closed_links`), so are the pumps and
-    check-valve pipes EPANET's steady state (solved with ``engine``) gives no flow, and pumps
+    pipes and pumps removed except ``keep`` (:func:`remove_closed_links`), the pumps and
+    check-valve pipes EPANET's steady state (solved with ``engine``) gives no flow made closed
+    valves, and pumps
     given by their power made head pumps at their operating point
     (:func:`burstloc.sim.tsnet_elements.settle_pumps_and_check_valves`), supply junctions except
     ``keep`` made fixed inflows (:func:`add_supply_boundaries`), then connectors
@@ -301,7 +303,7 @@ def prepare_for_tsnet(wn: Any, keep: Collection[str] = (), engine: str = "PDD") 
     at_rest, pumps = settle_pumps_and_check_valves(wn, keep, engine)
     supplies = add_supply_boundaries(wn, keep)
     connectors = add_connectors(wn, edges=[s.source for s in supplies])
-    return TsnetPreparation(removed + at_rest, connectors, supplies, pumps)
+    return TsnetPreparation(removed, connectors, supplies, pumps, at_rest)
 
 
 def transient_model(
