@@ -60,6 +60,7 @@ _EXTRA = """
  Hydraulic Timestep 90 SEC
  Pattern Timestep   15 min
  Start ClockTime    6 PM
+ Report Start       312
  Statistic          Average
 
 [OPTIONS]
@@ -100,6 +101,7 @@ def test_clock_times_units_and_quality_options_load_as_epanet_reads_them(tmp_pat
     times = wn.options.time
     assert (times.duration, times.hydraulic_timestep, times.pattern_timestep) == (1800, 90, 900)
     assert times.start_clocktime == 18 * 3600
+    assert times.report_start == 0  # results from time 0 (Net3_trace: 312 h, no t = 0)
     assert wn.options.quality.parameter == "NONE"
     assert wn.name == str(path)
     condition = wn.get_control("1")._condition

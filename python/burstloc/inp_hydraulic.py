@@ -13,7 +13,8 @@ options and sections, which WNTR rejects when it does not know their units (BWSN
 :func:`hydraulic_text` returns the text with each such time written as ``H:MM:SS`` (24-hour, or
 12-hour with ``AM``/``PM`` where WNTR needs it) and the water-quality lines (``Quality``,
 ``Diffusivity``, ``Tolerance``, ``Segments`` in [OPTIONS]; a report ``Statistic`` WNTR does
-not know; every line of [QUALITY], [REACTIONS], [SOURCES]
+not know and a ``Report Start`` after time 0 (reporting only: the transient starts at time
+0); every line of [QUALITY], [REACTIONS], [SOURCES]
 and [MIXING]) turned into comments. Every line keeps its number, so an error WNTR reports names
 the line of the original file. :func:`burstloc.network.load_network` reads the file through it.
 """
@@ -99,6 +100,14 @@ def clock_seconds(value: str, am_pm: str | None) -> float:
     return hours * 3600.0
 
 
+def _hours_or_none(value: str) -> float | None:
+    """Decimal hours of a plain time value, None when it is not one."""
+    try:
+        return _hours(value)
+    except ValueError:
+        return None
+
+
 def _hms(seconds: float) -> str:
     whole = round(seconds)
     return f"{whole // 3600}:{whole % 3600 // 60:02d}:{whole % 60:02d}"
@@ -116,6 +125,9 @@ def _times_line(fields: list[str]) -> str | None:
     """A [TIMES] line rewritten with its time in ``H:MM:SS`` where WNTR would misread it (a
     unit, a decimal or 24-hour clock time), else None: the line is kept."""
     key = fields[0].upper()
+    if key == "REPORT" and len(fields) > 2 and fields[1].upper() == "START":
+        # reporting only; a later start leaves no result at time 0, where the transient begins
+        return None if _hours_or_none(fields[2]) == 0 else ";" + " ".join(fields)
     if key == "STATISTIC":  # reporting only; a form WNTR does not know is left out
         return (
             None if len(fields) < 2 or fields[1].upper() in _STATISTICS else ";" + " ".join(fields)
