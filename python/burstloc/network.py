@@ -174,6 +174,7 @@ def steady_state(wn: WaterNetworkModel, engine: str = "PDD") -> SteadyState:
 
     Raises:
         ConfigError: an unknown ``engine``.
+        NetworkError: EPANET cannot solve it (its error code and message).
     """
     wntr = _wntr()
 
@@ -186,6 +187,14 @@ def steady_state(wn: WaterNetworkModel, engine: str = "PDD") -> SteadyState:
         with tempfile.TemporaryDirectory(prefix="burstloc-steady-") as tmp, capture_diagnostics():
             sim = wntr.sim.EpanetSimulator(wn)
             results = sim.run_sim(file_prefix=os.path.join(tmp, "steady"))
+    except Exception as exc:  # EPANET's own error (WNTR's EpanetException), with its code
+        if type(exc).__name__ != "EpanetException":
+            raise
+        kind = "pressure-driven" if engine.upper() == "PDD" else "demand-driven"
+        raise NetworkError(
+            f"EPANET cannot solve the steady state of {getattr(wn, 'name', None) or 'the network'}"
+            f" ({kind}): {exc}"
+        ) from exc
     finally:
         hydraulic.demand_model, times.duration = saved
     heads = results.node["head"].iloc[0]
