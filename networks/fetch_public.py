@@ -12,6 +12,13 @@ Run from the repository root (``make networks`` does; standard library only)::
     python networks/fetch_public.py                # fetch if missing or changed, else nothing
     python networks/fetch_public.py --check        # exit 1 unless every file is as pinned
     python networks/fetch_public.py --wheel W.whl  # extract from a wheel downloaded by hand
+    python networks/fetch_public.py --library      # also the wheel's whole network library
+
+``--library [DIR]`` extracts every INP file of the wheel (``epyt/networks/``: L-TOWN, the
+Kentucky networks KY1-KY15, BWSN, Richmond, exnet, MICROPOLIS, ...) into ``DIR`` (default
+``networks/public/library/``, gitignored: never commit these files; the Kentucky networks are
+for non-commercial research use only) with ``LIBRARY.json`` recording, per file, its path in the
+wheel, its SHA-256 and its terms. ``benches/bench_library.py`` sweeps them.
 
 A file whose hash differs from the pin is refused by name; nothing partial is left behind.
 """
@@ -212,12 +219,76 @@ def fetch(out: Path = PUBLIC, wheel: Path | None = None) -> str:
     return f"{out}: extracted {', '.join(n.name for n in NETWORKS)} from {wheel.name}"
 
 
+#: Where ``--library`` extracts the wheel's network library (in ``networks/public/``, gitignored).
+LIBRARY = PUBLIC / "library"
+LIBRARY_MANIFEST = "LIBRARY.json"
+_LIBRARY_ROOT = "epyt/networks/"
+#: The terms recorded per file: the Kentucky networks' own, else the wheel's.
+KY_TERMS = (
+    "Kentucky Water Distribution System research database (University of Kentucky): "
+    "non-commercial research use only; do not redistribute or commit"
+)
+WHEEL_TERMS = f"as distributed in the epyt wheel ({LICENCE}); the publishing authors' terms apply"
+
+
+def _terms(member: str) -> str:
+    return KY_TERMS if Path(member).name.lower().startswith("ky") else WHEEL_TERMS
+
+
+def extract_library(wheel: Path, out: Path = LIBRARY) -> list[Path]:
+    """Extract every INP file under ``epyt/networks/`` of the pinned ``wheel`` into ``out``
+    (its folders kept) with the wheel's licence and ``LIBRARY.json`` (source, and per file its
+    path in the wheel, SHA-256 and terms); return the written paths."""
+    verify(wheel, WHEEL_SHA256)
+    out.mkdir(parents=True, exist_ok=True)
+    written, records = [], []
+    with zipfile.ZipFile(wheel) as archive:
+        members = sorted(
+            m
+            for m in archive.namelist()
+            if m.startswith(_LIBRARY_ROOT) and m.lower().endswith(".inp")
+        )
+        for member in members:
+            data = archive.read(member)
+            target = out / member[len(_LIBRARY_ROOT) :]
+            target.parent.mkdir(parents=True, exist_ok=True)
+            target.write_bytes(data)
+            written.append(target)
+            records.append(
+                {
+                    "path": target.relative_to(out).as_posix(),
+                    "path_in_wheel": member,
+                    "sha256": hashlib.sha256(data).hexdigest(),
+                    "terms": _terms(member),
+                }
+            )
+        (out / LICENCE_FILE).write_bytes(archive.read(LICENCE_IN_WHEEL))
+    document = {
+        "source": {"package": "epyt", "version": VERSION, "wheel": WHEEL, "url": URL},
+        "wheel_sha256": WHEEL_SHA256,
+        "licence": LICENCE,
+        "licence_file": LICENCE_FILE,
+        "networks": records,
+    }
+    (out / LIBRARY_MANIFEST).write_text(json.dumps(document, indent=2) + "\n", "utf-8")
+    return written
+
+
 def main(argv: list[str] | None = None) -> int:
     """Fetch (or with ``--check`` verify) the public networks; return the exit status."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--check", action="store_true", help="verify only, download nothing")
     parser.add_argument("--wheel", type=Path, help=f"extract from this {WHEEL}, no download")
     parser.add_argument("--out", type=Path, default=PUBLIC, help="target directory")
+    parser.add_argument(
+        "--library",
+        nargs="?",
+        type=Path,
+        const=LIBRARY,
+        default=None,
+        metavar="DIR",
+        help=f"also extract the wheel's whole network library (default {LIBRARY})",
+    )
     args = parser.parse_args(argv)
     try:
         if args.check:
@@ -225,6 +296,10 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{args.out}: the public networks are present and as pinned")
         else:
             print(fetch(args.out, args.wheel))
+            if args.library is not None:
+                wheel = args.wheel if args.wheel is not None else args.out / WHEEL
+                files = extract_library(wheel, args.library)
+                print(f"{args.library}: extracted {len(files)} INP files from {wheel.name}")
     except FetchError as exc:
         print(f"fetch_public: {exc}", file=sys.stderr)
         return 1

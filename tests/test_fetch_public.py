@@ -93,3 +93,22 @@ def test_no_connection_says_what_to_do(tmp_path: Path) -> None:
     with pytest.raises(fetch_public.FetchError, match="make networks"):
         fetch_public.download(tmp_path, url="http://127.0.0.1:9/epyt.whl", timeout=5)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_the_library_is_every_network_of_the_wheel_with_its_terms(
+    wheel: Path, tmp_path: Path
+) -> None:
+    written = fetch_public.extract_library(wheel, tmp_path)
+    with zipfile.ZipFile(wheel) as archive:
+        members = [m for m in archive.namelist() if m.lower().endswith(".inp")]
+    assert len(written) == len([m for m in members if m.startswith("epyt/networks/")]) > 40
+    document = json.loads((tmp_path / "LIBRARY.json").read_text(encoding="utf-8"))
+    records = {r["path"]: r for r in document["networks"]}
+    assert set(records) == {p.relative_to(tmp_path).as_posix() for p in written}
+    for path in written:
+        record = records[path.relative_to(tmp_path).as_posix()]
+        assert fetch_public.sha256_of(path) == record["sha256"]
+    assert "non-commercial" in records["asce-tf-wdst/ky1.inp"]["terms"]
+    assert "non-commercial" not in records["L-TOWN.inp"]["terms"]
+    assert document["wheel_sha256"] == fetch_public.WHEEL_SHA256
+    assert (tmp_path / "LICENSE-epyt.md").is_file()

@@ -64,7 +64,7 @@ def graph(wn):  # type: ignore[no-untyped-def]
 def test_paper15_steady_state_flows_as_the_paper_table(graph, pipe: str) -> None:
     start, end = PAPER_TABLE[pipe][:2]
     assert network.pipe_endpoints(graph, pipe) == (start, end)
-    assert graph.edges[start, end]["flow"] > 1e-4  # a real flow (> 0.1 L/s), not a tie
+    assert graph.edges[start, end, pipe]["flow"] > 1e-4  # a real flow (> 0.1 L/s), not a tie
 
 
 def test_paper15_has_the_papers_elements(wn) -> None:  # type: ignore[no-untyped-def]
@@ -229,8 +229,8 @@ def test_graph_turns_reverse_flow_pipes_around(wn, graph) -> None:  # type: igno
     flows = network.steady_state_flows(wn)
     assert flows["P6"] < 0
     assert graph.has_edge("N2", "N5") and not graph.has_edge("N5", "N2")
-    assert graph.edges["N2", "N5"]["pipe"] == "P6"
-    assert graph.edges["N2", "N5"]["flow"] == pytest.approx(-flows["P6"])
+    assert graph.edges["N2", "N5", "P6"]["pipe"] == "P6"
+    assert graph.edges["N2", "N5", "P6"]["flow"] == pytest.approx(-flows["P6"])
 
 
 def test_graph_has_one_edge_per_link_and_mass_balance(wn, graph) -> None:  # type: ignore[no-untyped-def]
@@ -251,15 +251,24 @@ def test_graph_keeps_inp_orientation_for_a_closed_pipe(tmp_path: Path) -> None:
     )
     g = network.flow_direction_graph(network.load_network(path))
     assert network.pipe_endpoints(g, "D") == ("J3", "J2")
-    assert g.edges["J3", "J2"]["flow"] == 0
+    assert g.edges["J3", "J2", "D"]["flow"] == 0
 
 
-def test_parallel_links_are_refused(tmp_path: Path) -> None:
+def test_parallel_links_are_edges_of_their_own(tmp_path: Path) -> None:
+    # F runs beside B (J1 -> J2): each keeps its name, flow and end nodes; before, a DiGraph
+    # refused the network ("parallel links are not supported")
     path = _broken(
         tmp_path, " E    J3     J4", " F    J1     J2     210     200       100\n E    J3     J4"
     )
-    with pytest.raises(NetworkError, match="parallel"):
-        network.flow_direction_graph(network.load_network(path))
+    wn = network.load_network(path)
+    flows = network.steady_state_flows(wn)
+    g = network.flow_direction_graph(wn, flows)
+    assert g.number_of_edges() == wn.num_links == 6
+    assert network.pipe_endpoints(g, "B") == network.pipe_endpoints(g, "F") == ("J1", "J2")
+    assert set(g["J1"]["J2"]) == {"B", "F"}
+    for link in ("B", "F"):
+        assert g.edges["J1", "J2", link]["flow"] == pytest.approx(abs(flows[link]))
+    assert flows["B"] > flows["F"] > 0  # the shorter main carries more
 
 
 def test_bad_engine_is_a_config_error(wn) -> None:  # type: ignore[no-untyped-def]

@@ -8,6 +8,7 @@
 * :data:`CANDIDATE_POSITIONS`: burst positions along a pipe that the localizers try.
 * :data:`SIGNATURE_DECISION_DELAY`: when the steady-state signature is read after a burst (s).
 * :data:`MAX_SAMPLE`: the largest reading magnitude the detectors take (``cpd_core::MAX_SAMPLE``).
+* :data:`PRESSURE_NOISE`: how far below zero a steady-state pressure is numerical noise (m).
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ __all__ = [
     "LOCALIZERS",
     "MAX_SAMPLE",
     "METER_MODELS",
+    "PRESSURE_NOISE",
     "RANKING_LOCALIZERS",
     "SCENARIO_DURATION",
     "SIGNATURE_DECISION_DELAY",
@@ -68,3 +70,10 @@ that the arrival and signature localizers try; a pipe keeps its best-fitting pos
 
 SIGNATURE_DECISION_DELAY = 150.0
 """Seconds after a burst's onset at which the signature localizer reads the lasting drop."""
+
+PRESSURE_NOISE = 1e-3
+"""How far (m) below atmospheric a junction's steady-state pressure may be and still count as
+zero: EPANET's solver leaves pressures of the order of its accuracy around a true zero (hanoi's
+junctions at -1.9e-5 m, all its demands undelivered). Below this a junction with a demand starts
+at a negative pressure, which the transient model cannot (TSNet's demand law ``q = k sqrt(p)``);
+within it the junction is taken at zero pressure."""

@@ -7,7 +7,8 @@
   what EPANET warns is captured, never printed). The flow-direction graph and the burst
   signatures (:mod:`burstloc.sim.signatures`) both use it.
 * :func:`flow_direction_graph` is the paper's directed graph (section IV.B): one edge per link,
-  pointing downstream in the steady state.
+  keyed by the link's name (parallel links are edges of their own), pointing downstream in the
+  steady state.
 * :func:`split_pipe` cuts a pipe into two at a fraction of its length with a new junction
   between them, where a burst can then be placed (TSNet bursts only at junctions).
 
@@ -33,6 +34,7 @@ import numpy as np
 from burstloc._diagnostics import capture_diagnostics
 from burstloc.exceptions import ConfigError, NetworkError, SimulatorMissingError
 from burstloc.inp import pipe_names_in_file
+from burstloc.inp_hydraulic import hydraulic_text
 
 if TYPE_CHECKING:
     from wntr.network import WaterNetworkModel
@@ -83,8 +85,22 @@ def load_network(path: str | os.PathLike[str]) -> WaterNetworkModel:
 
     file = Path(path)
     pipe_names_in_file(file)  # names a malformed file's line before WNTR reads it
+    text = hydraulic_text(file, file.read_text(encoding="utf-8"))
+    if text is None:
+        wn = _read(wntr, file, file)
+    else:  # times and water quality rewritten, every line in its place
+        with tempfile.TemporaryDirectory(prefix="burstloc-inp-") as tmp:
+            read = Path(tmp) / file.name
+            read.write_text(text, encoding="utf-8")
+            wn = _read(wntr, read, file)
+    wn.name = str(file)
+    return wn
+
+
+def _read(wntr: Any, read: Path, file: Path) -> WaterNetworkModel:
+    """WNTR's model of ``read`` (the text of ``file``); its errors name ``file`` and the line."""
     try:
-        return wntr.network.WaterNetworkModel(str(file))
+        return wntr.network.WaterNetworkModel(str(read))
     except Exception as exc:  # WNTR raises many types for bad input; name file and line
         detail = str(exc)
         line = None
@@ -96,6 +112,7 @@ def load_network(path: str | os.PathLike[str]) -> WaterNetworkModel:
                 detail = str(cause)
             cause = cause.__cause__
         where = f"{file}:{line}" if line else f"{file}"
+        detail = detail.replace(str(read), str(file))
         raise NetworkError(f"{where}: malformed INP file: {type(exc).__name__}: {detail}") from exc
 
 
@@ -159,6 +176,7 @@ def steady_state(wn: WaterNetworkModel, engine: str = "PDD") -> SteadyState:
 
     Raises:
         ConfigError: an unknown ``engine``.
+        NetworkError: EPANET cannot solve it (its error code and message).
     """
     wntr = _wntr()
 
@@ -171,6 +189,14 @@ def steady_state(wn: WaterNetworkModel, engine: str = "PDD") -> SteadyState:
         with tempfile.TemporaryDirectory(prefix="burstloc-steady-") as tmp, capture_diagnostics():
             sim = wntr.sim.EpanetSimulator(wn)
             results = sim.run_sim(file_prefix=os.path.join(tmp, "steady"))
+    except Exception as exc:  # EPANET's own error (WNTR's EpanetException), with its code
+        if type(exc).__name__ != "EpanetException":
+            raise
+        kind = "pressure-driven" if engine.upper() == "PDD" else "demand-driven"
+        raise NetworkError(
+            f"EPANET cannot solve the steady state of {getattr(wn, 'name', None) or 'the network'}"
+            f" ({kind}): {exc}"
+        ) from exc
     finally:
         hydraulic.demand_model, times.duration = saved
     heads = results.node["head"].iloc[0]
@@ -189,24 +215,23 @@ def steady_state_flows(wn: WaterNetworkModel, engine: str = "PDD") -> dict[str, 
 
 def flow_direction_graph(
     wn: WaterNetworkModel, flows: dict[str, float] | None = None, engine: str = "PDD"
-) -> nx.DiGraph:
+) -> nx.MultiDiGraph:
     """Return the paper's flow-direction graph (IV.B): every edge points downstream.
 
     As in the paper, link weights are the signs of the steady-state flows and WNTR's
     ``to_graph(link_weight=..., modify_direction=True)`` turns the links with negative weight
-    around. Edge attributes: ``pipe`` (the link name, pipes, valves and pumps alike), ``flow``
-    (|steady-state flow| in m³/s) and ``link_type``. A link with zero flow keeps its INP
-    orientation. ``graph.graph["edges_by_pipe"]`` maps each link name to its ``(start, end)``.
+    around. The graph is a networkx ``MultiDiGraph`` keyed by link name, as WNTR's own: parallel
+    links (two mains side by side, a pump beside its bypass, a valve beside a pipe) are edges of
+    their own (``graph.edges[start, end, link]``). Edge attributes: ``pipe`` (the link name,
+    pipes, valves and pumps alike), ``flow`` (|steady-state flow| in m³/s) and ``link_type``. A
+    link with zero flow keeps its INP orientation. ``graph.graph["edges_by_pipe"]`` maps each
+    link name to its ``(start, end)``.
 
     Args:
         wn: the network.
         flows: steady-state flows by link (m³/s, INP orientation); solved with ``engine`` when
             omitted (see :func:`steady_state_flows`).
         engine: ``"PDD"`` (the paper's) or ``"DD"``.
-
-    Raises:
-        NetworkError: two links join the same two nodes in the same flow direction (a DiGraph
-            holds one edge per ordered node pair).
     """
     import pandas as pd
 
@@ -214,19 +239,18 @@ def flow_direction_graph(
         flows = steady_state_flows(wn, engine)
     sign = pd.Series({name: float(np.sign(flows[name])) for name in wn.link_name_list})
     multi = wn.to_graph(link_weight=sign, modify_direction=True)
-    graph = nx.DiGraph()
+    graph = nx.MultiDiGraph()
     graph.add_nodes_from(multi.nodes(data=True))
     by_pipe: dict[str, tuple[str, str]] = {}
     for start, end, name in multi.edges(keys=True):
-        if graph.has_edge(start, end):
-            other = graph.edges[start, end]["pipe"]
-            raise NetworkError(
-                f"links {other!r} and {name!r} both carry flow {start} -> {end}; parallel "
-                "links are not supported by the flow-direction graph"
-            )
         link = wn.get_link(name)
         graph.add_edge(
-            start, end, pipe=name, flow=abs(flows[name]), link_type=link.link_type.lower()
+            start,
+            end,
+            key=name,
+            pipe=name,
+            flow=abs(flows[name]),
+            link_type=link.link_type.lower(),
         )
         by_pipe[name] = (start, end)
     graph.graph["edges_by_pipe"] = by_pipe
@@ -234,7 +258,7 @@ def flow_direction_graph(
     return graph
 
 
-def pipe_endpoints(graph: nx.DiGraph, pipe: str) -> tuple[str, str]:
+def pipe_endpoints(graph: nx.MultiDiGraph, pipe: str) -> tuple[str, str]:
     """Return ``(start, end)`` of a pipe in steady-state flow direction.
 
     Raises:

@@ -144,6 +144,19 @@ def test_multidigraph_edges_are_supported() -> None:
     assert loc is not None and loc.pipe == "P1"
 
 
+def test_parallel_links_name_a_pipe_then_the_larger_flow() -> None:
+    # N3's only predecessor R1 is joined to it by P1 and, beside it, a valve and a smaller main
+    g = nx.MultiDiGraph(tnet1_like())
+    g.add_edge("R1", "N3", key="V1", pipe="V1", flow=9.0, link_type="valve")
+    g.add_edge("R1", "N3", key="P1b", pipe="P1b", flow=0.001, link_type="pipe")
+    g.edges["R1", "N3", 0]["flow"] = 0.5  # P1, keyed 0 by the conversion
+    loc = locate(g, changes(N3=-6.0), MEANS, 2.0)
+    assert loc is not None and (loc.pipe, loc.rule) == ("P1", Rule.SINGLE_PREDECESSOR)
+    g.edges["R1", "N3", "P1b"]["flow"] = 1.0
+    loc = locate(g, changes(N3=-6.0), MEANS, 2.0)
+    assert loc is not None and loc.pipe == "P1b"
+
+
 def test_localization_as_dict_is_json_ready() -> None:
     loc = locate(tnet1_like(), changes(N4=-5.0, N6=-2.0), MEANS, 2.0)
     assert loc is not None

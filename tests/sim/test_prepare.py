@@ -23,6 +23,7 @@ from burstloc.sim.prepare import (
     wave_fronts,
 )
 from burstloc.sim.signatures import cached_signature_sets
+from conftest import write_tiny
 
 
 def test_travel_time_spread(tiny_network: Path) -> None:
@@ -125,6 +126,22 @@ def test_wave_fronts_follow_the_junction_transmission_along_the_shortest_path(
     closed = dict(zip(meters, wave_fronts(wn, meters, pipes)["E"], strict=True))
     assert closed["J1"] == 0.0
     assert closed["J3"] == pytest.approx(share(d, 2 * d))
+
+
+def test_parallel_mains_of_one_length_carry_the_front_side_by_side(tmp_path: Path) -> None:
+    # F runs beside B (J1-J2, 200 m, 200 mm): a front from J2 to J1 crosses both at once
+    path = write_tiny(tmp_path / "tiny.inp")
+    text = path.read_text(encoding="utf-8")
+    path.write_text(text.replace(" E    J3", " F    J1     J2     200     200       100\n E    J3"))
+    wn = load_network(path)
+    graph = length_graph(wn)
+    assert graph["J1"]["J2"]["links"] == ("B", "F") and graph["J1"]["J2"]["length"] == 200
+    pipes, _ = arrival_geometry(wn, ["J1"])
+    fronts = wave_fronts(wn, ["J1"], pipes)
+    a, b, d = _area(300), _area(200), _area(150)
+    # a burst on D reaches J1 through J2 (200 m by B or F; 250 m by C from J3)
+    assert fronts["D"][0] == pytest.approx(2 * d / (2 * b + d) * 2 * (2 * b) / (a + 3 * b))
+    assert fronts["F"][0] == pytest.approx(fronts["B"][0])
 
 
 def test_the_model_and_the_arrival_localizer_carry_the_fronts(

@@ -12,11 +12,13 @@ from burstloc.sim.scenario import BurstScenario
 from burstloc.sim.steady import STEADY_TOLERANCE, check_steady_start, steady_start
 from burstloc.sim.tsnet import simulate_burst
 
-#: Three junctions behind a throttle valve left Active (TSNet treats it as shut, EPANET as
-#: throttling): TSNet's transient does not start from EPANET's steady state.
-ACTIVE_VALVE_INP = """\
+#: Three junctions behind a pipe far rougher (Hazen-Williams C = 10, a Darcy-Weisbach factor of
+#: about 3) than TSNet's friction cap of 0.08, which it replaces by 0.03: TSNet's transient does
+#: not start from EPANET's steady state. (An active throttle valve, TSNet's shut valve, was the
+#: example before burstloc held valves at their steady loss: burstloc.sim.tsnet_elements.)
+ROUGH_PIPE_INP = """\
 [TITLE]
-tiny network with an active throttle valve
+tiny network with a pipe rougher than TSNet's friction cap
 
 [JUNCTIONS]
 ;ID   Elev   Demand
@@ -30,11 +32,8 @@ tiny network with an active throttle valve
 [PIPES]
 ;ID  Node1  Node2  Length  Diameter  Roughness  MinorLoss  Status
  A    R1     J1     300     300       100        0          Open
+ V1   J1     J2     250     200       10         0          Open
  B    J2     J3     250     200       100        0          Open
-
-[VALVES]
-;ID  Node1  Node2  Diameter  Type  Setting  MinorLoss
- V1   J1     J2     200       TCV   5        0
 
 [OPTIONS]
  Units  LPS
@@ -70,8 +69,8 @@ def test_a_steady_network_passes_and_records_its_movement(tiny_network: Path) ->
 
 
 def test_an_unsteady_network_is_refused_naming_the_junction(tmp_path: Path) -> None:
-    inp = tmp_path / "active_valve.inp"
-    inp.write_text(ACTIVE_VALVE_INP, encoding="utf-8")
+    inp = tmp_path / "rough_pipe.inp"
+    inp.write_text(ROUGH_PIPE_INP, encoding="utf-8")
     with pytest.raises(UnsteadyStartError) as caught:
         simulate_burst(BurstScenario(inp, "B", burst_start=1.0, duration=1.5), cache=False)
     error = caught.value

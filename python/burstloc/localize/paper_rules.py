@@ -21,6 +21,10 @@ rules name one pipe:
    lowest mean pressure over the concatenated window (ties: meter order). Predecessors without
    a meter have no readings and are not candidates.
 
+The rules name a pair of nodes; when parallel links join them (the flow-direction graph is a
+``MultiDiGraph`` keyed by link name) the pipe named is a pipe before a valve or pump, then the one
+with the larger steady flow: the meters cannot tell parallel links apart.
+
 If nothing alarmed, or the trigger node has no predecessor (or several, none metered, none
 alarmed), the window decides nothing: :func:`locate` returns ``None``, never a guess.
 
@@ -146,9 +150,21 @@ def trigger_node(
 
 
 def _pipe(graph: nx.DiGraph, u: Hashable, v: Hashable) -> str:
+    """The link the rules name for the edge ``u -> v``; of parallel links (a ``MultiDiGraph``
+    keyed by link name), a pipe before a valve or pump, then the larger steady flow, then the
+    name."""
     data = graph.get_edge_data(u, v)
     if isinstance(graph, nx.MultiDiGraph) and data:
-        data = data[min(data, key=str)]
+        data = data[
+            min(
+                data,
+                key=lambda k: (
+                    data[k].get("link_type", "pipe") != "pipe",
+                    -float(data[k].get("flow", 0.0)),
+                    str(k),
+                ),
+            )
+        ]
     pipe = (data or {}).get("pipe")
     if pipe is None:
         raise NetworkError(f"edge {u} -> {v} of the flow-direction graph has no 'pipe' attribute")

@@ -69,6 +69,7 @@ from typing import Any
 
 import numpy as np
 
+from burstloc.constants import PRESSURE_NOISE
 from burstloc.exceptions import SimulatorMissingError
 from burstloc.network import _wntr
 
@@ -77,6 +78,10 @@ __all__ = ["applied", "load"]
 #: TSNet's thresholds in ``cal_roughness_coef``: below either, the pipe has no friction.
 _V_TOL = 1e-5
 _H_TOL = 1e-3
+#: TSNet's gravity (m/s²) and its cap on a Darcy-Weisbach friction factor in
+#: ``cal_roughness_coef`` (above it TSNet warns and takes 0.03).
+_G = 9.8
+_MAX_FRICTION = 0.08
 
 #: TSNet's ``pumpclosing`` keeps a "closed" pump at this speed (its curve scaled by zero speed
 #: is three identical points, which no parabola fits); ``pumpopening`` did not: now it does.
@@ -148,8 +153,18 @@ def _adjust_wavev(tm: Any) -> Any:
 
 
 def _cal_roughness_coef(pipe: Any, velocity: Any, head_loss: Any) -> Any:
-    """TSNet's ``cal_roughness_coef``; a pipe without steady flow gets roughness 0 past WNTR."""
+    """TSNet's ``cal_roughness_coef``; a pipe without steady flow gets roughness 0 past WNTR;
+    a pipe with a minor loss keeps the friction factor of its steady head loss above TSNet's
+    cap of 0.08 (which sets 0.03 instead: BWSN_Network_1's pump suction main, minor loss 800,
+    then lost a fraction of EPANET's head and its pump moved 22 m before any burst)."""
     if abs(velocity) >= _V_TOL and head_loss >= _H_TOL:
+        factor = head_loss / (pipe.length / pipe.diameter) / (velocity**2 / 2 / _G)
+        if factor > _MAX_FRICTION and float(getattr(pipe, "minor_loss", 0.0) or 0.0) > 0:
+            pipe.roughness = factor
+            pipe.roughness_height = max(
+                10 ** (-1 / 1.8 / np.sqrt(factor)) - 6.9 / pipe.initial_Re, 0
+            )
+            return pipe
         return _ORIGINALS["cal_roughness_coef"](pipe, velocity, head_loss)
     pipe._roughness = 0  # TSNet's "no friction"; WNTR >= 1.4's setter refuses 0
     pipe.roughness_height = 0
@@ -158,12 +173,14 @@ def _cal_roughness_coef(pipe: Any, velocity: Any, head_loss: Any) -> Any:
 
 def _cal_demand_coef(demand: Any, pipe: Any, hs: Any, he: Any, t0: float = 0.0) -> Any:
     """TSNet's ``cal_demand_coef``; a node without demand gets coefficient 0 whatever its
-    pressure (TSNet: ``0 / sqrt(p)``, NaN below atmospheric pressure)."""
-    with np.errstate(invalid="ignore"):  # 0 / sqrt(p < 0), mended below
+    pressure (TSNet: ``0 / sqrt(p)``, NaN below atmospheric pressure), and so does a node at
+    zero pressure within :data:`~burstloc.constants.PRESSURE_NOISE` (TSNet: ``q / sqrt(0)``,
+    infinite, or NaN a micrometre below)."""
+    with np.errstate(invalid="ignore", divide="ignore"):  # q / sqrt(p <= 0), mended below
         pipe = _ORIGINALS["cal_demand_coef"](demand, pipe, hs, he, t0)
-    if demand[0] == 0:
+    if demand[0] == 0 or -PRESSURE_NOISE <= hs <= 0:
         pipe.start_node.demand_coeff = 0.0
-    if demand[1] == 0:
+    if demand[1] == 0 or -PRESSURE_NOISE <= he <= 0:
         pipe.end_node.demand_coeff = 0.0
     return pipe
 

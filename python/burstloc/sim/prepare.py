@@ -48,7 +48,9 @@ def length_graph(wn: WaterNetworkModel) -> nx.Graph:
     """Undirected graph of a WNTR model weighted by link length (m).
 
     Pipes weigh their length; valves and pumps, which have none, weigh 0 (the wave passes them).
-    Parallel links keep the shortest.
+    Parallel links keep the shortest: edge attributes ``length``, ``link`` (the first shortest
+    link in INP order) and ``links`` (every link of that shortest length, which a wave front
+    crosses side by side: :func:`wave_fronts`).
     """
     graph = nx.Graph()
     graph.add_nodes_from(wn.node_name_list)
@@ -56,9 +58,13 @@ def length_graph(wn: WaterNetworkModel) -> nx.Graph:
         link = wn.get_link(name)
         length = float(getattr(link, "length", 0.0) or 0.0)
         u, v = link.start_node_name, link.end_node_name
-        if graph.has_edge(u, v) and graph[u][v]["length"] <= length:
-            continue
-        graph.add_edge(u, v, length=length, link=name)
+        if graph.has_edge(u, v):
+            edge = graph[u][v]
+            if edge["length"] == length:
+                edge["links"] = (*edge["links"], name)
+            if edge["length"] <= length:
+                continue
+        graph.add_edge(u, v, length=length, link=name, links=(name,))
     return graph
 
 
@@ -135,7 +141,8 @@ def wave_fronts(
     ``2 A_q / sum(A)`` passes (the junction transmission coefficient of pipes of one wave speed:
     ``A`` the cross-sections of the links at ``k``; 2 at a dead end, where the front doubles); a
     reservoir or tank holds its head (0: nothing passes it), a closed link carries nothing and a
-    pump passes the front whole. The front at meter ``m`` for a burst on ``p`` comes through, of
+    pump passes the front whole; parallel links of one length carry it side by side (their
+    shares add). The front at meter ``m`` for a burst on ``p`` comes through, of
     ``p``'s two end nodes, the one nearer ``m`` (the first front; the larger on a tie): the
     product of the shares along the path, the end node's own share of a front coming from ``p``
     included. Friction, demands, fronts along other paths and the reflections that follow are
@@ -168,7 +175,8 @@ def wave_fronts(
         for node in dist:  # in the order Dijkstra settled them: a node's first pred is done
             if node != meter:
                 front[node] = max(
-                    share(toward, graph[node][toward]["link"]) * front[toward]
+                    sum(share(toward, link) for link in graph[node][toward]["links"])
+                    * front[toward]
                     for toward in preds[node]
                     if toward in front  # across a 0-length link (pump, valve) ties go both ways
                 )

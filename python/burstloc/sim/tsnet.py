@@ -29,12 +29,14 @@ import numpy as np
 
 from burstloc import network
 from burstloc._diagnostics import capture_diagnostics
+from burstloc.constants import PRESSURE_NOISE
 from burstloc.exceptions import ConfigError, NetworkError, SimulationError
 from burstloc.sim import _tsnet_compat, moc
 from burstloc.sim.cache import DiskCache, file_sha256, package_versions
 from burstloc.sim.scenario import SCHEMA, BurstScenario, ScenarioResult
 from burstloc.sim.steady import check_steady_start
 from burstloc.sim.sweep import SweepReport, sweep
+from burstloc.sim.tsnet_elements import hold_valves
 from burstloc.sim.tsnet_ready import prepare_for_tsnet, transient_model
 
 __all__ = [
@@ -149,7 +151,7 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
         meters = network.junction_names(wn)
         model, pipe, position, shortened = transient_model(wn, scenario)
         split = network.split_pipe(model, pipe, position)
-        prepared = prepare_for_tsnet(split.network)
+        prepared = prepare_for_tsnet(split.network, engine=scenario.engine)
         where = f"pipe {scenario.pipe!r} of {scenario.network}"
 
         def burst(tm: Any) -> None:
@@ -268,7 +270,7 @@ def _negative(tm: Any) -> str:
     low = {
         name: float(node.head[0] - node.elevation)
         for name, node in tm.junctions()
-        if node.head[0] - node.elevation < 0
+        if node.head is not None and node.head[0] - node.elevation < -PRESSURE_NOISE
     }
     if not low:
         return ""
@@ -312,6 +314,7 @@ def _run_tsnet(
     try:
         operate(tm)
         tm = tsnet.simulation.Initializer(tm, 0.0, settings.engine)
+        hold_valves(tm)
         if settings.solver == "vectorized":
             return moc.solve(tm, settings.friction)
         return tsnet.simulation.MOCSimulator(tm, results_obj="no", friction=settings.friction)

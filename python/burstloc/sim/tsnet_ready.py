@@ -56,12 +56,13 @@ steady state is unchanged (the valve loses no head), and the metadata lists the 
 from __future__ import annotations
 
 from collections.abc import Collection
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from typing import Any
 
 from burstloc import network, skeleton
 from burstloc.network import _fresh_name
 from burstloc.sim.scenario import BurstScenario
+from burstloc.sim.tsnet_elements import PowerPumpCurve, settle_pumps_and_check_valves
 
 __all__ = [
     "Connector",
@@ -89,12 +90,25 @@ class Connector:
     diameter: float
 
 
-def _needs_connector(wn: Any, link_name: str, node_name: str, edges: Collection[str]) -> bool:
+def _needs_connector(
+    wn: Any, link_name: str, node_name: str, edges: Collection[str], side: str
+) -> bool:
     node = wn.get_node(node_name)
     if node.node_type != "Junction" or node_name in edges:
         return False  # a reservoir, a tank or a supply's source is a boundary TSNet handles
     others = [name for name in wn.get_links_for_node(node_name) if name != link_name]
-    return len(others) != 1 or wn.get_link(others[0]).link_type != "Pipe"
+    if len(others) != 1 or wn.get_link(others[0]).link_type != "Pipe":
+        return True
+    # TSNet's valve and pump equations take the pipe at the link's start to end there and the
+    # pipe at its end to start there (pipe -> valve -> pipe); a pipe the other way round is
+    # solved with the wrong characteristic (L-TOWN's PRV-2: 0.5 m before any burst; KY13's
+    # Pump-3: 62 m); and they have no demand at the link's nodes (L-TOWN's PRV-3 at n229: 0.27 m)
+    if any(demand.base_value != 0 for demand in node.demand_timeseries_list):
+        return True
+    pipe = wn.get_link(others[0])
+    return bool(
+        pipe.end_node_name != node_name if side == "start" else pipe.start_node_name != node_name
+    )
 
 
 def _template(wn: Any, node_name: str) -> Any:
@@ -155,7 +169,8 @@ def _connect(wn: Any, node_name: str, moved: list[str], name: str, length: float
 def add_connectors(wn: Any, edges: Collection[str] = ()) -> list[Connector]:
     """Add a connector pipe wherever a tank or reservoir of ``wn`` (changed in place) is joined
     by more than one link (its links then meet at the connector's far end), then wherever a pump
-    or valve does not meet a single pipe at a junction end, except at the junctions ``edges`` (a
+    or valve does not meet a single pipe at a junction end (a pipe ending at its start,
+    starting at its end, at a junction without demand), except at the junctions ``edges`` (a
     supply's source, the network's edge on purpose); return what was added (empty: nothing
     needed)."""
     length = min(float(pipe.length) for _, pipe in wn.pipes())
@@ -167,7 +182,7 @@ def add_connectors(wn: Any, edges: Collection[str] = ()) -> list[Connector]:
     for link_name in [name for name, _ in wn.pumps()] + [name for name, _ in wn.valves()]:
         for side in ("start", "end"):
             node_name = getattr(wn.get_link(link_name), f"{side}_node_name")
-            if _needs_connector(wn, link_name, node_name, edges):
+            if _needs_connector(wn, link_name, node_name, edges, side):
                 name = f"{link_name}_{side[0].upper()}"
                 added.append(_connect(wn, node_name, [link_name], name, length))
     return added
@@ -233,11 +248,14 @@ def add_supply_boundaries(wn: Any, keep: Collection[str] = ()) -> list[SupplyBou
 @dataclass(frozen=True)
 class TsnetPreparation:
     """What :func:`prepare_for_tsnet` changed: the closed links removed, the supplies made
-    fixed inflows, the connectors added."""
+    fixed inflows, the connectors added, the power pumps given curves, the pumps and check-valve
+    pipes at rest made closed valves."""
 
     removed_closed_links: list[str]
     connectors: list[Connector]
     supply_boundaries: list[SupplyBoundary]
+    power_pumps: list[PowerPumpCurve] = field(default_factory=list)
+    closed_at_rest: list[str] = field(default_factory=list)
 
     def as_metadata(self) -> dict[str, Any]:
         """The records stored in a simulation's metadata."""
@@ -245,6 +263,8 @@ class TsnetPreparation:
             "removed_closed_links": list(self.removed_closed_links),
             "connectors": [asdict(c) for c in self.connectors],
             "supply_boundaries": [asdict(s) for s in self.supply_boundaries],
+            **({"power_pumps": [asdict(p) for p in self.power_pumps]} if self.power_pumps else {}),
+            **({"closed_at_rest": list(self.closed_at_rest)} if self.closed_at_rest else {}),
         }
 
 
@@ -270,15 +290,20 @@ def remove_closed_links(wn: Any, keep: Collection[str] = ()) -> list[str]:
     return closed
 
 
-def prepare_for_tsnet(wn: Any, keep: Collection[str] = ()) -> TsnetPreparation:
+def prepare_for_tsnet(wn: Any, keep: Collection[str] = (), engine: str = "PDD") -> TsnetPreparation:
     """Make ``wn`` (changed in place) a network TSNet simulates as EPANET solves it: closed
-    pipes and pumps removed except ``keep`` (:func:`remove_closed_links`), supply junctions
-    except ``keep`` made fixed inflows (:func:`add_supply_boundaries`), then connectors
+    pipes and pumps removed except ``keep`` (:func:`remove_closed_links`), the pumps and
+    check-valve pipes EPANET's steady state (solved with ``engine``) gives no flow made closed
+    valves, and pumps
+    given by their power made head pumps at their operating point
+    (:func:`burstloc.sim.tsnet_elements.settle_pumps_and_check_valves`), supply junctions except
+    ``keep`` made fixed inflows (:func:`add_supply_boundaries`), then connectors
     (:func:`add_connectors`)."""
     removed = remove_closed_links(wn, keep)
+    at_rest, pumps = settle_pumps_and_check_valves(wn, keep, engine)
     supplies = add_supply_boundaries(wn, keep)
     connectors = add_connectors(wn, edges=[s.source for s in supplies])
-    return TsnetPreparation(removed, connectors, supplies)
+    return TsnetPreparation(removed, connectors, supplies, pumps, at_rest)
 
 
 def transient_model(
