@@ -16,10 +16,10 @@ PYTHON313  ?= $(shell for p in "$$(command -v python3.13)" \
 VENV313 := .venv313
 BIN313  := $(VENV313)/bin
 
-.PHONY: setup setup313 networks paper study test test-rust test-python test-python313 lint bench bench-rust clean
+.PHONY: setup setup313 networks chromium paper study test test-rust test-python test-python313 lint bench bench-rust clean
 
 ## setup: create .venv (the default Python), build burstloc's wheel, install it with its
-## sim/dev/bench extras
+## sim/dev/bench/river/web extras
 # One wheel for every Python: the extension uses CPython's stable ABI (abi3, Python >= 3.10), so
 # maturin builds it once, here, and the same file is installed in .venv and in .venv313. The
 # wheel is rebuilt when the Rust or Python sources, a manifest or pyproject.toml change (cargo
@@ -106,7 +106,12 @@ study: setup
 
 ## test: every test and lint (Rust and Python); the Python suite on the default Python and on
 ## Python 3.13 with numpy 2
-test: setup setup313 lint test-rust test-python test-python313
+test: setup setup313 chromium lint test-rust test-python test-python313
+
+## chromium: Debian's Chromium and its WebDriver, for the control-room page's browser tests
+## (installed where missing, as Mosquitto is; only the tests need them)
+chromium:
+	scripts/install-chromium.sh
 
 lint:
 	cargo fmt --all --check
@@ -123,11 +128,11 @@ test-rust:
 	cargo test -p cpd-core
 	cargo test -p cpd-core --no-default-features
 
-test-python:
+test-python: chromium
 	$(BIN)/python -m pytest -q
 
 # The installed wheel, not the sources, on Python 3.13 (the tests' own helpers come from tests/).
-test-python313: setup313 networks/todini6.inp networks
+test-python313: setup313 chromium networks/todini6.inp networks
 	$(BIN313)/python -m pytest -q
 
 ## bench: Python-side benchmarks on fresh data (bindings vs pure Python vs River vs TSNet), then

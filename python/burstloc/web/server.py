@@ -276,6 +276,7 @@ class WebServer:
         except OSError as exc:
             sock.close()
             raise ConfigError(f"--web cannot listen on {self.host}:{self.port}: {exc}") from exc
+        sock.listen(128)  # from now on a browser is queued, not refused, until uvicorn accepts
         self.port = sock.getsockname()[1]
         config = uvicorn.Config(
             self.app,
@@ -289,7 +290,8 @@ class WebServer:
             target=self._server.run, kwargs={"sockets": [sock]}, name="burstloc-web", daemon=True
         )
         self._thread.start()
-        if not self._started.wait(30):
+        server = self._server
+        if not (self._started.wait(30) and _until(lambda: server.started, 30)):
             raise ConfigError("the web server did not start within 30 s")
 
     def stop(self) -> None:
@@ -297,6 +299,18 @@ class WebServer:
         if self._server is not None and self._thread is not None:
             self._server.should_exit = True
             self._thread.join(10)
+
+
+def _until(condition: Any, seconds: float) -> bool:
+    """Whether ``condition()`` comes true within ``seconds`` (checked every 10 ms)."""
+    import time
+
+    end = time.monotonic() + seconds
+    while not condition():
+        if time.monotonic() > end:
+            return False
+        time.sleep(0.01)
+    return True
 
 
 def _event(name: str, doc: Any) -> bytes:
