@@ -177,6 +177,27 @@ def test_a_silent_meter_shows_as_silent(
     assert any("N8" in line and "silent" in line for line in m.stderr)
 
 
+def test_a_replayed_file_shows_the_burst_located_and_the_page_stays_up(
+    browser: Any, monitor: Any, feed: list[str], tmp_path: Path
+) -> None:
+    readings = tmp_path / "demo.csv"
+    readings.write_text("\n".join(feed) + "\n")
+    m = monitor("--readings", str(readings), "--replay-speed", "40")
+    browser.get(m.url)
+    _ready(browser)
+    record = m.record("decision")
+    wait_for(
+        lambda: page_state(browser).get("highlighted") == record["pipes"][0]["pipe"],
+        "the replayed burst is shown",
+    )
+    wait_for(lambda: any("page stays up" in line for line in m.stderr), "the feed ends")
+    browser.refresh()  # the page is still served after the last reading
+    assert _ready(browser)["answer"]["time"] == record["time"]
+    m.proc.terminate()
+    assert m.proc.wait(timeout=60) == 0
+    wait_for(lambda: any("stopped by SIGTERM" in line for line in m.stderr), "told")
+
+
 def _get(url: str, method: str = "GET", headers: dict[str, str] | None = None) -> tuple[int, bytes]:
     request = urllib.request.Request(url, method=method, headers=headers or {})
     try:

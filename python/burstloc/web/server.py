@@ -36,7 +36,7 @@ from burstloc.web.view import View
 __all__ = ["POLL", "WebServer", "check_access", "parse_bind"]
 
 #: Seconds between drains of the hub when nothing urgent woke the server.
-POLL = 0.1
+POLL = 0.2
 #: News batches a browser may have waiting before it is dropped.
 CLIENT_QUEUE = 512
 _COOKIE = "burstloc_token"
@@ -111,6 +111,7 @@ class WebServer:
         self._network = json.dumps(network, separators=(",", ":")).encode()
         self._clients: set[asyncio.Queue[bytes | None]] = set()
         self._wake: asyncio.Event | None = None
+        self._loop: asyncio.AbstractEventLoop | None = None
         self._server: Any = None
         self._thread: threading.Thread | None = None
         self._started = threading.Event()
@@ -199,7 +200,7 @@ class WebServer:
 
     # ------------------------------------------------------------------ pushing
     async def _pump(self) -> None:
-        loop = asyncio.get_running_loop()
+        self._loop = loop = asyncio.get_running_loop()
         self._wake = wake = asyncio.Event()
 
         def wake_up() -> None:
@@ -220,6 +221,14 @@ class WebServer:
                     self._broadcast(_event("update", news))
         finally:
             self.hub.wake = None
+
+    def _close_clients(self) -> None:
+        """End every page's stream (the server is stopping)."""
+        for queue in list(self._clients):
+            while not queue.empty():
+                queue.get_nowait()
+            queue.put_nowait(None)
+        self._clients.clear()
 
     def _broadcast(self, data: bytes) -> None:
         for queue in list(self._clients):
@@ -297,6 +306,9 @@ class WebServer:
     def stop(self) -> None:
         """Stop serving (open pages are disconnected) and wait for the thread."""
         if self._server is not None and self._thread is not None:
+            if self._loop is not None:
+                with contextlib.suppress(RuntimeError):  # its loop has already closed
+                    self._loop.call_soon_threadsafe(self._close_clients)
             self._server.should_exit = True
             self._thread.join(10)
 

@@ -16,11 +16,15 @@ from typing import Any
 
 from burstloc.readings import Step
 
-__all__ = ["INCIDENT_GAP", "View"]
+__all__ = ["INCIDENT_GAP", "ROWS_PER_PUSH", "View"]
 
 #: Seconds (reading time) after which a new alarm starts a new incident even when the last one
 #: got no answer (its alarms were dismissed: one meter alone).
 INCIDENT_GAP = 60.0
+
+#: Newest readings pushed per batch at most (a feed replayed fast, or a backlog, is thinned for
+#: the chart; the page side's work, which shares the monitor's interpreter, stays bounded).
+ROWS_PER_PUSH = 50
 
 
 def _clean(value: Any) -> Any:
@@ -32,6 +36,11 @@ def _clean(value: Any) -> Any:
     if isinstance(value, (list, tuple)):
         return [_clean(v) for v in value]
     return value
+
+
+def _row(step: Step) -> tuple[float, list[float | None]]:
+    """A step as the page's chart takes it: (time, values; ``None`` for a missing value)."""
+    return float(step.timestamp), [_clean(float(v)) for v in step.values]
 
 
 def _describe(record: dict[str, Any]) -> str:
@@ -64,7 +73,7 @@ class View:
     ) -> None:
         self.meters = list(meters)
         self.meta = dict(meta, meters=self.meters, capture_interval=capture_interval)
-        self.rows: deque[tuple[float, list[float | None]]] = deque(
+        self.rows: deque[Step] = deque(  # as handed off: converted only when shown
             maxlen=max(math.ceil(window / capture_interval), 2)
         )
         self.log: deque[dict[str, Any]] = deque(maxlen=log)
@@ -87,20 +96,20 @@ class View:
                 self.implausible_at[meter] = record.get("time") or self.now or 0.0
         self.health = _clean(record)
 
-    def take(self, items: Iterable[tuple[str, Any]]) -> list[dict[str, Any]]:
-        """Apply the handed-off ``items``; return the news for the browsers (the new readings
-        as one ``rows`` item, the rest in order)."""
+    def take(self, items: Iterable[Step | tuple[str, Any]]) -> list[dict[str, Any]]:
+        """Apply the handed-off ``items``; return the news for the browsers (the newest
+        :data:`ROWS_PER_PUSH` readings as one ``rows`` item, the rest in order)."""
         news: list[dict[str, Any]] = []
-        rows: list[tuple[float, list[float | None]]] = []
+        steps = 0
         health = False
-        for kind, payload in items:
-            if kind == "step":
-                step: Step = payload
-                row = (float(step.timestamp), [_clean(float(v)) for v in step.values])
-                self.rows.append(row)
-                rows.append(row)
-                self.now = row[0]
-            elif kind == "alarm":
+        for item in items:
+            if isinstance(item, Step):
+                self.rows.append(item)
+                self.now = float(item.timestamp)
+                steps += 1
+                continue
+            kind, payload = item
+            if kind == "alarm":
                 meter, t, onset, amplitude = payload
                 last = self.alarms[-1]["time"] if self.alarms else None
                 if self.answer is not None or (last is not None and t - last > INCIDENT_GAP):
@@ -129,8 +138,11 @@ class View:
             elif kind == "health":
                 self._health(payload)
                 health = True
-        if rows:
-            news.insert(0, {"kind": "rows", "rows": rows[-(self.rows.maxlen or 1) :]})
+        if steps:
+            newest = [
+                self.rows[-k] for k in range(min(steps, ROWS_PER_PUSH, len(self.rows)), 0, -1)
+            ]
+            news.insert(0, {"kind": "rows", "rows": [_row(s) for s in newest]})
         if health:
             news.append({"kind": "health", **self._health_news()})
         return news
@@ -143,7 +155,7 @@ class View:
         return {
             "kind": "snapshot",
             "meta": self.meta,
-            "rows": list(self.rows),
+            "rows": [_row(s) for s in self.rows],
             "log": list(self.log),
             "alarms": list(self.alarms),
             "transient": self.transient,
