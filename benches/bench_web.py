@@ -14,8 +14,9 @@ Usage: ``.venv/bin/python benches/bench_web.py [--loads N] [--decisions N] [--ru
    different pipe each time; the wall-clock time from the hand-off to the page's frame that
    draws the pipe (``Date.now()`` on both sides, one machine), p50/p99/max.
 3. **The monitor with and without the page**: the same feed (the burst's readings, one by one)
-   through a fresh live loop ``--runs`` times each way, alternated: no observer; the hub and
-   the server with no page; the hub and the server with a page open. Throughput (readings/s,
+   through a fresh live loop ``--runs`` times each way, alternated: no observer; the hub alone
+   (the hand-off without a server thread); the hub and the server with no page; the hub and the
+   server with a page open. Throughput (readings/s,
    median) and decision latency (wall time from feeding the reading that completes the
    decision to its record, median), each as a ratio to the loop without the page.
 """
@@ -172,18 +173,21 @@ def with_and_without(driver: Any, config: Any, steps: list[Any], runs: int) -> d
         for s in steps
         for m, v in zip(config.meters, s.values, strict=True)
     ]
-    results: dict[str, list[tuple[float, float, float]]] = {"none": [], "server": [], "page": []}
+    from burstloc.web.hub import Hub
+
+    setups = ("none", "hub", "server", "page")
+    results: dict[str, list[tuple[float, float, float]]] = {s: [] for s in setups}
     server = control_room(PAPER15, list(config.meters), 0.2)
     server.start()
     try:
         for k in range(runs):
-            for setup in ("none", "server", "page") if k % 2 == 0 else ("page", "server", "none"):
+            for setup in setups if k % 2 == 0 else setups[::-1]:
                 if setup == "page":
                     driver.get(server.url)
                     wait_for(lambda: page_state(driver).get("ready"), "ready")
                 else:
                     driver.get("about:blank")
-                observer = None if setup == "none" else server.hub
+                observer = {"none": None, "hub": Hub()}.get(setup, server.hub)
                 results[setup].append(monitor_run(config, readings, observer))
                 time.sleep(0.3)  # the page side drains what this run handed off
     finally:
@@ -200,6 +204,7 @@ def main() -> None:
     parser.add_argument(
         "--network", type=Path, action="append", default=[], help="another INP file to load"
     )
+    parser.add_argument("--sections", default="123", help="which parts to run, e.g. 3")
     parser.add_argument("--after", type=float, default=1800.0, help="s of readings after it")
     args = parser.parse_args()
     from live_feed import burst_steps
@@ -219,21 +224,25 @@ def main() -> None:
         grid = grid_network(folder / "grid.inp", args.grid_pipes)
         networks.append((f"grid ({args.grid_pipes} pipes)", grid))
         with chromium(folder / "chromium") as driver:
-            print("1. page ready (navigation start -> network drawn + snapshot applied)")
-            for name, path in networks:
+            if "1" in args.sections:
+                print("1. page ready (navigation start -> network drawn + snapshot applied)")
+            for name, path in networks if "1" in args.sections else []:
                 ready, frame, pipes = page_ready(driver, path, args.loads)
                 median = statistics.median(ready)
                 print(
                     f"   {name:22s} {pipes:6d} pipes: ready median {median:7.0f} ms, "
                     f"slowest {max(ready):7.0f} ms; one pan/zoom redraw {frame:6.1f} ms"
                 )
-            record = real_decision(config, steps)
-            lat = sorted(highlight_latency(driver, record, args.decisions))
-            p99 = lat[min(len(lat) - 1, round(0.99 * (len(lat) - 1)))]
-            print(
-                f"2. decision record -> highlighted ({len(lat)} records): p50 "
-                f"{statistics.median(lat):.1f} ms, p99 {p99:.1f} ms, max {lat[-1]:.1f} ms"
-            )
+            if "2" in args.sections:
+                record = real_decision(config, steps)
+                lat = sorted(highlight_latency(driver, record, args.decisions))
+                p99 = lat[min(len(lat) - 1, round(0.99 * (len(lat) - 1)))]
+                print(
+                    f"2. decision record -> highlighted ({len(lat)} records): p50 "
+                    f"{statistics.median(lat):.1f} ms, p99 {p99:.1f} ms, max {lat[-1]:.1f} ms"
+                )
+            if "3" not in args.sections:
+                return
             results = with_and_without(driver, config, steps, args.runs)
         base_rate = statistics.median(r[0] for r in results["none"])
         base_cpu = statistics.median(r[1] for r in results["none"])
@@ -245,6 +254,7 @@ def main() -> None:
         )
         for setup, label in (
             ("none", "no observer"),
+            ("hub", "hub alone (nobody drains)"),
             ("server", "hub + server, no page"),
             ("page", "hub + server + page open"),
         ):

@@ -34,18 +34,20 @@ def test_urgent_news_wakes_the_page_side_and_a_closed_loop_is_forgotten() -> Non
     hub.step(Step(0.0, [1.0]))
     assert woken == []  # readings wait for the next poll
     hub.alarm("N3", 1.0, 0.8, -0.5)
+    hub.record({"type": "health"})
+    assert woken == []  # alarms and health wait for the poll too: not amid the decision
     hub.record({"type": "decision"})
     hub.message("meter 'N8' silent")
-    assert len(woken) == 3
+    assert len(woken) == 2
 
     def closed() -> None:
         raise RuntimeError("Event loop is closed")
 
     hub.wake = closed
-    hub.alarm("N5", 2.0, 1.8, -0.4)  # never raises into the monitor
+    hub.record({"type": "event"})  # never raises into the monitor
     assert hub.wake is None
     kinds = [item[0] if isinstance(item, tuple) else "step" for item in hub.drain()]
-    assert kinds == ["step", "alarm", "record", "message", "alarm"]
+    assert kinds == ["step", "alarm", "record", "record", "message", "record"]
 
 
 def test_health_is_built_only_when_due() -> None:

@@ -1,12 +1,15 @@
 """The hand-off from the monitor to the web page: a bounded inbox the monitor only appends to.
 
-:class:`Hub` is the :class:`~burstloc.live.observe.LiveObserver` that ``burstloc monitor
---web`` gives the live loop. On the monitor's thread each call appends one item to a bounded
-``deque`` (an atomic operation: no lock, no wait; when the page side falls behind, the oldest
-items are dropped, never the monitor slowed) and, for the rare items that must show at once
-(an alarm, a record, a message), wakes the page side through a callback that only schedules
-work on its event loop. Health records are built at most every ``health_every`` seconds of
-wall-clock time. The page side (:class:`burstloc.web.view.View`) drains the inbox.
+:class:`Hub` is the :class:`~burstloc.live.observe.LiveObserver` that ``burstloc monitor --web``
+gives the live loop. On the monitor's thread each call appends one item to a bounded ``deque``
+(an atomic operation: no lock, no wait; when the page side falls behind, the oldest items are
+dropped, never the monitor slowed) and, for the rare items that must show at once (a decision,
+transient or event record, a message), wakes the page side through a callback that only
+schedules work on its event loop. Alarms and readings wait for the page side's next poll
+(:data:`burstloc.web.server.POLL`): waking it at an alarm would put its work (it shares the
+monitor's interpreter) in the middle of the decision the alarm starts. Health records are built
+at most every ``health_every`` seconds of wall-clock time. The page side
+(:class:`burstloc.web.view.View`) drains the inbox.
 """
 
 from __future__ import annotations
@@ -54,12 +57,16 @@ class Hub(LiveObserver):
         self.inbox.append(step)
 
     def alarm(self, meter: str, time: float, onset: float, amplitude: float) -> None:
-        """An alarm, shown at once."""
-        self._urgent(("alarm", (meter, time, onset, amplitude)))
+        """An alarm, shown at the next poll."""
+        self.inbox.append(("alarm", (meter, time, onset, amplitude)))
 
     def record(self, record: dict[str, Any]) -> None:
-        """A decision, transient, event or health record, shown at once."""
-        self._urgent(("record", record))
+        """A decision, transient or event record, shown at once (a health record at the next
+        poll)."""
+        if record.get("type") == "health":
+            self.inbox.append(("record", record))
+        else:
+            self._urgent(("record", record))
 
     def message(self, text: str) -> None:
         """A message for the log, shown at once."""

@@ -11,10 +11,11 @@ request, in constant time (:func:`hmac.compare_digest`): as ``?token=`` (the pag
 load; a cookie then carries it), the cookie or an ``Authorization: Bearer`` header. A missing or
 wrong token gets 401 and nothing else.
 
-**Pushing.** A task on the server's event loop drains the hub's inbox when woken (an alarm, a
-record, a message) and at least every :data:`POLL` seconds (the readings), applies it to the
-:class:`~burstloc.web.view.View` and puts the news on each browser's bounded queue; a browser
-whose queue is full is dropped (its page reconnects and starts again from a snapshot).
+**Pushing.** A task on the server's event loop drains the hub's inbox when woken (a decision,
+transient or event record, a message) and at least every :data:`POLL` seconds (the readings),
+applies it to the :class:`~burstloc.web.view.View` and puts the news on each browser's bounded
+queue; a browser whose queue is full is dropped (its page reconnects and starts again from a
+snapshot).
 """
 
 from __future__ import annotations

@@ -47,6 +47,7 @@ let rows = []; // [t, values]
 let health = null;
 let implausibleAt = {};
 let selected = null;
+let chosen = false; // the operator picked a meter (else the first to alarm is shown)
 let dirty = true;
 let pendingRecord = null;
 
@@ -513,6 +514,7 @@ function apply(n) {
     S.alarms = []; S.transient = null; S.answer = null; S.highlighted = null; S.region = null; S.position = null;
   } else if (n.kind === "alarm") {
     S.alarms.push(n.alarm);
+    if (!chosen && S.alarms.length === 1) selected = n.alarm.meter;
     addLog(n.log);
   } else if (n.kind === "record") {
     const rec = n.record;
@@ -544,7 +546,7 @@ function snapshot(doc) {
     applyRecord(rec);
     pendingRecord = { pipe: S.highlighted, type: rec.type, received: Date.now(), time: rec.time };
   }
-  if (selected === null && meta.meters.length) selected = meta.meters[0];
+  if (!chosen) selected = S.alarms.length ? S.alarms[0].meter : meta.meters[0] || null;
   $("meta").textContent = `${meta.network || ""} · ${meta.meters.length} meters · ${meta.detector || ""} / ${meta.localizer || ""} · capture ${meta.capture_interval} s`;
   S.snapshots++;
 }
@@ -588,7 +590,7 @@ window.addEventListener("mouseup", (e) => {
   if (drag && !drag.moved && net) {
     const r = map.getBoundingClientRect();
     const m = nearestMeter(e.clientX - r.left, e.clientY - r.top);
-    if (m) { selected = m; dirty = true; schedulePanels(); }
+    if (m) { selected = m; chosen = true; dirty = true; schedulePanels(); }
   }
   drag = null;
 });
@@ -630,7 +632,7 @@ map.addEventListener("wheel", (e) => {
 map.addEventListener("dblclick", () => fit());
 $("health").addEventListener("click", (e) => {
   const tr = e.target.closest("tr[data-m]");
-  if (tr) { selected = tr.dataset.m; dirty = true; schedulePanels(); }
+  if (tr) { selected = tr.dataset.m; chosen = true; dirty = true; schedulePanels(); }
 });
 window.addEventListener("resize", () => { dirty = true; schedulePanels(); });
 
