@@ -67,7 +67,7 @@ def main() -> None:
         )  # fmt: skip
         try:
             with chromium(folder / "chromium") as driver:
-                driver.set_window_size(1600, 900)
+                driver.set_window_size(1600, 1000)
                 driver.get(monitor.url)
                 wait_for(lambda: page_state(driver).get("ready"), "ready")
                 wait_for(lambda: page_state(driver).get("answer"), "the decision", 300)

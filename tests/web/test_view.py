@@ -79,6 +79,7 @@ def test_the_view_keeps_the_incident_and_a_new_alarm_after_the_answer_starts_ano
     news = view.take(
         [
             Step(1.0, [50.0, float("nan")]),
+            Step(1.2, [50.5, 49.0], filled=("N5",)),
             ("alarm", ("N3", 1.2, 1.0, -0.5)),
             ("alarm", ("N5", 1.4, 1.2, -0.4)),
             ("record", _decision("9", 1.5, "transient")),
@@ -86,7 +87,8 @@ def test_the_view_keeps_the_incident_and_a_new_alarm_after_the_answer_starts_ano
         ]
     )
     assert [n["kind"] for n in news] == ["rows", "alarm", "alarm", "record", "record"]
-    assert news[0]["rows"] == [(1.0, [50.0, None])]  # strict JSON: NaN as null
+    # strict JSON: NaN as null; a filled value is not a reading
+    assert news[0]["rows"] == [(1.0, [50.0, None]), (1.2, [50.5, None])]
     json.dumps(news, allow_nan=False)
     snap = view.snapshot()
     assert [a["meter"] for a in snap["alarms"]] == ["N3", "N5"]

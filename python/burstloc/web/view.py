@@ -38,9 +38,13 @@ def _clean(value: Any) -> Any:
     return value
 
 
-def _row(step: Step) -> tuple[float, list[float | None]]:
-    """A step as the page's chart takes it: (time, values; ``None`` for a missing value)."""
-    return float(step.timestamp), [_clean(float(v)) for v in step.values]
+def _row(step: Step, meters: Sequence[str]) -> tuple[float, list[float | None]]:
+    """A step as the page's chart takes it: (time, values; ``None`` for a value the meter did
+    not send: filled, or missing)."""
+    values = [_clean(float(v)) for v in step.values]
+    for meter in step.filled:
+        values[meters.index(meter)] = None
+    return float(step.timestamp), values
 
 
 def _describe(record: dict[str, Any]) -> str:
@@ -142,7 +146,7 @@ class View:
             newest = [
                 self.rows[-k] for k in range(min(steps, ROWS_PER_PUSH, len(self.rows)), 0, -1)
             ]
-            news.insert(0, {"kind": "rows", "rows": [_row(s) for s in newest]})
+            news.insert(0, {"kind": "rows", "rows": [_row(s, self.meters) for s in newest]})
         if health:
             news.append({"kind": "health", **self._health_news()})
         return news
@@ -155,7 +159,7 @@ class View:
         return {
             "kind": "snapshot",
             "meta": self.meta,
-            "rows": [_row(s) for s in self.rows],
+            "rows": [_row(s, self.meters) for s in self.rows],
             "log": list(self.log),
             "alarms": list(self.alarms),
             "transient": self.transient,

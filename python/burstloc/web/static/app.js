@@ -376,7 +376,7 @@ function drawChart() {
   const j = meta.meters.indexOf(selected);
   if (j < 0 || !rows.length) return;
   const t1 = rows[rows.length - 1][0];
-  const t0 = Math.max(rows[0][0], t1 - 300);
+  const t0 = Math.max(rows[0][0], t1 - 300); // the last five minutes
   let lo = Infinity, hi = -Infinity;
   for (const r of rows) if (r[0] >= t0 && r[1][j] !== null) { lo = Math.min(lo, r[1][j]); hi = Math.max(hi, r[1][j]); }
   if (!isFinite(lo)) return;
@@ -471,7 +471,7 @@ function renderHealth() {
       return `<tr data-m="${esc(m)}" class="${m === selected ? "sel" : ""}"><td>${esc(m)}</td>` +
         `<td data-status="${st}"><span class="dot" style="background:${COLORS[st]}"></span>${STATE_NAMES[st]}</td>` +
         `<td>${last ? fmt(last[1]) : "–"}</td><td>${last ? fmt(last[0], 1) : "–"}</td>` +
-        `<td>${h.clock_offset ? fmt(h.clock_offset, 1) : ""}</td><td>${h.implausible || ""}</td>` +
+        `<td>${h.clock_offset ? (h.clock_offset > 0 ? "+" : "") + fmt(h.clock_offset, 1) + " s" : ""}</td><td>${h.implausible || ""}</td>` +
         `<td>${h.late || ""}</td><td>${h.filled || ""}</td></tr>`;
     })
     .join("");
