@@ -252,3 +252,39 @@ def test_a_public_address_needs_a_token(config: tuple[Calibration, Path]) -> Non
     assert proc.returncode != 0
     assert "needs a token" in proc.stderr and "BURSTLOC_WEB_TOKEN" in proc.stderr
     assert "control room at" not in proc.stderr
+
+
+def test_an_mqtt_feed_is_shown_alike(
+    browser: Any, monitor: Any, feed: list[str], tmp_path: Path
+) -> None:
+    import paho.mqtt.client as mqtt
+    from mosquitto import broker
+    from paho.mqtt.enums import CallbackAPIVersion
+
+    steps = [
+        "\n".join(feed[k : k + len(METERS)]).encode() for k in range(0, len(feed), len(METERS))
+    ]
+    with broker(tmp_path) as port:
+        m = monitor("--mqtt", f"127.0.0.1:{port}", "--topic", "plant/readings/#")
+        browser.get(m.url)
+        _ready(browser)
+        sender = mqtt.Client(CallbackAPIVersion.VERSION2, client_id="sender")
+        sender.connect("127.0.0.1", port)
+        sender.loop_start()
+        try:
+
+            def first_step_shown() -> bool:  # sent again until the monitor has subscribed
+                sender.publish("plant/readings/all", steps[0], qos=1).wait_for_publish(10)
+                return bool(browser.execute_script("return rows.length"))
+
+            wait_for(first_step_shown, "the first readings through the broker")
+            for payload in steps[1:]:
+                sender.publish("plant/readings/all", payload, qos=1)
+            record = m.record("decision")
+            wait_for(
+                lambda: page_state(browser).get("highlighted") == record["pipes"][0]["pipe"],
+                "the burst read from the broker is shown",
+            )
+        finally:
+            sender.loop_stop()
+            m.stop()
