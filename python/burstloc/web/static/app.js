@@ -74,6 +74,14 @@ function buildPaths() {
     for (let k = 2; k < p.length; k += 2) path.lineTo(p[k], p[k + 1]);
     if (L.kinds[i] === "pipe") pipes++;
   }
+  // a typical link's drawn length: junction dots are drawn only when links are long on screen
+  const sample = [];
+  for (let i = 0; i < L.names.length; i += Math.max(1, Math.floor(L.names.length / 500))) {
+    const p = polyline(i);
+    sample.push(Math.hypot(p[p.length - 2] - p[0], p[p.length - 1] - p[1]));
+  }
+  sample.sort((a, b) => a - b);
+  net.typical = sample.length ? sample[Math.floor(sample.length / 2)] : 1;
   S.pipes = L.kinds.filter((k) => k === "pipe").length;
   S.drawnPipes = pipes;
   S.links = L.names.length;
@@ -213,11 +221,11 @@ function draw() {
   const s = view.s;
   ctx.save();
   ctx.setTransform(dpr * s, 0, 0, -dpr * s, dpr * view.ox, dpr * view.oy);
-  ctx.lineCap = "round";
-  ctx.lineJoin = "round";
   ctx.strokeStyle = COLORS.pipe;
   ctx.lineWidth = 1.6 / s;
-  ctx.stroke(net.paths.pipe);
+  ctx.stroke(net.paths.pipe); // one path for every pipe (butt caps: the cheapest stroke)
+  ctx.lineCap = "round";
+  ctx.lineJoin = "round";
   ctx.strokeStyle = COLORS.pump;
   ctx.lineWidth = 3 / s;
   ctx.stroke(net.paths.pump);
@@ -291,8 +299,7 @@ function draw() {
 function drawNodes() {
   const N = net.nodes;
   const n = N.names.length;
-  const few = n * Math.min(view.s, 1) < 4000 || view.s > 2;
-  if (few) {
+  if (view.s * net.typical > 12) {
     ctx.fillStyle = COLORS.junction;
     const path = new Path2D();
     const w = map.clientWidth, h = map.clientHeight;
