@@ -5,18 +5,23 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 export PYO3_PYTHON := $(abspath $(BIN)/python)
 
-# The second Python the suite runs on: 3.13 with numpy 2. Found as a user's CI would: `python3.13`
-# on PATH (e.g. a pyenv shim, if it runs), else the newest 3.13 among pyenv's versions.
-# `make test PYTHON313=/path/to/python3.13` names one.
+# Another Python, found as a user's CI would: `python3.X` on PATH (e.g. a pyenv shim, if it
+# runs), else the newest 3.X among pyenv's versions. $(call find_python,3.13)
 PYENV_ROOT ?= $(HOME)/.pyenv
-PYTHON313  ?= $(shell for p in "$$(command -v python3.13)" \
-                $$(ls -d $(PYENV_ROOT)/versions/3.13*/bin/python3.13 2>/dev/null | sort -rV); do \
-                  [ -n "$$p" ] && "$$p" -c 'import sys; assert sys.version_info[:2] == (3, 13)' \
+find_python = $(shell for p in "$$(command -v python$(1))" \
+                $$(ls -d $(PYENV_ROOT)/versions/$(1).*/bin/python$(1) 2>/dev/null | sort -rV); do \
+                  [ -n "$$p" ] && "$$p" -c 'import sys; assert "%d.%d" % sys.version_info[:2] == "$(1)"' \
                     2>/dev/null && echo "$$p" && break; done)
+# The second Python the suite runs on: 3.13 with numpy 2 (`make test PYTHON313=/path/to/python3.13`
+# names one).
+PYTHON313  ?= $(call find_python,3.13)
+# The plain-pip smoke test's Python: 3.12, which neither suite uses (`make test PYTHON312=...`).
+PYTHON312  ?= $(call find_python,3.12)
 VENV313 := .venv313
 BIN313  := $(VENV313)/bin
 
-.PHONY: setup setup313 networks chromium paper study test test-rust test-python test-python313 lint bench bench-rust clean
+.PHONY: setup services setup313 networks paper study test test-rust test-python test-python313 \
+        test-pip lint bench bench-rust clean
 
 ## setup: create .venv (the default Python), build burstloc's wheel, install it with its
 ## sim/dev/bench/river/web extras
@@ -43,7 +48,14 @@ EXTRAS       := sim,dev,bench,river,web
 EXT_RUSTFLAGS ?= -C target-cpu=native
 
 setup: $(VENV)/.installed networks/todini6.inp networks
+
+## services: what the tests need beside Python (not the main job): Mosquitto, the MQTT broker the
+## monitor's integration tests start on a loopback port, and Debian's Chromium with its WebDriver,
+## the browser the control-room page's tests drive; installed where missing (as root with
+## apt-get), else named with the command that installs them
+services:
 	scripts/install-mosquitto.sh
+	scripts/install-chromium.sh
 
 ## networks: EPANET's Net1, Net2, Net3 and Anytown in networks/public/ (not committed), from the
 ## pinned epyt wheel on PyPI, every file checked against its pinned SHA-256 (standard library
@@ -105,13 +117,8 @@ study: setup
 	$(BIN)/burstloc study --out docs/study --workers 2
 
 ## test: every test and lint (Rust and Python); the Python suite on the default Python and on
-## Python 3.13 with numpy 2
-test: setup setup313 chromium lint test-rust test-python test-python313
-
-## chromium: Debian's Chromium and its WebDriver, for the control-room page's browser tests
-## (installed where missing, as Mosquitto is; only the tests need them)
-chromium:
-	scripts/install-chromium.sh
+## Python 3.13 with numpy 2; a plain pip install on Python 3.12 running the README's tour
+test: setup setup313 services lint test-rust test-python test-python313 test-pip
 
 lint:
 	cargo fmt --all --check
@@ -128,12 +135,21 @@ test-rust:
 	cargo test -p cpd-core
 	cargo test -p cpd-core --no-default-features
 
-test-python: chromium
+test-python:
 	$(BIN)/python -m pytest -q
 
 # The installed wheel, not the sources, on Python 3.13 (the tests' own helpers come from tests/).
-test-python313: setup313 chromium networks/todini6.inp networks
+test-python313: setup313 networks/todini6.inp networks
 	$(BIN313)/python -m pytest -q
+
+# A plain `pip install 'burstloc-...whl[sim]'` in a fresh virtualenv on Python 3.12 (neither .venv
+# nor .venv313: the path of a user without the Makefile), then the README's tour as written (the
+# block after `<!-- tour -->`), in an empty directory with an empty cache (~2 min).
+test-pip: $(WHEEL_STAMP)
+	@test -n "$(PYTHON312)" || { echo "make: no Python 3.12 found: neither python3.12 on PATH \
+	nor $(PYENV_ROOT)/versions/3.12*; install one (e.g. pyenv install 3.12) or run \
+	make test PYTHON312=/path/to/python3.12" >&2; exit 1; }
+	scripts/smoke-pip.sh "$(PYTHON312)" "$(abspath $(WHEEL))"
 
 ## bench: Python-side benchmarks on fresh data (bindings vs pure Python vs River vs TSNet), then
 ## burstloc.river beside River's PageHinkley on River's annotated change-point datasets

@@ -35,6 +35,7 @@ import os
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
@@ -44,7 +45,7 @@ from paho.mqtt.enums import CallbackAPIVersion
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "live"))
-from mosquitto import broker  # noqa: E402  (the tests' broker fixture, one place for it)
+from mosquitto import SUBSCRIPTIONS, broker  # noqa: E402  (the tests' broker fixture, one place for it)
 
 from burstloc.experiments.calibrate import calibrate  # noqa: E402
 from burstloc.experiments.paper import ScenarioConfig  # noqa: E402
@@ -225,9 +226,20 @@ def main() -> int:
         argv += ["--capture-interval", str(DT), "--mqtt", f"127.0.0.1:{port}"]
         argv += ["--topic", "soak/readings", "--state", str(work / "state.json")]
         argv += ["--health-every", "600"]
+        subscribed = threading.Event()
+        watcher = mqtt.Client(CallbackAPIVersion.VERSION2, client_id="soak-watcher")
+        watcher.on_message = lambda c, u, m: (
+            subscribed.set() if m.payload.decode().endswith(" soak/readings") else None
+        )
+        watcher.connect("127.0.0.1", port)
+        watcher.subscribe(SUBSCRIPTIONS, qos=1)
+        watcher.loop_start()
         with open(work / "stdout", "w") as out, open(work / "stderr", "w") as err:
             proc = subprocess.Popen(argv, stdout=out, stderr=err, env=dict(os.environ))
-        time.sleep(3.0)
+        while not subscribed.wait(0.5):  # readings sent before the subscription would be lost
+            if proc.poll() is not None:
+                raise SystemExit(f"the monitor ended: {(work / 'stderr').read_text()}")
+        watcher.loop_stop()
         sender = mqtt.Client(CallbackAPIVersion.VERSION2, client_id="soak-sender")
         sender.max_inflight_messages_set(1000)
         sender.connect("127.0.0.1", port)

@@ -3,15 +3,19 @@
 from __future__ import annotations
 
 import errno
+import gc
+import io
 import json
 import math
 import re
+import sys
 from pathlib import Path
-from typing import IO
+from typing import IO, Any
 
 import numpy as np
 import pytest
 
+from burstloc import _atomic
 from burstloc._atomic import atomic_write, check_output, write_json, write_npz, write_text
 from burstloc.exceptions import OutputError
 
@@ -26,7 +30,7 @@ def test_interrupted_write_leaves_no_entry_and_no_temporary(
     def killed(*args: object, **kwargs: object) -> None:
         raise KeyboardInterrupt  # the run is killed mid-write
 
-    monkeypatch.setattr(np, "savez", killed)
+    monkeypatch.setattr(np.lib.format, "write_array", killed)
     with pytest.raises(KeyboardInterrupt):
         write_npz(target, {"x": np.ones(3)})
     assert target.read_bytes() == before  # the old entry is intact
@@ -106,3 +110,29 @@ def test_a_failing_write_is_an_output_error_and_keeps_the_old_file(tmp_path: Pat
         atomic_write(target, full_disk)
     assert target.read_text() == "good\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["r.txt"]
+
+
+def test_a_full_disk_during_an_npz_write_closes_the_archive(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The write fails with ENOSPC midway: one OutputError, and nothing left for the garbage
+    collector to trip on (an unclosed archive writing into the closed file)."""
+    target = tmp_path / "s.npz"
+    write_npz(target, {"x": np.zeros(3)})
+    before = target.read_bytes()
+
+    class FullDisk(io.FileIO):
+        def write(self, b: Any) -> int:
+            if self.tell() + len(b) > 4096:
+                raise OSError(errno.ENOSPC, "No space left on device")
+            return super().write(b)
+
+    unraisable: list[Any] = []
+    monkeypatch.setattr(sys, "unraisablehook", unraisable.append)
+    monkeypatch.setattr(_atomic.os, "fdopen", lambda fd, mode: FullDisk(fd, mode))
+    with pytest.raises(OutputError, match=r"cannot write .*s\.npz: No space left on device"):
+        write_npz(target, {"a": np.ones(10), "b": np.arange(100_000.0)})
+    gc.collect()
+    assert [str(u.exc_value) for u in unraisable] == []
+    assert target.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.npz"]

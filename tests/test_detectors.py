@@ -8,6 +8,7 @@ and that bad input raises the documented exception and changes nothing.
 from __future__ import annotations
 
 import copy
+import math
 import pickle
 import re
 import struct
@@ -23,6 +24,7 @@ from hypothesis import strategies as st
 
 import burstloc
 from burstloc import Alarm, ConfigError, Cusum, InputError, Shewhart
+from burstloc.constants import MAX_SAMPLE
 from reference import RefAlarm, amplitude_tolerance, cusum_online, shewhart_streaming
 from signals import build_signal, cusum_parameters, pressure_signals
 
@@ -232,14 +234,35 @@ def test_restore_rejects_foreign_or_corrupt_snapshots() -> None:
         Cusum.restore(negative)
 
 
-def test_snapshots_keep_non_finite_window_sums() -> None:
-    """Finite samples near 1e160 overflow a window's sum of squares; snapshots must keep it."""
-    x = np.array([1e160, -1e160, 3e160, 1.0, 2.0, 5e159, 7e159, -2e160])
+def test_the_packages_max_sample_is_the_detectors() -> None:
+    above = math.nextafter(MAX_SAMPLE, math.inf)
+    for x, ok in ((MAX_SAMPLE, True), (-MAX_SAMPLE, True), (above, False), (-above, False)):
+        for det in (Cusum(threshold=0.5), Shewhart(window=2, threshold=0.5)):
+            if ok:
+                det.update(x)
+            else:
+                with pytest.raises(InputError, match="out-of-range"):
+                    det.update(x)
+                assert det.samples_seen == 0
+
+
+def test_samples_beyond_1e100_are_refused_and_window_sums_stay_finite() -> None:
+    """Samples near 1e160 would overflow a window's sum of squares, leaving a state no snapshot
+    check could tell from a corrupt one: they are refused like a NaN, the state unchanged. The
+    largest samples taken keep every sum finite, through a snapshot and on."""
     det = Shewhart(window=5, threshold=1.0)
-    det.update_many(x[:6])
+    det.update_many(np.array([1.0, 2.0]))
+    before = det.snapshot()
+    with pytest.raises(InputError, match=r"out-of-range .*sample 1e160 at index 2"):
+        det.update(1e160)
+    with pytest.raises(InputError, match=r"sample -1e160 at index 3"):
+        det.update_many(np.array([1.0, -1e160]))
+    assert det.snapshot() == before
+    x = np.tile([1e100, -1e100, 1e100, 1.0, -1e100, 2.0, 1e100, -1e100], 200)
+    det.update_many(x[:900])
     restored = pickle.loads(pickle.dumps(det))
     assert restored.snapshot() == det.snapshot()
-    assert restored.update_many(x[6:]) == det.update_many(x[6:])
+    assert restored.update_many(x[900:]) == det.update_many(x[900:])
 
 
 # --- Bad input ---------------------------------------------------------------------------

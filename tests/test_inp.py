@@ -46,6 +46,18 @@ def test_reading_a_file_as_text_loads_no_wntr() -> None:
     assert out.stdout.split("\n")[:2] == ["25", "[]"]
 
 
+def test_junctions_in_file_are_wntrs_and_meters_must_be_among_them(tmp_path: Path) -> None:
+    from burstloc.network import junction_names, load_network
+
+    for network in (write_tiny(tmp_path / "tiny.inp"), PAPER15):
+        junctions = inp.junction_names_in_file(network)
+        assert junctions == junction_names(load_network(network))
+        assert inp.check_meters(junctions[:2], junctions, network) == junctions[:2]
+    tiny = tmp_path / "tiny.inp"
+    with pytest.raises(NetworkError, match=r"meter\(s\) \['R1', 'Z'\] are not junctions of .*tiny"):
+        inp.check_meters(["J1", "R1", "Z"], inp.junction_names_in_file(tiny), tiny)
+
+
 @pytest.mark.parametrize(
     ("edit", "message"),
     [

@@ -99,3 +99,34 @@ def test_fields_name_the_source_and_the_path() -> None:
         check_count(item.get("c"), "c", low=5, high=9)
     with pytest.raises(ConfigError, match=r"^f: b\[0\]: other problem"), item.checking():
         raise ConfigError("other problem")
+
+
+def test_json_npz_round_trip_and_checks(tmp_path: Path) -> None:
+    from burstloc._atomic import write_json_npz
+    from burstloc._validate import read_json_npz
+    from burstloc.exceptions import OutputError
+
+    rows = [[0.1 * i + j for j in range(3)] for i in range(4)]
+    document = {"name": "x", "rows": rows, "counts": [1, 2, 3, 4], "flags": [True] * 20}
+    path = write_json_npz(tmp_path / "d.npz", document, min_size=12)
+    back = read_json_npz(path, "document")
+    assert isinstance(back["rows"], np.ndarray) and back["rows"].tolist() == rows
+    assert back["counts"] == [1, 2, 3, 4] and back["flags"] == [True] * 20  # stay JSON
+    assert back["name"] == "x"
+    with pytest.raises(OutputError, match=r"field rows\[0\]\[1\] is NaN"):
+        write_json_npz(tmp_path / "n.npz", {"rows": [[1.0, math.nan]]})
+    # a reference to no array, a NaN array, a foreign file: named
+    text = np.frombuffer(b'{"rows": {"$npz": "a9"}}', dtype=np.uint8)
+    np.savez(tmp_path / "ref.npz", document=text)
+    with pytest.raises(ConfigError, match="field rows refers to no array"):
+        read_json_npz(tmp_path / "ref.npz", "document")
+    text = np.frombuffer(b'{"rows": {"$npz": "a0"}}', dtype=np.uint8)
+    np.savez(tmp_path / "nan.npz", document=text, a0=np.array([np.nan]))
+    with pytest.raises(ConfigError, match="'a0' holds NaN"):
+        read_json_npz(tmp_path / "nan.npz", "document")
+    np.savez(tmp_path / "none.npz", rows=np.ones(3))
+    with pytest.raises(ConfigError, match="no array 'document'"):
+        read_json_npz(tmp_path / "none.npz", "document")
+    (tmp_path / "text.npz").write_text("{}")
+    with pytest.raises(ConfigError, match=r"not an \.npz file"):
+        read_json_npz(tmp_path / "text.npz", "document")

@@ -8,7 +8,10 @@ What a user imports (``docs/api.md`` describes each):
 * the errors: :class:`ConfigError`, :class:`InputError`, :class:`StreamError`,
   :class:`NetworkError` (all ``ValueError``), :class:`SimulationError` and its
   :class:`UnsteadyStartError`;
-* the live path: :class:`BurstMonitor`, :class:`ReadingStream`, :class:`Reading`, :class:`Step`,
+* the live path: :class:`BurstMonitor`, fed complete time steps (:class:`Step`) that a
+  :class:`StepFeed` assembles from readings (:class:`Reading`; :func:`parse_lines` reads them,
+  and :class:`BadReading` what is not one, from CSV lines), :class:`ReadingStream` (the paper's
+  localization windows),
   :class:`Calibration` (the stored configuration, with its :class:`LocalizationModel`), and
   what a decision holds: :class:`Decision`, :class:`Ranking`, :class:`RankedPipe`,
   :class:`BurstEvidence`;
@@ -46,7 +49,9 @@ from burstloc.exceptions import (
 if TYPE_CHECKING:
     from burstloc.experiments.calibrate import calibrate
     from burstloc.experiments.evaluate import evaluate
+    from burstloc.live.feeds import StepFeed
     from burstloc.live.monitor import BurstMonitor
+    from burstloc.live.parse import BadReading, parse_lines
     from burstloc.live.windows import ReadingStream
     from burstloc.localize.classify import Classification, ClassifierConfig, Operation
     from burstloc.localize.config import Calibration
@@ -62,6 +67,9 @@ if TYPE_CHECKING:
 _LAZY: dict[str, str] = {
     "BurstMonitor": "burstloc.live.monitor",
     "ReadingStream": "burstloc.live.windows",
+    "StepFeed": "burstloc.live.feeds",
+    "BadReading": "burstloc.live.parse",
+    "parse_lines": "burstloc.live.parse",
     "Reading": "burstloc.readings",
     "Step": "burstloc.readings",
     "Calibration": "burstloc.localize.config",
@@ -83,6 +91,7 @@ _LAZY: dict[str, str] = {
 
 __all__ = [
     "Alarm",
+    "BadReading",
     "BurstEvidence",
     "BurstMonitor",
     "BurstScenario",
@@ -105,6 +114,7 @@ __all__ = [
     "Shewhart",
     "SimulationError",
     "Step",
+    "StepFeed",
     "StreamError",
     "UnsteadyStartError",
     "__version__",
@@ -112,6 +122,7 @@ __all__ = [
     "detect_cusum",
     "detect_shewhart",
     "evaluate",
+    "parse_lines",
     "simulate_burst",
     "simulate_event",
 ]

@@ -19,13 +19,14 @@ import json
 import os
 import stat
 import tempfile
+import zipfile
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import IO, Any
 
 import numpy as np
 
-from burstloc._validate import find_non_finite
+from burstloc._validate import NPZ_DOCUMENT, NPZ_MIN_SIZE, NPZ_REFERENCE, find_non_finite
 from burstloc.exceptions import OutputError
 
 __all__ = [
@@ -33,6 +34,7 @@ __all__ = [
     "check_output",
     "write_bytes",
     "write_json",
+    "write_json_npz",
     "write_npz",
     "write_text",
 ]
@@ -157,5 +159,62 @@ def write_json(path: str | os.PathLike[str], document: Any, *, indent: int | Non
 
 
 def write_npz(path: str | os.PathLike[str], arrays: Mapping[str, np.ndarray]) -> Path:
-    """Write ``arrays`` to an ``.npz`` file atomically."""
-    return atomic_write(path, lambda f: np.savez(f, **arrays))
+    """Write ``arrays`` to an ``.npz`` file atomically (the layout of ``np.savez``).
+
+    The archive is closed whatever happens (``np.savez`` leaves it open when a write fails, and
+    the garbage collector's late ``ZipFile.close`` then writes into the closed file: "Exception
+    ignored ... seek of closed file" after the error).
+    """
+
+    def write(f: IO[bytes]) -> None:
+        with zipfile.ZipFile(f, mode="w", compression=zipfile.ZIP_STORED) as archive:
+            for name, array in arrays.items():
+                with archive.open(f"{name}.npy", mode="w", force_zip64=True) as member:
+                    np.lib.format.write_array(member, np.asanyarray(array), allow_pickle=False)
+
+    return atomic_write(path, write)
+
+
+def write_json_npz(
+    path: str | os.PathLike[str], document: Any, *, min_size: int = NPZ_MIN_SIZE
+) -> Path:
+    """Write a JSON document as an ``.npz`` file: every list of finite floats (or rectangular
+    list of such lists) with at least ``min_size`` numbers becomes a binary array, replaced in
+    the document by ``{"$npz": NAME}``; the rest of the document is stored as strict JSON text
+    (array ``document``: its UTF-8 bytes). :func:`burstloc._validate.read_json_npz` reads it back.
+
+    Raises:
+        OutputError: a non-finite number (named), or the file cannot be written.
+    """
+    arrays: dict[str, np.ndarray] = {}
+
+    def pack(value: Any) -> Any:
+        if isinstance(value, Mapping):
+            return {k: pack(v) for k, v in value.items()}
+        if isinstance(value, (list, tuple)):
+            try:
+                array = np.asarray(value)
+            except ValueError:  # ragged
+                array = None
+            if (
+                array is not None
+                and array.dtype.kind == "f"  # floats (ints, booleans, text stay JSON)
+                and array.size >= min_size
+                and np.isfinite(array).all()
+            ):
+                name = f"a{len(arrays)}"
+                arrays[name] = array.astype(np.float64)
+                return {NPZ_REFERENCE: name}
+            return [pack(v) for v in value]
+        return value
+
+    packed = pack(document)
+    try:
+        text = json.dumps(packed, allow_nan=False, separators=(",", ":"))
+    except ValueError:
+        field, value = find_non_finite(document)
+        raise OutputError(
+            f"cannot write {os.fspath(path)}: field {field} is {value} (numbers must be finite)"
+        ) from None
+    utf8 = np.frombuffer(text.encode("utf-8"), dtype=np.uint8)
+    return write_npz(path, {**arrays, NPZ_DOCUMENT: utf8})

@@ -7,6 +7,8 @@ signature sets): one reader, errors that name the file and the field.
 * :class:`Fields` walks one JSON object: required fields, nested objects and lists of objects,
   each error naming the file and the field's path (``intervals[0].cusum.threshold``), and
   :meth:`Fields.checking` names them in the errors of the checks a constructor runs.
+* :func:`read_npz` reads the binary companion of a document (large matrices, NumPy's ``.npz``,
+  never pickled objects): each array present, of the expected kind and rank, floats finite.
 * :func:`check_number`, :func:`check_count`, :func:`check_names`, :func:`check_string`: the
   type and range checks themselves (a :class:`FieldError` naming the field), used by the classes
   that validate at construction, so each range is written once, where the class is.
@@ -22,6 +24,8 @@ import os
 from collections.abc import Iterator, Mapping, Sequence
 from typing import Any
 
+import numpy as np
+
 from burstloc.exceptions import ConfigError
 
 __all__ = [
@@ -34,10 +38,19 @@ __all__ = [
     "check_string",
     "find_non_finite",
     "read_json",
+    "read_json_npz",
+    "read_npz",
 ]
 
 #: The largest JSON file burstloc reads (bytes): far above any configuration it writes.
 MAX_JSON_BYTES = 256 * 1024 * 1024
+
+#: A JSON document's ``.npz`` form (:func:`burstloc._atomic.write_json_npz`): the array holding
+#: the document's text, the key marking a list stored as an array, and the fewest numbers a list
+#: holds to be stored as one.
+NPZ_DOCUMENT = "document"
+NPZ_REFERENCE = "$npz"
+NPZ_MIN_SIZE = 1024
 
 
 def read_json(path: str | os.PathLike[str], what: str) -> Any:
@@ -60,6 +73,103 @@ def read_json(path: str | os.PathLike[str], what: str) -> Any:
     except UnicodeDecodeError as exc:
         raise ConfigError(f"cannot read {where}: not UTF-8 text (byte {exc.start})") from None
 
+    return _loads(text, where)
+
+
+def read_npz(
+    path: str | os.PathLike[str], what: str, arrays: Mapping[str, tuple[str, int]]
+) -> dict[str, np.ndarray]:
+    """Read the ``.npz`` file ``path``: ``arrays`` maps each required array's name to its kind
+    (``"f"`` float, ``"U"`` text, ``"i"`` integer: NumPy's dtype kinds) and its number of
+    dimensions. No pickled object is ever loaded; float arrays must be finite; other arrays in
+    the file are ignored.
+
+    Raises:
+        ConfigError: the file cannot be read or is not an ``.npz`` file, or an array is missing,
+            of another kind or rank, or holds NaN or an infinite value; the message names
+            ``what``, the file and the array.
+    """
+    import zipfile
+
+    where = f"{what} {os.fspath(path)}"
+    try:
+        if os.path.getsize(path) > MAX_JSON_BYTES * 8:
+            raise ConfigError(f"cannot read {where}: larger than {MAX_JSON_BYTES * 8} bytes")
+        with np.load(path, allow_pickle=False) as data:
+            missing = [name for name in arrays if name not in data.files]
+            if missing:
+                raise ConfigError(f"{where}: no array {missing[0]!r}")
+            found = {name: data[name] for name in arrays}
+    except OSError as exc:
+        raise ConfigError(f"cannot read {where}: {exc.strerror or exc}") from None
+    except (ValueError, EOFError, zipfile.BadZipFile) as exc:
+        raise ConfigError(f"cannot read {where}: not an .npz file ({exc})") from None
+    for name, (kind, ndim) in arrays.items():
+        array = found[name]
+        if array.dtype.kind != kind or array.ndim != ndim:
+            raise ConfigError(
+                f"{where}: array {name!r} must be {ndim}-dimensional of kind {kind!r}, got "
+                f"{array.ndim}-dimensional {array.dtype}"
+            )
+        if kind == "f" and not np.isfinite(array).all():
+            raise ConfigError(f"{where}: array {name!r} holds NaN or infinite values")
+    return found
+
+
+def read_json_npz(path: str | os.PathLike[str], what: str) -> Any:
+    """Read a JSON document stored as ``.npz`` (:func:`burstloc._atomic.write_json_npz`): the
+    text checked as :func:`read_json` checks a file, each ``{"$npz": NAME}`` replaced by its
+    array (finite floats; a missing or malformed array named).
+
+    Raises:
+        ConfigError: the file cannot be read, the document is not strict JSON, or an array is
+            missing or malformed; the message names ``what`` and the file.
+    """
+    import zipfile
+
+    where = f"{what} {os.fspath(path)}"
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            names = list(data.files)
+            if NPZ_DOCUMENT not in names:
+                raise ConfigError(f"{where}: no array {NPZ_DOCUMENT!r}")
+            utf8 = data[NPZ_DOCUMENT]
+            if utf8.dtype != np.uint8 or utf8.ndim != 1:
+                raise ConfigError(f"{where}: array {NPZ_DOCUMENT!r} must be UTF-8 bytes")
+            try:
+                text = utf8.tobytes().decode("utf-8")
+            except UnicodeDecodeError as exc:
+                raise ConfigError(
+                    f"cannot read {where}: not UTF-8 text (byte {exc.start})"
+                ) from None
+            document = _loads(text, where)
+            arrays = read_npz(
+                path, what, {name: ("f", data[name].ndim) for name in names if name != "document"}
+            )
+    except OSError as exc:
+        raise ConfigError(f"cannot read {where}: {exc.strerror or exc}") from None
+    except (ValueError, EOFError, zipfile.BadZipFile) as exc:
+        if isinstance(exc, ConfigError):
+            raise
+        raise ConfigError(f"cannot read {where}: not an .npz file ({exc})") from None
+
+    def unpack(value: Any, field: str) -> Any:
+        if isinstance(value, Mapping):
+            if set(value) == {NPZ_REFERENCE}:
+                name = value[NPZ_REFERENCE]
+                if name not in arrays:
+                    raise ConfigError(f"{where}: field {field} refers to no array ({name!r})")
+                return arrays[name]
+            return {k: unpack(v, f"{field}.{k}" if field else str(k)) for k, v in value.items()}
+        if isinstance(value, list):
+            return [unpack(v, f"{field}[{i}]") for i, v in enumerate(value)]
+        return value
+
+    return unpack(document, "")
+
+
+def _loads(text: str, where: str) -> Any:
+    """Strict JSON text: no NaN or infinity (the field named)."""
     try:
         document = json.loads(text)
     except json.JSONDecodeError as exc:

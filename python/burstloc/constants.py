@@ -7,6 +7,7 @@
 * :data:`METER_MODELS` / :data:`MeterModel`: what a meter's reading is.
 * :data:`CANDIDATE_POSITIONS`: burst positions along a pipe that the localizers try.
 * :data:`SIGNATURE_DECISION_DELAY`: when the steady-state signature is read after a burst (s).
+* :data:`MAX_SAMPLE`: the largest reading magnitude the detectors take (``cpd_core::MAX_SAMPLE``).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ __all__ = [
     "CAPTURE_INTERVALS",
     "DETECTORS",
     "LOCALIZERS",
+    "MAX_SAMPLE",
     "METER_MODELS",
     "RANKING_LOCALIZERS",
     "SCENARIO_DURATION",
@@ -28,6 +30,11 @@ __all__ = [
 ]
 
 CAPTURE_INTERVALS: tuple[float, ...] = (0.2, 2.0, 5.0, 10.0)
+
+#: The detectors refuse a sample beyond +-this (InputError, like a NaN): no meter reads 1e100 of
+#: anything, and below it a window's sum of squares cannot overflow. The Rust core's
+#: ``MAX_SAMPLE``; ``tests/test_detectors.py`` checks the two agree.
+MAX_SAMPLE = 1e100
 """Capture intervals (s) of the paper's experiment, and the defaults of every command."""
 
 WAVE_SPEED = 1200.0

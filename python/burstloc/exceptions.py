@@ -4,9 +4,10 @@ Every error is a typed subclass of a built-in exception, so callers can catch pr
 
 * :class:`ConfigError` (``ValueError``): a detector parameter is invalid; the message names
   the parameter and its value.
-* :class:`InputError` (``ValueError``): a detector was fed bad input (a NaN or infinite sample,
-  a wrong dtype, shape or channel count); the message names the sample index, channel or
-  argument. The detector's state is left unchanged.
+* :class:`InputError` (``ValueError``): a detector was fed bad input (a NaN, infinite or
+  out-of-range sample, beyond +-1e100; a wrong dtype, shape or channel count; a snapshot holding
+  a state no detector reaches); the message names the sample index, channel, argument or state
+  field. The detector's state is left unchanged.
 * :class:`StreamError` (``InputError``): bad or out-of-order readings in a live stream.
 * :class:`NetworkError` (``ValueError``): an unknown node or pipe, or a malformed INP file
   (with the file and line).
@@ -74,7 +75,9 @@ class UnsteadyStartError(SimulationError):
         super().__init__(
             f"{network} does not start steady in the transient model: junction {junction!r} moved "
             f"{movement:.3g} m from its initial head by {time:.3g} s, before the event at "
-            f"{onset:g} s (tolerance {tolerance:g} m)"
+            f"{onset:g} s (tolerance {tolerance:g} m): the transient model does not hold an "
+            "element near it at its steady state (a valve, pump, tank or control): no burst on "
+            "this network can be told from that movement, so none is simulated"
         )
         self.network = network
         self.junction = junction
@@ -90,14 +93,30 @@ class SimulatorMissingError(SimulationError):
         cause: the ``ImportError`` raised importing it; its message is kept in this one.
     """
 
-    #: How to install the simulator (the end of every message).
+    #: How to install the simulator (the end of the message when it is not installed).
     INSTALL = "pip install 'burstloc[sim]'"
 
+    #: The simulator's own packages: when one of them is missing, the simulator is not installed;
+    #: any other missing module is a dependency of theirs, named as such.
+    PACKAGES = ("tsnet", "wntr")
+
     def __init__(self, cause: ImportError) -> None:
-        super().__init__(
-            f"this command needs the simulator, which is not installed ({cause}): {self.INSTALL}"
-        )
-        self.package = cause.name
+        name = cause.name
+        if name is None or name.split(".")[0] in self.PACKAGES:
+            message = f"this command needs the simulator, which is not installed ({cause}): "
+            message += self.INSTALL
+        elif name.split(".")[0] == "pkg_resources":
+            message = (
+                f"the simulator cannot be imported: WNTR 1.3 imports pkg_resources, which "
+                f"setuptools 81 and later no longer provide ({cause}): pip install 'setuptools<81'"
+            )
+        else:
+            message = (
+                f"the simulator cannot be imported: its dependency {name!r} is missing ({cause}): "
+                f"reinstall it with {self.INSTALL}"
+            )
+        super().__init__(message)
+        self.package = name
 
 
 class OutputError(ValueError):

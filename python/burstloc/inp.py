@@ -7,6 +7,9 @@
 * :func:`network_hash` fingerprints a network file (its bytes): what a stored configuration
   is bound to.
 * :func:`choose_pipes` checks a selection of pipes against a file's.
+* :func:`junction_names_in_file` lists a file's junctions, and :func:`check_meters` is the one
+  rule for meters: each is a junction of the network (``calibrate``, the signatures and the
+  localization model with WNTR's list, a stored configuration with the file's).
 """
 
 from __future__ import annotations
@@ -20,7 +23,13 @@ from pathlib import Path
 
 from burstloc.exceptions import ConfigError, NetworkError
 
-__all__ = ["choose_pipes", "network_hash", "pipe_names_in_file"]
+__all__ = [
+    "check_meters",
+    "choose_pipes",
+    "junction_names_in_file",
+    "network_hash",
+    "pipe_names_in_file",
+]
 
 #: Section headers EPANET 2.2 accepts (as WNTR reads them), and ``[END]``.
 _SECTIONS = frozenset(
@@ -173,6 +182,38 @@ def pipe_names_in_file(path: str | os.PathLike[str]) -> list[str]:
         NetworkError: the file is missing or malformed (naming file and line).
     """
     return _lint(Path(path))
+
+
+def junction_names_in_file(path: str | os.PathLike[str]) -> list[str]:
+    """Return the junction IDs of an INP file in file order, without building a network model
+    (the file checked as :func:`pipe_names_in_file` checks it).
+
+    Raises:
+        NetworkError: the file is missing or malformed (naming file and line).
+    """
+    file = Path(path)
+    _lint(file)
+    return [row.fields[0] for row in _rows(file) if row.section == "[JUNCTIONS]"]
+
+
+def check_meters(
+    meters: Sequence[str],
+    junctions: Sequence[str],
+    network: str | os.PathLike[str],
+    error: type[ValueError] = NetworkError,
+) -> list[str]:
+    """Return ``meters`` as a list if each is one of ``junctions`` (those of ``network``).
+
+    Raises:
+        NetworkError: ``meter(s) [...] are not junctions of NETWORK``, naming every one (or
+            ``error``: a :class:`~burstloc.exceptions.ConfigError` where the meters are a
+            parameter, as in ``calibrate``).
+    """
+    known = set(junctions)
+    unknown = [m for m in meters if m not in known]
+    if unknown:
+        raise error(f"meter(s) {unknown} are not junctions of {os.fspath(network)}")
+    return list(meters)
 
 
 def choose_pipes(

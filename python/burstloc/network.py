@@ -63,6 +63,8 @@ def _wntr() -> Any:
     """
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DeprecationWarning)
+        # setuptools 80 warns that pkg_resources (which WNTR 1.3 imports) is deprecated
+        warnings.filterwarnings("ignore", "pkg_resources is deprecated", UserWarning)
         try:
             import wntr
         except ImportError as exc:

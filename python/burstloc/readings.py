@@ -3,18 +3,38 @@
 :class:`Reading` is what a meter sends, :class:`Step` a complete time step (one value per
 meter), :class:`Window` what one localization attempt of the paper's rules sees.
 :mod:`burstloc.live.feeds` assembles them from a feed; the localizers read them.
+
+The feed's CSV form (``timestamp,meter,value``, :data:`CSV_HEADER`) and its timestamps
+(:func:`timestamp_seconds`: seconds, or ISO 8601 with a UTC offset) are defined here, for the
+monitor that reads feeds (:mod:`burstloc.live.parse`) and the simulator that writes them
+(:mod:`burstloc.sim.feed`).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
+from datetime import datetime, timedelta
 
 import numpy as np
 import numpy.typing as npt
 
 from burstloc.exceptions import StreamError
 
-__all__ = ["FloatArray", "Item", "Reading", "Step", "Window"]
+__all__ = [
+    "CSV_HEADER",
+    "FloatArray",
+    "Item",
+    "Reading",
+    "Step",
+    "Window",
+    "format_timestamp",
+    "parse_start_time",
+    "timestamp_seconds",
+]
+
+#: The columns of the feed's CSV form, one reading a line; a first line naming them is a header.
+CSV_HEADER = ("timestamp", "meter", "value")
 
 FloatArray = npt.NDArray[np.float64]
 """A float64 NumPy array."""
@@ -84,3 +104,59 @@ class Window:
 
 
 Item = Reading | Step
+
+
+def timestamp_seconds(text: str) -> float:
+    """A reading's timestamp as seconds.
+
+    Either a finite number of seconds (from any origin: the simulation's start, or the Unix epoch)
+    or an ISO 8601 date and time with a UTC offset or ``Z`` (``2026-11-26T10:00:00.2Z``,
+    ``2026-11-26T12:00:00.2+02:00``), given as seconds since the Unix epoch.
+
+    Raises:
+        ValueError: neither; the message says why (an ISO time without an offset is refused: its
+            time zone is unknown).
+    """
+    try:
+        x = float(text)
+    except (TypeError, ValueError, OverflowError):
+        return parse_start_time(text).timestamp()
+    if not math.isfinite(x):
+        raise ValueError("timestamp is not a finite number of seconds")
+    return x
+
+
+def parse_start_time(text: str) -> datetime:
+    """An ISO 8601 date and time with a UTC offset or ``Z``.
+
+    Raises:
+        ValueError: not one, or one without an offset; the message says which.
+    """
+    stamp = str(text).strip()
+    if stamp[-1:] in ("Z", "z"):  # Python 3.10's fromisoformat does not read "Z"
+        stamp = stamp[:-1] + "+00:00"
+    try:
+        when = datetime.fromisoformat(stamp)
+    except ValueError:
+        raise ValueError(
+            "timestamp is neither seconds nor an ISO 8601 date and time "
+            "(e.g. 2026-11-26T10:00:00.2Z)"
+        ) from None
+    if when.utcoffset() is None:
+        raise ValueError("ISO 8601 timestamp without a UTC offset (add Z or +HH:MM)")
+    return when
+
+
+def format_timestamp(seconds: float, start: datetime | None = None) -> str:
+    """A feed's timestamp: ``seconds`` (to the microsecond, no float noise), or with ``start``
+    the ISO 8601 time ``seconds`` after it, in ``start``'s offset (``Z`` for UTC), to the
+    millisecond (to the microsecond where a reading falls between milliseconds)."""
+    micros = round(seconds * 1e6)
+    if start is None:
+        whole, part = divmod(abs(micros), 1_000_000)
+        sign = "-" if micros < 0 else ""
+        return f"{sign}{whole}" + (f".{part:06d}".rstrip("0") if part else "")
+    when = start + timedelta(microseconds=micros)
+    spec = "microseconds" if when.microsecond % 1000 else "milliseconds"
+    text = when.isoformat(timespec=spec)
+    return text[:-6] + "Z" if when.utcoffset() == timedelta(0) else text

@@ -223,8 +223,9 @@ def test_an_explicit_time_step_reaches_the_simulation(tmp_path: Path, capsys) ->
     assert _evaluate_long_pipes(tmp_path, "--time-step", "0.15") == 0
     assert json.loads((tmp_path / "r.json").read_text())["scenario"]["time_step"] == 0.15
     capsys.readouterr()
-    # above TSNet's stability limit: refused, naming the limit and the pipe
-    assert _evaluate_long_pipes(tmp_path, "--time-step", "0.3") == 2
+    # above TSNet's stability limit: the pipe's simulation fails, naming the limit and the pipe
+    # (exit 1, as from `burstloc simulate`)
+    assert _evaluate_long_pipes(tmp_path, "--time-step", "0.3") == 1
     err = capsys.readouterr().err
     assert "time_step 0.3 s exceeds TSNet's stability limit 0.20833 s for pipe 'B'" in err
 

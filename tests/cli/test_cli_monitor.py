@@ -47,7 +47,7 @@ def test_garbage_of_every_kind_is_reported_and_skipped(tiny: Path, cfg: Path) ->
     for text in [
         "line 2: value is not a finite number",
         "line 3: value is not a finite number",
-        "line 4: timestamp is not a finite number",
+        "line 4: ISO 8601 timestamp without a UTC offset",
         "line 5: want 'timestamp,meter,value'",
         "line 6: unknown meter 'J9'",
         "2 more bad-input messages not shown",  # at most 5 of a kind per 10 s; none silent
@@ -76,17 +76,18 @@ def test_an_overlong_line_is_one_bad_reading_and_the_lines_after_it_count(
 
 
 @pytest.mark.parametrize("feed", [b"", b"timestamp,meter,value\n", b"# only a comment\n\n"])
-def test_an_empty_feed_is_said(tiny: Path, cfg: Path, feed: bytes) -> None:
+def test_an_empty_feed_is_said_and_is_bad_input(tiny: Path, cfg: Path, feed: bytes) -> None:
     done = _monitor(tiny, cfg, stdin=feed)
-    assert done.returncode == 0, done.stderr
+    assert done.returncode == 2, done.stderr  # was 0: a run that monitored nothing "succeeded"
     assert "the feed held no readings: nothing was monitored" in done.stderr.decode()
+    assert "burstloc: error: no usable readings in stdin" in done.stderr.decode()
     assert done.stdout == b""
 
 
 def test_a_feed_of_only_bad_readings_is_said(tiny: Path, cfg: Path) -> None:
     feed = b"t,meter,value\n0.0,J9,60.0\n\xff\xfe0,J1,\x9960\n"
     done = _monitor(tiny, cfg, stdin=feed)
-    assert done.returncode == 0, done.stderr
+    assert done.returncode == 2, done.stderr
     err = done.stderr.decode()
     assert "the feed held no usable readings (3 bad, skipped): nothing was monitored" in err, err
     assert "line 3: not UTF-8 text" in err, err
@@ -136,3 +137,23 @@ def test_classify_and_operations_options(tiny: Path, cfg: Path, tmp_path: Path) 
     ops.write_text("asset,time,action\nJ1,soon,demand on\n")
     bad = _monitor(tiny, cfg, "--classify", str(path), "--operations", str(ops))
     assert bad.returncode != 0 and b"line 2" in bad.stderr
+
+
+@pytest.mark.parametrize("node", ["R1", "J9"])
+def test_a_configuration_whose_meter_is_not_a_junction_is_refused_by_name(
+    tiny: Path, cfg: Path, tmp_path: Path, node: str
+) -> None:
+    """A configuration edited by hand: meter J4 renamed everywhere (so the file is consistent
+    and still bound to the network's SHA-256) to the reservoir R1 or to a node the network does
+    not have. The monitor refuses it before reading anything, as `calibrate` refuses such
+    meters."""
+    edited = tmp_path / "edited.json"
+    edited.write_text(cfg.read_text().replace('"J4"', f'"{node}"'))
+    assert node in json.loads(edited.read_text())["meters"]
+    done = _monitor(tiny, edited, stdin=_steady(50))
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.decode().splitlines() == [
+        f"burstloc: error: meter(s) ['{node}'] are not junctions of {tiny} (in configuration "
+        "'tiny-calibrated')"
+    ]
+    assert done.stdout == b""

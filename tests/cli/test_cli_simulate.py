@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import json
+import os
+import resource
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -152,3 +155,90 @@ def test_command_line_process(tiny_network: Path, tmp_path: Path) -> None:
     )
     assert done.returncode == 2
     assert "unknown pipe(s) ['Nope']" in done.stderr and done.stdout == ""
+
+
+def _small_file_limit() -> None:
+    """In the child: files may not grow past 8 KiB, and a write past it fails (EFBIG) instead of
+    killing the process (SIGXFSZ ignored), as a full disk fails a write with ENOSPC."""
+    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    resource.setrlimit(resource.RLIMIT_FSIZE, (8192, 8192))
+
+
+def test_a_failed_write_prints_one_error_and_no_traceback(
+    tiny_network: Path, tmp_path: Path
+) -> None:
+    """A scenario file of ~12 KB whose write the OS refuses midway: the clear error and exit 2,
+    nothing after it (no "Exception ignored" from an archive left open)."""
+    out = tmp_path / "out"
+    done = subprocess.run(
+        [sys.executable, "-m", "burstloc.cli", "simulate", str(tiny_network), "--pipe", "A",
+         "--out", str(out), "--no-cache", "--burst-start", "0.2", "--duration", "10", "--quiet",
+         "--workers", "1"],
+        capture_output=True, text=True, check=False, preexec_fn=_small_file_limit,
+        env={**os.environ, "PYTHONDONTWRITEBYTECODE": "1"},
+    )  # fmt: skip
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.splitlines() == [
+        f"burstloc: error: cannot write {out / 'tiny_pipe-A.npz'}: File too large"
+    ]
+    assert list(out.iterdir()) == []
+
+
+def _monitor(network: Path, config: Path, feed: Path) -> subprocess.CompletedProcess[str]:
+    argv = [sys.executable, "-m", "burstloc", "monitor", str(network), "--config", str(config)]
+    argv += ["--capture-interval", "0.2", "--readings", str(feed), "--health-every", "0"]
+    return subprocess.run(argv, capture_output=True, text=True, check=False)
+
+
+@pytest.fixture(scope="module")
+def paper15_config(paper15: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    from burstloc.experiments.calibrate import calibrate
+
+    config = calibrate(paper15, capture_intervals=(0.2,))
+    return config.save(tmp_path_factory.mktemp("cfg") / "paper15.json")
+
+
+@pytest.mark.parametrize("start", [None, "2026-11-26T12:00:00+02:00"])
+def test_a_feed_from_a_simulation_is_what_the_monitor_reads(
+    start: str | None, paper15: Path, paper15_config: Path, tmp_path: Path
+) -> None:
+    # Before, nothing wrote a feed: `burstloc monitor --readings feed.csv` had no feed.
+    feed = tmp_path / "feed.csv"
+    args = ["simulate", paper15, "--pipe", "P7", "--duration", "14", "--capture-interval", "0.2"]
+    args += ["--noise", "0.01", "--seed", "3", "--out", tmp_path / "out", "--quiet"]
+    args += ["--start", start] if start else []
+    assert _run(*args, "--feed", feed) == 0
+    lines = feed.read_text().splitlines()
+    assert lines[0] == "timestamp,meter,value" and len(lines) == 1 + 15 * 70
+    first = [line.split(",") for line in lines[1:16]]
+    assert [meter for _, meter, _ in first][:3] == ["N2", "N3", "N4"]
+    assert {t for t, _, _ in first} == {start.replace("+", ".000+") if start else "0"}
+    done = _monitor(paper15, paper15_config, feed)
+    assert done.returncode == 0, done.stderr
+    (decision,) = [json.loads(line) for line in done.stdout.splitlines()]
+    assert decision["type"] == "decision" and decision["pipes"][0]["pipe"] == "P7"
+    if start is None:  # times without float noise (was 10.600000000000001)
+        assert decision["first_alarm"] == 10.6 and decision["pipes"][0]["score"] == 0.0
+    again = tmp_path / "again.csv"
+    assert _run(*args, "--feed", again) == 0
+    assert again.read_text() == feed.read_text()  # seeded: the same noise
+
+
+@pytest.mark.parametrize(
+    ("extra", "says"),
+    [
+        (["--feed", "f.csv"], "--feed needs --capture-interval"),
+        (["--feed", "f.csv", "--capture-interval", "0.2", "--all"], "one --pipe"),
+        (["--noise", "0.01"], "--noise applies to --feed FILE only"),
+        (["--feed", "f.csv", "--capture-interval", "0.2", "--start", "2026-11-26T10:00"],
+         "--start: ISO 8601 timestamp without a UTC offset"),
+        (["--feed", "f.csv", "--capture-interval", "0.2", "--noise", "-1"], "--noise must be"),
+    ],
+)  # fmt: skip
+def test_bad_feed_options_are_named_before_any_work(
+    extra: list[str], says: str, tiny: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    pipe = [] if "--all" in extra else ["--pipe", "C"]
+    assert _run("simulate", tiny, *pipe, "--out", tmp_path / "o", *extra) == 2
+    assert says in capsys.readouterr().err
+    assert not (tmp_path / "o").exists() or not any((tmp_path / "o").iterdir())

@@ -266,6 +266,28 @@ def test_a_corrupt_cache_entry_is_reported_dropped_and_recomputed(
 #: evaluate in this process with its progress bar on, then ``--json PATH``.
 INTERRUPTIBLE = ["--capture-interval", "1", "--json"]
 
+#: Loaded by every Python process of the interrupted run (``PYTHONPATH``), the worker processes
+#: included: each burst simulation first says that it started (a line in the file named by
+#: ``BURSTLOC_TEST_STARTED``) and then simulates its burst again and again, so the run is
+#: always simulating when the signal lands, however fast or loaded the machine is.
+_NEVER_ENDING_SIMULATION = """
+import os
+
+import burstloc.sim.tsnet as _tsnet
+
+_simulate = _tsnet._simulate_uncached
+
+
+def _simulate_forever(scenario):
+    with open(os.environ["BURSTLOC_TEST_STARTED"], "a") as started:
+        started.write(f"{os.getpid()}\\n")
+    while True:
+        _simulate(scenario)
+
+
+_tsnet._simulate_uncached = _simulate_forever
+"""
+
 
 @pytest.mark.parametrize("workers", ["1", "2"])
 def test_ctrl_c_prints_one_line_exits_130_and_keeps_the_output(
@@ -273,34 +295,43 @@ def test_ctrl_c_prints_one_line_exits_130_and_keeps_the_output(
 ) -> None:
     out = tmp_path / "results.json"
     out.write_text('{"kept": true}\n')
-    err = tmp_path / "stderr.txt"
     cache = tmp_path / "cache"
-    with err.open("w") as stderr:
-        # Its own process group, interrupted as a terminal does it: SIGINT to the whole group,
-        # the worker processes included.
-        pipes = ["A", "B", "C", "D", "E"]  # more work than can finish before the signal lands
-        command = [*BURSTLOC, "evaluate", str(tiny), "--pipes", *pipes, "--workers", workers]
-        proc = subprocess.Popen(
-            [*command, *INTERRUPTIBLE, str(out)],
-            stdout=subprocess.DEVNULL,
-            stderr=stderr,
-            env=_env(cache),
-            start_new_session=True,
-        )
-        deadline = time.monotonic() + 120
-        while "simulating" not in err.read_text() and proc.poll() is None:
-            assert time.monotonic() < deadline, "the run never started simulating"
-            time.sleep(0.05)
-        os.killpg(proc.pid, signal.SIGINT)
-        status = proc.wait()
-    text = err.read_text()
+    hooks = tmp_path / "hooks"
+    hooks.mkdir()
+    (hooks / "sitecustomize.py").write_text(_NEVER_ENDING_SIMULATION)
+    started = tmp_path / "started.txt"
+    env = _env(cache)
+    env["PYTHONPATH"] = os.pathsep.join([str(hooks), env["PYTHONPATH"]])
+    env["BURSTLOC_TEST_STARTED"] = str(started)
+    # Its own process group, interrupted as a terminal does it: SIGINT to the whole group, the
+    # worker processes included.
+    pipes = ["A", "B", "C", "D", "E"]
+    command = [*BURSTLOC, "evaluate", str(tiny), "--pipes", *pipes, "--workers", workers]
+    proc = subprocess.Popen(
+        [*command, *INTERRUPTIBLE, str(out)],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+        start_new_session=True,
+    )
+    # No deadline: the run cannot end before the signal (its simulations never end); one that
+    # fails before simulating anything ends by itself and is caught here.
+    while not (started.exists() and started.read_text()) and proc.poll() is None:
+        time.sleep(0.05)
+    assert proc.poll() is None, proc.communicate()[1]
+    os.killpg(proc.pid, signal.SIGINT)
+    # Read to the end of the stream: every process that holds it (workers, Python's resource
+    # tracker, which may write after the run itself has ended) has closed it by then.
+    _, text = proc.communicate()
+    status = proc.returncode
     assert status == 130, text
     assert "Traceback" not in text and "KeyboardInterrupt" not in text, text
-    assert text.rstrip().splitlines()[-1] == "burstloc: interrupted"
+    assert text.rstrip().splitlines()[-1] == "burstloc: interrupted", text
     assert out.read_text() == '{"kept": true}\n'
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".results")] == []
-    # The work stops: the simulations under way are not finished (nor cached) after Ctrl-C.
-    assert len(list(cache.rglob("*.npz"))) < len(pipes)
+    # The work stops: no simulation under way is finished (nor cached) after Ctrl-C.
+    assert list(cache.rglob("*.npz")) == []
 
 
 def test_a_closed_stdout_ends_quietly(tiny: Path, tmp_path: Path) -> None:

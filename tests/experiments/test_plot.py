@@ -59,3 +59,33 @@ def test_accuracy_by_interval_has_one_panel_per_meter_model(tmp_path: Path) -> N
         return int.from_bytes(path.read_bytes()[16:20], "big")  # the PNG header's width
 
     assert width(two) > 1.8 * width(one)
+
+
+def test_the_traces_say_what_a_ranking_localizer_said(tiny: Path, tmp_path: Path) -> None:
+    # Before, every ranking localizer's traces were titled "not located", whatever it named.
+    from burstloc.experiments import paper
+    from burstloc.experiments.calibrate import calibrate
+    from burstloc.experiments.evaluate import evaluate
+    from burstloc.experiments.plot import trace_title
+
+    config = calibrate(tiny, capture_intervals=[0.2], noise_sigma=0.01, max_samples=300_000)
+    spec = RunSpec(DetectorConfig("cusum", 0.3), 0.2, 5, localizer="arrival")
+    ev = evaluate(
+        tiny,
+        [spec],
+        pipes=["C"],
+        phases=1,
+        scenario=paper.ScenarioConfig(burst_start=2.0),
+        config=config,
+        workers=1,
+        progress=False,
+    )
+    run = ev.runs[0]
+    attempt = run.attempts["C"][0]
+    assert attempt.decision is not None and attempt.predicted_pipe is not None
+    title = trace_title(run, "C", attempt.burst_start)
+    verdict = "correct" if attempt.correct else "wrong"
+    assert title.startswith(f"pipe C burst: named {attempt.predicted_pipe}, {verdict}"), title
+    assert "arrival localizer" in title and "not located" not in title
+    paths = write_plots(ev, tmp_path / "plots")
+    assert [p.read_bytes()[:8] for p in paths] == [PNG, PNG]

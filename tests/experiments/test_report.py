@@ -50,7 +50,9 @@ def small() -> Evaluation:
 def test_format_tables_sets_each_run_beside_the_paper(small: Evaluation) -> None:
     text = format_tables(small)
     lines = text.splitlines()
-    assert lines[0].startswith("Table III (CUSUM, detection mode 'window')")
+    # what the readings carried comes first: the paper's rules read noiseless readings
+    assert lines[0] == "Sensor noise on the readings (paper's rules: none; seed 0; --noise sets it)"
+    assert lines[1] == "" and lines[2].startswith("Table III (CUSUM, detection mode 'window')")
     assert any(line.startswith("Table IV (Shewhart, detection mode 'window')") for line in lines)
     # the paper's pipe order, whatever the order asked for
     rows = [line for line in lines if line.startswith(("P4 ", "12 "))]
@@ -73,6 +75,29 @@ def test_format_tables_sets_each_run_beside_the_paper(small: Evaluation) -> None
         assert f"{100 * tally.top1_fraction:.0f}% / {100 * tally.top3_fraction:.0f}%" in summary
     assert "over 2 phase(s) spread over one capture interval" in text
     assert lines[-1] == "warning: a warning to print"
+
+
+def test_another_network_is_not_framed_as_the_papers_tables(small: Evaluation, tiny: Path) -> None:
+    # Before, any network got "Table III / Table V" and an empty "paper" column.
+    runs = [RunSpec(DetectorConfig("cusum", 0.3), 0.2, 5, Mode.WINDOW, "S_C1")]
+    ev = evaluate(
+        tiny,
+        runs,
+        pipes=["C"],
+        phases=1,
+        scenario=paper.ScenarioConfig(burst_start=2.0),
+        workers=1,
+        progress=False,
+    )
+    text = format_tables(ev)
+    assert "Table" not in text and "S_C1" not in text, text
+    headers = [line.split() for line in text.splitlines() if line.startswith(("pipe", "detector"))]
+    assert len(headers) == 2 and not any("paper" in header for header in headers), text
+    assert text.startswith("Sensor noise on the readings (paper's rules: none;")
+    assert text.splitlines()[2].startswith("CUSUM, detection mode 'window'")
+    assert "Summary: accuracy" in text
+    assert "Table III" in format_tables(ev, paper_tables=True)  # when asked
+    assert "Table III" in format_tables(small)  # the paper's network, some of its pipes
 
 
 def test_write_json_is_the_schema_document(small: Evaluation, tmp_path: Path) -> None:

@@ -15,6 +15,11 @@ MOSQUITTO = shutil.which("mosquitto") or (
 )
 
 
+#: The topic on which the broker publishes its log of subscriptions: ``"<time>: <client> <qos>
+#: <topic filter>"``.
+SUBSCRIPTIONS = "$SYS/broker/log/M/subscribe"
+
+
 def _free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
@@ -23,18 +28,25 @@ def _free_port() -> int:
 
 @contextmanager
 def broker(folder: Path) -> Iterator[int]:
-    """Run ``mosquitto`` on 127.0.0.1 (config and log in ``folder``); yield its port."""
+    """Run ``mosquitto`` on 127.0.0.1 (its config in ``folder``); yield its port."""
     if MOSQUITTO is None:
         raise RuntimeError("mosquitto is not installed: run `make setup` (see the README)")
     port = _free_port()
     conf = folder / "mosquitto.conf"
     conf.write_text(
         f"listener {port} 127.0.0.1\nallow_anonymous true\npersistence false\n"
-        f"log_dest file {folder / 'mosquitto.log'}\n"
+        # The log goes to the broker's own topics (a log file in ``folder`` is not writable once
+        # a broker started as root drops to its own user, and then it logs nothing at all).
+        # Each subscription is published on SUBSCRIPTIONS, so that a test can wait until a
+        # client has subscribed instead of guessing how long that takes.
+        "log_dest topic\nlog_type subscribe\nlog_type error\nlog_type warning\n"
+        # Nagle's algorithm off on the broker's sockets too, as the monitor's documentation
+        # advises: small records are not held back for a delayed acknowledgement.
+        "set_tcp_nodelay true\n"
     )
     proc = subprocess.Popen([MOSQUITTO, "-c", str(conf)], stderr=subprocess.PIPE)
     try:
-        deadline = time.monotonic() + 10
+        deadline = time.monotonic() + 120  # a guard against a hang, not a timing assumption
         while True:
             try:
                 socket.create_connection(("127.0.0.1", port), timeout=0.2).close()

@@ -81,6 +81,28 @@ def test_readings_sent_again_after_a_restart_are_replayed_not_off_the_clock(
     }
 
 
+def test_a_feed_that_is_all_replay_is_said(tiny, tiny_config, long_feed, tmp_path: Path) -> None:
+    # Before, a feed sent again in full after a restart was skipped without a word.
+    config, feed = tiny_config, long_feed
+    state = StateFile(tmp_path / "state.json", _identity(config))
+    before = _loop(tiny, config, state)
+    for r in feed[:2000]:
+        before.loop.feed(r)
+    before.loop.save()
+    after = _loop(tiny, config, state)
+    saved = state.load()
+    assert saved is not None
+    after.loop.restore(saved)
+    after.run(feed[1000:2000])  # every reading seen before the restart
+    assert after.loop.readings == 1000 and after.decisions == []
+    meters = len(config.meters)
+    said = (
+        f"the feed ended in its replay: 1000 readings of {meters} meter(s) sent again after the "
+        "restart (seen before it) skipped, none newer"
+    )
+    assert [m for m in after.messages if said in m], after.messages
+
+
 def test_after_the_replay_a_meter_reading_out_of_order_is_late_again(
     tiny, tiny_config, long_feed, tmp_path: Path
 ) -> None:

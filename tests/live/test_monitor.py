@@ -26,6 +26,7 @@ from burstloc.live.windows import readings_of
 from burstloc.localize.config import Calibration
 from burstloc.localize.detection import DetectorConfig
 from burstloc.readings import Step
+from burstloc.sim.sensors import SensorModel
 from conftest import write_tiny
 
 SHORT = paper.ScenarioConfig(burst_start=2.0)
@@ -36,8 +37,11 @@ def config(tiny: Path) -> Calibration:
     return calibrate(tiny, capture_intervals=(0.2, 2.0), noise_sigma=0.01)
 
 
-def _evaluate(tiny: Path, config: Calibration, intervals: tuple[float, ...]):
-    """``evaluate``'s answers (the batch reference) for bursts on two pipes."""
+def _evaluate(
+    tiny: Path, config: Calibration, intervals: tuple[float, ...], noise: float | None = 0.0
+):
+    """``evaluate``'s answers (the batch reference) for bursts on two pipes (noiseless unless
+    ``noise`` says otherwise: ``None`` is evaluate's default, the calibrated noise)."""
     runs = [
         RunSpec(DetectorConfig("cusum", 0.3), ci, 5, localizer=name)
         for ci in intervals
@@ -52,6 +56,7 @@ def _evaluate(tiny: Path, config: Calibration, intervals: tuple[float, ...]):
         config=config,
         workers=1,
         progress=False,
+        noise=noise,
     )
 
 
@@ -84,6 +89,54 @@ def test_the_live_loop_decides_what_evaluate_decides(tiny: Path, config: Calibra
             assert live.first_alarm <= live.time
             doc = live.to_json()
             assert [p["pipe"] for p in doc["pipes"]] == [r.pipe for r in expected.ranking.top(3)]
+
+
+@pytest.mark.parametrize("noise", [None, 0.05])
+def test_the_live_loop_decides_what_evaluate_decides_under_noise(
+    tiny: Path, config: Calibration, noise: float | None
+):
+    # evaluate's own noise (None: each meter's calibrated sigma, 0.01 m; 0.05 m: five times
+    # what the bank was calibrated for, so that meters alarm alone before the burst), and the
+    # same noisy readings, reading by reading, through the live loop (reading stream, health,
+    # monitor): every attempt's decision, or its absence, is the same.
+    names = ("arrival", "signature", "fused")
+    runs = [RunSpec(DetectorConfig("cusum", 0.3), 0.2, 5, localizer=name) for name in names]
+    ev = evaluate(
+        tiny, runs, phases=3, scenario=SHORT, config=config, workers=1, progress=False, noise=noise
+    )
+    assert ev.scenario["noise"]["ranking"] == (noise if noise is not None else config.noise_sigma)
+    sensor = SensorModel(
+        noise_sigma=noise or 0.0, meter_sigma=None if noise else config.noise_sigma
+    )
+    compared = 0
+    for run in ev.runs:
+        for pipe in run.pipes:
+            for offset, expected in zip(run.offsets, run.attempts[pipe], strict=True):
+                result = ev.results[pipe]
+                times, values = readings_at_offset(
+                    result, run.spec, offset, config.meters, sensor=sensor
+                )
+                exact, _ = readings_at_offset(result, run.spec, offset, config.meters)
+                assert np.array_equal(times, exact)
+                steps = [Step(float(t), v) for t, v in zip(times, values, strict=True)]
+                monitor = BurstMonitor(
+                    tiny, config, capture_interval=0.2, localizer=run.spec.localizer
+                )
+                decided = Collected(monitor).run(readings_of(steps, monitor.meters)).decisions
+                if expected.decision is None:
+                    assert decided == [], (run.spec.localizer, pipe, offset)
+                    continue
+                live = decided[0]
+                assert live["pipes"][0]["pipe"] == expected.predicted_pipe
+                assert expected.ranking is not None
+                top = [r.pipe for r in expected.ranking.top(3)]
+                assert [p["pipe"] for p in live["pipes"]] == top, (run.spec.localizer, pipe)
+                # the reading stream puts each step on the capture grid (k x 0.2 s): a clock
+                # offset moves the stamp by less than half an interval, never the step
+                assert expected.decided_at is not None
+                assert abs(live["time"] - expected.decided_at) < 0.1 + 1e-9
+                compared += 1
+    assert compared >= len(ev.runs[0].pipes) * 3  # most attempts decided
 
 
 def test_the_live_loop_looks_again_at_the_arrivals_as_evaluate_does(
@@ -174,8 +227,14 @@ def test_bad_steps_are_refused_by_name_and_leave_the_monitor_as_it_was(
     m = len(fed.meters)
     nan = steps[split].values.copy()
     nan[1] = np.nan
+    huge = steps[split].values.copy()
+    huge[2] = -1e150  # finite, but beyond what a detector takes
     bad = [
         (Step(steps[split].timestamp, nan), f"non-finite reading nan from meter {fed.meters[1]!r}"),
+        (
+            Step(steps[split].timestamp, huge),
+            f"out-of-range reading -1e\\+150 from meter {fed.meters[2]!r}",
+        ),
         (Step(steps[split].timestamp, np.ones(m + 1)), f"values for {m} meters"),
         (Step(steps[split - 1].timestamp, steps[split].values), "is not after the previous"),
         (Step(math.inf, steps[split].values), "not finite"),

@@ -5,23 +5,28 @@ from __future__ import annotations
 import json
 import queue
 import signal
+import socket
 import subprocess
 import sys
 import time
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import paho.mqtt.client as mqtt
 import pytest
 from live_feed import burst_steps
-from mosquitto import broker
+from mosquitto import SUBSCRIPTIONS, broker
 from paho.mqtt.enums import CallbackAPIVersion
 
 from burstloc.exceptions import ConfigError
 from burstloc.experiments.calibrate import calibrate
-from burstloc.live.mqtt import parse_address
+from burstloc.live.mqtt import MqttLink, parse_address
 
 PIPE = "C"
+#: Seconds after which a test that waits for the monitor gives up: a guard against a hang, far
+#: beyond what the slowest machine needs (nothing here is timed).
+HANG_GUARD = 600
 
 
 @pytest.fixture(scope="module")
@@ -44,17 +49,31 @@ def test_readings_in_and_decisions_out_through_the_broker(
     config = calibrate(tiny, capture_intervals=(0.2,), noise_sigma=0.01)
     cfg = config.save(tmp_path / "tiny.json")
     steps = burst_steps(tiny, config.meters, PIPE, sigma=0.002, after=200.0)
-    got: queue.Queue[tuple[str, dict]] = queue.Queue()
+    got: queue.Queue[tuple[str, Any]] = queue.Queue()
+    hang = time.monotonic() + HANG_GUARD
     listener = _client(mqtt_port, "listener")
-    listener.on_message = lambda c, u, m: got.put((m.topic, json.loads(m.payload)))
+    listener.on_message = lambda c, u, m: got.put(
+        (m.topic, m.payload.decode() if m.topic == SUBSCRIPTIONS else json.loads(m.payload))
+    )
     listener.subscribe("burstloc/decisions", qos=1)
     listener.subscribe("burstloc/health", qos=1)
+    listener.subscribe(SUBSCRIPTIONS, qos=1)
     argv = [sys.executable, "-m", "burstloc", "monitor", str(tiny), "--config", str(cfg)]
     argv += ["--capture-interval", "0.2", "--mqtt", f"127.0.0.1:{mqtt_port}"]
     argv += ["--topic", "plant/readings/#", "--health-every", "30"]
     monitor = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
-        time.sleep(2.0)  # let it subscribe
+        # Readings sent before the monitor has subscribed would be lost: wait for the broker to
+        # log its subscription (however long the monitor takes to start on a loaded machine).
+        while True:
+            try:
+                topic, record = got.get(timeout=1)
+            except queue.Empty:
+                assert monitor.poll() is None, "the monitor ended before subscribing"
+                assert time.monotonic() < hang, "the monitor never subscribed"
+                continue
+            if topic == SUBSCRIPTIONS and record.endswith(" plant/readings/#"):
+                break
         sender = _client(mqtt_port, "sender")
         infos = [sender.publish("plant/readings/x", b"{broken", qos=1)]
         infos.append(sender.publish("plant/readings/x", b"1.0,J1,not-a-number", qos=1))
@@ -66,15 +85,16 @@ def test_readings_in_and_decisions_out_through_the_broker(
             infos.append(sender.publish("plant/readings/all", json.dumps(batch), qos=1))
         for info in infos:
             info.wait_for_publish(10)
-        deadline = time.monotonic() + 60
         decisions, health = [], []
-        while not decisions or not health:
-            assert time.monotonic() < deadline, "no decision on the broker"
+        while not decisions or not health:  # the monitor answers, or ends and fails the test
             try:
                 topic, record = got.get(timeout=1)
             except queue.Empty:
+                assert monitor.poll() is None, "the monitor ended without a decision"
+                assert time.monotonic() < hang, "no decision on the broker"
                 continue
-            (decisions if topic == "burstloc/decisions" else health).append(record)
+            if topic != SUBSCRIPTIONS:
+                (decisions if topic == "burstloc/decisions" else health).append(record)
         assert decisions[0]["type"] == "decision" and decisions[0]["pipes"][0]["pipe"] == PIPE
         assert health[0]["type"] == "health"
     finally:
@@ -91,3 +111,24 @@ def test_broker_address_is_checked() -> None:
     for bad in ("host:0", ":1883", "host:x", "host:70000"):
         with pytest.raises(ConfigError, match="HOST:PORT"):
             parse_address(bad)
+
+
+def test_the_link_sends_small_records_without_nagle_delay(mqtt_port: int) -> None:
+    # A decision is one small packet: with Nagle's algorithm on (paho's default) it could wait
+    # for the broker's delayed acknowledgement of the previous one before leaving.
+    messages: list[str] = []
+    link = MqttLink(
+        "127.0.0.1",
+        mqtt_port,
+        "plant/readings/#",
+        client_id="nodelay-check",
+        report=lambda kind, text: messages.append(text),
+    )
+    try:
+        assert link.wait_connected(HANG_GUARD), messages
+        sock = link._client.socket()
+        assert sock is not None
+        assert sock.getsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY) != 0
+    finally:
+        link.close()
+    assert not any("Nagle" in text for text in messages), messages

@@ -13,6 +13,24 @@ def test_csv_lines_header_bom_quotes_and_comments() -> None:
     assert list(parse_lines(lines)) == [Reading(0.2, "N2", 181.5), Reading(0.4, "N3", 180.0)]
 
 
+def test_iso_8601_and_epoch_timestamps_are_read_as_epoch_seconds() -> None:
+    # what historians export: ISO 8601 with an offset or Z; before, every such line was bad
+    epoch = 1_795_687_200.0  # 2026-11-26T10:00:00Z
+    lines = [
+        "2026-11-26T10:00:00.2Z,N2,181.5",
+        "2026-11-26T12:00:00.400+02:00,N2,181.4",
+        f"{epoch + 0.6},N2,181.3",
+        "oops,N2,1.0",
+    ]
+    items = list(parse_lines(lines))
+    assert [(i.meter, i.value) for i in items[:3]] == [("N2", 181.5), ("N2", 181.4), ("N2", 181.3)]
+    times = [i.timestamp for i in items[:3] if isinstance(i, Reading)]
+    assert abs(times[0] - (epoch + 0.2)) < 1e-6 and abs(times[1] - (epoch + 0.4)) < 1e-6
+    assert isinstance(items[3], BadReading) and "neither seconds nor an ISO 8601" in items[3].reason
+    payload = json.dumps({"t": "2026-11-26T10:00:01Z", "meter": "N3", "value": 1.0}).encode()
+    assert parse_payload(payload, "m") == [Reading(epoch + 1.0, "N3", 1.0)]
+
+
 def test_every_kind_of_bad_line_is_named_with_its_line_and_skipped() -> None:
     lines = [
         "0.2,N2,abc",
@@ -28,7 +46,7 @@ def test_every_kind_of_bad_line_is_named_with_its_line_and_skipped() -> None:
     bad = [i for i in items if isinstance(i, BadReading)]
     assert [b.where for b in bad] == [f"line {k}" for k in range(1, 8)]
     assert "value is not a finite number" in bad[0].reason and bad[0].meter == "N2"
-    assert "timestamp is not a finite number" in bad[2].reason
+    assert "ISO 8601 timestamp without a UTC offset" in bad[2].reason  # its zone is unknown
     assert "want 'timestamp,meter,value'" in bad[3].reason
     assert "no meter name" in bad[4].reason
     assert bad[5].reason == "not UTF-8 text" and "binary" in bad[6].reason

@@ -101,7 +101,7 @@ def test_rows_give_exactly_what_items_one_by_one_give(tiny, tiny_config, tiny_fe
         "unknown meter 'nowhere'",
         "implausible value 1e+06 m",
         "payload is not valid JSON",
-        "'t' must be a finite number of seconds",
+        "'t' must be seconds or an ISO 8601 time",
         "meter 'J4' silent",
         "meter 'J4' reports again",
     ]:

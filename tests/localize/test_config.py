@@ -171,3 +171,25 @@ def test_a_configuration_built_in_code_is_checked_too(stored: Calibration) -> No
         dataclasses.replace(item, cusum_drift={**item.cusum_drift, "J1": None})
     with pytest.raises(ConfigError, match=r"^meters lists 'J1' more than once"):
         dataclasses.replace(stored, meters=("J1", "J1", "J2", "J3"))
+
+
+def test_a_configuration_saved_as_npz_loads_the_same(
+    tiny: Path, stored: Calibration, tmp_path: Path
+) -> None:
+    from burstloc._atomic import write_json_npz
+    from burstloc._validate import read_json_npz
+
+    path = stored.save(tmp_path / "c.npz")
+    assert Calibration.load(path, network=tiny) == stored
+    # the tiny network's matrices are below the size that goes binary: force it, and check
+    # that the signature matrices really left the JSON text and come back bit for bit
+    write_json_npz(tmp_path / "small.npz", stored.to_json(), min_size=4)
+    with np.load(tmp_path / "small.npz") as data:
+        assert len(data.files) > len(stored.model.signature_sets)  # the document and arrays
+        text = data["document"].tobytes().decode()
+    assert '"matrix":{"$npz":' in text
+    back = Calibration.from_json(read_json_npz(tmp_path / "small.npz", "configuration"), "c")
+    assert back == stored
+    assert back.model.signature_sets[0].matrix.tobytes() == (
+        stored.model.signature_sets[0].matrix.tobytes()
+    )

@@ -180,10 +180,11 @@ def test_a_decision_knows_its_first_alarm_and_prints_as_json() -> None:
     assert doc["position"]["from"] == "m0"
     assert abs(doc["position"]["metres"] - 300.0) <= 30.0 + 1.0
     assert doc["position"]["low"] <= 300.0 <= doc["position"]["high"]
-    assert doc["pipes"] == [
-        {"pipe": r.pipe, "start": r.start, "end": r.end, "score": r.score}
+    assert doc["pipes"] == [  # scores to 1e-6, without float noise (0.049999999999964476)
+        {"pipe": r.pipe, "start": r.start, "end": r.end, "score": round(r.score, 6)}
         for r in decision.ranking.top(2)
     ]
+    assert [p["score"] for p in doc["pipes"]] == [0.05, -4.513351]
     assert Decision(Ranking([]), 1.0, 0.5).pipe is None
     fused, _, _ = _decide("fused", 1100.0, MATRIX[1])
     assert fused.position is not None and fused.position.pipe == fused.pipe == "p12"

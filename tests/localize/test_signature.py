@@ -62,20 +62,44 @@ def test_fit_rejects_mismatched_shapes() -> None:
         fit_signatures(np.array([1.0, np.nan]), np.ones((2, 2)))
 
 
-def test_signature_set_json_round_trip_and_subset(tmp_path: Path) -> None:
+@pytest.mark.parametrize("name", ["sig.json", "sig.npz"])
+def test_signature_set_round_trip_and_subset(tmp_path: Path, name: str) -> None:
     sig = _synthetic()
-    path = tmp_path / "sig.json"
+    path = tmp_path / name
     sig.save(path)
     back = SignatureSet.load(path)
     assert back.pipes == sig.pipes and back.meters == sig.meters
-    np.testing.assert_array_equal(back.matrix, sig.matrix)
+    assert back.endpoints == sig.endpoints and back.params == sig.params
+    np.testing.assert_array_equal(back.matrix, sig.matrix)  # bit for bit, either way
+    np.testing.assert_array_equal(back.baseline, sig.baseline)
     sub = back.for_meters(["m3", "m0"])
     np.testing.assert_array_equal(sub.matrix, sig.matrix[:, [3, 0]])
     with pytest.raises(InputError, match="m9"):
         back.for_meters(["m9"])
-    path.write_text(json.dumps({"format": "other"}))
+    if name.endswith(".npz"):
+        np.savez(path, **{**sig.to_arrays(), "format": np.asarray("other")})
+    else:
+        path.write_text(json.dumps({"format": "other"}))
     with pytest.raises(InputError, match="not a signature file"):
         SignatureSet.load(path)
+
+
+def test_signature_set_npz_is_checked(tmp_path: Path) -> None:
+    sig = _synthetic()
+    # a damaged or foreign file is an InputError naming the problem
+    arrays = sig.to_arrays()
+    np.savez(tmp_path / "nan.npz", **{**arrays, "matrix": np.full_like(sig.matrix, np.nan)})
+    with pytest.raises(InputError, match="'matrix' holds NaN"):
+        SignatureSet.load(tmp_path / "nan.npz")
+    np.savez(tmp_path / "short.npz", **{k: v for k, v in arrays.items() if k != "pipes"})
+    with pytest.raises(InputError, match="no array 'pipes'"):
+        SignatureSet.load(tmp_path / "short.npz")
+    np.savez(tmp_path / "flat.npz", **{**arrays, "matrix": sig.matrix.ravel()})
+    with pytest.raises(InputError, match="'matrix' must be 2-dimensional"):
+        SignatureSet.load(tmp_path / "flat.npz")
+    (tmp_path / "text.npz").write_text("not a zip")
+    with pytest.raises(InputError, match=r"not an \.npz file"):
+        SignatureSet.load(tmp_path / "text.npz")
 
 
 def test_signature_sets_must_agree() -> None:

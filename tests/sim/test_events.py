@@ -119,7 +119,8 @@ def test_bad_parameters_are_config_errors(kwargs: dict[str, object], match: str)
 def test_simulate_event_writes_one_file(tmp_path: Path) -> None:
     out = tmp_path / "out"
     args = ["simulate", str(ASSETS), "--event", "demand-step", "--asset", "N8"]
-    args += ["--demand-change", "0.02", "--start", "0.5", "--duration", "2", "--out", str(out)]
+    args += ["--demand-change", "0.02", "--burst-start", "0.5", "--duration", "2"]
+    args += ["--out", str(out)]
     args += ["--capture-interval", "0.2", "--cache-dir", str(tmp_path / "c"), "--quiet"]
     assert main(args) == 0
     scenario = EventScenario(ASSETS, "demand-step", "N8", demand_change=0.02)

@@ -164,3 +164,110 @@ def test_meter_separation_on_the_paper_network(paper15: Path) -> None:
         meter_separation(paper15, ["N4", "nowhere"])
     with pytest.raises(ConfigError, match="no meters"):
         meter_separation(paper15, [])
+
+
+def _reference_arrival_meters(
+    pipes: list[PipeGeometry],
+    junctions: list[str],
+    distances: dict[str, np.ndarray],
+    count: int,
+    resolution: float,
+) -> tuple[str, ...]:
+    """The arrival greedy evaluated directly: every candidate junction scored over all pairs of
+    candidate points (a points x points matrix per candidate), as the placement was first
+    written."""
+    from burstloc.constants import WAVE_SPEED
+    from burstloc.sim.placement import ARRIVAL_POINTS, _travel
+
+    travel = _travel(pipes, distances, ARRIVAL_POINTS, WAVE_SPEED)
+    n_pipes, n_points = len(pipes), len(ARRIVAL_POINTS)
+    owner = np.repeat(np.arange(n_pipes), n_points)
+    other_pipe = owner[:, None] != owner[None, :]
+    upper = np.triu(np.ones((n_pipes, n_pipes), dtype=bool), k=1)
+
+    def objective(s1: np.ndarray, s2: np.ndarray, k: int) -> float:
+        spread = np.sqrt(np.maximum(s2 / k - (s1 / k) ** 2, 0.0))
+        spread = np.where(other_pipe, spread, np.inf)
+        per_pair = spread.reshape(n_pipes, n_points, n_pipes, n_points).min(axis=(1, 3))
+        return float(np.minimum(per_pair[upper], resolution).sum())
+
+    spread_of = travel.std(axis=0)
+    chosen = [int(np.argmax(spread_of))]
+    sum1 = travel[:, chosen[0]][:, None] - travel[:, chosen[0]][None, :]
+    sum2 = sum1**2
+    while len(chosen) < count:
+        keys = []
+        for j in range(len(junctions)):
+            if j not in chosen:
+                diff = travel[:, j][:, None] - travel[:, j][None, :]
+                objective_j = objective(sum1 + diff, sum2 + diff**2, len(chosen) + 1)
+                keys.append((objective_j, spread_of[j], -j))
+        j = -max(keys)[2]
+        diff = travel[:, j][:, None] - travel[:, j][None, :]
+        sum1, sum2 = sum1 + diff, sum2 + diff**2
+        chosen.append(j)
+    return tuple(junctions[j] for j in sorted(chosen))
+
+
+@pytest.mark.parametrize("network", ["paper15.inp", "awumah11.inp", "paper15_assets.inp"])
+def test_arrival_placement_equals_the_direct_greedy(network: str) -> None:
+    """Same meters as the direct evaluation, for every count and two capture intervals (ties
+    between junctions, which happen when pairs saturate, included)."""
+    from burstloc.network import load_network
+    from burstloc.sim.prepare import arrival_geometry
+
+    wn = load_network(Path(__file__).resolve().parents[2] / "networks" / network)
+    junctions = list(wn.junction_name_list)
+    pipes, distances = arrival_geometry(wn, junctions)
+    for resolution in (0.2, 0.05):
+        for count in range(1, len(junctions) + 1):
+            expected = _reference_arrival_meters(pipes, junctions, distances, count, resolution)
+            got = arrival_meters(pipes, junctions, distances, count, resolution=resolution)
+            assert got == expected, (network, resolution, count)
+
+
+def test_arrival_placement_equals_the_direct_greedy_on_a_symmetric_grid() -> None:
+    """A 4 x 4 grid of equal pipes: many junctions tie in exact arithmetic, and the direct
+    evaluation's sums decide between them; the placement must fall the same way."""
+    import networkx as nx
+
+    side, spacing = 4, 300.0
+    grid = nx.grid_2d_graph(side, side)
+    names = [f"g{r}{c}" for r, c in grid.nodes]
+    label = dict(zip(grid.nodes, names, strict=True))
+    pipes = [
+        PipeGeometry(f"p{i}", label[u], label[v], spacing) for i, (u, v) in enumerate(grid.edges)
+    ]
+    hops = dict(nx.all_pairs_shortest_path_length(grid))
+    distances = {
+        label[u]: np.array([spacing * hops[u][v] for v in grid.nodes], dtype=np.float64)
+        for u in grid.nodes
+    }
+    for resolution in (0.2, 0.05):
+        for count in range(1, 9):
+            expected = _reference_arrival_meters(pipes, names, distances, count, resolution)
+            got = arrival_meters(pipes, names, distances, count, resolution=resolution)
+            assert got == expected, (resolution, count)
+
+
+def test_arrival_separation_equals_the_direct_evaluation(paper15: Path) -> None:
+    """The k-d tree's candidate pairs miss no pair closer than the capture interval: the same
+    share as comparing every point with every other point."""
+    from burstloc.constants import CANDIDATE_POSITIONS, WAVE_SPEED
+    from burstloc.sim.placement import _travel
+    from burstloc.sim.prepare import arrival_geometry
+
+    shares = []
+    for meters in (["N4", "N7", "1", "8"], ["N3", "5"], ["N2", "N5", "N8", "2", "4", "6", "7"]):
+        pipes, distances = arrival_geometry(paper15, meters)
+        travel = _travel(pipes, distances, CANDIDATE_POSITIONS, WAVE_SPEED)
+        owner = np.repeat(np.arange(len(pipes)), len(CANDIDATE_POSITIONS))
+        diff = travel[:, None, :] - travel[None, :, :]
+        spread = diff.max(axis=2) - diff.min(axis=2)
+        spread[owner[:, None] == owner[None, :]] = np.inf
+        for resolution in (0.05, 0.2, 1.0):
+            expected = float((spread.min(axis=1) >= resolution).mean())
+            got = arrival_separation(pipes, distances, resolution=resolution)
+            assert got == expected, (meters, resolution)
+            shares.append(expected)
+    assert len({*shares}) > 3  # neither all told nor none: the comparisons mean something

@@ -79,7 +79,7 @@ def test_cached_signatures_are_computed_once(
 ) -> None:
     first = cached_signatures(tiny_network, ["J4", "J2"], cache_dir=tmp_path)
     assert first.meters == ("J4", "J2")
-    files = list(tmp_path.glob("*.json"))
+    files = list(tmp_path.glob("*.npz"))
     assert len(files) == 1
 
     def boom(*args: object, **kwargs: object) -> SignatureSet:
@@ -100,7 +100,7 @@ def test_positions_along_the_pipe_match_an_off_centre_burst(
 ) -> None:
     sets = cached_signature_sets(tiny_network, cache_dir=tmp_path)
     assert [s.params["position"] for s in sets] == [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9]
-    assert len(list(tmp_path.glob("*.json"))) == len(sets)
+    assert len(list(tmp_path.glob("*.npz"))) == len(sets)
     middle = sets[4]
     for pipe in middle.pipes:
         for fraction in (0.1, 0.9):

@@ -71,3 +71,15 @@ def test_unreachable_scheduler_is_a_config_error(monkeypatch: pytest.MonkeyPatch
     monkeypatch.setattr(sweep_mod, "DASK_CONNECT_TIMEOUT", 1.0)
     with pytest.raises(ConfigError, match=r"tcp://127\.0\.0\.1:9"):
         sweep(math.sqrt, ITEMS, scheduler="tcp://127.0.0.1:9", progress=False)
+
+
+def test_the_same_failure_of_many_items_is_one_line() -> None:
+    # A network that cannot be simulated fails every pipe with the same error: said once, with
+    # how many items and which; a different error keeps its own line.
+    items = [-1.0, -2.0, -3.0, -4.0, -5.0, -6.0, -7.0, 4.0, "x"]
+    report = sweep(math.sqrt, items, workers=1, progress=False, label=lambda x: f"x={x}")
+    lines = report.failure_lines()
+    assert lines == [
+        "7 of 9 (x=-1.0, x=-2.0, x=-3.0, x=-4.0, x=-5.0 and 2 more): ValueError: math domain error",
+        "x=x: TypeError: must be real number, not str",
+    ]

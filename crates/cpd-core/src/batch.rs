@@ -86,7 +86,7 @@ fn take(v: &[usize], idx: &[usize]) -> Vec<usize> {
 /// `amplitude = x[end] - x[start]`.
 ///
 /// Errors: [`Error::InvalidParameter`] for a bad threshold/drift (TSNet does not check),
-/// [`Error::NonFiniteSample`] for a NaN/inf in `x`.
+/// [`Error::NonFiniteSample`] for a NaN/inf (or a value beyond ±[`crate::MAX_SAMPLE`]) in `x`.
 ///
 /// ```
 /// use cpd_core::detect_cusum;
@@ -177,7 +177,7 @@ pub fn detect_cusum(
 /// computed in NumPy's summation order, bit for bit), with amplitudes `|x_i - μ|`.
 ///
 /// Errors: [`Error::InvalidParameter`] for a bad `sigma`/`threshold`,
-/// [`Error::NonFiniteSample`] for a NaN/inf in `x`. An empty slice gives no changes.
+/// [`Error::NonFiniteSample`] for a NaN/inf (or a value beyond ±[`crate::MAX_SAMPLE`]) in `x`. An empty slice gives no changes.
 ///
 /// ```
 /// use cpd_core::detect_shewhart;

@@ -4,6 +4,8 @@ use alloc::string::String;
 use alloc::vec::Vec;
 use core::fmt;
 
+use crate::math::abs;
+
 /// Everything that can go wrong in `cpd-core`.
 ///
 /// Configuration problems ([`Error::InvalidParameter`], see [`Error::is_config`]) are
@@ -22,21 +24,24 @@ pub enum Error {
         /// What the value must satisfy, e.g. `"must be finite and > 0"`.
         reason: &'static str,
     },
-    /// A NaN or infinite sample was fed to a single-channel detector or a batch function.
+    /// A NaN, an infinite or an out-of-range sample (beyond ±[`MAX_SAMPLE`]) was fed to a
+    /// single-channel detector or a batch function.
     NonFiniteSample {
         /// Index of the bad sample in the detector's stream (or in the batch slice).
         index: u64,
         /// The offending value.
         value: f64,
     },
-    /// A NaN or infinite reading was passed to a bank's `step`.
+    /// A NaN, an infinite or an out-of-range reading (beyond ±[`MAX_SAMPLE`]) was passed to a
+    /// bank's `step`.
     NonFiniteReading {
         /// Channel (column) of the bad reading.
         channel: usize,
         /// The offending value.
         value: f64,
     },
-    /// A NaN or infinite value in the matrix passed to a bank's `step_many`.
+    /// A NaN, an infinite or an out-of-range value (beyond ±[`MAX_SAMPLE`]) in the matrix
+    /// passed to a bank's `step_many`.
     NonFiniteMatrixReading {
         /// Row (time step within the call) of the bad reading.
         row: usize,
@@ -65,6 +70,18 @@ pub enum Error {
         /// What is inconsistent.
         reason: &'static str,
     },
+    /// A deserialized state field holds a value no detector can reach: a NaN or an infinity, a
+    /// sample beyond ±[`MAX_SAMPLE`], a negative drift sum, a real sum above the threshold.
+    InvalidState {
+        /// The field, as named in the serde form (`"gp"`, `"s1"`, `"ring"`, `"reference"`, ...).
+        field: &'static str,
+        /// The element of an array field: a bank's channel, a ring's slot (`None` for a scalar).
+        index: Option<usize>,
+        /// The offending value.
+        value: f64,
+        /// What the field must hold, e.g. `"must be finite"`.
+        reason: &'static str,
+    },
     /// Snapshot bytes that cannot be restored (see `cpd_core::snapshot`): not a snapshot, of
     /// another kind or format, or holding an invalid configuration or state.
     InvalidSnapshot {
@@ -91,10 +108,20 @@ impl fmt::Display for Error {
                 reason,
             } => write!(f, "invalid parameter `{name}` = {value}: {reason}"),
             Error::NonFiniteSample { index, value } => {
-                write!(f, "non-finite sample {value} at index {index}")
+                write!(
+                    f,
+                    "{} sample {} at index {index}",
+                    bad_kind(*value),
+                    Num(*value)
+                )
             }
             Error::NonFiniteReading { channel, value } => {
-                write!(f, "non-finite reading {value} on channel {channel}")
+                write!(
+                    f,
+                    "{} reading {} on channel {channel}",
+                    bad_kind(*value),
+                    Num(*value)
+                )
             }
             Error::NonFiniteMatrixReading {
                 row,
@@ -102,7 +129,9 @@ impl fmt::Display for Error {
                 value,
             } => write!(
                 f,
-                "non-finite reading {value} at row {row}, channel {channel}"
+                "{} reading {} at row {row}, channel {channel}",
+                bad_kind(*value),
+                Num(*value)
             ),
             Error::ChannelCount { expected, got } => {
                 write!(
@@ -115,6 +144,18 @@ impl fmt::Display for Error {
                 "matrix of {len} values is not a whole number of rows of {channels} channels"
             ),
             Error::CorruptState { reason } => write!(f, "corrupt detector state: {reason}"),
+            Error::InvalidState {
+                field,
+                index,
+                value,
+                reason,
+            } => {
+                write!(f, "invalid state field `{field}`")?;
+                if let Some(i) = index {
+                    write!(f, "[{i}]")?;
+                }
+                write!(f, " = {}: {reason}", Num(*value))
+            }
             Error::InvalidSnapshot { kind, detail } => {
                 write!(f, "invalid {kind} snapshot: {detail}")
             }
@@ -123,6 +164,42 @@ impl fmt::Display for Error {
 }
 
 impl core::error::Error for Error {}
+
+/// The largest sample magnitude the detectors take: no sensor reports 1e100 of anything, and
+/// below it the running sums of squares cannot overflow (a Shewhart window of up to 2^64
+/// samples, each up to `(2e100)^2`, sums to about 1e220), so every state a detector reaches is
+/// finite and a restored state can be held to that.
+pub const MAX_SAMPLE: f64 = 1e100;
+
+/// True for a sample the detectors take: finite and within ±[`MAX_SAMPLE`] (false for NaN).
+#[inline(always)]
+pub(crate) fn in_range(x: f64) -> bool {
+    abs(x) <= MAX_SAMPLE
+}
+
+/// A value in a message: plain decimals in the usual range, else scientific notation (`1e160`,
+/// not 161 digits); `NaN`, `inf`, `-inf` as Rust writes them.
+struct Num(f64);
+
+impl fmt::Display for Num {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let v = self.0;
+        if !v.is_finite() || v == 0.0 || (1e-6..1e16).contains(&abs(v)) {
+            write!(f, "{v}")
+        } else {
+            write!(f, "{v:e}")
+        }
+    }
+}
+
+/// How a refused sample is described: "non-finite" or "out-of-range".
+fn bad_kind(value: f64) -> &'static str {
+    if value.is_finite() {
+        "out-of-range (|x| > 1e100)"
+    } else {
+        "non-finite"
+    }
+}
 
 /// Checks that `value` is finite and strictly positive.
 pub(crate) fn positive(name: &'static str, value: f64) -> Result<f64, Error> {
@@ -168,6 +245,46 @@ pub(crate) fn ensure(ok: bool, reason: &'static str) -> Result<(), Error> {
     }
 }
 
+/// A restored-state field check: [`Error::InvalidState`] naming `field` (and `index`) unless
+/// `ok`.
+#[cfg(feature = "serde")]
+pub(crate) fn field(
+    ok: bool,
+    field: &'static str,
+    index: Option<usize>,
+    value: f64,
+    reason: &'static str,
+) -> Result<(), Error> {
+    if ok {
+        Ok(())
+    } else {
+        Err(Error::InvalidState {
+            field,
+            index,
+            value,
+            reason,
+        })
+    }
+}
+
+/// A restored field that holds a sample: finite and within ±[`MAX_SAMPLE`].
+#[cfg(feature = "serde")]
+pub(crate) fn sample_field(name: &'static str, index: Option<usize>, x: f64) -> Result<(), Error> {
+    field(
+        in_range(x),
+        name,
+        index,
+        x,
+        "must be a sample: finite, within +-1e100",
+    )
+}
+
+/// A restored field that holds a running sum: finite.
+#[cfg(feature = "serde")]
+pub(crate) fn finite_field(name: &'static str, index: Option<usize>, x: f64) -> Result<(), Error> {
+    field(x.is_finite(), name, index, x, "must be finite")
+}
+
 /// Checks that `value` is finite and non-negative.
 pub(crate) fn non_negative(name: &'static str, value: f64) -> Result<f64, Error> {
     if value.is_finite() && value >= 0.0 {
@@ -181,30 +298,30 @@ pub(crate) fn non_negative(name: &'static str, value: f64) -> Result<f64, Error>
     }
 }
 
-/// Index and value of the first non-finite element of `xs`, if any.
+/// Index and value of the first element of `xs` that is not a sample ([`in_range`]), if any.
 #[inline]
 pub(crate) fn first_non_finite(xs: &[f64]) -> Option<(usize, f64)> {
     // Branch-free (vectorizable) scan first; locate the culprit only when something is wrong.
-    if xs.iter().fold(true, |ok, v| ok & v.is_finite()) {
+    if xs.iter().fold(true, |ok, v| ok & in_range(*v)) {
         return None;
     }
     xs.iter()
         .enumerate()
-        .find(|(_, v)| !v.is_finite())
+        .find(|(_, v)| !in_range(**v))
         .map(|(i, v)| (i, *v))
 }
 
-/// Rejects a non-finite sample with the stream index it would have had.
+/// Rejects a non-finite or out-of-range sample with the stream index it would have had.
 #[inline(always)]
 pub(crate) fn check_sample(x: f64, index: u64) -> Result<(), Error> {
-    if x.is_finite() {
+    if in_range(x) {
         Ok(())
     } else {
         Err(Error::NonFiniteSample { index, value: x })
     }
 }
 
-/// Rejects a slice holding a non-finite sample, naming the first one by its stream index
+/// Rejects a slice holding a non-finite or out-of-range sample, naming the first one by its stream index
 /// (`offset` = the stream index of `xs[0]`).
 #[inline]
 pub(crate) fn check_samples(xs: &[f64], offset: u64) -> Result<(), Error> {

@@ -1,7 +1,7 @@
 //! API (for binding authors; everything is re-exported at the crate root):
 //! - errors: [`Error`] (`InvalidParameter`, `NonFiniteSample`, `NonFiniteReading`,
 //!   `NonFiniteMatrixReading`, `ChannelCount`, `MatrixShape`, `CorruptState`,
-//!   `InvalidSnapshot`), [`Error::is_config`];
+//!   `InvalidState`, `InvalidSnapshot`), [`Error::is_config`], [`MAX_SAMPLE`];
 //! - results: [`Alarm`] `{ index, start, direction, amplitude }`, [`Direction`] `{ Rise, Drop }`,
 //!   [`ChannelAlarm`] `{ channel, alarm }`;
 //! - CUSUM: [`CusumConfig::new`]`(threshold, drift)`, [`Cusum::new`]`(config)` with `update`,
@@ -24,8 +24,11 @@
 //! - feature `snapshot`: `snapshot::to_bytes` / `snapshot::from_bytes`, the versioned CBOR
 //!   snapshots the Python package reads and writes.
 //!
-//! Non-finite input policy: a NaN or ±inf sample/reading is *rejected* with a typed error and
-//! the detector or bank is left exactly as it was (nothing consumed). Missing readings are
+//! Non-finite input policy: a NaN, ±inf or out-of-range (beyond ±[`MAX_SAMPLE`] = 1e100)
+//! sample/reading is *rejected* with a typed error and the detector or bank is left exactly as
+//! it was (nothing consumed). A restored state is held to what a detector can reach: every
+//! float field finite, samples within range, sums in their bounds ([`Error::InvalidState`]
+//! names the field). Missing readings are
 //! handled by the caller (skip, or hold the last value) above this crate.
 #![doc = include_str!("../README.md")]
 #![cfg_attr(not(feature = "std"), no_std)]
@@ -49,5 +52,5 @@ pub use alarm::{Alarm, ChannelAlarm, Direction};
 pub use bank::{Bank, CusumBank, ShewhartBank};
 pub use batch::{detect_cusum, detect_shewhart, CusumChanges, ShewhartChanges};
 pub use cusum::{Cusum, CusumConfig};
-pub use error::Error;
+pub use error::{Error, MAX_SAMPLE};
 pub use shewhart::{Shewhart, ShewhartConfig};

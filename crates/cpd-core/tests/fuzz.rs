@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::{signal, Rng};
+use common::{signal, snapshots, Rng};
 use cpd_core::snapshot::{self, Snapshot};
 use cpd_core::{Bank, Cusum, CusumBank, CusumConfig, Shewhart, ShewhartBank, ShewhartConfig};
 use proptest::prelude::*;
@@ -35,29 +35,7 @@ fn sample() -> impl Strategy<Value = f64> {
     ]
 }
 
-/// A few detectors of every kind, fed a seeded signal, as snapshot bytes.
-fn valid_snapshots(seed: u64, n: usize) -> Vec<(u8, Vec<u8>)> {
-    let x = signal(seed % 6, n, &mut Rng::new(seed));
-    let mut c = Cusum::new(CusumConfig::new(0.5, 0.01).unwrap());
-    let mut s = Shewhart::new(ShewhartConfig::new(5, 2.0, 0.1).unwrap()).unwrap();
-    let mut cb = Bank::from(CusumBank::new(2, CusumConfig::new(0.5, 0.0).unwrap()).unwrap());
-    let mut sb =
-        Bank::from(ShewhartBank::new(2, ShewhartConfig::new(4, 1.0, 0.1).unwrap()).unwrap());
-    let (mut a, mut b) = (Vec::new(), Vec::new());
-    c.update_slice(&x, &mut a).unwrap();
-    s.update_slice(&x, &mut a).unwrap();
-    let even = &x[..x.len() / 2 * 2];
-    cb.step_many(even, &mut b).unwrap();
-    sb.step_many(even, &mut b).unwrap();
-    vec![
-        (0, snapshot::to_bytes(&c)),
-        (1, snapshot::to_bytes(&s)),
-        (2, snapshot::to_bytes(&cb)),
-        (2, snapshot::to_bytes(&sb)),
-    ]
-}
-
-/// Bit-exact equality (a Shewhart's running sums may legitimately hold NaN, which `==` refuses).
+/// Bit-exact equality: the same snapshot bytes (`==` on floats takes -0.0 for 0.0).
 fn same<T: Snapshot>(a: &T, b: &T) -> bool {
     snapshot::to_bytes(a) == snapshot::to_bytes(b)
 }
@@ -248,7 +226,7 @@ proptest! {
     fn snapshot_decoder_never_panics_on_edited_snapshots(
         seed in any::<u64>(), n in 0usize..80, edits in prop::collection::vec(edit(), 1..6)
     ) {
-        for (_, mut bytes) in valid_snapshots(seed, n) {
+        for (_, mut bytes) in snapshots(seed, n) {
             for e in &edits {
                 apply(&mut bytes, e);
             }
@@ -354,7 +332,7 @@ proptest! {
 /// them are refused without allocating what they declare.
 #[test]
 fn huge_declared_lengths_are_refused() {
-    let valid = &valid_snapshots(3, 40)[0].1;
+    let valid = &snapshots(3, 40)[0].1;
     for header in [0x5bu8, 0x7b, 0x9b, 0xbb] {
         let mut bytes = vec![header];
         bytes.extend_from_slice(&u64::MAX.to_be_bytes());

@@ -16,7 +16,8 @@ macro_rules! detector_methods {
         pymethods_with_snapshots!($py_type, {
             /// Feeds one sample; returns the alarm it raises, if any.
             ///
-            /// A NaN or infinite sample raises `InputError` and leaves the state unchanged.
+            /// A NaN, infinite or out-of-range (beyond +-1e100) sample raises `InputError` and
+            /// leaves the state unchanged.
             fn update(&mut self, x: f64) -> PyResult<Option<PyAlarm>> {
                 match self.inner.update(x) {
                     Ok(None) => Ok(None),
@@ -27,10 +28,11 @@ macro_rules! detector_methods {
 
             /// Feeds every sample of a 1-D float64 array, releasing the GIL; returns the alarms.
             ///
-            /// A NaN or infinite sample anywhere raises `InputError` naming its index, and no
-            /// sample is consumed: the detector is as before the call. Another dtype or shape raises
-            /// `InputError` too. While the samples are processed other Python threads run; a
-            /// call on this same detector from one of them meanwhile raises `RuntimeError`.
+            /// A NaN, infinite or out-of-range sample anywhere raises `InputError` naming its
+            /// index, and no sample is consumed: the detector is as before the call. Another
+            /// dtype or shape raises `InputError` too. While the samples are processed other
+            /// Python threads run; a call on this same detector from one of them meanwhile
+            /// raises `RuntimeError`.
             fn update_many(&mut self, py: Python<'_>, x: &Bound<'_, PyAny>) -> PyResult<Vec<PyAlarm>> {
                 let view = arrays::vector(x, "x")?;
                 let samples = arrays::samples(&view);

@@ -14,9 +14,10 @@ create_exception!(
     burstloc._core,
     InputError,
     PyValueError,
-    "A detector was fed invalid input (a NaN or infinite sample, a wrong dtype, shape or \
-     channel count); the message names the sample, channel or argument. The detector's state \
-     is unchanged."
+    "A detector was fed invalid input (a NaN, infinite or out-of-range sample, beyond \
+     +-1e100; a wrong dtype, shape or channel count; a snapshot holding an invalid state); the \
+     message names the sample, channel, argument or state field. The detector's state is \
+     unchanged."
 );
 
 /// Converts a core error: bad configuration becomes `ConfigError`, everything else `InputError`.

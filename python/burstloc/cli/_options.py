@@ -12,6 +12,7 @@ if TYPE_CHECKING:
     from burstloc.sim.cache import DiskCache
 
 __all__ = [
+    "DefaultsFormatter",
     "add_meters_file_option",
     "add_min_pipe_length_option",
     "add_run_options",
@@ -22,6 +23,25 @@ __all__ = [
     "meters_of",
     "time_step_of",
 ]
+
+
+class DefaultsFormatter(argparse.HelpFormatter):
+    """``--help`` with every option's default: ``(default: X)`` after its help, unless the help
+    already says it, or the default is ``None`` or ``False`` (none, or a flag)."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        text = action.help or ""
+        default = action.default
+        if (
+            not action.option_strings
+            or default is None
+            or default is False
+            or default == []
+            or default is argparse.SUPPRESS
+            or "default" in text
+        ):
+            return action.help
+        return f"{text} (default: %(default)s)" if text else "default: %(default)s"
 
 
 def add_run_options(parser: argparse.ArgumentParser, *, cache: bool = True) -> None:

@@ -26,7 +26,13 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "`evaluate --config` and `monitor --config` accept.",
     )
     parser.add_argument("network", help="EPANET INP file")
-    parser.add_argument("--out", required=True, help="configuration file to write (JSON)")
+    parser.add_argument(
+        "--out",
+        required=True,
+        help="configuration file to write: JSON, or with a path ending in .npz the same "
+        "document with its large matrices as binary arrays (a third of the size on a "
+        "900-pipe network; both load anywhere a configuration is read)",
+    )
     parser.add_argument(
         "--capture-interval",
         type=float,

@@ -121,6 +121,23 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "0.02, the paper's scenario: the burst draws 0.02 x sqrt(pressure head) m^3/s, which "
         "can be more than a small network's whole demand)",
     )
+    parser.add_argument(
+        "--noise",
+        type=float,
+        default=None,
+        metavar="SIGMA",
+        help="the meters' Gaussian noise, m (standard deviation), added to every reading of "
+        "every run; default: the noise the configuration was calibrated for (each meter's, "
+        "what the monitor expects) on the ranking localizers' readings and none on the "
+        "paper's rules (its experiment is noiseless); 0: noiseless readings",
+    )
+    parser.add_argument(
+        "--noise-seed",
+        type=int,
+        default=0,
+        metavar="N",
+        help="seed of the noise (default 0): the same seed gives the same readings",
+    )
     add_min_pipe_length_option(parser)
     add_solver_option(parser)
     parser.add_argument(
@@ -134,6 +151,12 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     parser.add_argument("--json", default=None, metavar="PATH", help="write the JSON results")
     parser.add_argument("--csv", default=None, metavar="PATH", help="write the CSV results")
+    parser.add_argument(
+        "--paper-tables",
+        action="store_true",
+        help="frame the tables as the paper's Tables III-V, with its figures beside ours, on any "
+        "network (default: on the paper's network, networks/paper15.inp, only)",
+    )
     parser.add_argument(
         "--plot",
         default=None,
@@ -218,6 +241,10 @@ def run(args: argparse.Namespace) -> int:
         if not (math.isfinite(args.burst_coeff) and args.burst_coeff > 0):
             raise ConfigError(f"--burst-coeff must be a positive number, got {args.burst_coeff}")
         scenario = replace(scenario, burst_coeff=args.burst_coeff)
+    if args.noise is not None and not (math.isfinite(args.noise) and args.noise >= 0):
+        raise ConfigError(f"--noise must be a number of metres >= 0, got {args.noise}")
+    if args.noise_seed < 0:
+        raise ConfigError(f"--noise-seed must be >= 0, got {args.noise_seed}")
     ev = evaluate(
         args.network,
         runs,
@@ -232,8 +259,10 @@ def run(args: argparse.Namespace) -> int:
         config=config,
         meters=meters,
         time_step=time_step,
+        noise=args.noise,
+        noise_seed=args.noise_seed,
     )
-    print(report.format_tables(ev), end="")
+    print(report.format_tables(ev, True if args.paper_tables else None), end="")
     if args.events:
         _events(args, ev, cache)
     if args.json:

@@ -47,7 +47,11 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
             '("type": "decision") and a health record every --health-every seconds '
             '("type": "health"). Bad readings are reported on stderr and skipped; silent meters '
             "are excluded until they report again. NETWORK.inp is only checked against the "
-            "configuration's SHA-256."
+            "configuration's SHA-256. A decision's \"pipes\" are the three likeliest, best "
+            'first; their "score" (fused localizer) is a log-likelihood relative to the best '
+            "pipe: 0 for it, -1.2 for a pipe e^-1.2 = 0.3 times as likely. Timestamps: seconds "
+            "or ISO 8601 with a UTC offset (read as epoch seconds). Exit status 2 when a file or "
+            "stdin held no usable reading."
         ),
     )
     parser.add_argument("network", metavar="NETWORK.inp", help="EPANET INP file")
@@ -244,6 +248,9 @@ def run(args: argparse.Namespace) -> int:
     if flags["stop"]:
         saved_to = f"; state saved to {args.state}" if args.state else ""
         print(f"burstloc monitor: stopped by SIGTERM{saved_to}", file=sys.stderr)
+    elif link is None and loop.readings == 0:
+        source = "stdin" if args.readings == "-" else repr(args.readings)
+        raise InputError(f"no usable readings in {source}: nothing was monitored")
     return 0
 
 

@@ -4,7 +4,9 @@ TSNet (a valve or pump operation, a demand step)."""
 from __future__ import annotations
 
 import argparse
+import math
 import sys
+from datetime import datetime
 from typing import Any
 
 from burstloc._atomic import check_output
@@ -27,15 +29,22 @@ EVENT_KINDS = ("valve-closure", "valve-opening", "pump-trip", "pump-start", "dem
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Register ``burstloc simulate``."""
-    from burstloc.sim import scenario as sim
+    from burstloc.experiments.paper import SCENARIO
 
     parser = subparsers.add_parser(
         "simulate",
-        help="simulate pipe bursts with TSNet and write one NPZ file per scenario",
+        help="simulate pipe bursts with TSNet and write one NPZ file per scenario, or a feed",
         description=(
             "Simulate a burst on each chosen pipe (split at --position) and write the pressure "
             "head of every junction over time, one NPZ file per pipe: arrays time (T,), heads "
-            "(T, M), junctions (M,) and metadata (a JSON string). Results are cached."
+            "(T, M), junctions (M,) and metadata (a JSON string). Results are cached. The burst "
+            "is the one `burstloc evaluate` simulates (the paper's: coefficient 0.02, opened in "
+            "0.3 s, at 10 s). With --feed FILE (one pipe or --event, and --capture-interval): "
+            "also the readings the meters would send, in the CSV form `burstloc monitor "
+            "--readings` reads: a header line 'timestamp,meter,value', then one line per "
+            "reading, every meter's reading of a capture tick before the next tick's; "
+            "timestamp: seconds from the simulation's start, or with --start an ISO 8601 time; "
+            "meter: the junction; value: pressure head, m (0.1 mm), with --noise."
         ),
     )
     parser.add_argument("network", metavar="NETWORK.inp", help="EPANET INP file")
@@ -56,7 +65,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         type=float,
         default=1.0,
         metavar="S",
-        help="--event: how long the operation or the demand ramp takes (default 1 s)",
+        help="--event: how long the operation or the demand ramp takes, s",
     )
     parser.add_argument(
         "--setting",
@@ -75,22 +84,31 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument("--position", type=float, default=0.5, help="fraction along the pipe")
     parser.add_argument(
         "--burst-start",
-        "--start",
         type=float,
-        default=sim.DEFAULT_BURST_START,
+        default=SCENARIO.burst_start,
         metavar="S",
         help="when the burst (or --event) starts, s",
     )
-    parser.add_argument("--duration", type=float, default=SCENARIO_DURATION, metavar="S")
+    parser.add_argument(
+        "--duration", type=float, default=SCENARIO_DURATION, metavar="S", help="simulated, s"
+    )
     parser.add_argument(
         "--burst-coeff",
         type=float,
-        default=sim.DEFAULT_BURST_COEFF,
+        default=SCENARIO.burst_coeff,
         metavar="C",
         help="final emitter coefficient, m^3/s/m^0.5",
     )
-    parser.add_argument("--opening-time", type=float, default=sim.DEFAULT_OPENING_TIME, metavar="S")
-    parser.add_argument("--wave-speed", type=float, default=WAVE_SPEED, metavar="M/S")
+    parser.add_argument(
+        "--opening-time",
+        type=float,
+        default=SCENARIO.opening_time,
+        metavar="S",
+        help="how long the burst takes to open, s",
+    )
+    parser.add_argument(
+        "--wave-speed", type=float, default=WAVE_SPEED, metavar="M/S", help="pressure wave speed"
+    )
     parser.add_argument(
         "--time-step", type=float, default=None, metavar="S", help="default: TSNet's largest"
     )
@@ -103,8 +121,35 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         metavar="S",
         help="write the readings meters send every S seconds instead of TSNet's grid",
     )
-    parser.add_argument("--capture-phase", type=float, default=0.0, metavar="S")
-    parser.add_argument("--out", default="out/simulations", metavar="DIR")
+    parser.add_argument(
+        "--capture-phase", type=float, default=0.0, metavar="S", help="first capture tick, s"
+    )
+    parser.add_argument(
+        "--out", default="out/simulations", metavar="DIR", help="directory of the NPZ files"
+    )
+    feed = parser.add_argument_group("feed (the readings a monitor would receive)")
+    feed.add_argument(
+        "--feed",
+        default=None,
+        metavar="FILE",
+        help="write the captured readings as a `burstloc monitor --readings` feed (CSV)",
+    )
+    feed.add_argument(
+        "--noise",
+        type=float,
+        default=0.0,
+        metavar="SIGMA",
+        help="--feed: the meters' Gaussian noise, standard deviation in m",
+    )
+    feed.add_argument("--seed", type=int, default=0, metavar="N", help="--feed: the noise's seed")
+    feed.add_argument(
+        "--start",
+        default=None,
+        metavar="ISO-TIME",
+        help="--feed: the wall-clock time of the simulation's start, ISO 8601 with a UTC offset "
+        "or Z (e.g. 2026-11-26T10:00:00Z); the feed's timestamps are then ISO times "
+        "(default: seconds from the simulation's start)",
+    )
     add_run_options(parser)
     parser.set_defaults(handler=run)
     return parser
@@ -117,8 +162,9 @@ def run(args: argparse.Namespace) -> int:
 
     check_output(args.out, directory=True)
     check_run_options(args)
+    start = _check_feed(args)
     if args.event is not None:
-        return _event(args)
+        return _event(args, start)
     scenarios = scenario.burst_scenarios(
         args.network,
         None if args.all else args.pipe,
@@ -146,13 +192,51 @@ def run(args: argparse.Namespace) -> int:
             result = result.resample(args.capture_interval, args.capture_phase)
         result.save(scenario.output_path(args.out, result))
         written += 1
+        _write_feed(args, result, start)
     print(f"wrote {written} scenario file(s) to {args.out}")
-    for failure in report.failures:
-        print(f"burstloc: failed: {failure}", file=sys.stderr)
+    for line in report.failure_lines():
+        print(f"burstloc: failed: {line}", file=sys.stderr)
     return 0 if report.ok else 1
 
 
-def _event(args: argparse.Namespace) -> int:
+def _check_feed(args: argparse.Namespace) -> datetime | None:
+    """The feed options checked before any work; the feed's start time, if any."""
+    from burstloc.readings import parse_start_time
+
+    if args.feed is None:
+        for option, value, unset in [("--noise", args.noise, 0.0), ("--start", args.start, None)]:
+            if value != unset:
+                raise ConfigError(f"{option} applies to --feed FILE only")
+        return None
+    check_output(args.feed)
+    if args.capture_interval is None:
+        raise ConfigError(
+            "--feed needs --capture-interval S: the interval the meters send readings at "
+            "(the monitor's --capture-interval)"
+        )
+    if args.all or (args.pipe is not None and len(args.pipe) != 1):
+        raise ConfigError("--feed writes one burst's readings: give one --pipe (or --event)")
+    if not (math.isfinite(args.noise) and args.noise >= 0):
+        raise ConfigError(f"--noise must be a finite number >= 0 (m), got {args.noise}")
+    if args.seed < 0:
+        raise ConfigError(f"--seed must be >= 0, got {args.seed}")
+    if args.start is None:
+        return None
+    try:
+        return parse_start_time(args.start)
+    except ValueError as exc:
+        raise ConfigError(f"--start: {exc}, got {args.start!r}") from None
+
+
+def _write_feed(args: argparse.Namespace, result: Any, start: datetime | None) -> None:
+    from burstloc.sim.feed import write_feed
+
+    if args.feed is not None:
+        path, count = write_feed(args.feed, result, noise=args.noise, seed=args.seed, start=start)
+        print(f"wrote {count} readings to {path} (a `burstloc monitor --readings` feed)")
+
+
+def _event(args: argparse.Namespace, start: datetime | None) -> int:
     """``burstloc simulate --event KIND --asset ID``: one event, one NPZ file."""
     from burstloc.sim.events import EventScenario, event_output_path, simulate_event
 
@@ -181,4 +265,5 @@ def _event(args: argparse.Namespace) -> int:
         result = result.resample(args.capture_interval, args.capture_phase)
     path = result.save(event_output_path(args.out, scenario))
     print(f"wrote {path} ({scenario.label})")
+    _write_feed(args, result, start)
     return 0

@@ -64,7 +64,7 @@ from burstloc import _core
 from burstloc._validate import check_names, check_number
 from burstloc.constants import CAPTURE_INTERVALS, SIGNATURE_DECISION_DELAY, WAVE_SPEED
 from burstloc.exceptions import ConfigError, InputError
-from burstloc.inp import network_hash
+from burstloc.inp import check_meters, network_hash
 from burstloc.localize.config import (
     MAX_CAPTURE_INTERVAL,
     MAX_METERS,
@@ -316,9 +316,7 @@ def calibrate(
         meter_list = list(
             junctions if meters is None else check_names(meters, "meters", high=MAX_METERS)
         )
-    unknown = [m for m in meter_list if m not in junctions]
-    if unknown:
-        raise ConfigError(f"meter(s) {unknown} are not junctions of {os.fspath(network)}")
+    check_meters(meter_list, junctions, network, ConfigError)
     if baseline is not None:
         sigmas = check_baseline(baseline)
         kind = "recorded"

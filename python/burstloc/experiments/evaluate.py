@@ -74,6 +74,7 @@ from burstloc.experiments.runs import (
 if TYPE_CHECKING:
     from burstloc.localize.config import Calibration
     from burstloc.sim.scenario import ScenarioResult
+    from burstloc.sim.sensors import SensorModel
 
 __all__ = [
     "DEFAULT_LOCALIZER",
@@ -245,6 +246,8 @@ def evaluate(
     config: Calibration | None = None,
     meters: Sequence[str] | None = None,
     time_step: float | None = None,
+    noise: float | None = None,
+    noise_seed: int = 0,
 ) -> Evaluation:
     """Run the experiment: simulate (cached), stream, localize and score every run.
 
@@ -260,6 +263,13 @@ def evaluate(
 
     With ``pipes=None`` (every pipe) the pipes closed in the network file are left out, and
     said in the warnings.
+
+    ``noise`` is the meters' Gaussian noise (m, standard deviation) added to every reading,
+    drawn with ``noise_seed``: ``None`` (default) adds the calibrated noise of each meter
+    (the configuration's ``noise_sigma``, what the monitor was calibrated for) to the ranking
+    localizers' readings and none to the paper's rules (the paper's experiment is noiseless);
+    a number adds that noise to every run's readings, ``0`` none. The JSON's ``scenario``
+    records it.
 
     Raises:
         NetworkError: missing or malformed network, unknown pipe, a named pipe that is closed.
@@ -314,7 +324,7 @@ def evaluate(
     if report.failures:
         from burstloc.exceptions import SimulationError
 
-        raise SimulationError("; ".join(str(f) for f in report.failures))
+        raise SimulationError("; ".join(report.failure_lines()))
     results = {s.pipe: r for s, r in zip(scenarios, report.results, strict=True) if r is not None}
 
     dt = max(r.time_step for r in results.values())
@@ -347,13 +357,13 @@ def evaluate(
     setup = None
     if ranked:
         junctions = list(next(iter(results.values())).junctions)
-        unknown = [m for m in meters or () if m not in junctions]
-        if unknown:
-            raise NetworkError(f"meter(s) {unknown} are not junctions of {path}")
-        metered = list(meters) if meters else junctions
+        metered = inp.check_meters(meters, junctions, path) if meters else junctions
         intervals = sorted({spec.capture_interval for spec in ranked})
         setup = RankingSetup.build(path, metered, intervals, config)
-    attempts = _score(runs, results, chosen, graph, setup, phases, phase_span)
+    sensors = _sensors(noise, noise_seed, setup)
+    params["noise"] = _noise_record(noise, setup)
+    params["noise_seed"] = noise_seed
+    attempts = _score(runs, results, chosen, graph, setup, phases, phase_span, sensors)
     scorer = PositionScorer(wn, {p: results[p] for p in chosen})
     out = [
         RunResult(
@@ -373,6 +383,30 @@ def evaluate(
     )
 
 
+def _sensors(
+    noise: float | None, seed: int, setup: RankingSetup | None
+) -> dict[str, SensorModel | None]:
+    """The sensor model of the paper's rules and of the ranking localizers (see
+    :func:`evaluate`'s ``noise``)."""
+    from burstloc.sim.sensors import SensorModel
+
+    if noise is not None:
+        sensor = SensorModel(noise_sigma=noise, seed=seed) if noise > 0 else None
+        return {"paper": sensor, "ranking": sensor}
+    if setup is None:
+        return {"paper": None, "ranking": None}
+    calibrated = SensorModel(seed=seed, meter_sigma=setup.config.noise_sigma)
+    return {"paper": None, "ranking": calibrated if calibrated.enabled else None}
+
+
+def _noise_record(noise: float | None, setup: RankingSetup | None) -> dict[str, Any]:
+    """The JSON record of the readings' noise: m per run kind, per meter where calibrated."""
+    if noise is not None:
+        return {"paper": noise, "ranking": noise}
+    ranking = None if setup is None else dict(setup.config.noise_sigma)
+    return {"paper": 0.0, "ranking": ranking}
+
+
 def _score(
     runs: Sequence[RunSpec],
     results: dict[str, ScenarioResult],
@@ -381,6 +415,7 @@ def _score(
     setup: RankingSetup | None,
     phases: int,
     phase_span: str,
+    sensors: dict[str, SensorModel | None],
 ) -> dict[RunSpec, dict[str, list[Attempt]]]:
     """Every run's attempts, ``[spec][pipe][k]``. Ranking runs that differ only in their
     localizer see the same readings: they share one pass of the bank per attempt
@@ -391,8 +426,10 @@ def _score(
             continue
         offsets = phase_offsets(spec, phases, phase_span)
         if setup is None or spec.localizer == "paper":
+            sensor = sensors["paper"]
             scored[spec] = {
-                p: [locate_burst(results[p], graph, spec, o) for o in offsets] for p in pipes
+                p: [locate_burst(results[p], graph, spec, o, sensor=sensor) for o in offsets]
+                for p in pipes
             }
             continue
         key = _readings_key(spec)
@@ -403,7 +440,9 @@ def _score(
             for o in offsets:
                 ranked = rank_attempts(
                     results[p],
-                    readings_at_offset(results[p], spec, o, setup.meters),
+                    readings_at_offset(
+                        results[p], spec, o, setup.meters, sensor=sensors["ranking"]
+                    ),
                     setup,
                     detector=spec.detector.kind,
                     capture_interval=spec.capture_interval,

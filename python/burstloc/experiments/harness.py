@@ -39,16 +39,19 @@ import numpy as np
 from numpy.typing import NDArray
 
 from burstloc.constants import MeterModel
-from burstloc.exceptions import ConfigError, InputError, NetworkError
+from burstloc.exceptions import ConfigError, InputError
 from burstloc.experiments.calibrate import calibrate
 from burstloc.experiments.runs import RunSpec
+from burstloc.inp import check_meters
+from burstloc.live.monitor import BurstMonitor
 from burstloc.live.paper_locator import BurstLocator
 from burstloc.live.windows import replay
-from burstloc.localize.config import Calibration, calibrated_bank
-from burstloc.localize.decide import Decision, rank_alarms
+from burstloc.localize.config import Calibration
+from burstloc.localize.decide import Decision
 from burstloc.localize.detection import make_detector
 from burstloc.localize.evidence import Ranking
 from burstloc.localize.paper_rules import Localization
+from burstloc.readings import Step
 from burstloc.sim.capture import capture
 from burstloc.sim.prepare import ranking_localizers
 
@@ -138,10 +141,9 @@ def capture_readings(
         ConfigError: the clock's interval is finer than the simulation's time step.
     """
     junctions = list(result.junctions)
-    names = junctions if meters is None else list(meters)
-    unknown = [m for m in names if m not in junctions]
-    if unknown:
-        raise NetworkError(f"meter(s) {unknown} are not junctions of the simulated network")
+    names = (
+        junctions if meters is None else check_meters(meters, junctions, "the simulated network")
+    )
     columns = [junctions.index(m) for m in names]
     heads = result.heads if meters is None else result.heads[:, columns]
     ci = clock.capture_interval
@@ -161,9 +163,13 @@ def readings_at_offset(
     spec: RunSpec,
     offset: float,
     meters: Sequence[str] | None = None,
+    *,
+    sensor: SensorModel | None = None,
 ) -> Readings:
     """The readings of one run at a clock offset (s): ``meters`` (default every junction), on
-    :meth:`Clock.at_offset` with ``2 x interval`` readings of warm-up.
+    :meth:`Clock.at_offset` with ``2 x interval`` readings of warm-up; ``sensor`` adds its
+    noise, drawn under the key ``"<pipe>/<offset>"`` (the same readings for every run at that
+    offset and capture interval).
 
     The capture clock ticks at ``t0 - offset - 2 x interval x capture_interval + k x
     capture_interval`` (``t0``: the simulation's start). Ticks before ``t0`` carry the initial
@@ -171,7 +177,10 @@ def readings_at_offset(
     ``t0`` on sample the simulation (sample-and-hold).
     """
     clock = Clock.at_offset(spec.capture_interval, offset, 2 * spec.localization_interval)
-    return capture_readings(result, clock, spec.meter_model, meters=meters)
+    key = f"{result.pipe}/{offset!r}/{spec.capture_interval!r}"
+    return capture_readings(
+        result, clock, spec.meter_model, meters=meters, sensor=sensor, noise_key=key
+    )
 
 
 @dataclass(frozen=True)
@@ -244,13 +253,15 @@ def locate_burst(
     graph: nx.DiGraph,
     spec: RunSpec,
     offset: float = 0.0,
+    *,
+    sensor: SensorModel | None = None,
 ) -> Attempt:
     """Stream one simulated burst at a clock offset through the paper's real-time loop.
 
     The capture clock, and with it the window grid, starts ``offset`` seconds earlier relative
-    to the burst than at offset 0 (see :func:`readings_at_offset`).
+    to the burst than at offset 0 (see :func:`readings_at_offset`); ``sensor`` adds its noise.
     """
-    times, values = readings_at_offset(result, spec, offset)
+    times, values = readings_at_offset(result, spec, offset, sensor=sensor)
     meters = list(result.junctions)
     detector = make_detector(spec.detector, meters, spec.localization_interval, spec.mode)
     locator = BurstLocator(graph, meters, detector, spec.localization_interval)
@@ -262,11 +273,13 @@ def locate_burst(
 @dataclass
 class RankingSetup:
     """What the ranking localizers need: the meters (the columns of the readings), the
-    calibration of their detector bank and the localizers by name."""
+    calibration of their detector bank, the localizers by name and the network file (the
+    monitor checks the calibration against it)."""
 
     meters: list[str]
     config: Calibration
     localizers: RankingLocalizers
+    network: str
 
     @classmethod
     def build(
@@ -291,7 +304,7 @@ class RankingSetup:
             config.check(path, meters)
             for ci in capture_intervals:
                 config.for_interval(ci)
-        return cls(list(meters), config, ranking_localizers(path, meters))
+        return cls(list(meters), config, ranking_localizers(path, meters), path)
 
 
 def rank_attempts(
@@ -305,48 +318,56 @@ def rank_attempts(
     meter_model: MeterModel | str = "instantaneous",
     offset: float = 0.0,
 ) -> dict[str, Attempt]:
-    """One burst's readings (of ``setup.meters``, captured every ``capture_interval`` s) through
-    the calibrated ``detector`` bank, once, and every one of ``localizers``.
+    """One burst's readings (of ``setup.meters``, captured every ``capture_interval`` s) fed
+    step by step to the live monitor (:class:`burstloc.live.monitor.BurstMonitor`: the
+    calibrated ``detector`` bank, the corroboration of its alarms, the looks at the arrivals),
+    once for each of ``localizers``; its first decision is the attempt's answer.
 
-    The signature localizer ranks before the fused one, which reuses its ranking (both look at
-    the signatures of the same readings at the same time). An attempt without an alarm, or
-    whose evidence the localizer cannot answer from, is not located. ``offset`` is recorded in
-    the attempts.
+    Scoring the monitor itself makes what is scored what runs live: an alarm of one meter
+    alone (a noise excursion before the burst) is dismissed as the monitor dismisses it. A
+    burst the monitor detects but cannot place (an ``InputError`` it reports and skips) leaves
+    it watching for the next alarm, as live. An attempt without a decision is not located.
+    ``offset`` is recorded in the attempts.
 
     Returns:
         The attempt of each localizer, by name.
+
+    Raises:
+        InputError: ``readings`` do not have one column per meter of ``setup``.
     """
     times, values = readings
     if values.shape[1] != len(setup.meters):
         raise InputError(f"readings have {values.shape[1]} columns for {len(setup.meters)} meters")
-    cal = setup.config.for_interval(capture_interval)
     burst_start = float(result.metadata["burst_start"])
-    bank = calibrated_bank(detector, len(setup.meters), cal)
-    alarms = bank.run(np.ascontiguousarray(values))
     out: dict[str, Attempt] = {}
-    signature_ranking: Ranking | None = None  # shared with fused (same evidence, same time)
-    for name in sorted(dict.fromkeys(localizers), key=lambda name: name != "signature"):
-        out[name] = Attempt(result.pipe, offset, burst_start, None)
-        if not alarms:
-            continue
-        try:
-            decision = rank_alarms(
-                name,
-                setup.localizers,
-                setup.meters,
-                times,
-                values,
-                alarms,
-                cal,
-                meter_model,  # type: ignore[arg-type]
-                signature_ranking=signature_ranking,
-            )
-        except InputError:
-            continue
-        if name == "signature":
-            signature_ranking = decision.ranking
+    for name in dict.fromkeys(localizers):
+        monitor = BurstMonitor(
+            setup.network,
+            setup.config,
+            capture_interval=capture_interval,
+            detector=detector,
+            localizer=name,
+            meter_model=meter_model,  # type: ignore[arg-type]
+            localizers=setup.localizers,
+        )
+        decision = first_decision(monitor, times, values)
         out[name] = Attempt(result.pipe, offset, burst_start, decision=decision)
     return {name: out[name] for name in localizers}
+
+
+def first_decision(
+    monitor: BurstMonitor, times: NDArray[np.float64], values: NDArray[np.float64]
+) -> Decision | None:
+    """The first decision of ``monitor`` fed the readings ``(times, values)`` step by step, or
+    ``None``. A burst it detects but cannot place is skipped, as the live loop skips it."""
+    for t, row in zip(times.tolist(), values, strict=True):
+        try:
+            decided = monitor.push(Step(t, row))
+        except InputError:
+            continue
+        if decided is not None:
+            return decided.decision
+    return None
 
 
 def locate_ranked(

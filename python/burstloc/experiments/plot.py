@@ -6,9 +6,9 @@ Per run, two figures:
   pipe in green and the named pipe in red (a correct answer is green only, "not located" is
   said in the panel title);
 * ``<network>_<detector>_<mode>_<interval>s_traces_<pipe>.png``: for one chosen burst (the
-  first pipe evaluated, or ``pipe``), every meter's readings at phase 0 around the burst, the
-  deciding window shaded, each alarmed meter's change starts marked and the trigger meter drawn
-  thicker.
+  first pipe evaluated, or ``pipe``), every meter's readings at phase 0 around the burst, each
+  alarmed meter's change start marked, the decision time drawn (the paper's rules: the deciding
+  window shaded and the trigger meter thicker), titled with what the run said.
 
 matplotlib is imported only when a figure is drawn.
 """
@@ -29,7 +29,7 @@ from burstloc._atomic import write_bytes
 from burstloc.experiments.evaluate import Evaluation, RunResult
 from burstloc.sim.capture import resample
 
-__all__ = ["plot_accuracy_by_interval", "plot_network", "plot_traces", "write_plots"]
+__all__ = ["plot_accuracy_by_interval", "plot_network", "plot_traces", "trace_title", "write_plots"]
 
 _UNSAFE = re.compile(r"[^A-Za-z0-9._-]")
 
@@ -85,9 +85,11 @@ def plot_network(ev: Evaluation, r: RunResult, path: str | os.PathLike[str]) -> 
         ax.scatter(xs, ys, s=6, color="0.5", zorder=2)
         t0, t1 = r.truth[pipe]
         ax.plot(*zip(pos[t0], pos[t1], strict=True), color="tab:green", lw=4, zorder=3)
+        _label(ax, pos[t0], pos[t1], pipe, "tab:green")
         if a.predicted is not None and not a.correct:
             p0, p1 = a.predicted
             ax.plot(*zip(pos[p0], pos[p1], strict=True), color="tab:red", lw=3, zorder=4)
+            _label(ax, pos[p0], pos[p1], a.predicted_pipe or "", "tab:red")
         if not a.located:
             status = "not located"
         elif a.localization is None:  # a ranking localizer
@@ -104,55 +106,129 @@ def plot_network(ev: Evaluation, r: RunResult, path: str | os.PathLike[str]) -> 
     for ax in list(axes.flat)[n:]:
         ax.axis("off")
     fig.suptitle(
-        f"{Path(ev.network).name}: {r.spec.detector.kind}, mode {r.spec.mode.value}, "
-        f"capture {r.spec.capture_interval:g} s - {r.correct}/{r.total} correct (phase 0)",
-        fontsize=10,
+        f"{Path(ev.network).name}: {r.spec.localizer} localizer, {r.spec.detector.kind}, mode "
+        f"{r.spec.mode.value}, capture {r.spec.capture_interval:g} s - {r.correct}/{r.total} "
+        "correct (phase 0); green: burst pipe, red: pipe named instead",
+        fontsize=9,
     )
-    fig.tight_layout()
+    fig.tight_layout(rect=(0.0, 0.0, 1.0, 1.0 - 0.35 / fig.get_figheight()))  # room for the title
     return _save(plt, fig, path)
 
 
+def _label(ax: Any, a: tuple[float, float], b: tuple[float, float], text: str, color: str) -> None:
+    """``text`` at the middle of the segment ``a``-``b``, in ``color``."""
+    ax.annotate(
+        text,
+        ((a[0] + b[0]) / 2, (a[1] + b[1]) / 2),
+        fontsize=7,
+        color=color,
+        fontweight="bold",
+        xytext=(5, 5),
+        textcoords="offset points",
+        ha="left",
+        zorder=5,
+        bbox={"boxstyle": "round,pad=0.1", "fc": "white", "ec": "none", "alpha": 0.8},
+    )
+
+
+def _ranked_alarms(ev: Evaluation, r: RunResult, pipe: str) -> dict[str, float]:
+    """Each alarmed meter's first alarm (the change's start time) in a ranking localizer's run
+    at phase 0: the readings and calibrated bank of that run, again."""
+    from burstloc.experiments.harness import readings_at_offset
+    from burstloc.localize.config import calibrated_bank
+
+    setup = ev.setup
+    if setup is None:
+        return {}
+    times, values = readings_at_offset(ev.results[pipe], r.spec, 0.0, meters=setup.meters)
+    cal = setup.config.for_interval(r.spec.capture_interval)
+    bank = calibrated_bank(r.spec.detector.kind, len(setup.meters), cal)
+    first: dict[str, float] = {}
+    for alarm in bank.run(np.ascontiguousarray(values)):
+        meter = setup.meters[int(alarm.channel or 0)]
+        first.setdefault(meter, float(times[alarm.start]))
+    return first
+
+
+def trace_title(r: RunResult, pipe: str, start: float) -> str:
+    """What the run said of the burst on ``pipe`` at phase 0: the named pipe, right or wrong,
+    by which rule or localizer, and when."""
+    a = r.attempts[pipe][0]
+    loc, decision = a.localization, a.decision
+    if loc is not None:
+        return (
+            f"pipe {pipe} burst: named {loc.pipe} ({loc.start_node} - {loc.end_node}), "
+            f"{'correct' if a.correct else 'wrong'}, by {loc.rule.value}, trigger "
+            f"{loc.trigger_node}, {loc.decision_time - start:.2f} s after the burst"
+        )
+    if decision is not None and a.predicted_pipe is not None:
+        return (
+            f"pipe {pipe} burst: named {a.predicted_pipe}, {'correct' if a.correct else 'wrong'}"
+            f" ({r.spec.localizer} localizer), first alarm {decision.first_alarm - start:.2f} s "
+            f"and decision {decision.time - start:.2f} s after the burst"
+        )
+    return f"pipe {pipe} burst: not located ({r.spec.localizer})"
+
+
 def plot_traces(ev: Evaluation, r: RunResult, pipe: str, path: str | os.PathLike[str]) -> Path:
-    """The meters' readings around the burst on ``pipe`` (phase 0) with the alarms."""
+    """The meters' readings around the burst on ``pipe`` (phase 0) with the alarms: each
+    alarmed meter's change start marked (``>``), the decision time and, for the paper's rules,
+    the deciding window shaded; the title says what the run said."""
     plt = _pyplot()
     result = ev.results[pipe]
     a = r.attempts[pipe][0]
-    loc = a.localization
+    loc, decision = a.localization, a.decision
     ci = r.spec.capture_interval
     times, values = resample(result.time, result.heads, ci, 0.0)
     start = a.burst_start
     window = 2 * r.spec.localization_interval * ci
-    end = loc.decision_time + window if loc else start + 2 * window
+    if loc is not None:
+        decided: float | None = loc.decision_time
+        alarms = {m: c[0].start_time for m, c in loc.evidence.items() if c}
+    else:
+        decided = None if decision is None else decision.time
+        alarms = _ranked_alarms(ev, r, pipe) if decision is not None else {}
+    # around the alarms; a decision much later (the fused localizer waiting for the signature)
+    # is marked at the right edge instead of squeezing the transient into a sliver
+    end = max(start + 2 * window, max(alarms.values(), default=start) + window)
+    if decided is not None and decided - start <= 5 * window:
+        end = max(end, decided + window)
     keep = (times >= start - window) & (times <= end)
-    fig, ax = plt.subplots(figsize=(10, 5))
+    fig, ax = plt.subplots(figsize=(10, 5.4))
     for j, meter in enumerate(result.junctions):
         trigger = loc is not None and meter == loc.trigger_node
+        alarmed = meter in alarms
         (line,) = ax.plot(
             times[keep],
             values[keep, j],
-            lw=2.5 if trigger else 0.9,
-            label=meter,
+            lw=2.5 if trigger else (1.3 if alarmed else 0.7),
+            label=f"{meter} (alarm)" if alarmed else meter,
             drawstyle="steps-post",
+            alpha=1.0 if alarmed else 0.6,
         )
-        if loc is not None and meter in loc.evidence:
-            for c in loc.evidence[meter]:
-                k = int(np.searchsorted(times, c.start_time))
-                if 0 <= k < times.size:
-                    ax.plot(times[k], values[k, j], ">", color=line.get_color(), ms=7)
+        if alarmed:
+            k = int(np.searchsorted(times, alarms[meter]))
+            if 0 <= k < times.size:
+                ax.plot(times[k], values[k, j], ">", color=line.get_color(), ms=8, mec="k")
     ax.axvline(start, color="k", ls="--", lw=1, label="burst start")
+    if decided is not None and decided <= end:
+        ax.axvline(decided, color="tab:red", ls=":", lw=1.5, label="decision")
+    elif decided is not None:
+        ax.annotate(
+            f"decision at {decided:g} s ->",
+            (1.0, 0.97),
+            xycoords="axes fraction",
+            ha="right",
+            va="top",
+            fontsize=8,
+            color="tab:red",
+        )
     if loc is not None:
         ax.axvspan(loc.decision_time - window + ci, loc.decision_time, color="0.9", zorder=0)
-        title = (
-            f"pipe {pipe} burst: named {loc.pipe} ({loc.start_node} - {loc.end_node}) by "
-            f"{loc.rule.value}, trigger {loc.trigger_node}, "
-            f"{loc.decision_time - start:.2f} s after the burst"
-        )
-    else:
-        title = f"pipe {pipe} burst: not located"
-    ax.set_title(title, fontsize=10)
+    ax.set_title(trace_title(r, pipe, start), fontsize=9, wrap=True)
     ax.set_xlabel("time (s)")
     ax.set_ylabel("pressure head (m)")
-    ax.legend(fontsize=7, ncol=2, loc="lower left")
+    ax.legend(fontsize=7, ncol=2, loc="lower left", title="meters; > alarm start", title_fontsize=7)
     fig.tight_layout()
     return _save(plt, fig, path)
 

@@ -33,7 +33,14 @@ from burstloc.experiments.position import PositionErrors, PositionOutcome
 if TYPE_CHECKING:
     from burstloc.experiments.grid import StudySettings
 
-__all__ = ["CSV_FIELDS", "format_tables", "write_csv", "write_json", "write_study_report"]
+__all__ = [
+    "CSV_FIELDS",
+    "format_tables",
+    "is_paper_network",
+    "write_csv",
+    "write_json",
+    "write_study_report",
+]
 
 #: Columns of :func:`write_csv`.
 CSV_FIELDS: tuple[str, ...] = (
@@ -96,30 +103,70 @@ def _render(rows: list[list[str]], header: list[str]) -> list[str]:
     return out
 
 
-def _run_title(r: RunResult) -> str:
+def _run_title(r: RunResult, framed: bool = True) -> str:
     label = r.spec.paper_run()
-    name = label.scenario if label else "run"
-    if r.spec.localizer != "paper":
+    name = label.scenario if label and framed else "run"
+    if r.spec.localizer != "paper" or not framed:
         short = "avg" if r.spec.meter_model == "interval-averaged" else "inst"
         name = f"{r.spec.localizer}/{short}"
     return f"{name} {r.spec.capture_interval:g}s"
 
 
-def format_tables(ev: Evaluation) -> str:
-    """The per-pipe tables and the Table V summary as text (``*`` marks a correct pipe)."""
-    out: list[str] = []
+def noise_line(ev: Evaluation) -> str:
+    """What noise the readings carried (``ev.scenario["noise"]``), in one line."""
+    noise = ev.scenario.get("noise") or {}
+
+    def said(sigma: Any) -> str:
+        if isinstance(sigma, dict):
+            levels = sorted(set(sigma.values()))
+            if not levels or levels == [0.0]:
+                return "none"
+            span = f"{levels[0]:g} m" if len(levels) == 1 else f"{levels[0]:g}-{levels[-1]:g} m"
+            return f"the calibrated sigma = {span}"
+        return "none" if not sigma else f"sigma = {sigma:g} m"
+
+    parts = []
+    if any(r.spec.localizer == "paper" for r in ev.runs):
+        parts.append(f"paper's rules: {said(noise.get('paper'))}")
+    if any(r.spec.localizer != "paper" for r in ev.runs):
+        parts.append(f"ranking localizers: {said(noise.get('ranking'))}")
+    seed = ev.scenario.get("noise_seed", 0)
+    return f"Sensor noise on the readings ({'; '.join(parts)}; seed {seed}; --noise sets it)"
+
+
+def is_paper_network(ev: Evaluation) -> bool:
+    """Whether ``ev`` evaluated the paper's network (``networks/paper15.inp``): every burst
+    pipe is one of the paper's, between the paper's nodes in flow direction."""
+    truth = ev.runs[0].truth if ev.runs else {}
+    return bool(truth) and all(_pair(truth[p]) == paper.TRUE_PIPES.get(p) for p in truth)
+
+
+def format_tables(ev: Evaluation, paper_tables: bool | None = None) -> str:
+    """The per-pipe tables and the summary as text (``*`` marks a correct pipe).
+
+    With ``paper_tables`` (default: on the paper's network only, :func:`is_paper_network`) they
+    are framed as the paper's Tables III-V, with the paper's figures beside ours; otherwise
+    they carry no figure of the paper's, whose network is another.
+    """
+    framed = is_paper_network(ev) if paper_tables is None else paper_tables
+    out: list[str] = [noise_line(ev)]
     for kind, mode, runs in _groups(ev):
         number, name = _TABLE_NAMES[kind]
         pipes = _pipe_order(runs[0].pipes)
         out.append("")
-        out.append(
-            f"Table {number} ({name}, detection mode '{mode}'): burst pipe named at phase 0, "
-            "'*' = correct; 'paper' = the paper's Table " + number
-        )
+        if framed:
+            out.append(
+                f"Table {number} ({name}, detection mode '{mode}'): burst pipe named at phase 0, "
+                "'*' = correct; 'paper' = the paper's Table " + number
+            )
+        else:
+            out.append(
+                f"{name}, detection mode '{mode}': burst pipe named at phase 0, '*' = correct"
+            )
         header = ["pipe", "true"]
         for r in runs:
-            header.append(_run_title(r))
-            if r.spec.paper_run() is not None:
+            header.append(_run_title(r, framed))
+            if framed and r.spec.paper_run() is not None:
                 header.append("paper")
         rows: list[list[str]] = []
         for p in pipes:
@@ -128,7 +175,7 @@ def format_tables(ev: Evaluation) -> str:
                 a = r.attempts[p][0]
                 row.append(_pair(a.predicted) + (" *" if a.correct else ""))
                 pr = r.spec.paper_run()
-                if pr is not None:
+                if framed and pr is not None:
                     if p in paper.TRUE_PIPES:
                         pub = paper.published_prediction(kind, p, pr.capture_interval)
                         row.append(pub + (" *" if pub == paper.TRUE_PIPES[p] else ""))
@@ -139,7 +186,7 @@ def format_tables(ev: Evaluation) -> str:
         for r in runs:
             total.append(f"{r.correct}/{r.total}")
             pr = r.spec.paper_run()
-            if pr is not None:
+            if framed and pr is not None:
                 k = CAPTURE_INTERVALS.index(pr.capture_interval)
                 total.append(
                     f"{paper.published_correct(kind)[k]}/25 "
@@ -150,10 +197,15 @@ def format_tables(ev: Evaluation) -> str:
 
     out.append("")
     out.append(
-        f"Table V: accuracy (eq. 4) at phase 0, and mean [min-max] over "
-        f"{len(ev.runs[0].offsets)} phase(s) spread over one "
+        f"{'Table V' if framed else 'Summary'}: accuracy (eq. 4) at phase 0, and mean [min-max] "
+        f"over {len(ev.runs[0].offsets)} phase(s) spread over one "
         f"{'capture interval' if ev.phase_span == 'capture' else 'localization window'}; "
-        "paper = Table V; time = median time to localize; position error = network distance "
+        + (
+            "paper = Table V; "
+            if framed
+            else "top-1 / top-3 = the burst pipe named first / among the first three; "
+        )
+        + "time = median time to localize; position error = network distance "
         "from the true burst point to the named position, over every attempt (mean interval width, "
         "intervals on the burst pipe that held the true point)"
     )
@@ -164,7 +216,7 @@ def format_tables(ev: Evaluation) -> str:
         "params",
         "phase 0",
         "phase mean [min-max]",
-        "paper",
+        *(["paper"] if framed else []),
         "median time",
         "localizer",
         "top-1 / top-3",
@@ -195,7 +247,7 @@ def format_tables(ev: Evaluation) -> str:
                     params,
                     f"{r.correct}/{r.total} = {_pct(r.accuracy)}",
                     f"{100 * sum(acc) / len(acc):.1f}% [{_pct(min(acc))}-{_pct(max(acc))}]",
-                    pub,
+                    *([pub] if framed else []),
                     "-" if ttl is None else f"{ttl:.2f} s",
                     f"{r.spec.localizer} ({r.spec.meter_model})",
                     f"{_pct(tally.top1_fraction)} / {_pct(tally.top3_fraction)}",

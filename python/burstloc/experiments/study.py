@@ -98,7 +98,7 @@ def score_point(task: tuple[StudyPoint, StudySettings]) -> list[dict[str, Any]]:
         seed=settings.seed,
     )
     localizers = RankingLocalizers(arrival, signature, FusedLocalizer(arrival, signature))
-    setup = RankingSetup(meters, config, localizers)
+    setup = RankingSetup(meters, config, localizers, point.network)
     sensor = SensorModel(noise_sigma=f.noise_sigma, seed=settings.seed)
     rows: list[dict[str, Any]] = []
     for dt in settings.capture_intervals:

@@ -14,4 +14,15 @@
 * :mod:`~burstloc.live.state`: the saved state (atomic, versioned, bound to its setup);
 * :mod:`~burstloc.live.mqtt`: readings from a broker, decisions and health to it;
 * :mod:`~burstloc.live.paper_locator`: the paper's real-time loop (windows, detector, rules).
+
+The public way to feed readings to a :class:`~burstloc.live.monitor.BurstMonitor` (also in the
+package façade, ``burstloc.StepFeed`` ...; ``docs/api.md`` has an example): :func:`parse_lines`
+reads CSV lines into readings, a :class:`StepFeed` assembles them into complete time steps, and
+``BurstMonitor.push(step)`` answers. :class:`~burstloc.live.loop.LiveLoop` adds meter health,
+reports and a saved state (what ``burstloc monitor`` runs).
 """
+
+from burstloc.live.feeds import StepFeed, StreamStats
+from burstloc.live.parse import BadReading, parse_lines
+
+__all__ = ["BadReading", "StepFeed", "StreamStats", "parse_lines"]

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from burstloc.localize.decide import Decision
+from burstloc.localize.decide import Decision, json_time
 from burstloc.localize.evidence import Ranking
 
 __all__ = ["LiveDecision"]
@@ -79,11 +79,11 @@ class LiveDecision:
         else:
             kind, burst = ("decision" if self.is_burst else "event"), self.is_burst
         doc: dict[str, Any] = {"type": kind, "burst": burst, **self.decision.to_json(top)}
-        if self.transient:
-            doc["classify_at"] = self.classify_at
+        if self.transient and self.classify_at is not None:
+            doc["classify_at"] = json_time(self.classify_at)
         doc.update(
             waited=self.waited,
-            decision_delay_s=self.delay,
+            decision_delay_s=json_time(self.delay),
             localizer=self.localizer,
             meters=list(self.meters),
             excluded=list(self.excluded),

@@ -326,6 +326,15 @@ class Health:
         """The meters currently silent."""
         return tuple(m for m, h in self.meter.items() if h.silent)
 
+    def replaying(self) -> dict[str, int]:
+        """The meters still in their replay after a restart (no newer reading yet), with the
+        readings of theirs replayed so far."""
+        return {
+            m: self._replayed[j]
+            for j, m in enumerate(self.meters)
+            if self._replay[j] is not None and self._replayed[j]
+        }
+
     def record(self) -> dict[str, Any]:
         """The health record (JSON-ready, ``"type": "health"``)."""
         return {

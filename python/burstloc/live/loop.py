@@ -304,6 +304,11 @@ class LiveLoop:
         if self.observer is not None:
             self.observer.record(record)
 
+    @property
+    def readings(self) -> int:
+        """Items fed so far that were readings of a configured meter (bad ones not counted)."""
+        return self._readings
+
     def tick(self) -> None:
         """Periodic work without input (silence, health, state save): call when idle."""
         self._tick()
@@ -329,6 +334,14 @@ class LiveLoop:
         if it was), save the state."""
         for step in self.stream.flush():
             self._step(step)
+        replaying = self.health.replaying()
+        if replaying:  # a replay is said when a newer reading ends it: this one never ended
+            self.report(
+                "replay",
+                f"the feed ended in its replay: {sum(replaying.values())} readings of "
+                f"{len(replaying)} meter(s) sent again after the restart (seen before it) "
+                "skipped, none newer",
+            )
         if self._items == 0:
             self.report("input", "the feed held no readings: nothing was monitored")
         elif self._readings == 0:

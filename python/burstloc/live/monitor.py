@@ -56,7 +56,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from burstloc.constants import METER_MODELS, RANKING_LOCALIZERS, MeterModel
+from burstloc.constants import MAX_SAMPLE, METER_MODELS, RANKING_LOCALIZERS, MeterModel
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.live.decision import LiveDecision
 from burstloc.live.observe import LiveObserver
@@ -233,11 +233,17 @@ class BurstMonitor:
         """Feed one complete time step; return the decision it completes, if any.
 
         Raises:
-            InputError: wrong number of values, a non-finite value of a meter that is neither
-                excluded nor filled, a timestamp not after the previous one, or a burst that the
-                localizer cannot place (the pending decision is then dropped); the monitor is
-                otherwise unchanged.
+            InputError: not a :class:`Step`, wrong number of values, a non-finite or
+                out-of-range value (beyond :data:`~burstloc.constants.MAX_SAMPLE`) of a meter
+                that is neither excluded nor filled, a timestamp not after the previous one, or
+                a burst that the localizer cannot place (the pending decision is then dropped);
+                the monitor is otherwise unchanged.
         """
+        if not isinstance(step, Step):  # e.g. a ReadingStream's Window: name the fix
+            raise InputError(
+                f"push takes a complete time step (burstloc.Step, from a burstloc.StepFeed), "
+                f"got {type(step).__name__}"
+            )
         t = float(step.timestamp)
         values = np.array(step.values, dtype=np.float64)
         if values.shape != (len(self.meters),):
@@ -247,13 +253,13 @@ class BurstMonitor:
         if not math.isfinite(t):
             raise InputError(f"step timestamp {t!r} is not finite")
         absent = set(step.filled) | self.excluded if step.filled or self.excluded else set()
-        if not math.isfinite(values.sum()):  # one sum: NaN and infinities propagate
-            bad = np.flatnonzero(~np.isfinite(values))
+        if not np.abs(values).max() <= MAX_SAMPLE:  # False for NaN too: the detectors' rule
+            bad = np.flatnonzero(~(np.abs(values) <= MAX_SAMPLE))
             for j in bad:
                 if self.meters[j] not in absent:
+                    kind = "non-finite" if not math.isfinite(values[j]) else "out-of-range"
                     raise InputError(
-                        f"non-finite reading {values[j]} from meter {self.meters[j]!r} "
-                        f"at t = {t:g} s"
+                        f"{kind} reading {values[j]} from meter {self.meters[j]!r} at t = {t:g} s"
                     )
             values[bad] = self._fill[bad]
         if self._times and t <= self._times[-1]:

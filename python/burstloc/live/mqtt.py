@@ -4,7 +4,9 @@ One :class:`MqttLink` is one paho-mqtt 2.x client (``CallbackAPIVersion.VERSION2
 QoS 1 both ways) with a persistent session (``clean_session=False`` and a stable client id):
 while the monitor is down or reconnecting, the broker keeps the readings for it. Lost
 connections are retried with backoff (1 s doubling to 30 s); every (re)connection subscribes
-again.
+again. Each connection made and each one lost is reported (``connected to broker ...``,
+``lost broker ...; reconnecting``); closing the link (:meth:`MqttLink.close`, e.g. on SIGTERM)
+is not a lost connection and is not reported as one.
 
 * **In**: every message on ``topic`` (MQTT wildcards allowed) goes into a bounded queue; the
   live loop takes messages from it (:meth:`MqttLink.messages`) and parses them
@@ -16,6 +18,11 @@ again.
   counted in :attr:`MqttLink.unsent` and reported.
 * **Out**: :meth:`MqttLink.publish` sends a record as JSON (QoS 1). Decisions and health go to
   their own topics through the same non-blocking queue: neither waits for the other.
+* **Latency**: the client's socket has Nagle's algorithm off (``TCP_NODELAY``; paho leaves it
+  on): a decision is a small packet written while the readings' acknowledgements flow, and with
+  Nagle's algorithm it could wait for the broker's delayed ACK (40 ms and more on Linux) before
+  leaving. The broker's own sockets are the broker's to configure (Mosquitto:
+  ``set_tcp_nodelay true``).
 """
 
 from __future__ import annotations
@@ -23,6 +30,7 @@ from __future__ import annotations
 import contextlib
 import json
 import queue
+import socket
 import threading
 from collections.abc import Callable, Iterator
 from typing import Any
@@ -77,6 +85,7 @@ class MqttLink:
         )
         self._client.reconnect_delay_set(min_delay=1, max_delay=30)
         self._client.max_queued_messages_set(queue_size)
+        self._client.on_socket_open = self._on_socket_open
         self._client.on_connect = self._on_connect
         self._client.on_disconnect = self._on_disconnect
         self._client.on_connect_fail = self._on_connect_fail
@@ -85,14 +94,23 @@ class MqttLink:
         self._client.loop_start()
         self._address = f"{host}:{port}"
         self._last: mqtt.MQTTMessageInfo | None = None
+        self._closing = False
 
     # ------------------------------------------------------- network thread
+    def _on_socket_open(self, client: Any, userdata: Any, sock: Any) -> None:
+        if isinstance(sock, socket.socket) and sock.family in (socket.AF_INET, socket.AF_INET6):
+            try:
+                sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            except OSError as exc:  # the link still works, only slower to send small records
+                self.report("mqtt", f"cannot turn Nagle's algorithm off ({exc}); records may lag")
+
     def _on_connect(self, client: Any, userdata: Any, flags: Any, reason: Any, props: Any) -> None:
         if reason.is_failure:
             self.report("mqtt", f"broker {self._address} refused the connection: {reason}")
             return
         client.subscribe(self.topic, qos=1)
         self.connected.set()
+        self.report("mqtt", f"connected to broker {self._address}, subscribed to {self.topic}")
 
     def _on_connect_fail(self, client: Any, userdata: Any) -> None:
         self.report("mqtt", f"cannot reach broker {self._address}; retrying")
@@ -101,7 +119,8 @@ class MqttLink:
         self, client: Any, userdata: Any, flags: Any, reason: Any, props: Any
     ) -> None:
         self.connected.clear()
-        self.report("mqtt", f"lost broker {self._address} ({reason}); reconnecting")
+        if not self._closing:
+            self.report("mqtt", f"lost broker {self._address} ({reason}); reconnecting")
 
     def _on_message(self, client: Any, userdata: Any, message: Any) -> None:
         self.received += 1
@@ -137,5 +156,6 @@ class MqttLink:
         if self._last is not None and self._last.rc == mqtt.MQTT_ERR_SUCCESS:
             with contextlib.suppress(RuntimeError, ValueError):
                 self._last.wait_for_publish(timeout)
+        self._closing = True
         self._client.disconnect()
         self._client.loop_stop()

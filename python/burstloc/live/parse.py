@@ -5,15 +5,16 @@ Two forms, one result type. Each source item (a CSV line, an MQTT message) gives
 where: the line number or the message id); the live loop counts, reports and skips the bad ones
 and goes on.
 
-* **CSV line**: ``timestamp,meter,value`` (seconds, junction name, metres of head). A first line
-  ``timestamp,meter,value`` is a header; blank lines and lines starting with ``#`` are skipped; a
-  UTF-8 byte-order mark and quotes around a field are removed.
+* **CSV line**: ``timestamp,meter,value`` (the time, the junction's name, metres of pressure
+  head). The time is seconds (from any origin, e.g. the Unix epoch) or an ISO 8601 date and time
+  with a UTC offset or ``Z`` (read as epoch seconds: :func:`burstloc.readings.timestamp_seconds`).
+  A first line ``timestamp,meter,value`` is a header; blank lines and lines starting with ``#``
+  are skipped; a UTF-8 byte-order mark and quotes around a field are removed.
 * **JSON payload** (MQTT): one reading ``{"t": 12.4, "meter": "N2", "value": 181.2}``, or a
   batch: a list of such objects, or ``{"readings": [...]}``. A payload that is not JSON is read
-  as CSV lines (the CSV line form over MQTT).
+  as CSV lines (the CSV line form over MQTT). ``t`` may also be an ISO 8601 string, as above.
 
-Timestamps and values must be finite numbers; meter names non-empty strings (a number is taken
-as its text).
+Values must be finite numbers; meter names non-empty strings (a number is taken as its text).
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any, NamedTuple
 
-from burstloc.readings import Reading
+from burstloc.readings import CSV_HEADER, Reading, timestamp_seconds
 
 __all__ = [
     "BadReading",
@@ -36,8 +37,6 @@ __all__ = [
     "parse_row",
     "unknown_meter",
 ]
-
-_HEADER = ("timestamp", "meter", "value")
 
 
 @dataclass(frozen=True, slots=True)
@@ -68,7 +67,7 @@ def parse_csv_line(text: str, where: str) -> Reading | BadReading | None:
     if not text or text.startswith("#"):
         return None
     fields = [f.strip().strip('"').strip("'").strip() for f in text.split(",")]
-    if tuple(f.lower() for f in fields) == _HEADER:
+    if tuple(f.lower() for f in fields) == CSV_HEADER:
         return None
     shown = text if len(text) <= 80 else text[:77] + "..."
     if len(fields) != 3:
@@ -76,9 +75,11 @@ def parse_csv_line(text: str, where: str) -> Reading | BadReading | None:
     meter = fields[1] or None
     if meter is None:
         return BadReading(where, f"no meter name: {shown!r}")
-    t, value = _number(fields[0]), _number(fields[2])
-    if t is None:
-        return BadReading(where, f"timestamp is not a finite number of seconds: {shown!r}", meter)
+    try:
+        t = timestamp_seconds(fields[0])
+    except ValueError as exc:
+        return BadReading(where, f"{exc}: {shown!r}", meter)
+    value = _number(fields[2])
     if value is None:
         return BadReading(where, f"value is not a finite number: {shown!r}", meter)
     return Reading(t, meter, value)
@@ -153,10 +154,17 @@ def _checked(obj: Any, where: str) -> Reading | BadReading:
         return BadReading(where, f"'meter' must be a non-empty string, got {_short(meter)}")
     raw_t, raw_v = obj.get("t", obj.get("timestamp")), obj.get("value")
     ok = all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in (raw_t, raw_v))
-    t = _number(raw_t) if ok else None
+    if isinstance(raw_t, str) and isinstance(raw_v, (int, float)) and not isinstance(raw_v, bool):
+        try:
+            t: float | None = timestamp_seconds(raw_t)
+            ok = True
+        except ValueError:
+            t = None
+    else:
+        t = _number(raw_t) if ok else None
     value = _number(raw_v) if ok else None
     if t is None:
-        reason = f"'t' must be a finite number of seconds, got {_short(raw_t)}"
+        reason = f"'t' must be seconds or an ISO 8601 time with an offset, got {_short(raw_t)}"
         return BadReading(where, reason, meter)
     if value is None:
         return BadReading(where, f"'value' must be a finite number, got {_short(raw_v)}", meter)

@@ -31,7 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from burstloc import _core
-from burstloc._atomic import write_json
+from burstloc._atomic import write_json, write_json_npz
 from burstloc._validate import (
     FieldError,
     Fields,
@@ -40,9 +40,10 @@ from burstloc._validate import (
     check_number,
     check_string,
     read_json,
+    read_json_npz,
 )
 from burstloc.exceptions import ConfigError
-from burstloc.inp import network_hash
+from burstloc.inp import check_meters, junction_names_in_file, network_hash
 from burstloc.localize.model import LocalizationModel
 
 __all__ = ["CALIBRATION_FORMAT", "Calibration", "IntervalCalibration", "calibrated_bank"]
@@ -250,13 +251,16 @@ class Calibration:
         )
 
     def check(self, network: str | os.PathLike[str], meters: Sequence[str] | None = None) -> None:
-        """Refuse (ConfigError) to be used with another network or another set of meters."""
+        """Refuse (ConfigError) to be used with another network or another set of meters, or
+        with meters that are not junctions of ``network`` (a configuration edited by hand)."""
         digest = network_hash(network)
         if digest != self.network_hash:
             raise ConfigError(
                 f"configuration {self.name!r} was calibrated for network {self.network!r} "
                 f"({self.network_hash}), not for {os.fspath(network)!r} ({digest})"
             )
+        where = f"{os.fspath(network)} (in configuration {self.name!r})"
+        check_meters(self.meters, junction_names_in_file(network), where, ConfigError)
         if meters is not None and tuple(meters) != self.meters:
             missing = sorted(set(self.meters) - set(meters))
             extra = sorted(set(meters) - set(self.meters))
@@ -321,7 +325,12 @@ class Calibration:
             )
 
     def save(self, path: str | os.PathLike[str]) -> Path:
-        """Write the configuration as JSON (atomically); returns the path."""
+        """Write the configuration (atomically); returns the path. A path ending in ``.npz``
+        gets the same document with its large float matrices (the signatures, the wave fronts)
+        stored as binary arrays (:func:`burstloc._atomic.write_json_npz`): a fraction of the
+        JSON's size and reading time on a large network; any other path gets JSON."""
+        if os.fspath(path).endswith(".npz"):
+            return write_json_npz(path, self.to_json())
         return write_json(path, self.to_json())
 
     @classmethod
@@ -333,7 +342,10 @@ class Calibration:
         meters: Sequence[str] | None = None,
     ) -> Calibration:
         """Read a configuration; with ``network`` (and ``meters``) it is also :meth:`check` ed."""
-        data = read_json(path, "configuration")
+        if os.fspath(path).endswith(".npz"):
+            data = read_json_npz(path, "configuration")
+        else:
+            data = read_json(path, "configuration")
         config = cls.from_json(data, f"configuration {os.fspath(path)}")
         if network is not None:
             config.check(network, meters)

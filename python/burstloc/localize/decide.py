@@ -60,6 +60,7 @@ __all__ = [
     "decision_time",
     "fused_of",
     "horizon_of",
+    "json_time",
     "rank_alarms",
 ]
 
@@ -99,18 +100,24 @@ class Decision:
         """JSON-ready summary: time, first alarm, waited, the ``top`` best pipes, the position
         on the best one (``None`` when the localizer gives none) and the classification."""
         doc: dict[str, Any] = {
-            "time": self.time,
-            "first_alarm": self.first_alarm,
+            "time": json_time(self.time),
+            "first_alarm": json_time(self.first_alarm),
             "waited": self.waited,
             "position": None if self.position is None else self.position.to_json(),
             "pipes": [
-                {"pipe": r.pipe, "start": r.start, "end": r.end, "score": r.score}
+                {"pipe": r.pipe, "start": r.start, "end": r.end, "score": round(r.score, 6)}
                 for r in self.ranking.top(top)
             ],
         }
         if self.classification is not None:
             doc["classification"] = self.classification.to_json()
         return doc
+
+
+def json_time(seconds: float) -> float:
+    """A time in a JSON record: to the microsecond, without float noise (``10.600000000000001``
+    is ``10.6``; epoch seconds keep their microseconds)."""
+    return round(float(seconds), 6)
 
 
 @dataclass(frozen=True)

@@ -70,6 +70,7 @@ from typing import Any
 import numpy as np
 
 from burstloc.exceptions import SimulatorMissingError
+from burstloc.network import _wntr
 
 __all__ = ["applied", "load"]
 
@@ -98,6 +99,7 @@ def load() -> ModuleType:
     Raises:
         SimulatorMissingError: TSNet is not installed (it comes with the ``sim`` extra).
     """
+    _wntr()  # TSNet imports WNTR: imported first, without its import-time noise
     try:
         import tsnet
         from tsnet.network import discretize, model

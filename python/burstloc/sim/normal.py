@@ -26,7 +26,8 @@ from numpy.typing import NDArray
 
 from burstloc import network
 from burstloc._diagnostics import capture_diagnostics
-from burstloc.exceptions import ConfigError, NetworkError
+from burstloc.exceptions import ConfigError
+from burstloc.inp import check_meters
 from burstloc.sim.sensors import SensorModel
 
 __all__ = ["DIURNAL", "HYDRAULIC_STEP", "normal_day"]
@@ -70,10 +71,8 @@ def normal_day(
     import wntr
 
     wn = network.load_network(os.fspath(network_path))
-    names = network.junction_names(wn) if meters is None else list(meters)
-    unknown = sorted(set(names) - set(network.junction_names(wn)))
-    if unknown:
-        raise NetworkError(f"meter(s) {unknown} are not junctions of {network_path}")
+    junctions = network.junction_names(wn)
+    names = check_meters(junctions if meters is None else meters, junctions, network_path)
     wn.add_pattern("burstloc_diurnal", multipliers)
     for name in network.junction_names(wn):
         for demand in wn.get_node(name).demand_timeseries_list:

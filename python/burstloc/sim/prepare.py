@@ -23,8 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from burstloc.constants import CANDIDATE_POSITIONS, WAVE_SPEED
-from burstloc.exceptions import NetworkError
-from burstloc.inp import network_hash
+from burstloc.inp import check_meters, network_hash
 from burstloc.localize.arrival import ArrivalLocalizer, PipeGeometry
 from burstloc.localize.decide import RankingLocalizers
 from burstloc.localize.model import LocalizationModel
@@ -80,11 +79,9 @@ def _model_of(network: str | os.PathLike[str] | WaterNetworkModel) -> WaterNetwo
 
 def _meters_of(wn: WaterNetworkModel, meters: Sequence[str] | None) -> list[str]:
     junctions = list(wn.junction_name_list)
-    meter_list = list(junctions if meters is None else meters)
-    unknown = [m for m in meter_list if m not in set(junctions)]
-    if unknown:
-        raise NetworkError(f"meter(s) {unknown} are not junctions of the network")
-    return meter_list
+    return check_meters(
+        junctions if meters is None else meters, junctions, wn.name or "the network"
+    )
 
 
 def arrival_geometry(

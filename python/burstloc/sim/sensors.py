@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import hashlib
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -36,11 +36,14 @@ class SensorModel:
         noise_sigma: standard deviation of additive Gaussian noise, in metres (0 = exact).
         meters: the junctions with meters, in output column order; ``None`` = all junctions.
         seed: seed of the noise; with the ``key`` given to :meth:`apply`, it fixes the draw.
+        meter_sigma: standard deviations (m) of the named meters, in place of ``noise_sigma``
+            (e.g. a calibrated configuration's ``noise_sigma``, which is per meter).
     """
 
     noise_sigma: float = 0.0
     meters: tuple[str, ...] | None = None
     seed: int = 0
+    meter_sigma: Mapping[str, float] | None = None
 
     def __post_init__(self) -> None:
         sigma = self.noise_sigma
@@ -56,11 +59,19 @@ class SensorModel:
             object.__setattr__(self, "meters", meters)
         if not isinstance(self.seed, int) or self.seed < 0:
             raise ConfigError(f"seed must be a non-negative integer, got {self.seed!r}")
+        if self.meter_sigma is not None:
+            for name, value in self.meter_sigma.items():
+                if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
+                    raise ConfigError(
+                        f"noise sigma of meter {name!r} must be a finite number >= 0 (m), "
+                        f"got {value!r}"
+                    )
+            object.__setattr__(self, "meter_sigma", dict(self.meter_sigma))
 
     @property
     def enabled(self) -> bool:
         """True when the model changes anything (noise or a subset of meters)."""
-        return self.noise_sigma > 0 or self.meters is not None
+        return self.noise_sigma > 0 or self.meters is not None or bool(self.meter_sigma)
 
     def apply(
         self, junctions: Sequence[str], readings: ArrayLike, key: int | str = 0
@@ -94,7 +105,11 @@ class SensorModel:
             values = values[:, [column[m] for m in names]]
         else:
             values = values.copy()
-        if self.noise_sigma > 0:
+        if self.meter_sigma:
+            sigma = np.array([self.meter_sigma.get(n, self.noise_sigma) for n in names])
+            rng = np.random.default_rng([self.seed, _stream_id(key)])
+            values += rng.standard_normal(size=values.shape) * sigma
+        elif self.noise_sigma > 0:
             rng = np.random.default_rng([self.seed, _stream_id(key)])
             values += rng.normal(0.0, self.noise_sigma, size=values.shape)
         return names, values

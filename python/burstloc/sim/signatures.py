@@ -3,10 +3,11 @@
 A pipe's *signature* at a position ``x`` along it is the vector of steady-state head drops at the
 meters caused by a reference burst (an emitter) at ``x``: what the signature localizer
 (:class:`burstloc.localize.signature.SignatureLocalizer`) matches the observed lasting drop to.
-:func:`compute_signatures` runs one EPANET steady state (:func:`burstloc.network.steady_state`,
-pressure-driven demand, the engine TSNet initialises from) for the base state and one per pipe;
-:func:`cached_signatures` / :func:`cached_signature_sets` keep the result on disk (one small JSON
-file per position in burstloc's cache directory).
+:func:`compute_signatures` runs one EPANET steady state (pressure-driven demand, the engine TSNet
+initialises from) for the base state and one per pipe, in one EPANET project edited in place
+(:mod:`burstloc.sim.epanet_inplace`);
+:func:`cached_signatures` / :func:`cached_signature_sets` keep the result on disk (one
+``.npz`` file per position in burstloc's cache directory).
 
 Only ``burstloc calibrate`` and the experiments call this: the stored configuration carries the
 signatures (:class:`burstloc.localize.model.LocalizationModel`), so the live path never runs it.
@@ -22,12 +23,14 @@ from typing import Literal
 
 import numpy as np
 
+from burstloc._diagnostics import capture_diagnostics
 from burstloc.constants import CANDIDATE_POSITIONS
-from burstloc.exceptions import ConfigError, InputError, NetworkError
-from burstloc.inp import network_hash
+from burstloc.exceptions import ConfigError, InputError
+from burstloc.inp import check_meters, network_hash
 from burstloc.localize.signature import SIGNATURE_FORMAT, SignatureSet
-from burstloc.network import load_network, split_pipe, steady_state
+from burstloc.network import load_network, steady_state
 from burstloc.sim.cache import cache_key, default_cache_dir, drop_corrupt
+from burstloc.sim.epanet_inplace import InPlaceSplitter
 
 __all__ = [
     "DEFAULT_BURST_COEFF",
@@ -60,8 +63,11 @@ def compute_signatures(
     """Burst signatures of every pipe of ``network`` at ``meters`` (default: every junction).
 
     One EPANET steady-state run for the base state and one per pipe with the pipe split at
-    ``position`` and an emitter of coefficient ``burst_coeff`` at the new junction. Pipe end nodes
-    are oriented in the base state's flow direction (a pipe with negative flow is reversed).
+    ``position`` and an emitter of coefficient ``burst_coeff`` at the new junction, all in one
+    EPANET project edited in place (:class:`burstloc.sim.epanet_inplace.InPlaceSplitter`: no copy
+    of the model per pipe). Pipe end nodes are oriented in the base state's flow direction (a
+    pipe with negative flow is reversed); ``baseline`` holds :func:`burstloc.network.steady_state`'s
+    heads.
 
     Raises:
         ConfigError: a bad ``burst_coeff``, ``position`` or ``demand_model``.
@@ -76,10 +82,7 @@ def compute_signatures(
         raise ConfigError(f"unknown demand model {demand_model!r}; use 'pdd' or 'emitter'")
     wn = load_network(network)
     junctions = list(wn.junction_name_list)
-    meter_list = list(junctions if meters is None else meters)
-    unknown = [m for m in meter_list if m not in junctions]
-    if unknown:
-        raise NetworkError(f"meter(s) {unknown} are not junctions of {network}")
+    meter_list = check_meters(junctions if meters is None else meters, junctions, network)
     if not meter_list:
         raise InputError("at least one meter is needed")
     if demand_model == "emitter":
@@ -95,21 +98,21 @@ def compute_signatures(
     state = steady_state(wn)
     pipes = list(wn.pipe_name_list)
     endpoints: dict[str, tuple[str, str]] = {}
-    rows = []
     for pipe in pipes:
         link = wn.get_link(pipe)
         a, b = link.start_node_name, link.end_node_name
         endpoints[pipe] = (b, a) if state.flows[pipe] < 0 else (a, b)
-        split = split_pipe(wn, pipe, position)
-        split.network.get_node(split.burst_node).emitter_coefficient = burst_coeff
-        heads = steady_state(split.network).heads
-        rows.append([state.heads[m] - heads[m] for m in meter_list])
+    matrix = np.empty((len(pipes), len(meter_list)), dtype=np.float64)
+    with capture_diagnostics(), InPlaceSplitter(wn) as splitter:
+        intact = splitter.heads(meter_list)
+        for i, pipe in enumerate(pipes):
+            matrix[i] = intact - splitter.split_heads(pipe, position, burst_coeff, meter_list)
     return SignatureSet(
         network_hash=network_hash(network),
         meters=tuple(meter_list),
         pipes=tuple(pipes),
         endpoints=endpoints,
-        matrix=np.array(rows, dtype=np.float64),
+        matrix=matrix,
         baseline=np.array([state.heads[m] for m in meter_list]),
         params={"burst_coeff": burst_coeff, "position": position, "demand_model": demand_model},
     )
@@ -136,7 +139,7 @@ def cached_signatures(
         files=[network],
     )
     folder = Path(cache_dir) if cache_dir is not None else default_cache_dir() / "signatures"
-    path = folder / f"{Path(network).stem}-{key[:24]}.json"
+    path = folder / f"{Path(network).stem}-{key[:24]}.npz"
     full: SignatureSet | None = None
     if path.exists():
         try:

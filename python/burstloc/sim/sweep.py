@@ -14,6 +14,7 @@ items must be picklable for the parallel modes (a module-level function, plain d
 
 from __future__ import annotations
 
+import gc
 import os
 import signal
 import sys
@@ -82,6 +83,24 @@ class SweepReport(Generic[T, R]):
     def ok(self) -> bool:
         """True when every item succeeded."""
         return not self.failures
+
+    def failure_lines(self) -> list[str]:
+        """The failures, one line per distinct error: ``"pipes 1, 2 and 3 of N: Type:
+        message"`` (a network that cannot be simulated fails every pipe the same way: said
+        once, not once per pipe)."""
+        groups: dict[tuple[str, str], list[str]] = {}
+        for failure in self.failures:
+            groups.setdefault((failure.error_type, failure.message), []).append(failure.label)
+        lines = []
+        for (kind, message), labels in groups.items():
+            if len(labels) == 1:
+                lines.append(f"{labels[0]}: {kind}: {message}")
+                continue
+            listed = ", ".join(labels[:5]) + (
+                f" and {len(labels) - 5} more" if len(labels) > 5 else ""
+            )
+            lines.append(f"{len(labels)} of {len(self.items)} ({listed}): {kind}: {message}")
+        return lines
 
     def succeeded(self) -> list[tuple[T, R]]:
         """Return ``(item, result)`` for the items that succeeded, in input order."""
@@ -241,9 +260,19 @@ def _run_processes(func: Callable[[T], R], todo: list[T], workers: int, done: _D
             exc = future.exception()
             done(futures[future], None if exc else future.result(), exc)
     except BaseException:
-        pool.shutdown(wait=False, cancel_futures=True)
-        for child in active_children():
+        # Workers stopped first: the pool's own thread then sees them gone, fails what is
+        # pending and ends, and the shutdown waits for it and frees the pool's queues here.
+        # (A shutdown without waiting would leave that thread, and the queues' semaphores, to
+        # the end of the process, and Python's resource tracker would warn of them after the
+        # run's last line.)
+        children = active_children()
+        for child in children:
             child.terminate()
+        for child in children:
+            child.join()
+        pool.shutdown(wait=True, cancel_futures=True)
+        del pool
+        gc.collect()
         raise
     pool.shutdown()
 

@@ -1,29 +1,20 @@
-//! The CUSUM bank: structure-of-arrays state; its kernel is in `cusum_tiles`.
+//! The CUSUM bank: structure-of-arrays state, and the driver that walks a matrix in chunks of
+//! rows with the two kernels below it: `cusum_tiles` (the tile's state in memory: a `step`, the
+//! remainder channels; also the tile view and the alarms' slow path both kernels share) and
+//! `cusum_resident` (the state in registers over a chunk). The kernels never call back up here.
 
 use alloc::vec::Vec;
 
 #[cfg(feature = "serde")]
 use serde::{Deserialize, Serialize};
 
+use super::cusum_resident::{tile_resident, TILE as TILE_R};
+use super::cusum_tiles::{tile, Block, Chunk, TILE};
 use super::{check_channels, check_matrix, checked_step, Kernel};
 use crate::alarm::ChannelAlarm;
 use crate::cusum::CusumConfig;
 use crate::cusum::CusumLane;
 use crate::error::{filled, Error};
-
-/// The state of a block of channels, borrowed for one step (or one chunk of steps). Separate
-/// `&mut` slices tell the compiler they do not alias, so the kernels' loops vectorize.
-pub(super) struct Block<'a> {
-    pub x_prev: &'a mut [f64],
-    pub gp: &'a mut [f64],
-    pub gn: &'a mut [f64],
-    pub gp_real: &'a mut [f64],
-    pub gn_real: &'a mut [f64],
-    pub tap: &'a mut [u64],
-    pub tan: &'a mut [u64],
-    pub x_tap: &'a mut [f64],
-    pub x_tan: &'a mut [f64],
-}
 
 /// `N` independent [`crate::Cusum`] detectors with one config, stepped together.
 ///
@@ -108,7 +99,7 @@ impl TryFrom<CusumBankRepr> for CusumBank {
             x_tan: r.x_tan,
         };
         for c in 0..n {
-            bank.lane(c).check(bank.steps, &bank.config)?;
+            bank.lane(c).check(bank.steps, &bank.config, Some(c))?;
         }
         Ok(bank)
     }
@@ -240,5 +231,67 @@ impl CusumBank {
     /// The shared config.
     pub fn config(&self) -> &CusumConfig {
         &self.config
+    }
+}
+
+/// Readings per chunk of rows (512 KiB: a chunk stays in the L2 cache while its tiles walk it;
+/// 64 rows at 1 024 channels, over which a tile's state stays in registers. Measured against
+/// 128 and 256 KiB at 1 024 channels: as fast on a matrix from memory, 1.4x as fast on a batch
+/// in the cache, where the per-chunk work of the tiles shows).
+const CHUNK_READINGS: usize = 65_536;
+
+/// Rows per chunk for `channels` channels: as many as fit [`CHUNK_READINGS`], at least 16 and at
+/// most 512. A tile's work per chunk (its state loaded and stored once, its previous readings
+/// and start values brought up to date) is spread over the rows; the matrix is read once
+/// whatever the chunk (each tile reads its own columns of each row).
+fn rows_per_chunk(channels: usize) -> usize {
+    (CHUNK_READINGS / channels).clamp(16, 512)
+}
+
+impl CusumBank {
+    /// Steps every row of a validated row-major matrix, a chunk of rows at a time, tile by tile.
+    pub(crate) fn advance_many(&mut self, matrix: &[f64], out: &mut Vec<ChannelAlarm>) {
+        let n = self.channels();
+        let mut rows = matrix;
+        if self.steps_seen() == 0 && !rows.is_empty() {
+            let (first, rest) = rows.split_at(n);
+            self.prime(first);
+            rows = rest;
+        }
+        let (threshold, drift) = (self.config().threshold(), self.config().drift());
+        for chunk_rows in rows.chunks(rows_per_chunk(n) * n) {
+            let chunk = Chunk {
+                rows: chunk_rows,
+                channels: n,
+                first: self.steps_seen(),
+                threshold,
+                drift,
+            };
+            let start = out.len();
+            let mut lanes = self.block(0, n);
+            let one_row = chunk_rows.len() == n;
+            let mut c = 0;
+            // Several rows: the state in registers (`cusum_resident`); one row (a `step`): the
+            // state stepped in memory, its start values blended in place.
+            if one_row {
+                while c + TILE <= n {
+                    tile::<TILE, true>(&mut lanes, c, chunk, out);
+                    c += TILE;
+                }
+            } else {
+                while c + TILE_R <= n {
+                    tile_resident(&mut lanes, c, &chunk, out);
+                    c += TILE_R;
+                }
+            }
+            while c < n {
+                tile::<1, false>(&mut lanes, c, chunk, out);
+                c += 1;
+            }
+            // Tiles ran one after another: put the chunk's alarms back in step, then channel,
+            // order (each pair is unique), as stepping row by row appends them.
+            out[start..].sort_unstable_by_key(|a| (a.alarm.index, a.channel));
+            self.add_steps((chunk_rows.len() / n) as u64);
+        }
     }
 }

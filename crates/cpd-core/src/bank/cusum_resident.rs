@@ -14,8 +14,7 @@ use alloc::vec::Vec;
 
 use wide::bytemuck::cast;
 
-use super::cusum::Block;
-use super::cusum_tiles::{collect, Chunk, Tile};
+use super::cusum_tiles::{collect, Block, Chunk, Tile};
 use crate::alarm::ChannelAlarm;
 
 /// The vector operations of the kernel: AVX-512 (8 channels per vector, comparisons into mask

@@ -7,6 +7,8 @@ use alloc::vec::Vec;
 #[cfg(feature = "serde")]
 use serde::{Deserialize, Serialize};
 
+#[cfg(feature = "serde")]
+use super::shewhart_tiles::gather;
 use super::shewhart_tiles::{chunk, Chunk, Lanes};
 use super::{check_channels, check_matrix, checked_step, Kernel};
 use crate::alarm::ChannelAlarm;
@@ -72,12 +74,15 @@ impl TryFrom<ShewhartBankRepr> for ShewhartBank {
     fn try_from(r: ShewhartBankRepr) -> Result<Self, Error> {
         let n = check_channels(r.channels)?;
         let w = r.config.window();
-        let sums = [&r.reference, &r.s1, &r.c1, &r.s2, &r.c2];
+        let sums: [&[f64]; 5] = [&r.reference, &r.s1, &r.c1, &r.s2, &r.c2];
         ensure(
             sums.iter().all(|v| v.len() == n) && Some(r.ring.len()) == w.checked_mul(n),
             "bank state arrays do not match the channels and window",
         )?;
         check_restored(w, r.steps, r.since_rebuild, r.pos, &r.ring)?;
+        for c in 0..n {
+            gather::<f64>(sums, c).check(Some(c))?;
+        }
         Ok(Self {
             config: r.config,
             channels: n,
@@ -115,18 +120,21 @@ impl Kernel for ShewhartBank {
 impl ShewhartBank {
     /// A fresh bank of `channels >= 1` detectors (allocates `W x channels` samples).
     ///
-    /// Errors with [`Error::InvalidParameter`] (`channels`) when `channels` is 0 or the state
-    /// cannot be allocated.
+    /// Errors with [`Error::InvalidParameter`]: `channels` when it is 0 or the per-channel sums
+    /// cannot be allocated, `window` when the `W x channels` ring cannot.
     pub fn new(channels: usize, config: ShewhartConfig) -> Result<Self, Error> {
         let n = check_channels(channels)?;
-        let len = config
-            .window()
+        // The ring holds `window` samples per channel: the window asks for that memory (the
+        // channels' own arrays, allocated first, name the channels).
+        let w = config.window();
+        let too_big = |reason| Error::InvalidParameter {
+            name: "window",
+            value: w as f64,
+            reason,
+        };
+        let len = w
             .checked_mul(n)
-            .ok_or(Error::InvalidParameter {
-                name: "channels",
-                value: n as f64,
-                reason: "window x channels overflows usize",
-            })?;
+            .ok_or(too_big("window x channels overflows usize"))?;
         let zeros = || filled("channels", n, 0.0);
         Ok(Self {
             config,
@@ -139,7 +147,11 @@ impl ShewhartBank {
             c1: zeros()?,
             s2: zeros()?,
             c2: zeros()?,
-            ring: filled("channels", len, 0.0)?,
+            ring: filled("window", len, 0.0).map_err(|_| {
+                too_big(
+                    "the ring of window x channels samples needs more memory than can be allocated",
+                )
+            })?,
         })
     }
 

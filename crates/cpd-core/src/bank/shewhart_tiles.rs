@@ -22,7 +22,7 @@ use crate::alarm::{Alarm, ChannelAlarm};
 use crate::shewhart::{exact_decision, Lane, ShewhartConfig, Sums};
 
 /// A vector of channels: the lane type of the kernel and its memory operations.
-trait Vector: Lane {
+pub(super) trait Vector: Lane {
     /// Channels per vector.
     const N: usize;
     /// The first `N` values of `a`.
@@ -154,7 +154,7 @@ impl Lanes<'_> {
 
 /// The sums of channels `c..c + V::N` from the state arrays `[reference, s1, c1, s2, c2]`.
 #[inline(always)]
-fn gather<V: Vector>(a: [&[f64]; 5], c: usize) -> Sums<V> {
+pub(super) fn gather<V: Vector>(a: [&[f64]; 5], c: usize) -> Sums<V> {
     Sums {
         reference: V::load(&a[0][c..]),
         s1: V::load(&a[1][c..]),

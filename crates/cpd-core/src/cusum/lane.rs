@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 use super::CusumConfig;
 use crate::alarm::{Alarm, Direction};
 #[cfg(feature = "serde")]
-use crate::error::{ensure, Error, MAX_COUNT};
+use crate::error::{ensure, field, finite_field, sample_field, Error, MAX_COUNT};
 
 /// The sign bit of an `f64`, hidden from the optimizer (`black_box`): [`CusumLane::advance`]
 /// negates `s` by flipping it, which LLVM cannot fold into the drop side's addition. Seeing a
@@ -247,31 +247,40 @@ impl CusumLane {
         *self = lane;
     }
 
-    /// Validates a restored lane after `seen` samples: every value finite, the drift sums
-    /// `>= 0`, the real sums `<= threshold` (they reset on crossing it), the starts before
-    /// `seen`. These hold for every state a detector reaches from finite samples.
+    /// Validates a restored lane after `seen` samples (`index`: the bank channel it is): the
+    /// sample values within range, the sums finite, the drift sums `>= 0`, the real sums
+    /// `<= threshold` (they reset on crossing it), the starts before `seen`. These hold for
+    /// every state a detector reaches from samples; [`Error::InvalidState`] names the field.
     #[cfg(feature = "serde")]
-    pub(crate) fn check(&self, seen: u64, config: &CusumConfig) -> Result<(), Error> {
-        let values = [
-            self.x_prev,
-            self.gp,
-            self.gn,
-            self.gp_real,
-            self.gn_real,
-            self.x_tap,
-            self.x_tan,
-        ];
+    pub(crate) fn check(
+        &self,
+        seen: u64,
+        config: &CusumConfig,
+        index: Option<usize>,
+    ) -> Result<(), Error> {
         ensure(seen <= MAX_COUNT, "sample count out of range")?;
-        ensure(
-            values.iter().all(|v| v.is_finite()),
-            "non-finite CUSUM state value",
-        )?;
-        ensure(self.gp >= 0.0 && self.gn >= 0.0, "negative CUSUM drift sum")?;
+        for (name, x) in [
+            ("x_prev", self.x_prev),
+            ("x_tap", self.x_tap),
+            ("x_tan", self.x_tan),
+        ] {
+            sample_field(name, index, x)?;
+        }
+        for (name, g) in [("gp", self.gp), ("gn", self.gn)] {
+            finite_field(name, index, g)?;
+            field(g >= 0.0, name, index, g, "a drift sum must be >= 0")?;
+        }
         let t = config.threshold();
-        ensure(
-            self.gp_real <= t && self.gn_real <= t,
-            "CUSUM real sum above the threshold",
-        )?;
+        for (name, g) in [("gp_real", self.gp_real), ("gn_real", self.gn_real)] {
+            finite_field(name, index, g)?;
+            field(
+                g <= t,
+                name,
+                index,
+                g,
+                "a real sum must be <= the threshold",
+            )?;
+        }
         let last = seen.saturating_sub(1);
         ensure(
             self.tap <= last && self.tan <= last,

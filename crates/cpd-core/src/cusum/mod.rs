@@ -25,7 +25,7 @@ use crate::error::{check_sample, check_samples, Error};
 /// start `tap` (rise) or `tan` (drop) and amplitude `x[i] - x[start]`, and all four sums
 /// reset to 0.
 ///
-/// **Non-finite samples** (NaN, ±inf) are rejected with [`Error::NonFiniteSample`] and
+/// **Non-finite samples** (NaN, ±inf, and values beyond ±[`crate::MAX_SAMPLE`]) are rejected with [`Error::NonFiniteSample`] and
 /// leave the detector exactly as it was: the sample is not counted, the next finite
 /// sample continues as if the bad one never arrived. Missing readings are the caller's
 /// business (skip them, or hold the last value).
@@ -70,7 +70,7 @@ struct CusumRepr {
 impl TryFrom<CusumRepr> for Cusum {
     type Error = Error;
     fn try_from(r: CusumRepr) -> Result<Self, Error> {
-        r.lane.check(r.seen, &r.config)?;
+        r.lane.check(r.seen, &r.config, None)?;
         Ok(Self {
             config: r.config,
             seen: r.seen,
@@ -91,7 +91,8 @@ impl Cusum {
 
     /// Feeds one sample; returns the alarm it raises, if any.
     ///
-    /// Errors with [`Error::NonFiniteSample`] (state unchanged) on NaN or ±inf.
+    /// Errors with [`Error::NonFiniteSample`] (state unchanged) on NaN, ±inf or a value beyond
+    /// ±[`crate::MAX_SAMPLE`].
     #[inline]
     pub fn update(&mut self, x: f64) -> Result<Option<Alarm>, Error> {
         check_sample(x, self.seen)?;

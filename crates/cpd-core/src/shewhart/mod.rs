@@ -33,7 +33,7 @@ use sums::{PairedSums, RunningSums};
 use crate::alarm::{Alarm, Direction};
 use crate::error::{check_sample, check_samples, filled, Error};
 #[cfg(feature = "serde")]
-use crate::error::{ensure, MAX_COUNT};
+use crate::error::{ensure, sample_field, MAX_COUNT};
 use crate::math::sqrt;
 
 /// Rebuild the running sums at the first ring wrap after this many samples (at least).
@@ -181,6 +181,7 @@ impl TryFrom<ShewhartRepr> for Shewhart {
             "ring buffer length does not match the window",
         )?;
         check_restored(r.config.window, r.seen, r.since_rebuild, r.pos, &r.ring)?;
+        r.sums.check(None)?;
         Ok(Self {
             config: r.config,
             seen: r.seen,
@@ -193,10 +194,9 @@ impl TryFrom<ShewhartRepr> for Shewhart {
 }
 
 /// Validates the counters and the ring of a restored detector or bank of window `w`: counts in
-/// range, the ring position consistent with them, every windowed sample finite (a detector
-/// only ever stores finite samples). The running sums are taken as they are: finite samples
-/// near ±1e154 legitimately overflow them to ±inf or NaN until the next rebuild, and whatever
-/// they hold, the decision then falls back to the exact window scan (see [`Sums::classify`]).
+/// range, the ring position consistent with them, every slot of the ring a sample (a detector
+/// only ever stores samples; [`Error::InvalidState`] names the slot). The running sums are
+/// checked apart ([`Sums::check`]): samples within ±[`crate::MAX_SAMPLE`] keep them finite.
 #[cfg(feature = "serde")]
 pub(crate) fn check_restored(
     w: usize,
@@ -214,10 +214,9 @@ pub(crate) fn check_restored(
         pos < w && (seen >= w as u64 || pos as u64 == seen),
         "ring position does not match the window and the sample count",
     )?;
-    ensure(
-        ring.iter().all(|v| v.is_finite()),
-        "non-finite sample in the window",
-    )
+    ring.iter()
+        .enumerate()
+        .try_for_each(|(k, &x)| sample_field("ring", Some(k), x))
 }
 
 impl Shewhart {
@@ -244,7 +243,8 @@ impl Shewhart {
 
     /// Feeds one sample; returns the alarm it raises, if any.
     ///
-    /// Errors with [`Error::NonFiniteSample`] (state unchanged) on NaN or ±inf.
+    /// Errors with [`Error::NonFiniteSample`] (state unchanged) on NaN, ±inf or a value beyond
+    /// ±[`crate::MAX_SAMPLE`].
     #[inline]
     pub fn update(&mut self, x: f64) -> Result<Option<Alarm>, Error> {
         check_sample(x, self.seen)?;

@@ -12,6 +12,9 @@ use crate::stats::{lane_sum, np_mean_std, out_of_control};
 #[cfg(feature = "serde")]
 use serde::{Deserialize, Serialize};
 
+#[cfg(feature = "serde")]
+use crate::error::{finite_field, sample_field, Error};
+
 use super::ShewhartConfig;
 
 /// At a ring wrap, the sums are also rebuilt when `mean(y)² > CANCELLATION · var`, i.e. when the
@@ -143,6 +146,22 @@ impl<T: Lane> Sums<T> {
 }
 
 impl Sums {
+    /// Validates restored sums (`index`: the bank channel): the reference a sample, the sums
+    /// and their compensations finite (as samples within range keep them).
+    #[cfg(feature = "serde")]
+    pub(crate) fn check(&self, index: Option<usize>) -> Result<(), Error> {
+        sample_field("reference", index, self.reference)?;
+        for (name, x) in [
+            ("s1", self.s1),
+            ("c1", self.c1),
+            ("s2", self.s2),
+            ("c2", self.c2),
+        ] {
+            finite_field(name, index, x)?;
+        }
+        Ok(())
+    }
+
     pub(crate) const ZERO: Self = Self {
         reference: 0.0,
         s1: 0.0,

@@ -1,4 +1,5 @@
-//! Shared helpers for the integration tests: a seeded generator of pressure-like signals.
+//! Shared helpers for the integration tests: a seeded generator of pressure-like signals, and
+//! snapshots of every kind fed one.
 #![allow(dead_code)]
 
 /// SplitMix64: tiny, seeded, good enough for test signals.
@@ -77,4 +78,30 @@ pub fn signal(kind: u64, n: usize, rng: &mut Rng) -> Vec<f64> {
         x.push(v);
     }
     x
+}
+
+/// The four snapshot kinds (a CUSUM, a Shewhart, a bank of each) fed `n` samples of a seeded
+/// signal (the banks the same samples as rows of two channels), as snapshot bytes with the
+/// kind's name: `"Cusum"`, `"Shewhart"`, `"CusumBank"`, `"ShewhartBank"`.
+pub fn snapshots(seed: u64, n: usize) -> Vec<(&'static str, Vec<u8>)> {
+    use cpd_core::snapshot::to_bytes;
+    use cpd_core::{Bank, Cusum, CusumBank, CusumConfig, Shewhart, ShewhartBank, ShewhartConfig};
+    let x = signal(seed % 6, n, &mut Rng::new(seed));
+    let mut c = Cusum::new(CusumConfig::new(0.5, 0.01).unwrap());
+    let mut s = Shewhart::new(ShewhartConfig::new(5, 2.0, 0.1).unwrap()).unwrap();
+    let mut cb = Bank::from(CusumBank::new(2, CusumConfig::new(0.5, 0.0).unwrap()).unwrap());
+    let mut sb =
+        Bank::from(ShewhartBank::new(2, ShewhartConfig::new(4, 1.0, 0.1).unwrap()).unwrap());
+    let (mut a, mut b) = (Vec::new(), Vec::new());
+    c.update_slice(&x, &mut a).unwrap();
+    s.update_slice(&x, &mut a).unwrap();
+    let even = &x[..x.len() / 2 * 2];
+    cb.step_many(even, &mut b).unwrap();
+    sb.step_many(even, &mut b).unwrap();
+    vec![
+        ("Cusum", to_bytes(&c)),
+        ("Shewhart", to_bytes(&s)),
+        ("CusumBank", to_bytes(&cb)),
+        ("ShewhartBank", to_bytes(&sb)),
+    ]
 }
