@@ -24,7 +24,7 @@ BIN313  := $(VENV313)/bin
         test-pip lint bench bench-rust clean
 
 ## setup: create .venv (the default Python), build burstloc's wheel, install it with its
-## sim/dev/bench extras
+## sim/dev/bench/river/web extras
 # One wheel for every Python: the extension uses CPython's stable ABI (abi3, Python >= 3.10), so
 # maturin builds it once, here, and the same file is installed in .venv and in .venv313. The
 # wheel is rebuilt when the Rust or Python sources, a manifest or pyproject.toml change (cargo
@@ -37,8 +37,9 @@ WHEEL         = $(firstword $(wildcard $(WHEEL_DIR)/burstloc-*-abi3-*.whl))
 EXT          := python/burstloc/_core.abi3.so
 BUILD_INPUTS := pyproject.toml Cargo.toml $(wildcard Cargo.lock) README.md \
                 $(shell find crates -path '*/src/*.rs' -o -name Cargo.toml -o -name build.rs 2>/dev/null) \
-                $(shell find python -name '*.py' -o -name '*.pyi' -o -name py.typed 2>/dev/null)
-EXTRAS       := sim,dev,bench,river
+                $(shell find python -name '*.py' -o -name '*.pyi' -o -name py.typed \
+                  -o -path '*/web/static/*' -type f 2>/dev/null)
+EXTRAS       := sim,dev,bench,river,web
 
 # The extension is compiled for the CPU of the machine that runs `make setup` (it is built
 # where it runs): the vectorized bank and Shewhart loops run 2-5x faster than in a generic
@@ -49,10 +50,12 @@ EXT_RUSTFLAGS ?= -C target-cpu=native
 setup: $(VENV)/.installed networks/todini6.inp networks
 
 ## services: what the tests need beside Python (not the main job): Mosquitto, the MQTT broker the
-## monitor's integration tests start on a loopback port; installed where missing (as root with
-## apt-get), else named with the command that installs it
+## monitor's integration tests start on a loopback port, and Debian's Chromium with its WebDriver,
+## the browser the control-room page's tests drive; installed where missing (as root with
+## apt-get), else named with the command that installs them
 services:
 	scripts/install-mosquitto.sh
+	scripts/install-chromium.sh
 
 ## networks: EPANET's Net1, Net2, Net3 and Anytown in networks/public/ (not committed), from the
 ## pinned epyt wheel on PyPI, every file checked against its pinned SHA-256 (standard library

@@ -2,7 +2,8 @@
 
 Layers: the base (``exceptions``, ``constants``, ``network``, ``readings``, ``_atomic``, ...),
 ``localize`` (base only), ``live`` (base and localize: the live path never reaches the
-simulator), ``sim`` (base and localize, whose model it prepares offline), ``experiments`` (all
+simulator), ``web`` (base and live: the control-room page shows the monitor's own records),
+``sim`` (base and localize, whose model it prepares offline), ``experiments`` (all
 of those) and ``cli`` (anything; nothing imports it).
 """
 
@@ -15,14 +16,16 @@ import networkx as nx
 import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "python" / "burstloc"
-LAYERS = ("localize", "live", "sim", "experiments", "cli")
+LAYERS = ("localize", "live", "web", "sim", "experiments", "cli")
 ALLOWED: dict[str, set[str]] = {
     "base": {"base"},
     "localize": {"base", "localize"},
     "live": {"base", "localize", "live"},
+    # the control-room page reads only the monitor's own records: never the simulator
+    "web": {"base", "live", "web"},
     "sim": {"base", "localize", "sim"},
     "experiments": {"base", "localize", "live", "sim", "experiments"},
-    "cli": {"base", "localize", "live", "sim", "experiments", "cli"},
+    "cli": {"base", "localize", "live", "web", "sim", "experiments", "cli"},
 }
 
 
@@ -103,3 +106,21 @@ def test_no_import_cycle() -> None:
     graph.remove_node("burstloc")  # the façade: imports from the layers, imported by none
     cycles = list(nx.simple_cycles(graph))
     assert not cycles, cycles
+
+
+def test_the_live_path_and_the_page_never_import_a_hydraulic_model() -> None:
+    roots = [PACKAGE / "live", PACKAGE / "web", PACKAGE / "layout.py"]
+    files = [p for r in roots for p in ([r] if r.is_file() else sorted(r.rglob("*.py")))]
+    wrong = []
+    for path in files:
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            names = (
+                [a.name for a in node.names]
+                if isinstance(node, ast.Import)
+                else [node.module or ""]
+                if isinstance(node, ast.ImportFrom)
+                else []
+            )
+            wrong += [f"{path.name}: {n}" for n in names if n.split(".")[0] in ("wntr", "tsnet")]
+    assert len(files) > 10
+    assert not wrong, wrong

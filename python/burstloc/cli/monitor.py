@@ -12,6 +12,7 @@ import sys
 from collections.abc import Iterator
 from typing import Any
 
+from burstloc.cli import _web
 from burstloc.constants import DETECTORS, METER_MODELS, RANKING_LOCALIZERS
 from burstloc.exceptions import ConfigError, InputError
 
@@ -112,6 +113,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         metavar="[METER=]LOW:HIGH",
         help="believable readings, m (default: -10 m to twice the highest steady head)",
     )
+    _web.add_arguments(parser)
     parser.set_defaults(handler=run)
     return parser
 
@@ -156,7 +158,14 @@ def run(args: argparse.Namespace) -> int:
         silent_after=args.silent_after,
         clock_tolerance=args.clock_tolerance,
     )
-    report = Reporter(lambda text: print(text, file=sys.stderr, flush=True))
+    web = _web.start(args, monitor)
+
+    def write(text: str) -> None:
+        print(text, file=sys.stderr, flush=True)
+        if web is not None:
+            web.hub.message(text.removeprefix("burstloc monitor: "))
+
+    report = Reporter(write)
     ident = identity(
         config,
         capture_interval=args.capture_interval,
@@ -196,6 +205,7 @@ def run(args: argparse.Namespace) -> int:
         health_every=args.health_every,
         state=state,
         save_every=args.save_every,
+        observer=None if web is None else web.hub,
     )
     saved = None if state is None else state.load()
     if saved is not None:
@@ -220,13 +230,21 @@ def run(args: argparse.Namespace) -> int:
         else:
             idle = min(max(args.save_every, 0.05), 1.0)
             items = _from_file(args.readings, flags, idle)
+            if args.replay_speed is not None:
+                from burstloc.live.replay import paced
+
+                items = paced(items, args.replay_speed, lambda: flags["stop"])
         loop.run(items)
+        if web is not None and link is None and args.readings != "-":
+            _web.linger(web, lambda: flags["stop"])
     except _StopError:
         loop.finish()
     finally:
         signal.signal(signal.SIGTERM, previous)
         if link is not None:
             link.close()
+        if web is not None:
+            web.stop()
     if flags["stop"]:
         saved_to = f"; state saved to {args.state}" if args.state else ""
         print(f"burstloc monitor: stopped by SIGTERM{saved_to}", file=sys.stderr)

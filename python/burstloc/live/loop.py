@@ -31,6 +31,7 @@ from burstloc.live.feeds import StepFeed
 from burstloc.live.health import AdmittedRow, Health
 from burstloc.live.monitor import BurstMonitor
 from burstloc.live.monitor_state import monitor_state, restore_monitor
+from burstloc.live.observe import LiveObserver
 from burstloc.live.parse import BadReading, Row, parse_row, unknown_meter
 from burstloc.live.state import StateFile
 from burstloc.readings import Reading, Step
@@ -104,8 +105,12 @@ class LiveLoop:
         health_every: float = 60.0,
         state: StateFile | None = None,
         save_every: float = 5.0,
+        observer: LiveObserver | None = None,
     ) -> None:
         self.monitor = monitor
+        #: Told of every step, alarm and record (:mod:`burstloc.live.observe`).
+        self.observer = observer
+        monitor.observer = observer
         self.health = health
         self.emit = emit
         self.report = report
@@ -252,6 +257,8 @@ class LiveLoop:
     def _step(self, step: Step) -> None:
         if step.filled:
             self.health.filled(step.filled)
+        if self.observer is not None:
+            self.observer.step(step)
         try:
             decided = self.monitor.push(step)
         except InputError as exc:
@@ -263,7 +270,7 @@ class LiveLoop:
             self.events += not (decided.is_burst or decided.transient)
             record = decided.to_json()
             record["health"] = self.health_record()
-            self.emit(record)
+            self._emit(record)
 
     def _tick(self) -> None:
         gone, back = self.health.update_silence()
@@ -285,10 +292,17 @@ class LiveLoop:
             if self._next_health is None:
                 self._next_health = ref
             if ref >= self._next_health:
-                self.emit(self.health_record())
+                self._emit(self.health_record())
                 self._next_health = ref + self.health_every
+        if self.observer is not None:
+            self.observer.tick(self.health_record)
         if self.state is not None and time.monotonic() - self._last_save >= self.save_every:
             self.save()
+
+    def _emit(self, record: Record) -> None:
+        self.emit(record)
+        if self.observer is not None:
+            self.observer.record(record)
 
     @property
     def readings(self) -> int:

@@ -59,6 +59,7 @@ import numpy as np
 from burstloc.constants import MAX_SAMPLE, METER_MODELS, RANKING_LOCALIZERS, MeterModel
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.live.decision import LiveDecision
+from burstloc.live.observe import LiveObserver
 from burstloc.live.subset import SubsetLocalizers
 from burstloc.localize.classify import ClassifierConfig, EventClassifier, Operation, classify_alarms
 from burstloc.localize.config import Calibration, calibrated_bank
@@ -200,6 +201,8 @@ class BurstMonitor:
             None if classify is None else EventClassifier.of(classify, self.localizers)
         )
         self.operations = list(operations)
+        #: Told of every alarm that counts (:meth:`LiveObserver.alarm`); set by the live loop.
+        self.observer: LiveObserver | None = None
 
     @property
     def pending(self) -> bool:
@@ -293,6 +296,9 @@ class BurstMonitor:
                 if channel not in alarmed and self._counts(self.meters[channel], absent):
                     self._alarms.append(IndexedAlarm(channel, a.index, a.start, a.amplitude))
                     alarmed.add(channel)
+                    if self.observer is not None:
+                        onset = self._times[max(a.start - self._seen + len(self._times), 0)]
+                        self.observer.alarm(self.meters[channel], t, onset, a.amplitude)
         if self._alarms and self._due is None:
             times = np.fromiter(self._times, dtype=np.float64)
             shifted, cal = self._shifted(times.size), self.calibration
