@@ -43,6 +43,18 @@ def _client(port: int, name: str) -> mqtt.Client:
     return client
 
 
+def _next(
+    got: queue.Queue[tuple[str, Any]], monitor: subprocess.Popen[str], hang: float, what: str
+) -> tuple[str, Any]:
+    """The next message the listener got, while the monitor runs (waiting for ``what``)."""
+    while True:
+        try:
+            return got.get(timeout=1)
+        except queue.Empty:
+            assert monitor.poll() is None, f"the monitor ended before {what}"
+            assert time.monotonic() < hang, f"no {what} on the broker"
+
+
 def test_readings_in_and_decisions_out_through_the_broker(
     tiny: Path, tmp_path: Path, mqtt_port: int
 ) -> None:
@@ -66,12 +78,7 @@ def test_readings_in_and_decisions_out_through_the_broker(
         # Readings sent before the monitor has subscribed would be lost: wait for the broker to
         # log its subscription (however long the monitor takes to start on a loaded machine).
         while True:
-            try:
-                topic, record = got.get(timeout=1)
-            except queue.Empty:
-                assert monitor.poll() is None, "the monitor ended before subscribing"
-                assert time.monotonic() < hang, "the monitor never subscribed"
-                continue
+            topic, record = _next(got, monitor, hang, "subscribing")
             if topic == SUBSCRIPTIONS and record.endswith(" plant/readings/#"):
                 break
         sender = _client(mqtt_port, "sender")
@@ -87,12 +94,7 @@ def test_readings_in_and_decisions_out_through_the_broker(
             info.wait_for_publish(10)
         decisions, health = [], []
         while not decisions or not health:  # the monitor answers, or ends and fails the test
-            try:
-                topic, record = got.get(timeout=1)
-            except queue.Empty:
-                assert monitor.poll() is None, "the monitor ended without a decision"
-                assert time.monotonic() < hang, "no decision on the broker"
-                continue
+            topic, record = _next(got, monitor, hang, "a decision and a health record")
             if topic != SUBSCRIPTIONS:
                 (decisions if topic == "burstloc/decisions" else health).append(record)
         assert decisions[0]["type"] == "decision" and decisions[0]["pipes"][0]["pipe"] == PIPE
