@@ -257,29 +257,44 @@ def test_a_public_address_needs_a_token(config: tuple[Calibration, Path]) -> Non
 def test_an_mqtt_feed_is_shown_alike(
     browser: Any, monitor: Any, feed: list[str], tmp_path: Path
 ) -> None:
+    import queue
+
     import paho.mqtt.client as mqtt
-    from mosquitto import broker
+    from mosquitto import SUBSCRIPTIONS, broker
     from paho.mqtt.enums import CallbackAPIVersion
 
     steps = [
         "\n".join(feed[k : k + len(METERS)]).encode() for k in range(0, len(feed), len(METERS))
     ]
     with broker(tmp_path) as port:
-        m = monitor("--mqtt", f"127.0.0.1:{port}", "--topic", "plant/readings/#")
-        browser.get(m.url)
-        _ready(browser)
+        logged: queue.Queue[str] = queue.Queue()
         sender = mqtt.Client(CallbackAPIVersion.VERSION2, client_id="sender")
+        sender.on_message = lambda c, u, message: logged.put(message.payload.decode())
         sender.connect("127.0.0.1", port)
+        sender.subscribe(SUBSCRIPTIONS, qos=1)
         sender.loop_start()
+        m = monitor("--mqtt", f"127.0.0.1:{port}", "--topic", "plant/readings/#")
         try:
+            browser.get(m.url)
+            _ready(browser)
 
-            def first_step_shown() -> bool:  # sent again until the monitor has subscribed
-                sender.publish("plant/readings/all", steps[0], qos=1).wait_for_publish(10)
-                return bool(browser.execute_script("return rows.length"))
+            def subscribed() -> bool:  # readings sent before it would be lost
+                try:
+                    return logged.get(timeout=0.5).endswith(" plant/readings/#")
+                except queue.Empty:
+                    assert m.proc.poll() is None, "".join(m.stderr)
+                    return False
 
-            wait_for(first_step_shown, "the first readings through the broker")
-            for payload in steps[1:]:
+            wait_for(subscribed, "the monitor's subscription")
+            for payload in steps:
                 sender.publish("plant/readings/all", payload, qos=1)
+            try:
+                wait_for(
+                    lambda: browser.execute_script("return rows.length"),
+                    "the first readings through the broker",
+                )
+            except AssertionError as exc:
+                raise AssertionError(f"{exc}; the monitor said: {''.join(m.stderr)}") from None
             record = m.record("decision")
             wait_for(
                 lambda: page_state(browser).get("highlighted") == record["pipes"][0]["pipe"],
