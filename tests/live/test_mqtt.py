@@ -134,3 +134,25 @@ def test_the_link_sends_small_records_without_nagle_delay(mqtt_port: int) -> Non
     finally:
         link.close()
     assert not any("Nagle" in text for text in messages), messages
+
+
+def test_a_connection_made_at_once_finds_the_link_ready(monkeypatch: pytest.MonkeyPatch) -> None:
+    # The network thread may connect before the constructor returns: its callbacks then read
+    # the link (the broker's address for the "connected" line). Here the connection is made
+    # the moment the thread starts; before the fix the callback raised AttributeError, which
+    # ended paho's network thread: no reading would ever have been received.
+    import paho.mqtt.client as paho
+
+    messages: list[str] = []
+
+    def connect_at_once(client: paho.Client) -> None:
+        reason = paho.ReasonCode(paho.PacketTypes.CONNACK, identifier=0)
+        client.on_connect(client, None, None, reason, None)
+
+    monkeypatch.setattr(paho.Client, "loop_start", connect_at_once)
+    monkeypatch.setattr(paho.Client, "subscribe", lambda client, topic, qos: None)
+    link = MqttLink(
+        "127.0.0.1", 1, "plant/#", client_id="at-once", report=lambda k, t: messages.append(t)
+    )
+    assert link.connected.is_set()
+    assert messages == ["connected to broker 127.0.0.1:1, subscribed to plant/#"]

@@ -90,11 +90,13 @@ class MqttLink:
         self._client.on_disconnect = self._on_disconnect
         self._client.on_connect_fail = self._on_connect_fail
         self._client.on_message = self._on_message
-        self._client.connect_async(host, port, keepalive=keepalive)
-        self._client.loop_start()
+        # Everything the callbacks read is set before the network thread starts: a connection
+        # made at once calls them before this constructor's next line.
         self._address = f"{host}:{port}"
         self._last: mqtt.MQTTMessageInfo | None = None
         self._closing = False
+        self._client.connect_async(host, port, keepalive=keepalive)
+        self._client.loop_start()
 
     # ------------------------------------------------------- network thread
     def _on_socket_open(self, client: Any, userdata: Any, sock: Any) -> None:
