@@ -17,7 +17,7 @@ from __future__ import annotations
 import hashlib
 import math
 import os
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -89,8 +89,19 @@ def _rows(path: Path) -> Iterator[_Row]:
             f"{path}:{bad_line}: not UTF-8 text (byte 0x{data[exc.start]:02x}); save the file "
             "as UTF-8"
         ) from None
+    yield from _section_rows(text.splitlines(), path)
+
+
+def _section_rows(lines: Iterable[str], path: str | os.PathLike[str]) -> Iterator[_Row]:
+    """The data lines of an INP file's text (``lines``, from its first) with their section
+    (canonical name: ``[TIME]`` is ``[TIMES]``, as WNTR reads it) and 1-based line number,
+    comments left out, up to ``[END]``.
+
+    Raises:
+        NetworkError: an unknown section, or data before any section, naming ``path``'s line.
+    """
     section: str | None = None
-    for number, raw in enumerate(text.splitlines(), start=1):
+    for number, raw in enumerate(lines, start=1):
         line = raw.split(";", 1)[0].strip()
         if not line:
             continue

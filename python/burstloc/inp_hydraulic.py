@@ -23,11 +23,11 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Iterator
 from functools import partial
 from pathlib import Path
 
 from burstloc.exceptions import NetworkError
+from burstloc.inp import _section_rows
 
 __all__ = ["clock_seconds", "hydraulic_text", "time_seconds"]
 
@@ -158,17 +158,6 @@ def _sub_time(match: re.Match[str], *, twelve_hour: bool) -> str:
     return f"{head}{_hms(time_seconds(value, word))}"
 
 
-def _data_lines(lines: list[str]) -> Iterator[tuple[str, int, list[str]]]:
-    """``(section, line number, fields)`` of each data line (comments left out)."""
-    section = ""
-    for number, raw in enumerate(lines, start=1):
-        data = raw.split(";", 1)[0].strip()
-        if data.startswith("["):
-            section = data.split()[0].upper()
-        elif data:
-            yield section, number, data.split()
-
-
 def _undefined_pattern(fields: list[str], patterns: set[str]) -> bool:
     """An [OPTIONS] ``Pattern`` line naming no pattern of the file, with no pattern ``1``
     (EPANET's own default) to fall back on either: EPANET keeps demands constant; WNTR stops.
@@ -194,9 +183,10 @@ def hydraulic_text(path: str | Path, text: str) -> str | None:
     """
     lines = text.splitlines()
     original = list(lines)
-    rows = list(_data_lines(lines))
-    patterns = {fields[0].upper() for section, _, fields in rows if section == "[PATTERNS]"}
-    for section, number, fields in rows:
+    rows = list(_section_rows(lines, path))
+    patterns = {row.fields[0].upper() for row in rows if row.section == "[PATTERNS]"}
+    for row in rows:
+        section, number, fields = row.section, row.line, row.fields
         raw, data = lines[number - 1], " ".join(fields)
         try:
             if section in _QUALITY_SECTIONS or (
@@ -214,8 +204,6 @@ def hydraulic_text(path: str | Path, text: str) -> str | None:
                     partial(_sub_time, twelve_hour=not rules), data
                 )
                 lines[number - 1] = raw if new == data else new
-            elif section == "[END]":
-                break
         except ValueError as exc:
             raise NetworkError(f"{path}:{number}: not a value EPANET accepts: {exc}") from None
     if lines == original:
