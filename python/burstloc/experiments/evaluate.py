@@ -418,8 +418,8 @@ def _score(
     sensors: dict[str, SensorModel | None],
 ) -> dict[RunSpec, dict[str, list[Attempt]]]:
     """Every run's attempts, ``[spec][pipe][k]``. Ranking runs that differ only in their
-    localizer see the same readings: they share one pass of the bank per attempt
-    (:func:`burstloc.experiments.harness.rank_attempts`)."""
+    localizer see the same readings, captured once per attempt and fed to each localizer's
+    monitor (:func:`burstloc.experiments.harness.rank_attempts`)."""
     scored: dict[RunSpec, dict[str, list[Attempt]]] = {}
     for spec in runs:
         if spec in scored:

@@ -9,10 +9,9 @@ apart:
    :class:`Clock` (its phase, and the readings of the initial steady state that precede the
    simulated span, a live meter's history), with optional sensor noise;
 2. :func:`locate_burst` streams them through the paper's rules
-   (:class:`burstloc.live.paper_locator.BurstLocator`); :func:`rank_attempts` runs the
-   calibrated detector bank once and asks every ranking localizer
-   (:func:`burstloc.localize.decide.rank_alarms`; the fused one reuses the signature
-   localizer's ranking of the same readings);
+   (:class:`burstloc.live.paper_locator.BurstLocator`); :func:`rank_attempts` feeds them,
+   step by step, to the live monitor (:class:`burstloc.live.monitor.BurstMonitor`) of each
+   ranking localizer and takes its first decision (what runs live is what is scored);
 3. each outcome is an :class:`Attempt`, and a :class:`Tally` counts attempts into top-1 / top-3
    accuracy, "not located" and the median time from the burst to the decision.
 
