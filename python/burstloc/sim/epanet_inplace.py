@@ -167,17 +167,17 @@ class InPlaceSplitter:
         return self._index_cache[key]
 
     def _node_index(self, name: str) -> int:
-        index = ctypes.c_int()
-        code = self._lib.EN_getnodeindex(self._ph, name.encode(), ctypes.byref(index))
-        if code:
-            raise NetworkError(f"unknown node {name!r}")
-        return index.value
+        return self._index("EN_getnodeindex", "node", name)
 
     def _link_index(self, name: str) -> int:
+        return self._index("EN_getlinkindex", "link", name)
+
+    def _index(self, function: str, kind: str, name: str) -> int:
+        """The toolkit index of the node or link ``name`` (``function``: the toolkit's lookup)."""
         index = ctypes.c_int()
-        code = self._lib.EN_getlinkindex(self._ph, name.encode(), ctypes.byref(index))
+        code = getattr(self._lib, function)(self._ph, name.encode(), ctypes.byref(index))
         if code:
-            raise NetworkError(f"unknown link {name!r}")
+            raise NetworkError(f"unknown {kind} {name!r}")
         return index.value
 
     def _node_value(self, index: int, prop: int) -> float:
