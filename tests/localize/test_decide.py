@@ -174,7 +174,7 @@ def test_a_decision_knows_its_first_alarm_and_prints_as_json() -> None:
     assert decision.first_alarm <= decision.time
     assert decision.pipe == decision.ranking[0].pipe == "p01"
     doc = decision.to_json(top=2)
-    assert list(doc) == ["time", "first_alarm", "waited", "position", "pipes"]
+    assert list(doc) == ["time", "first_alarm", "waited", "position", "region", "pipes"]
     assert (doc["time"], doc["first_alarm"], doc["waited"]) == (decision.time, first, False)
     # the burst is 300 m from m0 along p01; alarms are stamped to 0.05 s = 60 m of travel
     assert doc["position"]["from"] == "m0"

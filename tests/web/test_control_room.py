@@ -114,9 +114,11 @@ def test_a_burst_is_highlighted_and_a_second_browser_joining_sees_it(
 
     first = wait_for(lambda: shown(browser), f"pipe {pipe} highlighted")
     region = first["region"]["stretches"]
+    # the record's search region, drawn stretch by stretch, with its confidence
     assert [(r["pipe"], r["low"], r["high"]) for r in region] == [
-        (pipe, record["position"]["low"], record["position"]["high"])
+        (r["pipe"], r["low"], r["high"]) for r in record["region"]["stretches"]
     ]
+    assert first["region"]["confidence"] == record["region"]["confidence"] == 0.95
     alarmed = [a["meter"] for a in first["alarms"]]
     assert sorted(alarmed) == sorted(record["alarmed"])
     times = [a["time"] for a in first["alarms"]]
@@ -126,8 +128,9 @@ def test_a_burst_is_highlighted_and_a_second_browser_joining_sees_it(
         lambda: (
             (text := browser.find_element("id", "answer").text.upper()).startswith("BURST")
             and f"PIPE {pipe}\n" in text
+            and f"SEARCH REGION {record['region']['length_m']:.0f} M" in text
         ),
-        "the incident panel names the pipe",
+        "the incident panel names the pipe and the search region",
     )
     wait_for(
         lambda: f"burst located on pipe {pipe}" in browser.find_element("id", "log").text,

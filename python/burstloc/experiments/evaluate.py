@@ -64,6 +64,7 @@ from burstloc.experiments.position import (
     PositionOutcome,
     PositionScorer,
 )
+from burstloc.experiments.region_score import RegionOutcome, RegionScores, score_regions
 from burstloc.experiments.runs import (
     RunSpec,
     phase_offsets,
@@ -101,6 +102,9 @@ class RunResult:
     positions: dict[str, list[PositionOutcome]] = field(default_factory=dict)
     """Per pipe and offset: the position error (m) and whether the interval held the true point
     (:func:`burstloc.experiments.position.score_position`)."""
+    regions: dict[str, list[RegionOutcome]] = field(default_factory=dict)
+    """Per pipe and offset: the search regions against the true point
+    (:func:`burstloc.experiments.region_score.score_region`)."""
 
     def phase_accuracies(self, k: int = 1) -> list[float]:
         """Top-``k`` accuracy (fraction) at each clock offset (``k = 1``: eq. 4)."""
@@ -133,6 +137,10 @@ class RunResult:
         """Position errors (m) over every attempt of the run (all pipes, all phases)."""
         return PositionErrors.of(o for p in self.pipes for o in self.positions.get(p, []))
 
+    def region_scores(self) -> RegionScores:
+        """Search-region coverage, lengths and distances over every attempt of the run."""
+        return RegionScores.of(o for p in self.pipes for o in self.regions.get(p, []))
+
     def median_time_to_localize(self) -> float | None:
         """Median seconds from burst to decision over every located attempt (all phases)."""
         return self.tally().median_time()
@@ -146,6 +154,7 @@ class RunResult:
             a = self.attempts[p][0]
             loc = a.localization
             at = None if a.decision is None else a.decision.position
+            region = None if a.decision is None else a.decision.region
             truth = self.points.get(p)
             pipes.append(
                 {
@@ -164,6 +173,7 @@ class RunResult:
                     if truth is None
                     else {"pipe": p, "from": truth.node, "metres": truth.metres},
                     "position_error_m": (self.positions.get(p) or [PositionOutcome()])[0].error,
+                    "region": None if region is None else region.to_json(),
                 }
             )
         run = self.spec.paper_run()
@@ -195,6 +205,7 @@ class RunResult:
             "phase_offsets_s": list(self.offsets),
             "median_time_to_localize_s": tally.median_time(),
             "position_error_m": self.position_errors().to_json(),
+            "region": self.region_scores().to_json() if self.spec.localizer != "paper" else None,
             "paper": published,
             "pipes": pipes,
         }
@@ -365,18 +376,17 @@ def evaluate(
     params["noise_seed"] = noise_seed
     attempts = _score(runs, results, chosen, graph, setup, phases, phase_span, sensors)
     scorer = PositionScorer(wn, {p: results[p] for p in chosen})
-    out = [
-        RunResult(
-            spec,
-            chosen,
-            truth,
-            phase_offsets(spec, phases, phase_span),
-            attempts[spec],
-            scorer.points,
-            scorer.score(attempts[spec]),
+    lengths = {p: float(wn.get_link(p).length) for p in chosen}
+    out = []
+    for spec in runs:
+        positions = scorer.score(attempts[spec])
+        regions = score_regions(attempts[spec], scorer.points, lengths, positions)
+        offsets = phase_offsets(spec, phases, phase_span)
+        out.append(
+            RunResult(
+                spec, chosen, truth, offsets, attempts[spec], scorer.points, positions, regions
+            )
         )
-        for spec in runs
-    ]
     meters_used = [] if setup is None else list(setup.meters)
     return Evaluation(
         path, out, params, phase_span, warnings, results, graph, meters_used, setup=setup

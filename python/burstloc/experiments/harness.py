@@ -194,6 +194,9 @@ class Attempt:
     burst_start: float
     localization: Localization | None = None
     decision: Decision | None = None
+    early: Decision | None = None
+    """The monitor's early (transient) record before ``decision``, when it gave one: located
+    from the arrivals, answered later with the lasting drop."""
 
     @property
     def ranking(self) -> Ranking | None:
@@ -349,24 +352,37 @@ def rank_attempts(
             meter_model=meter_model,  # type: ignore[arg-type]
             localizers=setup.localizers,
         )
-        decision = first_decision(monitor, times, values)
-        out[name] = Attempt(result.pipe, offset, burst_start, decision=decision)
+        early, decision = monitor_answer(monitor, times, values)
+        out[name] = Attempt(result.pipe, offset, burst_start, decision=decision, early=early)
     return {name: out[name] for name in localizers}
 
 
-def first_decision(
+def monitor_answer(
     monitor: BurstMonitor, times: NDArray[np.float64], values: NDArray[np.float64]
-) -> Decision | None:
-    """The first decision of ``monitor`` fed the readings ``(times, values)`` step by step, or
-    ``None``. A burst it detects but cannot place is skipped, as the live loop skips it."""
+) -> tuple[Decision | None, Decision | None]:
+    """``(early, answer)``: the first answer of ``monitor`` fed the readings ``(times,
+    values)`` step by step (a decision or event, ``None`` without one) and the early
+    (transient) record before it, if it gave one. A burst it detects but cannot place is
+    skipped, as the live loop skips it."""
+    early = None
     for t, row in zip(times.tolist(), values, strict=True):
         try:
             decided = monitor.push(Step(t, row))
         except InputError:
             continue
-        if decided is not None:
-            return decided.decision
-    return None
+        if decided is not None and decided.transient:
+            early = decided.decision
+        elif decided is not None:
+            return early, decided.decision
+    return early, None
+
+
+def first_decision(
+    monitor: BurstMonitor, times: NDArray[np.float64], values: NDArray[np.float64]
+) -> Decision | None:
+    """The first answer of ``monitor`` fed the readings step by step, or ``None``
+    (:func:`monitor_answer`)."""
+    return monitor_answer(monitor, times, values)[1]
 
 
 def locate_ranked(

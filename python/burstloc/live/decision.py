@@ -20,10 +20,12 @@ class LiveDecision:
     monitor waited for settled readings. (The live
     loop adds the health record at decision time to :meth:`to_json`'s record.)
 
-    With a classifier the answer comes in two records: a *transient* located as soon as the
-    arrival localizer can (``classify_at`` is then the reading time at which the lasting change
-    will have settled and the alarm will be classified), then the decision or event at that
-    time. A transient is neither a burst report nor an event."""
+    The answer comes in two records when it waits for the lasting change: a *transient*
+    located as soon as the arrival localizer can, with its search region (``answer_at`` is then
+    the reading time at which the lasting change will have settled), then the decision or event
+    at that time, with the region narrowed by the lasting drop. That is so with a classifier
+    (``classifying``: the alarm is classified then) and when the fused localizer's arrivals were
+    not decisive. A transient is neither a burst report nor an event."""
 
     decision: Decision
     localizer: str
@@ -31,12 +33,13 @@ class LiveDecision:
     excluded: tuple[str, ...]
     alarmed: tuple[str, ...]
     waited: bool
-    classify_at: float | None = None
+    answer_at: float | None = None
+    classifying: bool = False
 
     @property
     def transient(self) -> bool:
-        """Whether this is the early record of an alarm still to be classified."""
-        return self.classify_at is not None
+        """Whether this is the early record of an alarm still to be answered."""
+        return self.answer_at is not None
 
     @property
     def is_burst(self) -> bool:
@@ -73,14 +76,17 @@ class LiveDecision:
         """The record that ``burstloc monitor`` prints: ``"type": "decision"`` for a burst,
         ``"event"`` for an alarm classified as another event or unsure (its ``classification``
         says which and why), ``"transient"`` for the early record of an alarm still to be
-        classified (``"burst": null`` and ``classify_at``, the reading time of its answer)."""
+        answered (``"burst": null`` and ``answer_at``, the reading time of its answer; also as
+        ``classify_at`` when that answer is a classification)."""
         if self.transient:
             kind, burst = "transient", None
         else:
             kind, burst = ("decision" if self.is_burst else "event"), self.is_burst
         doc: dict[str, Any] = {"type": kind, "burst": burst, **self.decision.to_json(top)}
-        if self.transient and self.classify_at is not None:
-            doc["classify_at"] = json_time(self.classify_at)
+        if self.answer_at is not None:
+            doc["answer_at"] = json_time(self.answer_at)
+            if self.classifying:
+                doc["classify_at"] = json_time(self.answer_at)
         doc.update(
             waited=self.waited,
             decision_delay_s=json_time(self.delay),

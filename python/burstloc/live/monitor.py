@@ -405,12 +405,19 @@ class BurstMonitor:
         settled = decision_time("signature", alarms, times, cal)
         if (decision.waited or self.classifier) and times[-1] + 1e-9 < settled:
             self._due = settled  # the fused localizer or the classifier waits for the signatures
-            if self.classifier is None or decision.waited or self._announced:
+            if self._announced:
                 return None
-            # Located now, classified when the lasting change has settled: say where at once.
+            # Located now, answered when the lasting change has settled: say where at once.
             self._announced = True
             return LiveDecision(
-                decision, self.localizer, tuple(meters), excluded, alarmed, False, settled
+                decision,
+                self.localizer,
+                tuple(meters),
+                excluded,
+                alarmed,
+                False,
+                settled,
+                classifying=self.classifier is not None,
             )
         if self.classifier is not None:  # over the meters that take part
             classifier = EventClassifier.of(self.classifier.config, localizers, self.operations)

@@ -199,6 +199,9 @@ class ArrivalLocalizer:
         d_end = np.array([node_distances[p.end] for p in self.pipes], dtype=np.float64)
         length = np.array([p.length for p in self.pipes], dtype=np.float64)
         self._ends = list(zip(d_start, d_end, strict=True))
+        self.end_distances = (d_start, d_end)
+        """Path lengths (m) from each pipe's start and end node to each meter, (pipes, meters)
+        each."""
         self._fronts: NDArray[np.float64] | None = None
         if fronts is not None:
             missing = [p.pipe for p in self.pipes if p.pipe not in fronts]
@@ -237,15 +240,26 @@ class ArrivalLocalizer:
         """
         return np.asarray(self._rms(self._dist, evidence).min(axis=1), dtype=np.float64)
 
-    def _rms(
+    def gaps(
         self,
         dist: NDArray[np.float64],
         evidence: BurstEvidence,
         rows: slice | list[int] = slice(None),
-    ) -> NDArray[np.float64]:
-        """RMS misfit (s) of candidate points whose path lengths to the meters are ``dist``
-        (shape ``(pipes, points, meters)``; the pipes are ``self.pipes[rows]``), shape
-        ``(pipes, points)`` (see :meth:`misfit`)."""
+    ) -> tuple[NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_]]:
+        """Each meter's timing misfit (s) at candidate points, with the burst time fitted.
+
+        ``dist`` (..., points, meters): path lengths from candidate points to the meters, of the
+        pipes ``self.pipes[rows]`` along the first axis (for their wave fronts). For each point
+        the burst time ``t0`` minimises the sum of squared misfits (:meth:`misfit`); returns
+        ``(gap, counted, placed)``: ``gap`` (..., points, K) the misfit of each alarmed meter,
+        then of each silent reading meter (0 where a silent meter says nothing, see
+        :func:`silence_counts`), ``counted`` where a meter takes part, and ``placed`` (...,
+        points) whether the point reaches some alarmed meter at all (``False``: the point
+        cannot explain the alarms).
+
+        Raises:
+            InputError: no meter of the model has alarmed.
+        """
         alarmed = [j for j, m in enumerate(self.meters) if m in evidence.alarms]
         if not alarmed:
             raise InputError("no meter of the arrival model has alarmed: nothing to localize")
@@ -294,9 +308,22 @@ class ArrivalLocalizer:
             a = np.where(up, a, mid)
         t0 = 0.5 * (a + b)
         gap = np.maximum(lo_f - t0[..., None], 0.0) + np.maximum(t0[..., None] - hi_f, 0.0)
+        gap = np.where(np.isfinite(gap), gap, 0.0)
+        return gap, finite, first.any(axis=2)
+
+    def _rms(
+        self,
+        dist: NDArray[np.float64],
+        evidence: BurstEvidence,
+        rows: slice | list[int] = slice(None),
+    ) -> NDArray[np.float64]:
+        """RMS misfit (s) of candidate points whose path lengths to the meters are ``dist``
+        (shape ``(pipes, points, meters)``; the pipes are ``self.pipes[rows]``), shape
+        ``(pipes, points)`` (see :meth:`misfit`)."""
+        gap, finite, placed = self.gaps(dist, evidence, rows)
         count = np.maximum(finite.sum(axis=2), 1)
         rms = np.sqrt(np.sum(gap**2, axis=2) / count)
-        rms = np.where(first.any(axis=2), rms, np.inf)
+        rms = np.where(placed, rms, np.inf)
         return np.asarray(rms, dtype=np.float64)
 
     def position(self, evidence: BurstEvidence, pipe: str) -> PipePosition:

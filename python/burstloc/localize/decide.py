@@ -46,6 +46,7 @@ from burstloc.exceptions import ConfigError, InputError
 from burstloc.localize.arrival import ArrivalLocalizer, PipePosition
 from burstloc.localize.evidence import BurstEvidence, Localizer, Ranking, evidence_at
 from burstloc.localize.fused import FusedLocalizer, decisive, quantisation_margin
+from burstloc.localize.region import REGION_CONFIDENCE, Posterior, SearchRegion, posterior
 from burstloc.localize.signature import SignatureLocalizer
 
 if TYPE_CHECKING:
@@ -84,6 +85,13 @@ class Decision:
     position: PipePosition | None = None
     classification: Classification | None = None
     look_again: float | None = None
+    posterior: Posterior | None = None
+
+    @property
+    def region(self) -> SearchRegion | None:
+        """The search region holding the burst with :data:`~burstloc.localize.region.
+        REGION_CONFIDENCE` (``None`` without a posterior: the signature localizer alone)."""
+        return None if self.posterior is None else self.posterior.region(REGION_CONFIDENCE)
 
     @property
     def is_burst(self) -> bool:
@@ -98,12 +106,15 @@ class Decision:
 
     def to_json(self, top: int = 3) -> dict[str, Any]:
         """JSON-ready summary: time, first alarm, waited, the ``top`` best pipes, the position
-        on the best one (``None`` when the localizer gives none) and the classification."""
+        on the best one (``None`` when the localizer gives none), the search ``region``
+        (:meth:`burstloc.localize.region.SearchRegion.to_json`, ``None`` without one) and the
+        classification."""
         doc: dict[str, Any] = {
             "time": json_time(self.time),
             "first_alarm": json_time(self.first_alarm),
             "waited": self.waited,
             "position": None if self.position is None else self.position.to_json(),
+            "region": None if self.region is None else self.region.to_json(),
             "pipes": [
                 {"pipe": r.pipe, "start": r.start, "end": r.end, "score": round(r.score, 6)}
                 for r in self.ranking.top(top)
@@ -267,10 +278,12 @@ def rank_alarms(
             return Decision(chosen.rank(early), min(decided, last), first)
         # at the signature's own decision time; the position from the arrivals at their
         # horizon (by the signature's time every meter's wave has come)
-        ranking = fused.rank(early, signature_ranking=signature_ranking)
+        drop = _signature_of(fused, early, signature_ranking)
+        ranking = fused.rank(early, signature_ranking=drop)
         arrived = arrivals(min(first + arrival_horizon(fused.arrival, calibration), last))
         at = _position(fused.arrival, arrived, ranking)
-        return Decision(ranking, min(decided, last), first, position=at)
+        region = _posterior(fused.arrival, arrived, drop)
+        return Decision(ranking, min(decided, last), first, position=at, posterior=region)
     margin = quantisation_margin(len(arrival.meters)) if fused is None else fused.margin
     start = decided if resume is None else max(decided, resume)
     look = _look(arrival, margin, arrivals, start, first, last, calibration)
@@ -281,17 +294,25 @@ def rank_alarms(
             first,
             position=_position(arrival, look.evidence, look.ranking),
             look_again=look.again,
+            posterior=_posterior(arrival, look.evidence, None),
         )
     later = onset + calibration.decision_delay
     if look.decisive or look.again is not None or later <= look.time:
-        ranking = fused.rank(look.evidence, arrival_ranking=look.ranking)
+        drop = _signature_of(fused, look.evidence, None)
+        ranking = fused.rank(look.evidence, arrival_ranking=look.ranking, signature_ranking=drop)
         at = _position(arrival, look.evidence, ranking)
-        return Decision(ranking, look.time, first, position=at, look_again=look.again)
-    ranking = fused.rank(
-        evidence(later), arrival_ranking=look.ranking, signature_ranking=signature_ranking
-    )
+        region = _posterior(arrival, look.evidence, drop)
+        return Decision(
+            ranking, look.time, first, position=at, look_again=look.again, posterior=region
+        )
+    settled = evidence(later)
+    drop = _signature_of(fused, settled, signature_ranking)
+    ranking = fused.rank(settled, arrival_ranking=look.ranking, signature_ranking=drop)
     at = _position(arrival, look.evidence, ranking)
-    return Decision(ranking, min(later, last), first, waited=True, position=at)
+    region = _posterior(arrival, look.evidence, drop)
+    return Decision(
+        ranking, min(later, last), first, waited=True, position=at, posterior=region
+    )
 
 
 def arrival_horizon(arrival: ArrivalLocalizer, calibration: IntervalCalibration) -> float:
@@ -351,6 +372,31 @@ def _look(
         if following > last + 1e-9:
             return _Look(ranking, seen, at, settled, following)
         at = following
+
+
+def _signature_of(
+    fused: FusedLocalizer, evidence: BurstEvidence, given: Ranking | None
+) -> Ranking | None:
+    """The signature ranking the fused localizer weighs at ``evidence``: ``given`` (the
+    caller's, of these readings), else the signature localizer's when the readings have settled
+    and signatures weigh at this capture interval, else ``None``."""
+    if given is not None:
+        return given
+    if fused.weights(evidence.capture_interval)[1] > 0 and fused.signature_ready(evidence):
+        return fused.signature.rank(evidence)
+    return None
+
+
+def _posterior(
+    arrival: ArrivalLocalizer, evidence: BurstEvidence, drop: Ranking | None
+) -> Posterior | None:
+    """The search posterior (:func:`burstloc.localize.region.posterior`) from the arrivals of
+    ``evidence`` and the signature ranking ``drop``, or ``None`` when they place the burst
+    nowhere (no alarmed meter of the model)."""
+    try:
+        return posterior(arrival, evidence, signature=drop)
+    except InputError:
+        return None
 
 
 def _position(

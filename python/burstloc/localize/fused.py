@@ -165,7 +165,9 @@ class FusedLocalizer:
         (:func:`decisive`)."""
         return decisive(arrival_ranking, self.margin)
 
-    def _signature_ready(self, evidence: BurstEvidence) -> bool:
+    def signature_ready(self, evidence: BurstEvidence) -> bool:
+        """Whether ``evidence`` holds readings before the onset and at least three settled
+        ones: what the signature localizer needs."""
         settled = evidence.times >= evidence.onset + self.signature.settle
         return bool(np.count_nonzero(settled) >= 3 and np.any(evidence.times <= evidence.onset))
 
@@ -192,7 +194,7 @@ class FusedLocalizer:
         elif evidence.alarms and w_arrival > 0:
             ranking = self.arrival.rank(evidence)
             parts.append((w_arrival, arrival_loglik(ranking), ranking))
-        if self._signature_ready(evidence) and w_signature > 0:
+        if self.signature_ready(evidence) and w_signature > 0:
             ranking = (
                 self.signature.rank(evidence) if signature_ranking is None else signature_ranking
             )

@@ -54,7 +54,9 @@ def _describe(record: dict[str, Any]) -> str:
     if position.get("metres") is not None:
         where += f", {position['metres']:.0f} m from node {position.get('from')}"
     if record["type"] == "transient":
-        return f"alarm located on {where}; classified at t = {record.get('classify_at', 0):g} s"
+        if "classify_at" in record:
+            return f"alarm located on {where}; classified at t = {record['classify_at']:g} s"
+        return f"alarm located on {where}; answered at t = {record.get('answer_at', 0):g} s"
     if record["type"] == "event":
         kind = record.get("classification") or {}
         return f"not a burst ({kind.get('class')}): {kind.get('reason', '')}; nearest {where}"

@@ -444,7 +444,7 @@ function renderIncident() {
     const pipe = rec.pipes && rec.pipes.length ? rec.pipes[0].pipe : "–";
     const pos = rec.position;
     const kind = rec.type;
-    const label = { decision: "burst", transient: "located, classifying", event: "not a burst" }[kind] || kind;
+    const label = { decision: "burst", transient: rec.classify_at !== undefined ? "located, classifying" : "located, narrowing", event: "not a burst" }[kind] || kind;
     let html = `<span class="kind ${kind}">${esc(label)}</span><span class="big">pipe ${esc(pipe)}</span>`;
     if (pos && pos.metres !== null && pos.metres !== undefined) {
       html += `<div class="row">position <b>${fmt(pos.metres, 0)} m</b> from node <b>${esc(pos.from)}</b> (${fmt(pos.low, 0)}–${fmt(pos.high, 0)} m of ${fmt(pos.length, 0)} m)</div>`;
@@ -458,7 +458,9 @@ function renderIncident() {
     }
     html += `<div class="row">decided at <b>t = ${fmt(rec.time, 1)} s</b>, first alarm ${fmt(rec.first_alarm, 1)} s (${fmt(rec.decision_delay_s, 1)} s later) by the ${esc(rec.localizer || "")} localizer</div>`;
     if (S.transient && S.answer) html += `<div class="row">early record: pipe <b>${esc(S.transient.pipes[0].pipe)}</b> at t = ${fmt(S.transient.time, 1)} s</div>`;
-    if (kind === "transient") html += `<div class="row">classified at t = ${fmt(rec.classify_at, 1)} s</div>`;
+    if (kind === "transient") html += rec.classify_at !== undefined
+      ? `<div class="row">classified at t = ${fmt(rec.classify_at, 1)} s</div>`
+      : `<div class="row">answered with the lasting drop at t = ${fmt(rec.answer_at, 1)} s</div>`;
     if (rec.classification) html += `<div class="row">class <b>${esc(rec.classification.class)}</b>: ${esc(rec.classification.reason)}</div>`;
     if (rec.pipes && rec.pipes.length > 1) html += `<div class="row">next: ${rec.pipes.slice(1).map((p) => esc(p.pipe)).join(", ")}</div>`;
     box.innerHTML = html;

@@ -1,0 +1,176 @@
+"""Search regions scored as a utility scores them: is the burst inside, how much main to search.
+
+Every answer of the arrival and fused localizers carries a posterior over points of the network
+(:mod:`burstloc.localize.region`) and its search regions. ``burstloc evaluate`` scores, per
+attempt (:func:`score_region`):
+
+* **coverage**: whether the true burst point lies in the region of each probability of
+  :data:`~burstloc.localize.region.REGION_LEVELS` (50, 80 and 95 %); a region that says 95 %
+  should hold the burst in 95 % of bursts;
+* the region's **length** in metres of main at each of those probabilities;
+* whether the **named point** (the position on the best pipe) is within 100 m and within
+  300 m network distance of the truth (BattLeDIM counts a localization within 300 m as found),
+  from the position errors of :mod:`burstloc.experiments.position`;
+* the **time to a region of at most 1 km** (:data:`SEARCHABLE`): seconds from the burst to the
+  first record whose 95 % region is that short: the monitor's early (transient) record, else
+  its answer (``None`` when neither is).
+
+An attempt without an answer counts as a burst outside every region, not within any distance
+and without a region. :class:`RegionScores` summarises a run.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from burstloc.localize.region import REGION_CONFIDENCE, REGION_LEVELS
+
+if TYPE_CHECKING:
+    from burstloc.experiments.harness import Attempt
+    from burstloc.experiments.position import PipePoint, PositionOutcome
+
+__all__ = ["NEAR", "SEARCHABLE", "RegionOutcome", "RegionScores", "score_region", "score_regions"]
+
+NEAR = (100.0, 300.0)
+"""Network distances (m) within which a named point counts as found."""
+
+SEARCHABLE = 1000.0
+"""Longest search region (m of main) a crew is sent to search."""
+
+
+@dataclass(frozen=True)
+class RegionOutcome:
+    """One attempt's region against the true point: per level of ``levels``, whether the region
+    holds it (``covered``) and its length (m, ``lengths``; empty without a region), the named
+    point's network distance to the truth (``error``, m, ``None`` without one) and the seconds
+    from the burst to the answer when its 95 % region is at most :data:`SEARCHABLE` m long
+    (``searchable_after``)."""
+
+    covered: tuple[bool, ...] = ()
+    lengths: tuple[float, ...] = ()
+    error: float | None = None
+    searchable_after: float | None = None
+
+
+def score_region(
+    attempt: Attempt,
+    truth: PipePoint,
+    truth_length: float,
+    position: PositionOutcome,
+    levels: Sequence[float] = REGION_LEVELS,
+) -> RegionOutcome:
+    """Score ``attempt``'s regions against the burst's true point ``truth`` (on a pipe of
+    ``truth_length`` m); ``position`` is the attempt's scored position."""
+    decision = attempt.decision
+    post = None if decision is None else decision.posterior
+    if decision is None or post is None:
+        return RegionOutcome(error=position.error)
+    regions = [post.region(level) for level in levels]
+    covered = tuple(
+        r.contains(truth.pipe, truth.node, truth.metres, truth_length) for r in regions
+    )
+    lengths = tuple(r.length for r in regions)
+    after = None
+    for answer in (attempt.early, decision):  # the early record first, then the answer
+        if answer is not None and answer.posterior is not None:
+            if answer.posterior.region(REGION_CONFIDENCE).length <= SEARCHABLE:
+                after = answer.time - attempt.burst_start
+                break
+    return RegionOutcome(covered, lengths, position.error, after)
+
+
+def score_regions(
+    attempts: Mapping[str, Sequence[Attempt]],
+    points: Mapping[str, PipePoint],
+    lengths: Mapping[str, float],
+    positions: Mapping[str, Sequence[PositionOutcome]],
+) -> dict[str, list[RegionOutcome]]:
+    """Per pipe, the region outcome of each attempt (``attempts[pipe][k]``)."""
+    return {
+        p: [
+            score_region(a, points[p], lengths[p], positions[p][k])
+            for k, a in enumerate(runs)
+        ]
+        for p, runs in attempts.items()
+    }
+
+
+def _share(flags: Iterable[bool], total: int) -> float | None:
+    return sum(flags) / total if total else None
+
+
+@dataclass(frozen=True)
+class RegionScores:
+    """A run's regions over its ``attempts``: ``coverage[level]`` (share of attempts whose
+    region of that probability held the burst), ``median_length`` / ``p90_length`` (m, of the
+    regions given, per level), ``within`` (share of attempts whose named point is within each
+    distance of :data:`NEAR`), ``searchable`` (share whose answer's 95 % region is at most
+    :data:`SEARCHABLE` m) and ``median_time_to_searchable`` (s from the burst, over every
+    attempt, ``None`` when half of them never get one)."""
+
+    attempts: int
+    answered: int
+    levels: tuple[float, ...]
+    coverage: tuple[float | None, ...]
+    median_length: tuple[float | None, ...]
+    p90_length: tuple[float | None, ...]
+    within: tuple[float | None, ...]
+    searchable: float | None
+    median_time_to_searchable: float | None
+
+    @classmethod
+    def of(
+        cls, outcomes: Iterable[RegionOutcome], levels: Sequence[float] = REGION_LEVELS
+    ) -> RegionScores:
+        """Summarise the region outcomes of a run's attempts."""
+        items = list(outcomes)
+        total = len(items)
+        answered = [o for o in items if o.lengths]
+        coverage, median, p90 = [], [], []
+        for i in range(len(levels)):
+            coverage.append(_share((o.covered[i] for o in answered), total))
+            lengths = np.array([o.lengths[i] for o in answered], dtype=np.float64)
+            median.append(float(np.median(lengths)) if lengths.size else None)
+            p90.append(float(np.percentile(lengths, 90)) if lengths.size else None)
+        within = tuple(
+            _share((o.error is not None and o.error <= d for o in items), total) for d in NEAR
+        )
+        times = sorted(
+            o.searchable_after if o.searchable_after is not None else np.inf for o in items
+        )
+        middle = float(np.median(times)) if times else np.inf
+        return cls(
+            attempts=total,
+            answered=len(answered),
+            levels=tuple(levels),
+            coverage=tuple(coverage),
+            median_length=tuple(median),
+            p90_length=tuple(p90),
+            within=within,
+            searchable=_share((o.searchable_after is not None for o in items), total),
+            median_time_to_searchable=middle if np.isfinite(middle) else None,
+        )
+
+    def to_json(self) -> dict[str, Any]:
+        """JSON-ready record (``tests/evaluate_schema.json``, ``region``)."""
+        return {
+            "attempts": self.attempts,
+            "answered": self.answered,
+            "levels": [
+                {
+                    "confidence": level,
+                    "coverage": self.coverage[i],
+                    "median_length_m": self.median_length[i],
+                    "p90_length_m": self.p90_length[i],
+                }
+                for i, level in enumerate(self.levels)
+            ],
+            "within_m": {f"{d:g}": share for d, share in zip(NEAR, self.within, strict=True)},
+            "searchable_m": SEARCHABLE,
+            "searchable": self.searchable,
+            "median_time_to_searchable_s": self.median_time_to_searchable,
+        }

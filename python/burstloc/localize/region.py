@@ -1,0 +1,296 @@
+"""The search region: where to send a crew, how much main that is, and how sure we are.
+
+With the few meters a utility has, one pipe is often not decidable from the data: several
+stretches of main explain the alarms equally well. So every answer also carries a *search
+region*: the smallest set of pipe stretches that holds the burst with a stated probability
+(default 95 %), its total length in metres, and the probability of each stretch.
+
+The probabilities come from a posterior over candidate points. Every pipe of the arrival
+localizer is cut into segments of about :data:`GRID_STEP` metres (:class:`RegionGrid`); the
+middle of each segment is a candidate point, with a prior proportional to the segment's length
+(a burst is as likely on any metre of main). Its likelihood has two parts:
+
+* **arrivals**: each meter's timing misfit with the burst time fitted
+  (:meth:`burstloc.localize.arrival.ArrivalLocalizer.gaps`: an alarm start is known to one
+  capture interval ``dt``; a silent meter says the wave has not come yet). The misfit beyond
+  the interval is the detector's placement of the change and the model's error: it counts as a
+  Student-t error (:data:`TAIL_DOF` degrees of freedom: a weak front a meter hears late is not
+  impossible, only unlikely) of scale ``sqrt((TIMING_INTERVALS dt)^2 + TIMING_FLOOR^2)``;
+* **the lasting drop**, once the readings have settled: the signature localizer's fit of the
+  pipe (:func:`burstloc.localize.fused.signature_loglik`, the same log-likelihood the fused
+  localizer weighs), the same for every point of a pipe.
+
+The region is the highest-density set: segments in decreasing posterior probability per metre
+until they hold the stated probability (the shortest main that does). Adjacent segments of a
+pipe merge into one stretch. Numpy only, from the stored localization model: on the live path.
+"""
+
+from __future__ import annotations
+
+import math
+import weakref
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from burstloc.exceptions import ConfigError, InputError
+from burstloc.localize.arrival import ArrivalLocalizer
+from burstloc.localize.evidence import BurstEvidence, Ranking
+from burstloc.localize.fused import signature_loglik
+
+__all__ = [
+    "GRID_STEP",
+    "REGION_CONFIDENCE",
+    "REGION_LEVELS",
+    "Posterior",
+    "RegionGrid",
+    "SearchRegion",
+    "Stretch",
+    "grid_of",
+    "posterior",
+    "regions",
+    "timing_scale",
+]
+
+REGION_CONFIDENCE = 0.95
+"""The probability a search region holds by default."""
+
+REGION_LEVELS = (0.5, 0.8, 0.95)
+"""The probabilities whose regions ``burstloc evaluate`` scores (coverage and length)."""
+
+GRID_STEP = 25.0
+"""Longest segment (m) a pipe is cut into for the posterior (more on a very large network:
+:data:`MAX_GRID_POINTS`)."""
+
+MAX_GRID_POINTS = 20_000
+"""Most candidate points of a grid: beyond it the segments are made longer."""
+
+TIMING_INTERVALS = 0.5
+"""Timing error beyond the capture interval, in capture intervals: where in its interval the
+detector places a change it sees one reading late or early."""
+
+TIMING_FLOOR = 0.02
+"""Timing error (s) of the model itself: path lengths and wave speed (20 ms is 24 m of wave
+travel at 1200 m/s)."""
+
+TAIL_DOF = 3.0
+"""Degrees of freedom of the Student-t timing error."""
+
+
+@dataclass(frozen=True)
+class Stretch:
+    """A stretch of a pipe: ``low`` to ``high`` metres from its flow-direction start node
+    ``start``, holding the burst with ``probability``."""
+
+    pipe: str
+    start: str
+    low: float
+    high: float
+    probability: float
+
+    @property
+    def length(self) -> float:
+        """Metres of main."""
+        return self.high - self.low
+
+    def to_json(self) -> dict[str, Any]:
+        """``pipe``, ``from`` (the start node), ``low``, ``high`` (m), ``probability``."""
+        return {
+            "pipe": self.pipe,
+            "from": self.start,
+            "low": round(self.low, 1),
+            "high": round(self.high, 1),
+            "probability": round(self.probability, 4),
+        }
+
+
+@dataclass(frozen=True)
+class SearchRegion:
+    """The stretches to search: together they hold the burst with ``probability`` (at least
+    ``confidence``, the probability asked for), ``length`` metres of main; most probable
+    first. ``pipes``: each pipe of the region with the probability the burst is on it (anywhere
+    on it), most probable first."""
+
+    confidence: float
+    probability: float
+    length: float
+    stretches: tuple[Stretch, ...]
+    pipes: tuple[tuple[str, float], ...]
+
+    def contains(self, pipe: str, node: str, metres: float, length: float) -> bool:
+        """Whether the point ``metres`` along ``pipe`` (of ``length`` m) from its end node
+        ``node`` lies in the region."""
+        for s in self.stretches:
+            if s.pipe != pipe:
+                continue
+            along = metres if node == s.start else length - metres
+            if s.low - 1e-6 <= along <= s.high + 1e-6:
+                return True
+        return False
+
+    def to_json(self, stretches: int | None = None) -> dict[str, Any]:
+        """JSON-ready record: ``confidence``, ``probability``, ``length_m``, ``pipe_count``,
+        ``stretches`` (the first ``stretches`` of them; all by default) and ``pipes`` (pipe and
+        probability, at most ten)."""
+        shown = self.stretches if stretches is None else self.stretches[:stretches]
+        return {
+            "confidence": self.confidence,
+            "probability": round(self.probability, 4),
+            "length_m": round(self.length, 1),
+            "pipe_count": len({s.pipe for s in self.stretches}),
+            "stretches": [s.to_json() for s in shown],
+            "pipes": [{"pipe": p, "probability": round(q, 4)} for p, q in self.pipes[:10]],
+        }
+
+
+class RegionGrid:
+    """Candidate points along every pipe of an arrival localizer: each pipe cut into equal
+    segments of at most ``step`` metres (longer where the network would give more than
+    :data:`MAX_GRID_POINTS`); ``pipe[i]`` (index into ``arrival.pipes``), ``low[i]`` /
+    ``high[i]`` (m from the pipe's flow-direction start) and ``dist[i, j]``, the path length from
+    the segment's middle to meter ``j``."""
+
+    def __init__(self, arrival: ArrivalLocalizer, step: float = GRID_STEP) -> None:
+        if not (math.isfinite(step) and step > 0):
+            raise ConfigError(f"the grid step must be > 0 m, got {step}")
+        lengths = np.array([p.length for p in arrival.pipes], dtype=np.float64)
+        step = max(step, float(lengths.sum()) / MAX_GRID_POINTS)
+        counts = np.maximum(np.ceil(lengths / step), 1).astype(np.int64)
+        self.arrival = arrival
+        self.pipe = np.repeat(np.arange(lengths.size), counts)
+        k = np.arange(self.pipe.size) - np.repeat(np.cumsum(counts) - counts, counts)
+        width = lengths[self.pipe] / counts[self.pipe]
+        self.low = k * width
+        self.high = self.low + width
+        self.length = width
+        mid = 0.5 * (self.low + self.high)
+        d_start, d_end = arrival.end_distances
+        total = lengths[self.pipe]
+        self.dist = np.minimum(
+            mid[:, None] + d_start[self.pipe], (total - mid)[:, None] + d_end[self.pipe]
+        )
+        self.rows = self.pipe.tolist()
+
+    def __len__(self) -> int:
+        """The number of candidate points."""
+        return int(self.pipe.size)
+
+
+_GRIDS: weakref.WeakKeyDictionary[ArrivalLocalizer, RegionGrid] = weakref.WeakKeyDictionary()
+
+
+def grid_of(arrival: ArrivalLocalizer) -> RegionGrid:
+    """The default :class:`RegionGrid` of ``arrival``, built once per localizer."""
+    grid = _GRIDS.get(arrival)
+    if grid is None:
+        grid = _GRIDS[arrival] = RegionGrid(arrival)
+    return grid
+
+
+def timing_scale(capture_interval: float) -> float:
+    """Scale (s) of the timing error beyond the capture interval (module docstring)."""
+    return math.hypot(TIMING_INTERVALS * capture_interval, TIMING_FLOOR)
+
+
+@dataclass(frozen=True)
+class Posterior:
+    """Probabilities of the candidate points of ``grid`` (``probability``, summing to 1)."""
+
+    grid: RegionGrid
+    probability: NDArray[np.float64]
+
+    def pipe_probabilities(self) -> dict[str, float]:
+        """The probability that the burst is on each pipe (pipes with some probability)."""
+        sums = np.bincount(self.grid.pipe, weights=self.probability)
+        pipes = self.grid.arrival.pipes
+        return {pipes[i].pipe: float(q) for i, q in enumerate(sums) if q > 0}
+
+    def region(self, confidence: float = REGION_CONFIDENCE) -> SearchRegion:
+        """The shortest set of segments holding at least ``confidence`` (module docstring).
+
+        Raises:
+            ConfigError: ``confidence`` is not in (0, 1].
+        """
+        if not (0 < confidence <= 1):
+            raise ConfigError(f"a region's confidence must be in (0, 1], got {confidence}")
+        grid, prob = self.grid, self.probability
+        order = np.argsort(-(prob / grid.length), kind="stable")
+        held = np.cumsum(prob[order])
+        count = int(np.searchsorted(held, confidence * held[-1] - 1e-12)) + 1
+        chosen = np.sort(order[: min(count, order.size)])
+        stretches: list[Stretch] = []
+        pipes = self.grid.arrival.pipes
+        for i in chosen.tolist():
+            p = pipes[int(grid.pipe[i])]
+            last = stretches[-1] if stretches else None
+            if last is not None and last.pipe == p.pipe and abs(last.high - grid.low[i]) < 1e-9:
+                stretches[-1] = Stretch(
+                    p.pipe, p.start, last.low, float(grid.high[i]), last.probability + prob[i]
+                )
+            else:
+                stretches.append(
+                    Stretch(p.pipe, p.start, float(grid.low[i]), float(grid.high[i]), prob[i])
+                )
+        stretches = [
+            Stretch(s.pipe, s.start, s.low, s.high, float(s.probability)) for s in stretches
+        ]
+        stretches.sort(key=lambda s: -s.probability)
+        by_pipe: dict[str, float] = {}
+        for s in stretches:
+            by_pipe[s.pipe] = by_pipe.get(s.pipe, 0.0) + s.probability
+        on_pipe = self.pipe_probabilities()
+        return SearchRegion(
+            confidence=float(confidence),
+            probability=float(prob[chosen].sum()),
+            length=float(grid.length[chosen].sum()),
+            stretches=tuple(stretches),
+            pipes=tuple(sorted(((p, on_pipe[p]) for p in by_pipe), key=lambda t: -t[1])),
+        )
+
+
+def _student(z: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Minus the log-density (up to a constant) of a Student-t error at ``z`` scales."""
+    return np.asarray(0.5 * (TAIL_DOF + 1.0) * np.log1p(z * z / TAIL_DOF), dtype=np.float64)
+
+
+def posterior(
+    arrival: ArrivalLocalizer,
+    evidence: BurstEvidence | None,
+    *,
+    signature: Ranking | None = None,
+    grid: RegionGrid | None = None,
+) -> Posterior:
+    """The posterior over ``grid``'s points (default :func:`grid_of`) from the arrivals of
+    ``evidence`` (``None``: none) and the signature localizer's ranking ``signature`` of the
+    lasting drop (``None``: not yet settled); see the module docstring.
+
+    Raises:
+        InputError: neither evidence is given, or no alarmed meter is one of the model's.
+    """
+    grid = grid_of(arrival) if grid is None else grid
+    loglik = np.log(grid.length)
+    if evidence is None and signature is None:
+        raise InputError("a search region needs arrivals or a lasting drop")
+    if evidence is not None:
+        gap, counted, placed = arrival.gaps(grid.dist[:, None, :], evidence, grid.rows)
+        scale = timing_scale(evidence.capture_interval)
+        penalty = np.sum(np.where(counted, _student(gap / scale), 0.0), axis=2)[:, 0]
+        loglik = loglik - np.where(placed[:, 0], penalty, np.inf)
+    if signature is not None:
+        fit = signature_loglik(signature)
+        names = [p.pipe for p in arrival.pipes]
+        worst = min(fit.values(), default=0.0)
+        per_pipe = np.array([fit.get(n, worst) for n in names], dtype=np.float64)
+        loglik = loglik + per_pipe[grid.pipe]
+    if not np.isfinite(loglik).any():
+        raise InputError("no candidate point explains the alarms")
+    weight = np.exp(loglik - loglik.max())
+    return Posterior(grid, weight / weight.sum())
+
+
+def regions(post: Posterior, levels: Sequence[float] = REGION_LEVELS) -> Mapping[float, SearchRegion]:
+    """The regions of ``post`` at each of ``levels``."""
+    return {level: post.region(level) for level in levels}
