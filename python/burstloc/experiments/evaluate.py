@@ -63,6 +63,7 @@ from burstloc.experiments.position import (
     PositionErrors,
     PositionOutcome,
     PositionScorer,
+    wave_travel,
 )
 from burstloc.experiments.region_score import RegionOutcome, RegionScores, score_regions
 from burstloc.experiments.runs import (
@@ -315,11 +316,12 @@ def evaluate(
     for pipe in chosen:  # a pipe named closed: said before anything is simulated
         netmod.require_pipe(wn, pipe, open_only=True)
     params: dict[str, Any] = scenario.parameters()
-    needed = max(required_duration(s, scenario.burst_start) for s in runs)
+    travel = wave_travel(wn, float(params["wave_speed"]))
+    needed = max(required_duration(s, scenario.burst_start, travel) for s in runs)
     if params["duration"] is None:
         params["duration"] = float(math.ceil(needed - 1e-9))
     elif params["duration"] + 1e-9 < needed:
-        worst = max(runs, key=lambda s: required_duration(s, scenario.burst_start))
+        worst = max(runs, key=lambda s: required_duration(s, scenario.burst_start, travel))
         raise ConfigError(
             f"the scenario simulates {params['duration']:g} s but the run "
             f"{worst.detector.kind} at {worst.capture_interval:g} s with localization interval "

@@ -40,6 +40,7 @@ __all__ = [
     "estimated_point",
     "score_position",
     "true_point",
+    "wave_travel",
 ]
 
 
@@ -70,6 +71,17 @@ def true_point(result: ScenarioResult, wn: WaterNetworkModel) -> PipePoint:
 def estimated_point(position: PipePosition) -> PipePoint:
     """The point a localizer's :class:`~burstloc.localize.arrival.PipePosition` names."""
     return PipePoint(position.pipe, position.start, position.metres)
+
+
+def wave_travel(wn: WaterNetworkModel, wave_speed: float) -> float:
+    """A bound (s) on the wave's travel between any two connected nodes of ``wn``: twice the
+    longest path length (m) from one node, over ``wave_speed`` (m/s)."""
+    graph = length_graph(wn)
+    if graph.number_of_nodes() == 0:
+        return 0.0
+    source = next(iter(graph.nodes))
+    reach = nx.single_source_dijkstra_path_length(graph, source, weight="length")
+    return 2.0 * max(reach.values()) / wave_speed
 
 
 class NetworkDistance:

@@ -27,13 +27,22 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from burstloc.localize.region import REGION_CONFIDENCE, REGION_LEVELS
+from burstloc.localize.region import REGION_LEVELS
 
 if TYPE_CHECKING:
     from burstloc.experiments.harness import Attempt
     from burstloc.experiments.position import PipePoint, PositionOutcome
 
-__all__ = ["NEAR", "SEARCHABLE", "RegionOutcome", "RegionScores", "score_region", "score_regions"]
+__all__ = [
+    "NEAR",
+    "REGION_HEADER",
+    "SEARCHABLE",
+    "RegionOutcome",
+    "RegionScores",
+    "region_cells",
+    "score_region",
+    "score_regions",
+]
 
 NEAR = (100.0, 300.0)
 """Network distances (m) within which a named point counts as found."""
@@ -70,16 +79,14 @@ def score_region(
     if decision is None or post is None:
         return RegionOutcome(error=position.error)
     regions = [post.region(level) for level in levels]
-    covered = tuple(
-        r.contains(truth.pipe, truth.node, truth.metres, truth_length) for r in regions
-    )
+    covered = tuple(r.contains(truth.pipe, truth.node, truth.metres, truth_length) for r in regions)
     lengths = tuple(r.length for r in regions)
     after = None
     for answer in (attempt.early, decision):  # the early record first, then the answer
-        if answer is not None and answer.posterior is not None:
-            if answer.posterior.region(REGION_CONFIDENCE).length <= SEARCHABLE:
-                after = answer.time - attempt.burst_start
-                break
+        post = None if answer is None else answer.posterior
+        if answer is not None and post is not None and post.region().length <= SEARCHABLE:
+            after = answer.time - attempt.burst_start
+            break
     return RegionOutcome(covered, lengths, position.error, after)
 
 
@@ -91,10 +98,7 @@ def score_regions(
 ) -> dict[str, list[RegionOutcome]]:
     """Per pipe, the region outcome of each attempt (``attempts[pipe][k]``)."""
     return {
-        p: [
-            score_region(a, points[p], lengths[p], positions[p][k])
-            for k, a in enumerate(runs)
-        ]
+        p: [score_region(a, points[p], lengths[p], positions[p][k]) for k, a in enumerate(runs)]
         for p, runs in attempts.items()
     }
 
@@ -174,3 +178,29 @@ class RegionScores:
             "searchable": self.searchable,
             "median_time_to_searchable_s": self.median_time_to_searchable,
         }
+
+
+REGION_HEADER = [
+    "coverage 50 / 80 / 95 %",
+    "95 % region median / p90",
+    "within 100 / 300 m",
+    "<= 1 km: share, median time",
+]
+"""The columns of :func:`region_cells`."""
+
+
+def _percent(x: float | None) -> str:
+    return "-" if x is None else f"{100 * x:.0f}%"
+
+
+def region_cells(scores: RegionScores) -> list[str]:
+    """A run's search regions as table cells (:data:`REGION_HEADER`)."""
+    last = len(scores.levels) - 1
+    median, p90 = scores.median_length[last], scores.p90_length[last]
+    time = scores.median_time_to_searchable
+    return [
+        " / ".join(_percent(c) for c in scores.coverage),
+        "-" if median is None or p90 is None else f"{median:.0f} / {p90:.0f} m",
+        " / ".join(_percent(w) for w in scores.within),
+        f"{_percent(scores.searchable)}, " + ("-" if time is None else f"{time:.1f} s"),
+    ]

@@ -29,6 +29,7 @@ from burstloc.constants import CAPTURE_INTERVALS
 from burstloc.experiments import paper
 from burstloc.experiments.evaluate import Evaluation, RunResult
 from burstloc.experiments.position import PositionErrors, PositionOutcome
+from burstloc.experiments.region_score import REGION_HEADER, RegionOutcome, region_cells
 
 if TYPE_CHECKING:
     from burstloc.experiments.grid import StudySettings
@@ -255,9 +256,31 @@ def format_tables(ev: Evaluation, paper_tables: bool | None = None) -> str:
                 ]
             )
     out += _render(rows, header)
+    ranked = [r for _, _, runs in _groups(ev) for r in runs if r.spec.localizer != "paper"]
+    if ranked:
+        out += ["", _REGION_TITLE]
+        rows = [
+            [
+                _TABLE_NAMES[r.spec.detector.kind][1],
+                f"{r.spec.capture_interval:g} s",
+                f"{r.spec.localizer} ({r.spec.meter_model})",
+                *region_cells(r.region_scores()),
+            ]
+            for r in ranked
+        ]
+        out += _render(rows, ["detector", "capture", "localizer", *REGION_HEADER])
     for w in ev.warnings:
         out.append(f"warning: {w}")
     return "\n".join(out).lstrip("\n") + "\n"
+
+
+_REGION_TITLE = (
+    "Search regions, over every attempt: the share of bursts inside the region stated to hold "
+    "them with 50 / 80 / 95 % (an attempt without an answer holds nothing); the 95 % region's "
+    "median / p90 length in metres of main; the named point within 100 / 300 m network "
+    "distance of the burst; the share with a 95 % region of at most 1 km, and the median time "
+    "from the burst to it"
+)
 
 
 def _metres(errors: PositionErrors) -> str:
@@ -283,6 +306,8 @@ def _csv_rows(ev: Evaluation) -> list[dict[str, Any]]:
             loc = a.localization
             at = None if a.decision is None else a.decision.position
             first = (r.positions.get(p) or [PositionOutcome()])[0]
+            region = None if a.decision is None else a.decision.region
+            covered = (r.regions.get(p) or [RegionOutcome()])[0].covered
             rows.append(
                 {
                     "detector": r.spec.detector.kind,
@@ -306,6 +331,9 @@ def _csv_rows(ev: Evaluation) -> list[dict[str, Any]]:
                     "position_m": "" if at is None else at.metres,
                     "position_from": "" if at is None else at.start,
                     "position_error_m": _blank(first.error),
+                    "region_m": "" if region is None else region.length,
+                    "region_pipes": "" if region is None else len(region.pipes),
+                    "region_holds_burst": "" if not covered else covered[-1],
                 }
             )
     return rows

@@ -287,15 +287,20 @@ def phase_offsets(spec: RunSpec, phases: int, span: str = "capture") -> list[flo
     return [k * period / phases for k in range(phases)]
 
 
-def required_duration(spec: RunSpec, burst_start: float) -> float:
+def required_duration(spec: RunSpec, burst_start: float, travel: float = 0.0) -> float:
     """Simulated time a run needs: ``2 x interval`` readings after the burst at any phase.
 
     ``burst_start + (2 x interval + 1) x capture_interval``: one capture interval of margin for
     the clock phase and for TSNet's grid, which ends up to one time step short of the duration.
+    The signature and fused localizers answer ``SIGNATURE_DECISION_DELAY`` after the onset the
+    meters see, which is up to ``travel`` seconds (the wave's longest travel to a meter) after
+    the burst.
     """
     need = burst_start + (2 * spec.localization_interval + 1) * spec.capture_interval
     if spec.localizer in ("signature", "fused"):
-        need = max(need, burst_start + SIGNATURE_DECISION_DELAY + 2 * spec.capture_interval)
+        need = max(
+            need, burst_start + travel + SIGNATURE_DECISION_DELAY + 2 * spec.capture_interval
+        )
     return need
 
 

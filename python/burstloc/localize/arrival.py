@@ -240,22 +240,23 @@ class ArrivalLocalizer:
         """
         return np.asarray(self._rms(self._dist, evidence).min(axis=1), dtype=np.float64)
 
-    def gaps(
+    def windows(
         self,
         dist: NDArray[np.float64],
         evidence: BurstEvidence,
         rows: slice | list[int] = slice(None),
-    ) -> tuple[NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_]]:
-        """Each meter's timing misfit (s) at candidate points, with the burst time fitted.
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_], int]:
+        """The burst times ``t0`` each meter allows at candidate points: ``(lo, hi, reach,
+        alarmed)``.
 
         ``dist`` (..., points, meters): path lengths from candidate points to the meters, of the
-        pipes ``self.pipes[rows]`` along the first axis (for their wave fronts). For each point
-        the burst time ``t0`` minimises the sum of squared misfits (:meth:`misfit`); returns
-        ``(gap, counted, placed)``: ``gap`` (..., points, K) the misfit of each alarmed meter,
-        then of each silent reading meter (0 where a silent meter says nothing, see
-        :func:`silence_counts`), ``counted`` where a meter takes part, and ``placed`` (...,
-        points) whether the point reaches some alarmed meter at all (``False``: the point
-        cannot explain the alarms).
+        pipes ``self.pipes[rows]`` along the first axis (for their wave fronts). ``lo`` / ``hi``
+        (..., points, K): for each of the ``alarmed`` alarmed meters first, then each silent
+        reading meter, the interval of ``t0`` that puts its wave in its capture interval (an
+        alarm) or after the decision time less two intervals (a silence: ``hi`` infinite);
+        ``-inf`` where the point's wave does not reach the meter, or a silence says nothing
+        (:func:`silence_counts`); ``reach`` where the wave reaches the meter (a silence that
+        says nothing still counts in an RMS, so that every point's is over the same meters).
 
         Raises:
             InputError: no meter of the model has alarmed.
@@ -279,19 +280,41 @@ class ArrivalLocalizer:
                 hi_parts.append(np.full_like(lo_parts[-1], np.inf))
         lo = np.concatenate(lo_parts, axis=2)  # t0 values that put each arrival in its window
         hi = np.concatenate(hi_parts, axis=2)
-        finite = np.isfinite(lo)
+        reach = np.isfinite(lo)
         if self._fronts is not None and silent:
             heard = silence_counts(self._fronts[rows], alarmed, silent)
             lo[:, :, len(alarmed) :] = np.where(
                 heard[:, None, :], lo[:, :, len(alarmed) :], -np.inf
             )
+        return lo, hi, reach, len(alarmed)
+
+    def gaps(
+        self,
+        dist: NDArray[np.float64],
+        evidence: BurstEvidence,
+        rows: slice | list[int] = slice(None),
+    ) -> tuple[NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_]]:
+        """Each meter's timing misfit (s) at candidate points, with the burst time fitted.
+
+        For each point of :meth:`windows` the burst time ``t0`` minimises the sum of squared
+        misfits (:meth:`misfit`); returns ``(gap, counted, placed)``: ``gap`` (..., points, K)
+        each meter's distance from ``t0`` to its window (0 where it says nothing),
+        ``counted`` where a meter takes part (its wave reaches the point), and ``placed``
+        (..., points) whether the point reaches some alarmed meter at all (``False``: it cannot
+        explain the alarms).
+
+        Raises:
+            InputError: no meter of the model has alarmed.
+        """
+        dt = evidence.capture_interval
+        lo, hi, finite, count = self.windows(dist, evidence, rows)
         lo_f = np.where(finite, lo, -np.inf)
         hi_f = np.where(finite, hi, np.inf)
-        first = np.isfinite(lo[:, :, : len(alarmed)])
-        left = np.where(first, lo[:, :, : len(alarmed)], np.inf).min(axis=2) - dt
+        first = np.isfinite(lo[:, :, :count])
+        left = np.where(first, lo[:, :, :count], np.inf).min(axis=2) - dt
         right = (
             np.maximum(
-                np.where(first, hi[:, :, : len(alarmed)], -np.inf).max(axis=2),
+                np.where(first, hi[:, :, :count], -np.inf).max(axis=2),
                 np.where(finite, lo, -np.inf).max(axis=2),
             )
             + dt

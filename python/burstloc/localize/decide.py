@@ -46,8 +46,14 @@ from burstloc.exceptions import ConfigError, InputError
 from burstloc.localize.arrival import ArrivalLocalizer, PipePosition
 from burstloc.localize.evidence import BurstEvidence, Localizer, Ranking, evidence_at
 from burstloc.localize.fused import FusedLocalizer, decisive, quantisation_margin
-from burstloc.localize.region import REGION_CONFIDENCE, Posterior, SearchRegion, posterior
-from burstloc.localize.signature import SignatureLocalizer
+from burstloc.localize.region import (
+    REGION_CONFIDENCE,
+    DropFit,
+    Posterior,
+    SearchRegion,
+    posterior,
+)
+from burstloc.localize.signature import SignatureLocalizer, rank_drop
 
 if TYPE_CHECKING:
     from burstloc.localize.classify import Classification
@@ -279,7 +285,7 @@ def rank_alarms(
         # at the signature's own decision time; the position from the arrivals at their
         # horizon (by the signature's time every meter's wave has come)
         drop = _signature_of(fused, early, signature_ranking)
-        ranking = fused.rank(early, signature_ranking=drop)
+        ranking = fused.rank(early, signature_ranking=None if drop is None else drop.ranking)
         arrived = arrivals(min(first + arrival_horizon(fused.arrival, calibration), last))
         at = _position(fused.arrival, arrived, ranking)
         region = _posterior(fused.arrival, arrived, drop)
@@ -299,7 +305,11 @@ def rank_alarms(
     later = onset + calibration.decision_delay
     if look.decisive or look.again is not None or later <= look.time:
         drop = _signature_of(fused, look.evidence, None)
-        ranking = fused.rank(look.evidence, arrival_ranking=look.ranking, signature_ranking=drop)
+        ranking = fused.rank(
+            look.evidence,
+            arrival_ranking=look.ranking,
+            signature_ranking=None if drop is None else drop.ranking,
+        )
         at = _position(arrival, look.evidence, ranking)
         region = _posterior(arrival, look.evidence, drop)
         return Decision(
@@ -307,12 +317,14 @@ def rank_alarms(
         )
     settled = evidence(later)
     drop = _signature_of(fused, settled, signature_ranking)
-    ranking = fused.rank(settled, arrival_ranking=look.ranking, signature_ranking=drop)
+    ranking = fused.rank(
+        settled,
+        arrival_ranking=look.ranking,
+        signature_ranking=None if drop is None else drop.ranking,
+    )
     at = _position(arrival, look.evidence, ranking)
     region = _posterior(arrival, look.evidence, drop)
-    return Decision(
-        ranking, min(later, last), first, waited=True, position=at, posterior=region
-    )
+    return Decision(ranking, min(later, last), first, waited=True, position=at, posterior=region)
 
 
 def arrival_horizon(arrival: ArrivalLocalizer, calibration: IntervalCalibration) -> float:
@@ -376,25 +388,28 @@ def _look(
 
 def _signature_of(
     fused: FusedLocalizer, evidence: BurstEvidence, given: Ranking | None
-) -> Ranking | None:
-    """The signature ranking the fused localizer weighs at ``evidence``: ``given`` (the
-    caller's, of these readings), else the signature localizer's when the readings have settled
-    and signatures weigh at this capture interval, else ``None``."""
+) -> DropFit | None:
+    """The lasting drop the fused localizer weighs at ``evidence``: ``given`` (the caller's
+    signature ranking of these readings), else the signature localizer's fit when the readings
+    have settled and signatures weigh at this capture interval, else ``None``."""
+    meters = len(fused.signature.signatures.meters)
     if given is not None:
-        return given
+        return DropFit(given, meters)
     if fused.weights(evidence.capture_interval)[1] > 0 and fused.signature_ready(evidence):
-        return fused.signature.rank(evidence)
+        drop = fused.signature.drop(evidence)
+        ranking = rank_drop(drop, fused.signature.signature_sets)
+        return DropFit(ranking, meters, float(np.sqrt(np.mean(drop**2))))
     return None
 
 
 def _posterior(
-    arrival: ArrivalLocalizer, evidence: BurstEvidence, drop: Ranking | None
+    arrival: ArrivalLocalizer, evidence: BurstEvidence, drop: DropFit | None
 ) -> Posterior | None:
     """The search posterior (:func:`burstloc.localize.region.posterior`) from the arrivals of
-    ``evidence`` and the signature ranking ``drop``, or ``None`` when they place the burst
+    ``evidence`` and the lasting ``drop``, or ``None`` when they place the burst
     nowhere (no alarmed meter of the model)."""
     try:
-        return posterior(arrival, evidence, signature=drop)
+        return posterior(arrival, evidence, drop=drop)
     except InputError:
         return None
 

@@ -10,15 +10,22 @@ localizer is cut into segments of about :data:`GRID_STEP` metres (:class:`Region
 middle of each segment is a candidate point, with a prior proportional to the segment's length
 (a burst is as likely on any metre of main). Its likelihood has two parts:
 
-* **arrivals**: each meter's timing misfit with the burst time fitted
-  (:meth:`burstloc.localize.arrival.ArrivalLocalizer.gaps`: an alarm start is known to one
-  capture interval ``dt``; a silent meter says the wave has not come yet). The misfit beyond
-  the interval is the detector's placement of the change and the model's error: it counts as a
-  Student-t error (:data:`TAIL_DOF` degrees of freedom: a weak front a meter hears late is not
-  impossible, only unlikely) of scale ``sqrt((TIMING_INTERVALS dt)^2 + TIMING_FLOOR^2)``;
-* **the lasting drop**, once the readings have settled: the signature localizer's fit of the
-  pipe (:func:`burstloc.localize.fused.signature_loglik`, the same log-likelihood the fused
-  localizer weighs), the same for every point of a pipe.
+* **arrivals**: each meter's timing misfit, the distance from the burst time ``t0`` to the
+  window its alarm allows (:meth:`burstloc.localize.arrival.ArrivalLocalizer.windows`: an alarm
+  start is known to one capture interval ``dt``; a silent meter says the wave has not come
+  yet). The misfit beyond the window is the detector's placement of the change and the model's
+  error: a Student-t error (:data:`TAIL_DOF` degrees of freedom) of scale ``sqrt((
+  TIMING_INTERVALS dt)^2 + TIMING_FLOOR^2)``, mixed with a chance :data:`OUTLIER` that the
+  meter's alarm says nothing of the first wave (a weak front heard late, on a later
+  reflection), uniform over the arrival horizon. ``t0`` is the best of the windows' ends and
+  the least-squares fit;
+* **the lasting drop**, once the readings have settled (:class:`DropFit`): the signature
+  localizer's fit of each pipe (its best position), the same for every point of the pipe. With
+  ``n`` meters and the burst size fitted, the residual has ``n - 1`` degrees of freedom and an
+  unknown noise level: the profile likelihood is ``-(n - 1)/2 log(rss)``, with the hydraulic
+  model's own error (:data:`DROP_MODEL_ERROR` of the drop, at least
+  :data:`~burstloc.localize.fused.SIGNATURE_FLOOR`) added to every residual. Two meters fit
+  many pipes' signatures; fifteen tell them apart.
 
 The region is the highest-density set: segments in decreasing posterior probability per metre
 until they hold the stated probability (the shortest main that does). Adjacent segments of a
@@ -29,7 +36,7 @@ from __future__ import annotations
 
 import math
 import weakref
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -39,19 +46,21 @@ from numpy.typing import NDArray
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.localize.arrival import ArrivalLocalizer
 from burstloc.localize.evidence import BurstEvidence, Ranking
-from burstloc.localize.fused import signature_loglik
+from burstloc.localize.fused import SIGNATURE_FLOOR
 
 __all__ = [
+    "DROP_MODEL_ERROR",
     "GRID_STEP",
     "REGION_CONFIDENCE",
     "REGION_LEVELS",
+    "DropFit",
     "Posterior",
     "RegionGrid",
     "SearchRegion",
     "Stretch",
     "grid_of",
     "posterior",
-    "regions",
+    "timing_penalty",
     "timing_scale",
 ]
 
@@ -78,6 +87,41 @@ travel at 1200 m/s)."""
 
 TAIL_DOF = 3.0
 """Degrees of freedom of the Student-t timing error."""
+
+OUTLIER = 0.05
+"""Chance that a meter's alarm start says nothing of the burst's first wave."""
+
+_T_PEAK = math.gamma(0.5 * (TAIL_DOF + 1)) / (
+    math.sqrt(TAIL_DOF * math.pi) * math.gamma(0.5 * TAIL_DOF)
+)
+
+DROP_MODEL_ERROR = 0.1
+"""Error of the lasting drop's hydraulic model (EPANET's steady state against the settled
+readings), as a fraction of the drop's RMS over the meters."""
+
+
+@dataclass(frozen=True)
+class DropFit:
+    """The lasting drop's evidence: the signature localizer's ``ranking`` (score: minus the RMS
+    residual, m) over ``meters`` meters, of a drop of RMS ``size`` m (``None``: not known, the
+    model error is then :data:`~burstloc.localize.fused.SIGNATURE_FLOOR`)."""
+
+    ranking: Ranking
+    meters: int
+    size: float | None = None
+
+    def loglik(self, pipes: Sequence[str]) -> NDArray[np.float64]:
+        """Log-likelihood of each of ``pipes`` (module docstring); a pipe the ranking does
+        not hold gets its worst."""
+        floor = SIGNATURE_FLOOR
+        if self.size is not None and math.isfinite(self.size):
+            floor = max(floor, DROP_MODEL_ERROR * self.size)
+        rss = {p.pipe: p.score * p.score + floor * floor for p in self.ranking}
+        best = min(rss.values(), default=floor * floor)
+        worst = max(rss.values(), default=floor * floor)
+        dof = max(self.meters - 1, 1)
+        values = np.array([rss.get(p, worst) for p in pipes], dtype=np.float64)
+        return np.asarray(-0.5 * dof * np.log(values / best), dtype=np.float64)
 
 
 @dataclass(frozen=True)
@@ -251,46 +295,67 @@ class Posterior:
         )
 
 
-def _student(z: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Minus the log-density (up to a constant) of a Student-t error at ``z`` scales."""
-    return np.asarray(0.5 * (TAIL_DOF + 1.0) * np.log1p(z * z / TAIL_DOF), dtype=np.float64)
+def timing_penalty(gap: NDArray[np.float64], scale: float, horizon: float) -> NDArray[np.float64]:
+    """Minus the log-likelihood of timing misfits ``gap`` (s), 0 at no misfit: a Student-t
+    error of ``scale`` s mixed with an :data:`OUTLIER` uniform over ``horizon`` s."""
+    z = gap / scale
+    kernel = np.power(1.0 + z * z / TAIL_DOF, -0.5 * (TAIL_DOF + 1.0))
+    flat = OUTLIER * scale / (max(horizon, scale) * _T_PEAK)
+    return np.asarray(
+        np.log((1.0 - OUTLIER) + flat) - np.log((1.0 - OUTLIER) * kernel + flat),
+        dtype=np.float64,
+    )
+
+
+def _arrival_penalty(
+    arrival: ArrivalLocalizer, grid: RegionGrid, evidence: BurstEvidence
+) -> NDArray[np.float64]:
+    """Each grid point's timing penalty (module docstring), ``inf`` where it explains no
+    alarm."""
+    dist = grid.dist[:, None, :]
+    lo, hi, _, count = arrival.windows(dist, evidence, grid.rows)
+    lo, hi = lo[:, 0, :], hi[:, 0, :]
+    says = np.isfinite(lo)
+    lo_f, hi_f = np.where(says, lo, -np.inf), np.where(says, hi, np.inf)
+    scale = timing_scale(evidence.capture_interval)
+    horizon = max(arrival.horizon, 10 * evidence.capture_interval)
+    gap, _, _ = arrival.gaps(dist, evidence, grid.rows)
+    best = np.sum(np.where(says, timing_penalty(gap[:, 0, :], scale, horizon), 0.0), axis=1)
+    for j in range(count):
+        for t0 in (lo[:, j], hi[:, j]):
+            t0 = np.where(np.isfinite(t0), t0, 0.0)[:, None]
+            miss = np.maximum(lo_f - t0, 0.0) + np.maximum(t0 - hi_f, 0.0)
+            miss = np.where(np.isfinite(miss), miss, 0.0)
+            pen = np.sum(np.where(says, timing_penalty(miss, scale, horizon), 0.0), axis=1)
+            best = np.minimum(best, np.where(says[:, j], pen, np.inf))
+    placed = says[:, :count].any(axis=1)
+    return np.asarray(np.where(placed, best, np.inf), dtype=np.float64)
 
 
 def posterior(
     arrival: ArrivalLocalizer,
     evidence: BurstEvidence | None,
     *,
-    signature: Ranking | None = None,
+    drop: DropFit | None = None,
     grid: RegionGrid | None = None,
 ) -> Posterior:
     """The posterior over ``grid``'s points (default :func:`grid_of`) from the arrivals of
-    ``evidence`` (``None``: none) and the signature localizer's ranking ``signature`` of the
-    lasting drop (``None``: not yet settled); see the module docstring.
+    ``evidence`` (``None``: none) and the lasting ``drop`` (``None``: not yet settled); see the
+    module docstring.
 
     Raises:
         InputError: neither evidence is given, or no alarmed meter is one of the model's.
     """
     grid = grid_of(arrival) if grid is None else grid
     loglik = np.log(grid.length)
-    if evidence is None and signature is None:
+    if evidence is None and drop is None:
         raise InputError("a search region needs arrivals or a lasting drop")
     if evidence is not None:
-        gap, counted, placed = arrival.gaps(grid.dist[:, None, :], evidence, grid.rows)
-        scale = timing_scale(evidence.capture_interval)
-        penalty = np.sum(np.where(counted, _student(gap / scale), 0.0), axis=2)[:, 0]
-        loglik = loglik - np.where(placed[:, 0], penalty, np.inf)
-    if signature is not None:
-        fit = signature_loglik(signature)
-        names = [p.pipe for p in arrival.pipes]
-        worst = min(fit.values(), default=0.0)
-        per_pipe = np.array([fit.get(n, worst) for n in names], dtype=np.float64)
+        loglik = loglik - _arrival_penalty(arrival, grid, evidence)
+    if drop is not None:
+        per_pipe = drop.loglik([p.pipe for p in arrival.pipes])
         loglik = loglik + per_pipe[grid.pipe]
     if not np.isfinite(loglik).any():
         raise InputError("no candidate point explains the alarms")
     weight = np.exp(loglik - loglik.max())
     return Posterior(grid, weight / weight.sum())
-
-
-def regions(post: Posterior, levels: Sequence[float] = REGION_LEVELS) -> Mapping[float, SearchRegion]:
-    """The regions of ``post`` at each of ``levels``."""
-    return {level: post.region(level) for level in levels}
