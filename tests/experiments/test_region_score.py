@@ -53,12 +53,12 @@ def test_an_attempt_is_scored_at_each_confidence_and_for_its_first_short_region(
     assert early.region is not None and answer.region is not None
     assert early.region.length == pytest.approx(600.0)
     assert answer.region.length < 300.0
-    attempt = Attempt("p12", 0.0, 1.0, decision=answer, early=early)
+    attempt = Attempt("p12", 0.0, 1.0, decision=answer, early=(early,))
     outcome = score_region(attempt, truth, 600.0, near)
     assert outcome.covered == (True, True, True)
     assert outcome.lengths[0] <= outcome.lengths[1] <= outcome.lengths[2]
     assert outcome.lengths[2] == pytest.approx(answer.region.length)
-    assert outcome.searchable_after == pytest.approx(0.2)  # the early record's: 600 m
+    assert outcome.searchable_after == outcome.first_after == pytest.approx(0.2)  # 600 m
     late = score_region(Attempt("p12", 0.0, 1.0, decision=answer), truth, 600.0, near)
     assert late.searchable_after == pytest.approx(150.0)
     # a burst elsewhere is outside the short region; an attempt without an answer holds nothing
@@ -72,9 +72,10 @@ def test_an_attempt_is_scored_at_each_confidence_and_for_its_first_short_region(
     assert scores.within == pytest.approx((1 / 3, 1 / 3))  # 40 m; 900 m; no position
     assert scores.searchable == pytest.approx(2 / 3)
     assert scores.median_time_to_searchable == pytest.approx(150.0)
+    assert scores.median_time_to_region == pytest.approx(150.0)  # late's; missed's early 0.2
     assert scores.median_length[2] == pytest.approx(answer.region.length)
     cells = region_cells(scores)
-    assert cells[0] == "33% / 33% / 33%" and cells[2] == "33% / 33%"
+    assert cells[1] == "33% / 33% / 33%" and cells[3] == "33% / 33%"
     assert RegionScores.of([none]).median_time_to_searchable is None
 
 

@@ -194,9 +194,9 @@ class Attempt:
     burst_start: float
     localization: Localization | None = None
     decision: Decision | None = None
-    early: Decision | None = None
-    """The monitor's early (transient) record before ``decision``, when it gave one: located
-    from the arrivals, answered later with the lasting drop."""
+    early: tuple[Decision, ...] = ()
+    """The monitor's early (transient) records before ``decision``, in order: located from
+    the arrivals, answered later (:class:`burstloc.live.decision.LiveDecision`)."""
 
     @property
     def ranking(self) -> Ranking | None:
@@ -359,22 +359,22 @@ def rank_attempts(
 
 def monitor_answer(
     monitor: BurstMonitor, times: NDArray[np.float64], values: NDArray[np.float64]
-) -> tuple[Decision | None, Decision | None]:
+) -> tuple[tuple[Decision, ...], Decision | None]:
     """``(early, answer)``: the first answer of ``monitor`` fed the readings ``(times,
     values)`` step by step (a decision or event, ``None`` without one) and the early
-    (transient) record before it, if it gave one. A burst it detects but cannot place is
-    skipped, as the live loop skips it."""
-    early = None
+    (transient) records before it. A burst it detects but cannot place is skipped, as the live
+    loop skips it."""
+    early: list[Decision] = []
     for t, row in zip(times.tolist(), values, strict=True):
         try:
             decided = monitor.push(Step(t, row))
         except InputError:
             continue
         if decided is not None and decided.transient:
-            early = decided.decision
+            early.append(decided.decision)
         elif decided is not None:
-            return early, decided.decision
-    return early, None
+            return tuple(early), decided.decision
+    return tuple(early), None
 
 
 def first_decision(

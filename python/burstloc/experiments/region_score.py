@@ -11,9 +11,11 @@ attempt (:func:`score_region`):
 * whether the **named point** (the position on the best pipe) is within 100 m and within
   300 m network distance of the truth (BattLeDIM counts a localization within 300 m as found),
   from the position errors of :mod:`burstloc.experiments.position`;
+* the **time to the first region**: seconds from the burst to the first record with one, the
+  monitor's first early (transient) record or its answer;
 * the **time to a region of at most 1 km** (:data:`SEARCHABLE`): seconds from the burst to the
-  first record whose 95 % region is that short: the monitor's early (transient) record, else
-  its answer (``None`` when neither is).
+  first record whose 95 % region is that short: the monitor's early (transient) records, then
+  its answer (``None`` when none is).
 
 An attempt without an answer counts as a burst outside every region, not within any distance
 and without a region. :class:`RegionScores` summarises a run.
@@ -55,14 +57,15 @@ SEARCHABLE = 1000.0
 class RegionOutcome:
     """One attempt's region against the true point: per level of ``levels``, whether the region
     holds it (``covered``) and its length (m, ``lengths``; empty without a region), the named
-    point's network distance to the truth (``error``, m, ``None`` without one) and the seconds
-    from the burst to the answer when its 95 % region is at most :data:`SEARCHABLE` m long
-    (``searchable_after``)."""
+    point's network distance to the truth (``error``, m, ``None`` without one), the seconds from
+    the burst to the first record with a region (``first_after``) and to the first whose 95 %
+    region is at most :data:`SEARCHABLE` m long (``searchable_after``)."""
 
     covered: tuple[bool, ...] = ()
     lengths: tuple[float, ...] = ()
     error: float | None = None
     searchable_after: float | None = None
+    first_after: float | None = None
 
 
 def score_region(
@@ -81,13 +84,16 @@ def score_region(
     regions = [post.region(level) for level in levels]
     covered = tuple(r.contains(truth.pipe, truth.node, truth.metres, truth_length) for r in regions)
     lengths = tuple(r.length for r in regions)
-    after = None
-    for answer in (attempt.early, decision):  # the early record first, then the answer
+    after = first = None
+    for answer in (*attempt.early, decision):  # the early records first, then the answer
         post = None if answer is None else answer.posterior
-        if answer is not None and post is not None and post.region().length <= SEARCHABLE:
+        if answer is None or post is None:
+            continue
+        first = answer.time - attempt.burst_start if first is None else first
+        if post.region().length <= SEARCHABLE:
             after = answer.time - attempt.burst_start
             break
-    return RegionOutcome(covered, lengths, position.error, after)
+    return RegionOutcome(covered, lengths, position.error, after, first)
 
 
 def score_regions(
@@ -107,6 +113,13 @@ def _share(flags: Iterable[bool], total: int) -> float | None:
     return sum(flags) / total if total else None
 
 
+def _median_time(times: Iterable[float | None]) -> float | None:
+    """The median of ``times``, a ``None`` counting as never; ``None`` if that is never."""
+    values = [np.inf if t is None else t for t in times]
+    middle = float(np.median(values)) if values else np.inf
+    return middle if np.isfinite(middle) else None
+
+
 @dataclass(frozen=True)
 class RegionScores:
     """A run's regions over its ``attempts``: ``coverage[level]`` (share of attempts whose
@@ -114,7 +127,8 @@ class RegionScores:
     regions given, per level), ``within`` (share of attempts whose named point is within each
     distance of :data:`NEAR`), ``searchable`` (share whose answer's 95 % region is at most
     :data:`SEARCHABLE` m) and ``median_time_to_searchable`` (s from the burst, over every
-    attempt, ``None`` when half of them never get one)."""
+    attempt, ``None`` when half of them never get one); ``median_time_to_region``: the same for
+    the first region of any length."""
 
     attempts: int
     answered: int
@@ -125,6 +139,7 @@ class RegionScores:
     within: tuple[float | None, ...]
     searchable: float | None
     median_time_to_searchable: float | None
+    median_time_to_region: float | None
 
     @classmethod
     def of(
@@ -143,10 +158,6 @@ class RegionScores:
         within = tuple(
             _share((o.error is not None and o.error <= d for o in items), total) for d in NEAR
         )
-        times = sorted(
-            o.searchable_after if o.searchable_after is not None else np.inf for o in items
-        )
-        middle = float(np.median(times)) if times else np.inf
         return cls(
             attempts=total,
             answered=len(answered),
@@ -156,7 +167,8 @@ class RegionScores:
             p90_length=tuple(p90),
             within=within,
             searchable=_share((o.searchable_after is not None for o in items), total),
-            median_time_to_searchable=middle if np.isfinite(middle) else None,
+            median_time_to_searchable=_median_time(o.searchable_after for o in items),
+            median_time_to_region=_median_time(o.first_after for o in items),
         )
 
     def to_json(self) -> dict[str, Any]:
@@ -177,10 +189,12 @@ class RegionScores:
             "searchable_m": SEARCHABLE,
             "searchable": self.searchable,
             "median_time_to_searchable_s": self.median_time_to_searchable,
+            "median_time_to_region_s": self.median_time_to_region,
         }
 
 
 REGION_HEADER = [
+    "first region",
     "coverage 50 / 80 / 95 %",
     "95 % region median / p90",
     "within 100 / 300 m",
@@ -198,7 +212,9 @@ def region_cells(scores: RegionScores) -> list[str]:
     last = len(scores.levels) - 1
     median, p90 = scores.median_length[last], scores.p90_length[last]
     time = scores.median_time_to_searchable
+    first = scores.median_time_to_region
     return [
+        "-" if first is None else f"{first:.1f} s",
         " / ".join(_percent(c) for c in scores.coverage),
         "-" if median is None or p90 is None else f"{median:.0f} / {p90:.0f} m",
         " / ".join(_percent(w) for w in scores.within),

@@ -66,6 +66,9 @@ CSV_FIELDS: tuple[str, ...] = (
     "position_m",
     "position_from",
     "position_error_m",
+    "region_m",
+    "region_pipes",
+    "region_holds_burst",
 )
 
 _TABLE_NAMES = {"cusum": ("III", "CUSUM"), "shewhart": ("IV", "Shewhart")}
@@ -275,7 +278,8 @@ def format_tables(ev: Evaluation, paper_tables: bool | None = None) -> str:
 
 
 _REGION_TITLE = (
-    "Search regions, over every attempt: the share of bursts inside the region stated to hold "
+    "Search regions, over every attempt: the median time from the burst to the first record "
+    "with a region; the share of bursts inside the region stated to hold "
     "them with 50 / 80 / 95 % (an attempt without an answer holds nothing); the 95 % region's "
     "median / p90 length in metres of main; the named point within 100 / 300 m network "
     "distance of the burst; the share with a 95 % region of at most 1 km, and the median time "
