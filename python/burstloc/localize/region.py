@@ -17,8 +17,8 @@ middle of each segment is a candidate point, with a prior proportional to the se
   error: a Student-t error (:data:`TAIL_DOF` degrees of freedom) of scale ``sqrt((
   TIMING_INTERVALS dt)^2 + TIMING_FLOOR^2)``, mixed with a chance :data:`OUTLIER` that the
   meter's alarm says nothing of the first wave (a weak front heard late, on a later
-  reflection), uniform over the arrival horizon. ``t0`` is the best of the windows' ends and
-  the least-squares fit;
+  reflection), uniform over the arrival horizon. ``t0`` is the best of the least-squares fit
+  and the window ends of the :data:`ANCHORS` earliest alarms;
 * **the lasting drop**, once the readings have settled (:class:`DropFit`): the signature
   localizer's fit of each pipe (its best position), the same for every point of the pipe. With
   ``n`` meters and the burst size fitted, the residual has ``n - 1`` degrees of freedom and an
@@ -90,6 +90,10 @@ TAIL_DOF = 3.0
 
 OUTLIER = 0.05
 """Chance that a meter's alarm start says nothing of the burst's first wave."""
+
+ANCHORS = 8
+"""The burst time is also tried at the window ends of this many alarmed meters (the earliest):
+a fit that takes one late meter as an outlier."""
 
 _T_PEAK = math.gamma(0.5 * (TAIL_DOF + 1)) / (
     math.sqrt(TAIL_DOF * math.pi) * math.gamma(0.5 * TAIL_DOF)
@@ -321,7 +325,8 @@ def _arrival_penalty(
     horizon = max(arrival.horizon, 10 * evidence.capture_interval)
     gap, _, _ = arrival.gaps(dist, evidence, grid.rows)
     best = np.sum(np.where(says, timing_penalty(gap[:, 0, :], scale, horizon), 0.0), axis=1)
-    for j in range(count):
+    starts = [evidence.alarms[m].start for m in arrival.meters if m in evidence.alarms]
+    for j in np.argsort(starts, kind="stable")[:ANCHORS].tolist():
         for t0 in (lo[:, j], hi[:, j]):
             t0 = np.where(np.isfinite(t0), t0, 0.0)[:, None]
             miss = np.maximum(lo_f - t0, 0.0) + np.maximum(t0 - hi_f, 0.0)
