@@ -2,7 +2,8 @@
 INP file: a pipe rougher than TSNet's friction cap (KY13, KY14), a pipe EPANET closes at a full
 tank (KY11), EPANET's steady state left unconverged by loose options (KY15, exnet-3), a junction
 below atmospheric pressure that EPANET delivers nothing (KY15, exnet-3), a pump near shut-off
-(MICROPOLIS's well pumps), a pipe from a dead end to a tank (Richmond_skeleton); and the models
+(MICROPOLIS's well pumps), a pipe from a dead end to a tank (Richmond_skeleton), a closed valve
+a control sets at the start (BWSN_Network_2); and the models
 refused as faults of the model (below absolute vacuum, no demand delivered: anytown-exeter,
 hanoi-exeter). Each burst runs on the vectorized solver, and ``simulate_burst`` refuses a run
 whose heads move more than 5 cm before the onset (``burstloc.sim.steady``)."""
@@ -180,6 +181,29 @@ def test_a_pipe_from_a_dead_end_to_a_tank_is_turned_around(tmp_path: Path) -> No
     result = burst(path, "C")
     assert moved(result) < 0.01
     assert result.metadata["turned_pipes"] == ["E"]
+    assert drop(result, "J3") > 0.5
+
+
+def test_a_closed_valve_a_control_sets_at_the_start_is_held_at_its_steady_loss(
+    tmp_path: Path,
+) -> None:
+    # V1 (an FCV filling T1) is Closed in [STATUS] and given its setting by a control at 0:00,
+    # so EPANET's steady state runs it at 5 L/s. Before: TSNet kept it shut and J6 moved 32 m
+    # (BWSN_Network_2's FCVs 14826 and 14828: junction 12501 moved 106 m)
+    path = write(
+        tmp_path,
+        "control_at_start",
+        junctions=" J5   0     0\n J6   0     0",
+        tanks=" T1   0    10   0   40   10   0",
+        pipes=" E    J2     J5     100     150       100        0          Open\n"
+        " F    J6     T1     100     150       100        0          Open",
+        options="\n[VALVES]\n V1   J5   J6   150   FCV   5   0\n\n[STATUS]\n V1  Closed\n\n"
+        "[CONTROLS]\n LINK V1 5 AT TIME 0:00:00\n",
+    )
+    state = network.steady_state(network.load_network(path))
+    assert state.flows["V1"] == pytest.approx(0.005, rel=1e-3)
+    result = burst(path, "C")
+    assert moved(result) < 0.01
     assert drop(result, "J3") > 0.5
 
 

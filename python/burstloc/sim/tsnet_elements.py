@@ -28,8 +28,9 @@ opening (a gate valve's loss at 100 % or 0 % open); EPANET knows two more kinds 
   pipe after the valve, TSNet's valve equation), so the transient starts where EPANET's state
   is and the valve then acts as a fixed loss: over the seconds a burst is localized in, a
   pressure-reducing valve's pilot does not move. A valve EPANET gives no flow is closed; a
-  valve an event operates (``burstloc simulate --event``) and a ``Closed`` one keep TSNet's own
-  model.
+  valve an event operates (``burstloc simulate --event``) and a ``Closed`` one EPANET gives no
+  flow keep TSNet's own model; a ``Closed`` one a control sets at the start (so EPANET runs it:
+  BWSN_Network_2's FCVs filling its tanks) is held like an active one.
 
 :func:`check_steady_state` refuses, before any of this, a model whose steady state serves no
 water: a junction with a demand below absolute vacuum (anytown-exeter: -30.5 m; KY15: -49 m),
@@ -245,19 +246,24 @@ def _pipe_area(tm: Any, node: str, valve: str) -> float | None:
 
 def hold_valves(tm: Any) -> list[HeldValve]:
     """Give every valve of TSNet's model ``tm`` (after its initializer) that is active or open,
-    and that no event operates, the fixed loss it has in EPANET's steady state; return them."""
+    or closed but given a flow in EPANET's steady state (a control at the start sets it:
+    BWSN_Network_2's FCVs filling its tanks, which TSNet shut and moved a junction by 106 m), and
+    that no event operates, the fixed loss it has in EPANET's steady state; return them."""
     from wntr.network.base import LinkStatus
 
     held = []
     for name, valve in tm.valves():
-        if getattr(valve, "operating", False) or valve.initial_status.name == "Closed":
-            continue
         flow = float(valve.initial_flow)
+        shut = valve.initial_status.name == "Closed"
+        if getattr(valve, "operating", False) or (shut and abs(flow) < NO_FLOW):
+            continue
         start, end = valve.start_node, valve.end_node
         loss = float(start.initial_head) - float(end.initial_head)
         area = _pipe_area(tm, end.name if flow >= 0 else start.name, name)
-        if area is None:
-            continue  # a valve at the network's edge: TSNet holds its flow (valve_end)
+        if area is None:  # a valve at the network's edge: TSNet holds its flow (valve_end)
+            if shut:  # ... if open
+                valve.initial_status = LinkStatus.Open
+            continue
         velocity = abs(flow) / area
         if abs(flow) < NO_FLOW:
             inverse = 0.0
