@@ -9,6 +9,7 @@
 * :data:`SIGNATURE_DECISION_DELAY`: when the steady-state signature is read after a burst (s).
 * :data:`MAX_SAMPLE`: the largest reading magnitude the detectors take (``cpd_core::MAX_SAMPLE``).
 * :data:`PRESSURE_NOISE`: how far below zero a steady-state pressure is numerical noise (m).
+* :data:`VACUUM_HEAD`: the pressure head of absolute vacuum (m), below which no water is.
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ __all__ = [
     "RANKING_LOCALIZERS",
     "SCENARIO_DURATION",
     "SIGNATURE_DECISION_DELAY",
+    "VACUUM_HEAD",
     "WAVE_SPEED",
     "Detector",
     "MeterModel",
@@ -70,6 +72,10 @@ that the arrival and signature localizers try; a pipe keeps its best-fitting pos
 
 SIGNATURE_DECISION_DELAY = 150.0
 """Seconds after a burst's onset at which the signature localizer reads the lasting drop."""
+
+VACUUM_HEAD = -10.33
+"""The pressure head (m of water, gauge) of absolute vacuum at sea level: 101.325 kPa / (rho g).
+No water is below it; a steady state that puts a junction there is a fault of the model."""
 
 PRESSURE_NOISE = 1e-3
 """How far (m) below atmospheric a junction's steady-state pressure may be and still count as

@@ -28,6 +28,7 @@ __all__ = [
     "choose_pipes",
     "junction_names_in_file",
     "network_hash",
+    "node_line",
     "pipe_names_in_file",
 ]
 
@@ -205,6 +206,22 @@ def junction_names_in_file(path: str | os.PathLike[str]) -> list[str]:
     file = Path(path)
     _lint(file)
     return [row.fields[0] for row in _rows(file) if row.section == "[JUNCTIONS]"]
+
+
+def node_line(path: str | os.PathLike[str], node: str) -> int | None:
+    """The 1-based line of an INP file that defines ``node`` (a junction, reservoir or tank);
+    ``None`` when the file does not (a node burstloc added) or cannot be read."""
+    try:
+        return next(
+            (
+                row.line
+                for row in _rows(Path(path))
+                if row.section in _NODE_SECTIONS and row.fields[0] == node
+            ),
+            None,
+        )
+    except NetworkError:
+        return None
 
 
 def check_meters(

@@ -24,7 +24,7 @@ import os
 import re
 import tempfile
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -158,10 +158,14 @@ def require_pipe(wn: WaterNetworkModel, pipe: str, *, open_only: bool = False) -
 @dataclass(frozen=True)
 class SteadyState:
     """A network's steady state at t = 0: ``heads`` per node (m), ``flows`` per link (m³/s,
-    sign: INP orientation)."""
+    sign: INP orientation), ``closed``: the links EPANET reports closed (a closed status, a
+    control at the start, a check valve held shut, a pipe at a full or empty tank), ``demands``
+    per junction (m³/s delivered; pressure-driven: what the pressure allows)."""
 
     heads: dict[str, float]
     flows: dict[str, float]
+    closed: frozenset[str] = frozenset()
+    demands: dict[str, float] = field(default_factory=dict)
 
 
 def steady_state(wn: WaterNetworkModel, engine: str = "PDD") -> SteadyState:
@@ -201,9 +205,13 @@ def steady_state(wn: WaterNetworkModel, engine: str = "PDD") -> SteadyState:
         hydraulic.demand_model, times.duration = saved
     heads = results.node["head"].iloc[0]
     flows = results.link["flowrate"].iloc[0]
+    demands = results.node["demand"].iloc[0]
+    status = results.link["status"].iloc[0]  # WNTR's LinkStatus: 0 closed, 1 open, 2 active
     return SteadyState(
         heads={name: float(heads[name]) for name in wn.node_name_list},
         flows={name: float(flows[name]) for name in wn.link_name_list},
+        closed=frozenset(name for name in wn.link_name_list if status[name] == 0),
+        demands={name: float(demands[name]) for name in wn.junction_name_list},
     )
 
 

@@ -8,21 +8,25 @@ import numpy as np
 import pytest
 
 from burstloc.exceptions import SimulationError, UnsteadyStartError
+from burstloc.sim import tsnet
 from burstloc.sim.scenario import BurstScenario
 from burstloc.sim.steady import STEADY_TOLERANCE, check_steady_start, steady_start
 from burstloc.sim.tsnet import simulate_burst
 
-#: Three junctions behind a pipe far rougher (Hazen-Williams C = 10, a Darcy-Weisbach factor of
-#: about 3) than TSNet's friction cap of 0.08, which it replaces by 0.03: TSNet's transient does
-#: not start from EPANET's steady state. (An active throttle valve, TSNet's shut valve, was the
-#: example before burstloc held valves at their steady loss: burstloc.sim.tsnet_elements.)
-ROUGH_PIPE_INP = """\
+#: A pressure-reducing valve between two pipes, active in EPANET's steady state (it holds J2 at
+#: 20 m): TSNet's own valve model takes an active valve as shut, so without burstloc holding it
+#: at its steady loss (``burstloc.sim.tsnet_elements.hold_valves``) the transient does not start
+#: from EPANET's steady state. (A pipe rougher than TSNet's friction cap was the example before
+#: burstloc kept every pipe's steady friction factor: burstloc.sim._tsnet_compat.)
+ACTIVE_VALVE_INP = """\
 [TITLE]
-tiny network with a pipe rougher than TSNet's friction cap
+tiny network with an active pressure-reducing valve
 
 [JUNCTIONS]
 ;ID   Elev   Demand
  J1   0      5
+ J1a  0      0
+ J2a  0      0
  J2   0      5
  J3   0      5
 
@@ -32,8 +36,13 @@ tiny network with a pipe rougher than TSNet's friction cap
 [PIPES]
 ;ID  Node1  Node2  Length  Diameter  Roughness  MinorLoss  Status
  A    R1     J1     300     300       100        0          Open
- V1   J1     J2     250     200       10         0          Open
+ A2   J1     J1a    250     200       100        0          Open
+ B2   J2a    J2     250     200       100        0          Open
  B    J2     J3     250     200       100        0          Open
+
+[VALVES]
+;ID  Node1  Node2  Diameter  Type  Setting  MinorLoss
+ V1   J1a    J2a    200       PRV   20       0
 
 [OPTIONS]
  Units  LPS
@@ -68,13 +77,18 @@ def test_a_steady_network_passes_and_records_its_movement(tiny_network: Path) ->
     assert record["onset"] == 0.5 and record["tolerance_m"] == STEADY_TOLERANCE
 
 
-def test_an_unsteady_network_is_refused_naming_the_junction(tmp_path: Path) -> None:
-    inp = tmp_path / "rough_pipe.inp"
-    inp.write_text(ROUGH_PIPE_INP, encoding="utf-8")
+def test_an_unsteady_network_is_refused_naming_the_junction(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    inp = tmp_path / "active_valve.inp"
+    inp.write_text(ACTIVE_VALVE_INP, encoding="utf-8")
+    scenario = BurstScenario(inp, "B", burst_start=1.0, duration=1.5)
+    assert simulate_burst(scenario, cache=False).metadata["steady_start"]["max_movement_m"] < 0.01
+    monkeypatch.setattr(tsnet, "hold_valves", lambda tm: [])  # TSNet's own model of the valve
     with pytest.raises(UnsteadyStartError) as caught:
-        simulate_burst(BurstScenario(inp, "B", burst_start=1.0, duration=1.5), cache=False)
+        simulate_burst(scenario, cache=False)
     error = caught.value
     assert isinstance(error, SimulationError)
-    assert error.junction == "J2" and error.movement > 10.0 and error.time < 1.0
+    assert error.junction == "J1a" and error.movement > 10.0 and error.time < 1.0  # the shut valve
     assert error.network == str(inp)
-    assert "junction 'J2' moved" in str(error) and str(inp) in str(error)
+    assert "junction 'J1a' moved" in str(error) and str(inp) in str(error)

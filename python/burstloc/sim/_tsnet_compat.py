@@ -17,7 +17,11 @@ to scalars; one relies on WNTR accepting a zero pipe roughness:
   same value as a float64 scalar.
 * ``tsnet.simulation.initialize.cal_roughness_coef`` sets the roughness of a pipe without
   steady flow to 0 (no friction); WNTR >= 1.4 rejects a roughness <= 0. Patched: that case
-  stores the 0 past WNTR's check, exactly as TSNet meant; every other case runs TSNet's code.
+  stores the 0 past WNTR's check, exactly as TSNet meant. And it replaces a Darcy-Weisbach
+  factor above 0.08 by 0.03, so the pipe loses a fraction of EPANET's head and the network
+  moves before any event (a Hazen-Williams pipe at low velocity: over half of KY14's pipes,
+  KY13's; a pipe with a large minor loss: BWSN_Network_1). Patched: the pipe keeps the factor
+  of its steady head loss; every other case runs TSNet's code.
 
 Two more make TSNet's valve and pump operations run (they failed on every WNTR we install):
 
@@ -37,6 +41,10 @@ Two more make TSNet's valve and pump operations run (they failed on every WNTR w
   which TSNet refused, keeps three of them, its first, middle and last, before TSNet's refit
   (which replaces the one nearest the operating point with that point, so the transient starts
   from EPANET's steady state).
+  Where that refit rises at the operating point (a pump near shut-off, whose shut-off point is
+  the one replaced: MICROPOLIS's well pumps), the pump would feed waves back amplified and the
+  network drifts before any event: the curve becomes ``H = H_s - K Q^2`` through the operating
+  point with the slope of the design curve there.
 
 And one makes a network with a junction below atmospheric pressure at the start simulate:
 
@@ -44,7 +52,9 @@ And one makes a network with a junction below atmospheric pressure at the start 
   root of its pressure; a junction without demand at a negative pressure (EPANET's Net3: junction
   10, behind the closed Lake pump) gets ``0 / sqrt(-0.45)``, NaN, and every head of the network
   turns NaN within a few steps. Patched: a node without demand has coefficient 0, as TSNet gives
-  it at any positive pressure; every other case runs TSNet's code.
+  it at any positive pressure, and so has one below zero pressure that EPANET's pressure-driven
+  steady state delivers nothing (its demand there is numerical residue, 1e-8 m³/s: KY15,
+  exnet-3); every other case runs TSNet's code.
 * ``tsnet.simulation.solver.dead_end`` solves a dead end's head from ``Q = k sqrt(p)`` with
   ``sqrt(p)`` as the unknown; without demand (``k = 0``) below atmospheric pressure it has no
   root, and TSNet holds the head at the elevation (zero pressure, its floor): junction 10
@@ -86,6 +96,10 @@ _MAX_FRICTION = 0.08
 #: TSNet's ``pumpclosing`` keeps a "closed" pump at this speed (its curve scaled by zero speed
 #: is three identical points, which no parabola fits); ``pumpopening`` did not: now it does.
 _MIN_SPEED = 1e-4
+
+#: Below this demand (m³/s) a node below zero pressure delivers none (EPANET's pressure-driven
+#: demand there is numerical residue, a few 1e-8 m³/s).
+_NO_DEMAND = 1e-6
 
 #: Below this flow (m³/s) a pump has no operating point: it is stopped.
 _Q_TOL = 1e-9
@@ -159,7 +173,7 @@ def _cal_roughness_coef(pipe: Any, velocity: Any, head_loss: Any) -> Any:
     then lost a fraction of EPANET's head and its pump moved 22 m before any burst)."""
     if abs(velocity) >= _V_TOL and head_loss >= _H_TOL:
         factor = head_loss / (pipe.length / pipe.diameter) / (velocity**2 / 2 / _G)
-        if factor > _MAX_FRICTION and float(getattr(pipe, "minor_loss", 0.0) or 0.0) > 0:
+        if factor > _MAX_FRICTION:
             pipe.roughness = factor
             pipe.roughness_height = max(
                 10 ** (-1 / 1.8 / np.sqrt(factor)) - 6.9 / pipe.initial_Re, 0
@@ -175,14 +189,26 @@ def _cal_demand_coef(demand: Any, pipe: Any, hs: Any, he: Any, t0: float = 0.0) 
     """TSNet's ``cal_demand_coef``; a node without demand gets coefficient 0 whatever its
     pressure (TSNet: ``0 / sqrt(p)``, NaN below atmospheric pressure), and so does a node at
     zero pressure within :data:`~burstloc.constants.PRESSURE_NOISE` (TSNet: ``q / sqrt(0)``,
-    infinite, or NaN a micrometre below)."""
+    infinite, or NaN a micrometre below) and one below zero pressure that EPANET's
+    pressure-driven steady state delivers no demand (TSNet: NaN; KY15, exnet-3)."""
     with np.errstate(invalid="ignore", divide="ignore"):  # q / sqrt(p <= 0), mended below
         pipe = _ORIGINALS["cal_demand_coef"](demand, pipe, hs, he, t0)
-    if demand[0] == 0 or -PRESSURE_NOISE <= hs <= 0:
+    if _no_demand(demand[0], hs):
         pipe.start_node.demand_coeff = 0.0
-    if demand[1] == 0 or -PRESSURE_NOISE <= he <= 0:
+    if _no_demand(demand[1], he):
         pipe.end_node.demand_coeff = 0.0
     return pipe
+
+
+def _no_demand(demand: Any, pressure: Any) -> bool:
+    """Whether a node's demand coefficient is 0: no demand, zero pressure (within
+    :data:`~burstloc.constants.PRESSURE_NOISE`), or below zero pressure with no demand delivered
+    (EPANET's pressure-driven demand there: a few 1e-8 m³/s of numerical residue)."""
+    return bool(
+        demand == 0
+        or -PRESSURE_NOISE <= pressure <= 0
+        or (pressure < 0 and abs(demand) < _NO_DEMAND)
+    )
 
 
 def _dead_end(
@@ -293,8 +319,39 @@ def _pump_operation_points(tm: Any) -> Any:
             points[:] = [points[0], points[len(points) // 2], points[-1]]
         elif len(points) != 3:
             raise Exception("TSNet only support one-point or three-point pump curve.")
+        design = list(points)
         dist = [np.sqrt((q - point[0]) ** 2 + (h - point[1]) ** 2) for q, h in points]
         points.remove(points[dist.index(min(dist))])
         points.append(point)
         pump.curve_coef = calc_parabola_vertex(points)
+        if _slope(pump.curve_coef, point[0]) >= 0:
+            _falling_curve(pump, point, design)
     return tm
+
+
+def _falling_curve(pump: Any, point: tuple[float, float], design: list[Any]) -> None:
+    """Give ``pump`` (whose refit curve rises at its operating point ``point``, where it would
+    feed every pressure wave back amplified: a pump near shut-off whose shut-off point TSNet
+    replaced, as MICROPOLIS's well pumps) the parabola ``H = H_s - K Q^2`` through ``point``
+    with the slope of its ``design`` curve there (the chord of the two design points around
+    the flow); a design curve that does not fall there keeps TSNet's refit."""
+    from tsnet.utils import calc_parabola_vertex
+
+    flow, head = point
+    ordered = sorted(design)
+    i = next((k for k in range(1, len(ordered) - 1) if flow < ordered[k][0]), len(ordered) - 1)
+    (q1, h1), (q2, h2) = ordered[i - 1], ordered[i]
+    slope = (h2 - h1) / (q2 - q1) if q2 > q1 else 0.0
+    if slope >= 0 or flow <= 0:
+        return
+    k = -slope / (2.0 * flow)
+    shutoff = head + k * flow**2
+    points = pump.get_pump_curve().points
+    points[:] = [(0.0, shutoff), (flow, head), (2.0 * flow, shutoff - 4.0 * k * flow**2)]
+    pump.curve_coef = calc_parabola_vertex(points)
+
+
+def _slope(coefficients: Any, flow: float) -> float:
+    """``dH/dQ`` at ``flow`` of the parabola ``H = a Q^2 + b Q + c`` (``(a, b, c)``)."""
+    a, b, _ = coefficients
+    return float(2 * a * flow + b)

@@ -36,7 +36,7 @@ from burstloc.sim.cache import DiskCache, file_sha256, package_versions
 from burstloc.sim.scenario import SCHEMA, BurstScenario, ScenarioResult
 from burstloc.sim.steady import check_steady_start
 from burstloc.sim.sweep import SweepReport, sweep
-from burstloc.sim.tsnet_elements import hold_valves
+from burstloc.sim.tsnet_elements import check_steady_state, hold_valves
 from burstloc.sim.tsnet_ready import prepare_for_tsnet, transient_model
 
 __all__ = [
@@ -145,7 +145,9 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
     with isolated_run() as tmp, capture_diagnostics() as diag:
         wn = network.load_network(source)
         network.require_pipe(wn, scenario.pipe, open_only=True)
-        flows = network.steady_state_flows(wn, scenario.engine)
+        state = network.steady_state(wn, scenario.engine)
+        check_steady_state(wn, state, scenario.network)
+        flows = state.flows
         graph = network.flow_direction_graph(wn, flows)
         true_start, true_end = network.pipe_endpoints(graph, scenario.pipe)
         meters = network.junction_names(wn)

@@ -64,6 +64,11 @@ from burstloc.network import _fresh_name
 from burstloc.sim.scenario import BurstScenario
 from burstloc.sim.tsnet_elements import PowerPumpCurve, settle_pumps_and_check_valves
 
+#: EPANET's trials for the steady state TSNet starts from (see :func:`prepare_for_tsnet`).
+STEADY_TRIALS = 1000
+#: EPANET's convergence criterion (relative flow change) for that state at most (its default).
+STEADY_ACCURACY = 0.001
+
 __all__ = [
     "Connector",
     "SupplyBoundary",
@@ -73,6 +78,7 @@ __all__ = [
     "prepare_for_tsnet",
     "supply_junctions",
     "transient_model",
+    "turn_dead_ends_from_sources",
 ]
 
 
@@ -256,6 +262,7 @@ class TsnetPreparation:
     supply_boundaries: list[SupplyBoundary]
     power_pumps: list[PowerPumpCurve] = field(default_factory=list)
     closed_at_rest: list[str] = field(default_factory=list)
+    turned_pipes: list[str] = field(default_factory=list)
 
     def as_metadata(self) -> dict[str, Any]:
         """The records stored in a simulation's metadata."""
@@ -265,6 +272,7 @@ class TsnetPreparation:
             "supply_boundaries": [asdict(s) for s in self.supply_boundaries],
             **({"power_pumps": [asdict(p) for p in self.power_pumps]} if self.power_pumps else {}),
             **({"closed_at_rest": list(self.closed_at_rest)} if self.closed_at_rest else {}),
+            **({"turned_pipes": list(self.turned_pipes)} if self.turned_pipes else {}),
         }
 
 
@@ -291,19 +299,48 @@ def remove_closed_links(wn: Any, keep: Collection[str] = ()) -> list[str]:
 
 
 def prepare_for_tsnet(wn: Any, keep: Collection[str] = (), engine: str = "PDD") -> TsnetPreparation:
-    """Make ``wn`` (changed in place) a network TSNet simulates as EPANET solves it: closed
+    """Make ``wn`` (changed in place) a network TSNet simulates as EPANET solves it: EPANET's
+    steady state solved to at least :data:`STEADY_TRIALS` trials and an accuracy of
+    :data:`STEADY_ACCURACY` (a model's looser options left KY15's pumps and valves switching
+    when its 100 trials ran out, and exnet-3's accuracy of 0.1 left flows metres of head off
+    balance: TSNet's transient started from that state and moved), closed
     pipes and pumps removed except ``keep`` (:func:`remove_closed_links`), the pumps and
     check-valve pipes EPANET's steady state (solved with ``engine``) gives no flow made closed
     valves, and pumps
     given by their power made head pumps at their operating point
     (:func:`burstloc.sim.tsnet_elements.settle_pumps_and_check_valves`), supply junctions except
     ``keep`` made fixed inflows (:func:`add_supply_boundaries`), then connectors
-    (:func:`add_connectors`)."""
+    (:func:`add_connectors`), and pipes from a dead end to a tank or reservoir turned around
+    (:func:`turn_dead_ends_from_sources`)."""
+    hydraulic = wn.options.hydraulic
+    hydraulic.trials = max(int(hydraulic.trials), STEADY_TRIALS)
+    hydraulic.accuracy = min(float(hydraulic.accuracy), STEADY_ACCURACY)
     removed = remove_closed_links(wn, keep)
     at_rest, pumps = settle_pumps_and_check_valves(wn, keep, engine)
     supplies = add_supply_boundaries(wn, keep)
     connectors = add_connectors(wn, edges=[s.source for s in supplies])
-    return TsnetPreparation(removed, connectors, supplies, pumps, at_rest)
+    turned = turn_dead_ends_from_sources(wn)
+    return TsnetPreparation(removed, connectors, supplies, pumps, at_rest, turned)
+
+
+def turn_dead_ends_from_sources(wn: Any) -> list[str]:
+    """Turn around (``wn`` changed in place) every pipe that runs from a dead end (a junction
+    joining only it) to a tank or reservoir, and return their names: TSNet solves such a pipe
+    only from the tank or reservoir to the dead end ("a Tank at its end with nothing at its
+    start": Richmond_skeleton's pipe 1832, whose pump at junction 753 is closed). EPANET's
+    steady state is the same, its flow's sign turned."""
+    turned = []
+    for name, pipe in wn.pipes():
+        start, end = pipe.start_node, pipe.end_node
+        if (
+            not pipe.check_valve
+            and start.node_type == "Junction"
+            and end.node_type in ("Tank", "Reservoir")
+            and list(wn.get_links_for_node(start.name)) == [name]
+        ):
+            pipe.start_node, pipe.end_node = end, start
+            turned.append(name)
+    return turned
 
 
 def transient_model(
