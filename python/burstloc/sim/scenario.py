@@ -68,8 +68,10 @@ DEFAULT_BURST_COEFF = 0.01
 
 
 #: Cache namespace; bump when a change changes what a scenario simulates (2: supply junctions
-#: are fixed inflows, :func:`burstloc.sim.tsnet_ready.add_supply_boundaries`).
-SCHEMA = "burst-scenario/2"
+#: are fixed inflows, :func:`burstloc.sim.tsnet_ready.add_supply_boundaries`; 3: every pipe keeps
+#: the friction factor of its steady head loss above TSNet's cap, pipes EPANET closes become
+#: closed valves, EPANET's steady state solved to at least 1000 trials: Anytown's bursts change).
+SCHEMA = "burst-scenario/3"
 
 
 _ENGINES = ("PDD", "DD")
