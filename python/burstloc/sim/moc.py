@@ -31,6 +31,8 @@ from typing import Any
 
 import numpy as np
 
+from burstloc.exceptions import ConfigError
+from burstloc.sim import moc_rust
 from burstloc.sim.moc_layout import Layout, layout
 
 __all__ = ["solve"]
@@ -138,17 +140,61 @@ def _dead_ends(
     return HP, VP
 
 
-def solve(tm: Any, friction: str = "steady") -> Any:
+#: The time loops :func:`solve` can run: ``"rust"`` (:mod:`burstloc.sim.moc_rust`, the
+#: default) or ``"numpy"`` (array operations per step, here); their heads are equal to the bit.
+KERNELS = ("rust", "numpy")
+
+
+def solve(tm: Any, friction: str = "steady", kernel: str = "rust") -> Any:
     """Run the transient of a TSNet model initialized by ``tsnet.simulation.Initializer``;
     return ``tm`` with every node's ``head`` series and ``simulation_timestamps`` set.
 
     Raises:
-        ConfigError: a friction model other than ``steady``.
+        ConfigError: a friction model other than ``steady``, a kernel not in :data:`KERNELS`.
         SimulationError: an element TSNet leaves unsimulated (named).
     """
+    if kernel not in KERNELS:
+        raise ConfigError(f"unknown MOC kernel {kernel!r}; expected one of {KERNELS}")
     lay = layout(tm, friction)
-    interior, iga, igadt, itheta, icf, iga2 = _interior(lay)
     junction = _Ends(lay, lay.junction)
+    dead = [(_Ends(lay, lay.dead_start), True), (_Ends(lay, lay.dead_end), False)]
+    if kernel == "rust":
+        result = moc_rust.run(lay)
+        heads = result.heads
+        junction.failed[:] = result.junction_failed
+        split = dead[0][0].size
+        dead[0][0].failed[:] = result.dead_failed[:split]
+        dead[1][0].failed[:] = result.dead_failed[split:]
+        _element_warnings(result.element_warnings)
+    else:
+        heads = _numpy_loop(lay, junction, dead)
+    _report(lay, heads, junction, dead)
+    for column, node in enumerate(lay.record_nodes):
+        node._head = heads[:, column]
+    tm.simulation_timestamps = list(np.arange(lay.steps) * lay.dt)
+    return tm
+
+
+#: TSNet's warnings from a pump or valve, in the order of ``moc_rust.Run.element_warnings``.
+_ELEMENT_WARNINGS = (
+    "The quadratic equation has no real solution (pump or valve)",
+    "Reverse flow stopped by check valve!",
+    "Negative head gain activates by-pass!",
+)
+
+
+def _element_warnings(counts: np.ndarray) -> None:
+    """Warn once of each of TSNet's pump and valve warnings, with the number of steps."""
+    for message, count in zip(
+        _ELEMENT_WARNINGS, np.sum(counts, axis=0, dtype=np.int64), strict=True
+    ):
+        if count:
+            warnings.warn(f"{message} ({int(count)} pipe-end time steps)", stacklevel=3)
+
+
+def _numpy_loop(lay: Layout, junction: _Ends, dead: list[tuple[_Ends, bool]]) -> np.ndarray:
+    """The time loop as array operations per step: the heads (steps x recorded nodes)."""
+    interior, iga, igadt, itheta, icf, iga2 = _interior(lay)
     c = lay.contributions
     cend = np.asarray(c["end"], dtype=np.int64)
     cidx = np.asarray(c["index"], dtype=np.int64)
@@ -165,7 +211,6 @@ def solve(tm: Any, friction: str = "steady") -> Any:
     at_start = junction.value < 0
     jb, jb2 = lay.junction_b, _squared(lay.junction_b)
     jelev = lay.elevation[junction.node]
-    dead = [(_Ends(lay, lay.dead_start), True), (_Ends(lay, lay.dead_end), False)]
     rev = [(_Ends(lay, lay.rev_start), 1.0), (_Ends(lay, lay.rev_end), -1.0)]
     valves = [(_Ends(lay, lay.valve_start), 1.0), (_Ends(lay, lay.valve_end), -1.0)]
     emitter, demand = lay.emitter.copy(), lay.demand.copy()
@@ -241,11 +286,7 @@ def solve(tm: Any, friction: str = "steady") -> Any:
         heads[ts] = HN[lay.record]
         H, HN = HN, H
         V, VN = VN, V
-    _report(lay, heads, junction, dead)
-    for column, node in enumerate(lay.record_nodes):
-        node._head = np.ascontiguousarray(heads[:, column])
-    tm.simulation_timestamps = list(np.arange(lay.steps) * lay.dt)
-    return tm
+    return heads
 
 
 def _report(

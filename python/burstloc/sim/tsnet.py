@@ -315,8 +315,9 @@ def _run_tsnet(
         operate(tm)
         tm = tsnet.simulation.Initializer(tm, 0.0, settings.engine)
         hold_valves(tm)
-        if settings.solver == "vectorized":
-            return moc.solve(tm, settings.friction)
+        if settings.solver in ("vectorized", "numpy"):
+            kernel = "rust" if settings.solver == "vectorized" else "numpy"
+            return moc.solve(tm, settings.friction, kernel)
         return tsnet.simulation.MOCSimulator(tm, results_obj="no", friction=settings.friction)
     except SimulationError as exc:
         raise SimulationError(f"{exc} ({where})") from exc

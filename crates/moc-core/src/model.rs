@@ -1,0 +1,645 @@
+//! The network as flat arrays, and the time loop.
+
+use crate::{pow2, Error, G, ROOT_TOLERANCE};
+
+/// A pipe's constants, as `burstloc.sim.moc_layout` computes them in TSNet's order.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pipe {
+    /// First point of the pipe in the flat arrays.
+    pub offset: usize,
+    /// Number of reaches: the pipe has `n + 1` points.
+    pub n: usize,
+    /// `g / a`.
+    pub ga: f64,
+    /// `a / g`.
+    pub ag: f64,
+    /// `g / a * dt`.
+    pub gadt: f64,
+    /// The pipe's slope term.
+    pub theta: f64,
+    /// Steady friction `f * dt / 2 / D`.
+    pub cf: f64,
+    /// Steady friction `f * dt / (2 D)`.
+    pub cf2: f64,
+    /// `pi D^2 / 4`.
+    pub area: f64,
+    /// `pi / 4 D^2`.
+    pub area_dead: f64,
+}
+
+/// A pipe end: its point, the point next to it in the same pipe, the pipe.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct End {
+    /// The end's point.
+    pub out: usize,
+    /// The point next to it.
+    pub near: usize,
+    /// The pipe's index.
+    pub pipe: usize,
+}
+
+/// A pipe end at a junction (TSNet's `add_leakage`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Junction {
+    /// The end.
+    pub end: End,
+    /// The junction's node index.
+    pub node: usize,
+    /// The own pipe's sign: -1 at its start, 1 at its end.
+    pub sign: f64,
+    /// The junction equation's constant `b`.
+    pub b: f64,
+    /// Its entries in [`Model::contributions`].
+    pub contributions: core::ops::Range<usize>,
+}
+
+/// One pipe meeting at a junction end, in its sum's order.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Contribution {
+    /// The point next to the junction in that pipe.
+    pub index: usize,
+    /// That pipe.
+    pub pipe: usize,
+    /// Its sign.
+    pub sign: f64,
+    /// `np.dot`'s lane (0..4) it is added in.
+    pub lane: usize,
+}
+
+/// A dead end: a junction ending one pipe (TSNet's `dead_end`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DeadEnd {
+    /// The end.
+    pub end: End,
+    /// The node's index.
+    pub node: usize,
+    /// The lowest head without demand.
+    pub floor: f64,
+    /// At the pipe's start.
+    pub at_start: bool,
+}
+
+/// A reservoir or tank ending one pipe, holding its head (TSNet's `rev_end`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Reservoir {
+    /// The end.
+    pub end: End,
+    /// The head held.
+    pub head: f64,
+    /// 1 at the pipe's start, -1 at its end.
+    pub side: f64,
+}
+
+/// A valve leading nowhere, holding a flow given per step (TSNet's `valve_end`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ValveEnd {
+    /// The end.
+    pub end: End,
+    /// 1 at the pipe's start, -1 at its end.
+    pub side: f64,
+}
+
+/// What sits at an [`Element`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ElementKind {
+    /// A valve between pipes (TSNet's `valve_node`); series column 0: the inverse loss.
+    Valve,
+    /// A pump between pipes (TSNet's `pump_node`), on its suction side or not; series columns:
+    /// the curve's `a, b, c`.
+    Pump {
+        /// The pipe end is on the pump's suction side.
+        suction: bool,
+    },
+    /// A pump drawing from a reservoir (TSNet's `source_pump`) with the sump's head; series
+    /// columns: the curve's `a, b, c`.
+    Source {
+        /// The sump's head.
+        sump: f64,
+    },
+}
+
+/// A pipe end at a pump or valve: TSNet's characteristic `C1` (upstream) and `C2`
+/// (downstream) from the points `link1` and `link2` (point, pipe, sign).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Element {
+    /// What it is.
+    pub kind: ElementKind,
+    /// The end's point.
+    pub out: usize,
+    /// The end is its pipe's start (TSNet's `nn == 0`).
+    pub at_start: bool,
+    /// `C1`'s point, pipe and sign (unused by a source pump).
+    pub link1: (usize, usize, f64),
+    /// `C2`'s point, pipe and sign.
+    pub link2: (usize, usize, f64),
+}
+
+/// The whole model. Per-step series are row-major `steps x count` (elements:
+/// `steps x count x 3`).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Model {
+    /// Number of time steps, the first being the initial state.
+    pub steps: usize,
+    /// Every pipe.
+    pub pipes: Vec<Pipe>,
+    /// Initial heads of every point.
+    pub h0: Vec<f64>,
+    /// Initial velocities of every point.
+    pub v0: Vec<f64>,
+    /// Per node: the emitter coefficient at the start (a burst's is replaced per step).
+    pub emitter: Vec<f64>,
+    /// Per node: the demand coefficient (a pulse's is scaled per step).
+    pub demand: Vec<f64>,
+    /// Per node: the elevation.
+    pub elevation: Vec<f64>,
+    /// Pipe ends at junctions.
+    pub junctions: Vec<Junction>,
+    /// The pipes meeting at junction ends.
+    pub contributions: Vec<Contribution>,
+    /// Dead ends.
+    pub dead_ends: Vec<DeadEnd>,
+    /// Reservoirs and tanks.
+    pub reservoirs: Vec<Reservoir>,
+    /// Valves leading nowhere.
+    pub valve_ends: Vec<ValveEnd>,
+    /// Their velocities per step.
+    pub valve_series: Vec<f64>,
+    /// Pumps and valves.
+    pub elements: Vec<Element>,
+    /// Their parameters per step.
+    pub element_series: Vec<f64>,
+    /// Nodes whose emitter coefficient is given per step (bursts).
+    pub bursts: Vec<usize>,
+    /// Their coefficients per step.
+    pub burst_series: Vec<f64>,
+    /// Nodes whose demand is scaled per step by `1 + pulse` (demand pulses).
+    pub pulses: Vec<usize>,
+    /// Their pulses per step.
+    pub pulse_series: Vec<f64>,
+    /// The points whose heads are recorded.
+    pub record: Vec<usize>,
+}
+
+/// What [`Model::run`] produces.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Output {
+    /// Heads of the recorded points, row-major `steps x record`.
+    pub heads: Vec<f64>,
+    /// Per junction end: the steps its equation had no real root.
+    pub junction_failed: Vec<u64>,
+    /// Per dead end: the steps its equation had no real root.
+    pub dead_failed: Vec<u64>,
+    /// Per element: steps without a real root, reverse flows stopped by the pump's check
+    /// valve, negative head gains bypassed (TSNet's three warnings).
+    pub element_warnings: Vec<[u64; 3]>,
+}
+
+/// `s V + g/a H - s J + g/a dt V theta` (TSNet's `cal_Cs`, steady friction `J`).
+#[inline(always)]
+fn characteristic(sign: f64, v: f64, h: f64, p: &Pipe) -> f64 {
+    let j = p.cf * v * v.abs();
+    sign * v + p.ga * h - sign * j + p.gadt * v * p.theta
+}
+
+/// NumPy's `maximum`: NaN if either is.
+#[inline]
+fn maximum(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() {
+        f64::NAN
+    } else if a >= b {
+        a
+    } else {
+        b
+    }
+}
+
+fn check(what: &str, i: usize, index: usize, size: usize) -> Result<(), Error> {
+    if index < size {
+        Ok(())
+    } else {
+        Err(Error(format!(
+            "{what} {i}: index {index} out of range 0..{size}"
+        )))
+    }
+}
+
+impl Model {
+    /// Checks that every index is in range and every series long enough.
+    ///
+    /// # Errors
+    /// [`Error`] naming the first array entry that does not fit.
+    pub fn validate(&self) -> Result<(), Error> {
+        let points = self.h0.len();
+        if self.v0.len() != points {
+            return Err(Error(format!(
+                "h0 and v0 differ in length: {} and {}",
+                points,
+                self.v0.len()
+            )));
+        }
+        let nodes = self.emitter.len();
+        if self.demand.len() != nodes || self.elevation.len() != nodes {
+            return Err(Error(
+                "emitter, demand and elevation differ in length".into(),
+            ));
+        }
+        if self.steps == 0 {
+            return Err(Error("steps must be at least 1".into()));
+        }
+        let pipes = self.pipes.len();
+        for (i, p) in self.pipes.iter().enumerate() {
+            if p.n == 0 || p.offset + p.n >= points {
+                return Err(Error(format!(
+                    "pipe {i}: points {}..={} out of range 0..{points}",
+                    p.offset,
+                    p.offset + p.n
+                )));
+            }
+        }
+        let end = |what: &str, i: usize, e: &End| -> Result<(), Error> {
+            check(what, i, e.out, points)?;
+            check(what, i, e.near, points)?;
+            check(what, i, e.pipe, pipes)
+        };
+        for (i, j) in self.junctions.iter().enumerate() {
+            end("junction end", i, &j.end)?;
+            check("junction end", i, j.node, nodes)?;
+            if j.contributions.start > j.contributions.end
+                || j.contributions.end > self.contributions.len()
+            {
+                return Err(Error(format!(
+                    "junction end {i}: contributions {:?} out of range 0..{}",
+                    j.contributions,
+                    self.contributions.len()
+                )));
+            }
+        }
+        for (i, c) in self.contributions.iter().enumerate() {
+            check("contribution", i, c.index, points)?;
+            check("contribution", i, c.pipe, pipes)?;
+            check("contribution lane", i, c.lane, 4)?;
+        }
+        for (i, d) in self.dead_ends.iter().enumerate() {
+            end("dead end", i, &d.end)?;
+            check("dead end", i, d.node, nodes)?;
+        }
+        for (i, r) in self.reservoirs.iter().enumerate() {
+            end("reservoir end", i, &r.end)?;
+        }
+        for (i, v) in self.valve_ends.iter().enumerate() {
+            end("valve end", i, &v.end)?;
+        }
+        for (i, e) in self.elements.iter().enumerate() {
+            check("element", i, e.out, points)?;
+            check("element", i, e.link1.0, points)?;
+            check("element", i, e.link1.1, pipes)?;
+            check("element", i, e.link2.0, points)?;
+            check("element", i, e.link2.1, pipes)?;
+        }
+        for (i, &b) in self.bursts.iter().enumerate() {
+            check("burst", i, b, nodes)?;
+        }
+        for (i, &b) in self.pulses.iter().enumerate() {
+            check("pulse", i, b, nodes)?;
+        }
+        for (i, &r) in self.record.iter().enumerate() {
+            check("record", i, r, points)?;
+        }
+        let series = [
+            (
+                "valve_series",
+                self.valve_series.len(),
+                self.valve_ends.len(),
+            ),
+            (
+                "element_series",
+                self.element_series.len(),
+                3 * self.elements.len(),
+            ),
+            ("burst_series", self.burst_series.len(), self.bursts.len()),
+            ("pulse_series", self.pulse_series.len(), self.pulses.len()),
+        ];
+        for (name, len, width) in series {
+            if len != self.steps * width {
+                return Err(Error(format!(
+                    "{name} must hold {} steps x {width} values, got {len}",
+                    self.steps
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// Runs the transient: the heads of the recorded points at every step.
+    ///
+    /// # Errors
+    /// [`Error`] if the model does not [`validate`](Model::validate).
+    pub fn run(&self) -> Result<Output, Error> {
+        self.validate()?;
+        let steps = self.steps;
+        let mut out = Output {
+            heads: Vec::with_capacity(steps * self.record.len()),
+            junction_failed: vec![0; self.junctions.len()],
+            dead_failed: vec![0; self.dead_ends.len()],
+            element_warnings: vec![[0; 3]; self.elements.len()],
+        };
+        let mut h = self.h0.clone();
+        let mut v = self.v0.clone();
+        let mut hn = self.h0.clone();
+        let mut vn = self.v0.clone();
+        out.heads.extend(self.record.iter().map(|&r| h[r]));
+        let mut emitter = self.emitter.clone();
+        let mut demand = self.demand.clone();
+        let base: Vec<f64> = self.pulses.iter().map(|&i| self.demand[i]).collect();
+        let mut k = vec![0.0; emitter.len()];
+        let mut products = vec![0.0; self.contributions.len()];
+        for ts in 1..steps {
+            let nb = self.bursts.len();
+            for (b, &i) in self.bursts.iter().enumerate() {
+                emitter[i] = self.burst_series[ts * nb + b];
+            }
+            let np_ = self.pulses.len();
+            for (q, &i) in self.pulses.iter().enumerate() {
+                demand[i] = base[q] * (1.0 + self.pulse_series[ts * np_ + q]);
+            }
+            for ((k, e), d) in k.iter_mut().zip(&emitter).zip(&demand) {
+                *k = e + d;
+            }
+            self.interior(&h, &v, &mut hn, &mut vn);
+            self.junction_ends(&h, &v, &k, &mut products, &mut hn, &mut vn, &mut out);
+            self.dead(&h, &v, &k, &mut hn, &mut vn, &mut out.dead_failed);
+            for r in &self.reservoirs {
+                let p = &self.pipes[r.end.pipe];
+                let (v1, h1) = (v[r.end.near], h[r.end.near]);
+                let j = p.cf * v1 * v1.abs();
+                hn[r.end.out] = r.head;
+                vn[r.end.out] = v1 + r.side * (p.ga * (r.head - h1)) - j;
+            }
+            let nv = self.valve_ends.len();
+            for (i, e) in self.valve_ends.iter().enumerate() {
+                let p = &self.pipes[e.end.pipe];
+                let (v1, h1) = (v[e.end.near], h[e.end.near]);
+                let vb = self.valve_series[ts * nv + i];
+                let j = p.cf * vb * vb.abs();
+                hn[e.end.out] = h1 + e.side * (p.ag * (vb - v1)) + e.side * (p.ag * j);
+                vn[e.end.out] = vb;
+            }
+            let ne = self.elements.len();
+            for (i, e) in self.elements.iter().enumerate() {
+                let at = (ts * ne + i) * 3;
+                let param = [
+                    self.element_series[at],
+                    self.element_series[at + 1],
+                    self.element_series[at + 2],
+                ];
+                let (head, velocity) = self.element(e, param, &h, &v, &mut out.element_warnings[i]);
+                hn[e.out] = head;
+                vn[e.out] = velocity;
+            }
+            out.heads.extend(self.record.iter().map(|&r| hn[r]));
+            core::mem::swap(&mut h, &mut hn);
+            core::mem::swap(&mut v, &mut vn);
+        }
+        Ok(out)
+    }
+
+    /// Interior points (TSNet's `inner_node_steady`).
+    fn interior(&self, h: &[f64], v: &[f64], hn: &mut [f64], vn: &mut [f64]) {
+        for p in &self.pipes {
+            let ga2 = p.ga + p.ga;
+            for i in p.offset + 1..p.offset + p.n {
+                let c0 = characteristic(1.0, v[i - 1], h[i - 1], p);
+                let c1 = characteristic(-1.0, v[i + 1], h[i + 1], p);
+                let hp = (c0 + c1) / ga2;
+                hn[i] = hp;
+                vn[i] = -c1 + p.ga * hp;
+            }
+        }
+    }
+
+    /// Junction ends (TSNet's `add_leakage`: demand and emitter `Q = k sqrt(p)`).
+    #[allow(clippy::too_many_arguments)]
+    fn junction_ends(
+        &self,
+        h: &[f64],
+        v: &[f64],
+        k: &[f64],
+        products: &mut [f64],
+        hn: &mut [f64],
+        vn: &mut [f64],
+        out: &mut Output,
+    ) {
+        for (c, product) in self.contributions.iter().zip(products.iter_mut()) {
+            let p = &self.pipes[c.pipe];
+            *product = characteristic(c.sign, v[c.index], h[c.index], p) * p.area;
+        }
+        for (e, j) in self.junctions.iter().enumerate() {
+            let mut acc = [0.0f64; 4];
+            for (c, product) in self.contributions[j.contributions.clone()]
+                .iter()
+                .zip(&products[j.contributions.clone()])
+            {
+                acc[c.lane] += product;
+            }
+            let nb = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+            let p = &self.pipes[j.end.pipe];
+            let co = characteristic(j.sign, v[j.end.near], h[j.end.near], p);
+            let a = nb + co * p.area;
+            let kj = k[j.node];
+            let k2 = pow2(kj);
+            let b1 = -2.0 * a * j.b - k2;
+            let c1 = pow2(a) + k2 * self.elevation[j.node];
+            let jb2 = pow2(j.b);
+            let delta = pow2(b1) - 4.0 * jb2 * c1;
+            if delta <= -ROOT_TOLERANCE {
+                out.junction_failed[e] += 1;
+            }
+            let hp = if delta >= 0.0 {
+                (-b1 - delta.sqrt()) / (2.0 * jb2)
+            } else {
+                (-b1) / (2.0 * jb2)
+            };
+            hn[j.end.out] = hp;
+            vn[j.end.out] = if j.sign < 0.0 {
+                -co + p.ga * hp
+            } else {
+                co - p.ga * hp
+            };
+        }
+    }
+
+    /// Dead ends (TSNet's `dead_end`, with burstloc's closed end below atmospheric pressure).
+    fn dead(
+        &self,
+        h: &[f64],
+        v: &[f64],
+        k: &[f64],
+        hn: &mut [f64],
+        vn: &mut [f64],
+        failed: &mut [u64],
+    ) {
+        for (i, d) in self.dead_ends.iter().enumerate() {
+            let p = &self.pipes[d.end.pipe];
+            let (v1, h1) = (v[d.end.near], h[d.end.near]);
+            let (kn, elev) = (k[d.node], self.elevation[d.node]);
+            let j = p.cf * v1 * v1.abs();
+            let (bq, cq) = if d.at_start {
+                (
+                    -p.ag * kn / p.area_dead,
+                    p.ag * v1 - p.ag * j - h1 - p.gadt * v1 * p.theta + elev,
+                )
+            } else {
+                (
+                    p.ag * kn / p.area_dead,
+                    -p.ag * v1 + p.ag * j - h1 - p.gadt * v1 * p.theta + elev,
+                )
+            };
+            let delta = pow2(bq) - 4.0 * cq;
+            let ok = delta >= 0.0;
+            let closed = kn == 0.0 && cq > 0.0 && d.floor < elev;
+            let root = (if ok { delta } else { 0.0 }).sqrt();
+            if delta <= -ROOT_TOLERANCE && !closed {
+                failed[i] += 1;
+            }
+            let x = if !ok {
+                (-bq) / 2.0
+            } else if d.at_start {
+                (-bq - root) / 2.0
+            } else {
+                (-bq + root) / 2.0
+            };
+            let hp = if closed {
+                maximum(elev - cq, d.floor)
+            } else {
+                pow2(x) + elev
+            };
+            let friction = p.cf2 * v1 * v1.abs();
+            let vp = if d.at_start {
+                v1 - p.ga * h1 - friction + p.ga * hp - p.gadt * v1 * p.theta
+            } else {
+                v1 + p.ga * h1 - friction - p.ga * hp + p.gadt * v1 * p.theta
+            };
+            hn[d.end.out] = hp;
+            vn[d.end.out] = vp;
+        }
+    }
+
+    /// A pump or valve end (TSNet's `valve_node`, `pump_node`, `source_pump`).
+    fn element(
+        &self,
+        e: &Element,
+        param: [f64; 3],
+        h: &[f64],
+        v: &[f64],
+        warn: &mut [u64; 3],
+    ) -> (f64, f64) {
+        let (i1, p1, s1) = e.link1;
+        let (i2, p2, s2) = e.link2;
+        let (pipe1, pipe2) = (&self.pipes[p1], &self.pipes[p2]);
+        let (a1, a2) = (pipe1.area, pipe2.area);
+        let c10 = characteristic(s1, v[i1], h[i1], pipe1);
+        let c11 = pipe1.ga;
+        let c20 = characteristic(s2, v[i2], h[i2], pipe2);
+        let c21 = pipe2.ga;
+        let root = |bq: f64, delta: f64, plus: bool, warn: &mut [u64; 3]| -> f64 {
+            if delta >= 0.0 {
+                if plus {
+                    (-bq + delta.sqrt()) / 2.0
+                } else {
+                    (-bq - delta.sqrt()) / 2.0
+                }
+            } else {
+                if delta <= -ROOT_TOLERANCE || delta.is_nan() {
+                    warn[0] += 1;
+                }
+                (-bq) / 2.0
+            }
+        };
+        match e.kind {
+            ElementKind::Valve => {
+                let kl = param[0];
+                let gk = 2.0 * G * kl;
+                let bq = gk * (a2 / a1 / c11 + 1.0 / c21);
+                let cq = gk * (c20 / c21 - c10 / c11);
+                let vp = root(bq, pow2(bq) - 4.0 * cq, true, warn);
+                if vp >= 0.0 {
+                    if e.at_start {
+                        ((c20 + vp) / c21, vp)
+                    } else {
+                        let vp = vp * a2 / a1;
+                        ((c10 - vp) / c11, vp)
+                    }
+                } else {
+                    let bq = gk * (-a1 / a2 / c21 - 1.0 / c11);
+                    let cq = gk * (-c20 / c21 + c10 / c11);
+                    let vp = root(bq, pow2(bq) - 4.0 * cq, false, warn);
+                    if e.at_start {
+                        let vp = vp * a1 / a2;
+                        ((c20 + vp) / c21, vp)
+                    } else {
+                        ((c10 - vp) / c11, vp)
+                    }
+                }
+            }
+            ElementKind::Pump { suction } => {
+                let ap = param[0] * pow2(a1);
+                let bp = param[1] * a1;
+                let cp = param[2];
+                let bq = 1.0 / ap * (bp - 1.0 / c11 - a1 / c21 / a2);
+                let cq = 1.0 / ap * (-c20 / c21 + c10 / c11 + cp);
+                let vp = root(bq, pow2(bq) - 4.0 * cq, true, warn);
+                let hp = ap * pow2(vp) + bp * vp + cp;
+                if vp > 0.0 && hp >= 0.0 {
+                    if e.at_start {
+                        let vp = vp * a1 / a2;
+                        ((c20 + vp) / c21, vp)
+                    } else {
+                        ((c10 - vp) / c11, vp)
+                    }
+                } else if vp < 0.0 {
+                    warn[1] += 1;
+                    if e.at_start {
+                        ((c20 + 0.0) / c21, 0.0)
+                    } else {
+                        ((c10 - 0.0) / c11, 0.0)
+                    }
+                } else {
+                    warn[2] += 1;
+                    let head = match (suction, e.at_start) {
+                        (true, true) => (c20 + vp) / c21,
+                        (true, false) => (c10 - vp) / c11,
+                        (false, true) => (c10 - vp) / c11 + 0.0,
+                        (false, false) => (c20 + vp) / c21 + 0.0,
+                    };
+                    (head, vp)
+                }
+            }
+            ElementKind::Source { sump } => {
+                let ap = param[0] * pow2(a2);
+                let bp = param[1] * a2;
+                let cp = param[2];
+                let aq = ap * pow2(c21);
+                let bq = bp * c21 - 2.0 * ap * c20 * c21 - 1.0;
+                let cq = ap * pow2(c20) - bp * c20 + sump + cp;
+                let delta = pow2(bq) - 4.0 * aq * cq;
+                let hp = if delta >= 0.0 {
+                    (-bq - delta.sqrt()) / (2.0 * aq)
+                } else {
+                    if delta <= -ROOT_TOLERANCE || delta.is_nan() {
+                        warn[0] += 1;
+                    }
+                    (-bq) / (2.0 * aq)
+                };
+                // TSNet's `if HP > Hsump: ... else: HP = Hsump` (NaN too)
+                let hp = if hp > sump { hp } else { sump };
+                let vp = -c20 + c21 * hp;
+                if vp <= 0.0 {
+                    warn[1] += 1;
+                    ((c20 + 0.0) / c21, 0.0)
+                } else {
+                    (hp, vp)
+                }
+            }
+        }
+    }
+}
