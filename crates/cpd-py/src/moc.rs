@@ -181,6 +181,7 @@ pub fn moc_run<'py>(
             node: index(row[3], "junctions")?,
             sign: vals[0],
             b: vals[1],
+            b2: moc_core::pow2(vals[1]),
             contributions: start..stop,
         });
         start = stop;

@@ -49,6 +49,8 @@ pub struct Junction {
     pub sign: f64,
     /// The junction equation's constant `b`.
     pub b: f64,
+    /// `b` squared as the C library's `pow` computes it ([`pow2`]).
+    pub b2: f64,
     /// Its entries in [`Model::contributions`].
     pub contributions: core::ops::Range<usize>,
 }
@@ -449,7 +451,7 @@ impl Model {
             let k2 = pow2(kj);
             let b1 = -2.0 * a * j.b - k2;
             let c1 = pow2(a) + k2 * self.elevation[j.node];
-            let jb2 = pow2(j.b);
+            let jb2 = j.b2;
             let delta = pow2(b1) - 4.0 * jb2 * c1;
             if delta <= -ROOT_TOLERANCE {
                 out.junction_failed[e] += 1;
