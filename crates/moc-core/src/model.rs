@@ -196,6 +196,38 @@ pub struct Output {
     pub element_warnings: Vec<[u64; 3]>,
 }
 
+/// Each point's pipe constants, for the interior points' loop over whole arrays.
+struct PointConstants {
+    ga: Vec<f64>,
+    gadt: Vec<f64>,
+    theta: Vec<f64>,
+    cf: Vec<f64>,
+    ga2: Vec<f64>,
+}
+
+impl PointConstants {
+    fn new(pipes: &[Pipe], points: usize) -> Self {
+        // points no pipe holds get harmless constants (their results are never read)
+        let mut c = Self {
+            ga: vec![1.0; points],
+            gadt: vec![0.0; points],
+            theta: vec![0.0; points],
+            cf: vec![0.0; points],
+            ga2: vec![2.0; points],
+        };
+        for p in pipes {
+            for i in p.offset..=p.offset + p.n {
+                c.ga[i] = p.ga;
+                c.gadt[i] = p.gadt;
+                c.theta[i] = p.theta;
+                c.cf[i] = p.cf;
+                c.ga2[i] = p.ga + p.ga;
+            }
+        }
+        c
+    }
+}
+
 /// `s V + g/a H - s J + g/a dt V theta` (TSNet's `cal_Cs`, steady friction `J`).
 #[inline(always)]
 fn characteristic(sign: f64, v: f64, h: f64, p: &Pipe) -> f64 {
@@ -355,6 +387,7 @@ impl Model {
         let base: Vec<f64> = self.pulses.iter().map(|&i| self.demand[i]).collect();
         let mut k = vec![0.0; emitter.len()];
         let mut products = vec![0.0; self.contributions.len()];
+        let constants = PointConstants::new(&self.pipes, self.h0.len());
         for ts in 1..steps {
             let nb = self.bursts.len();
             for (b, &i) in self.bursts.iter().enumerate() {
@@ -367,7 +400,7 @@ impl Model {
             for ((k, e), d) in k.iter_mut().zip(&emitter).zip(&demand) {
                 *k = e + d;
             }
-            self.interior(&h, &v, &mut hn, &mut vn);
+            self.interior(&constants, &h, &v, &mut hn, &mut vn);
             self.junction_ends(&h, &v, &k, &mut products, &mut hn, &mut vn, &mut out);
             self.dead(&h, &v, &k, &mut hn, &mut vn, &mut out.dead_failed);
             for r in &self.reservoirs {
@@ -405,17 +438,27 @@ impl Model {
         Ok(out)
     }
 
-    /// Interior points (TSNet's `inner_node_steady`).
-    fn interior(&self, h: &[f64], v: &[f64], hn: &mut [f64], vn: &mut [f64]) {
-        for p in &self.pipes {
-            let ga2 = p.ga + p.ga;
-            for i in p.offset + 1..p.offset + p.n {
-                let c0 = characteristic(1.0, v[i - 1], h[i - 1], p);
-                let c1 = characteristic(-1.0, v[i + 1], h[i + 1], p);
-                let hp = (c0 + c1) / ga2;
-                hn[i] = hp;
-                vn[i] = -c1 + p.ga * hp;
-            }
+    /// Interior points (TSNet's `inner_node_steady`), computed at every point but the first
+    /// and last over whole arrays (so that the compiler vectorizes it); a pipe's ends are
+    /// computed from garbage here and overwritten by their boundaries afterwards.
+    fn interior(&self, c: &PointConstants, h: &[f64], v: &[f64], hn: &mut [f64], vn: &mut [f64]) {
+        let n = h.len();
+        if n < 3 {
+            return;
+        }
+        let (hl, hr) = (&h[..n - 2], &h[2..]);
+        let (vl, vr) = (&v[..n - 2], &v[2..]);
+        let (ga, gadt) = (&c.ga[1..n - 1], &c.gadt[1..n - 1]);
+        let (theta, cf, ga2) = (&c.theta[1..n - 1], &c.cf[1..n - 1], &c.ga2[1..n - 1]);
+        let (hn, vn) = (&mut hn[1..n - 1], &mut vn[1..n - 1]);
+        for i in 0..n - 2 {
+            let (v0, h0, v1, h1) = (vl[i], hl[i], vr[i], hr[i]);
+            let c0 = v0 + ga[i] * h0 - cf[i] * v0 * v0.abs() + gadt[i] * v0 * theta[i];
+            // `characteristic(-1.0, ..)`: -1 * x is -x and y - (-j) is y + j, exactly
+            let c1 = -v1 + ga[i] * h1 + cf[i] * v1 * v1.abs() + gadt[i] * v1 * theta[i];
+            let hp = (c0 + c1) / ga2[i];
+            hn[i] = hp;
+            vn[i] = -c1 + ga[i] * hp;
         }
     }
 
@@ -436,14 +479,20 @@ impl Model {
             *product = characteristic(c.sign, v[c.index], h[c.index], p) * p.area;
         }
         for (e, j) in self.junctions.iter().enumerate() {
-            let mut acc = [0.0f64; 4];
+            // the four lanes in registers (an array indexed by lane went through memory)
+            let (mut a0, mut a1, mut a2, mut a3) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
             for (c, product) in self.contributions[j.contributions.clone()]
                 .iter()
                 .zip(&products[j.contributions.clone()])
             {
-                acc[c.lane] += product;
+                match c.lane {
+                    0 => a0 += product,
+                    1 => a1 += product,
+                    2 => a2 += product,
+                    _ => a3 += product,
+                }
             }
-            let nb = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+            let nb = (a0 + a1) + (a2 + a3);
             let p = &self.pipes[j.end.pipe];
             let co = characteristic(j.sign, v[j.end.near], h[j.end.near], p);
             let a = nb + co * p.area;

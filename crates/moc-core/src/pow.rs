@@ -25,18 +25,31 @@ pub fn pow2(x: f64) -> f64 {
     // Dekker's split is exact for |x| well inside the range; r must be normal and not a
     // power of two (whose lower neighbour is half an ULP away).
     if (1e-100..1e100).contains(&ax) && bits & 0x000f_ffff_ffff_ffff != 0 {
-        const SPLIT: f64 = 134_217_729.0; // 2^27 + 1
-        let c = SPLIT * x;
-        let hi = c - (c - x);
-        let lo = x - hi;
-        // x*x = r + err exactly
-        let err = ((hi * hi - r) + 2.0 * hi * lo) + lo * lo;
+        let err = square_error(x, r);
         let ulp = f64::from_bits(bits & 0x7ff0_0000_0000_0000) * f64::EPSILON;
         if err.abs() < 0.45 * ulp {
             return r;
         }
     }
     x.powf(black_box(2.0))
+}
+
+/// `x * x - r` exactly, `r` being `x * x` rounded: one fused multiply-add where the CPU has
+/// it (a build for the native CPU), else Dekker's product.
+#[inline(always)]
+fn square_error(x: f64, r: f64) -> f64 {
+    #[cfg(target_feature = "fma")]
+    {
+        x.mul_add(x, -r)
+    }
+    #[cfg(not(target_feature = "fma"))]
+    {
+        const SPLIT: f64 = 134_217_729.0; // 2^27 + 1
+        let c = SPLIT * x;
+        let hi = c - (c - x);
+        let lo = x - hi;
+        ((hi * hi - r) + 2.0 * hi * lo) + lo * lo
+    }
 }
 
 #[cfg(test)]
