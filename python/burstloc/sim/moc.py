@@ -8,7 +8,10 @@ state, demand coefficients, pump curves, the event's controls: everything but th
 and runs the same equations over the whole network at once (:mod:`burstloc.sim.moc_layout`):
 interior points, junctions (pressure-dependent demand and the burst's emitter, ``Q = k
 sqrt(p)``), dead ends, reservoirs and tanks, valves leading nowhere; pumps and valves between
-pipes keep TSNet's own functions (:mod:`burstloc.sim.moc_elements`). Every expression keeps
+pipes keep TSNet's own functions (:mod:`burstloc.sim.moc_elements`). The time loop runs in Rust by
+default (:mod:`burstloc.sim.moc_rust`, the same expressions, pumps and valves ported: the same
+heads to the bit, 15-20 times faster on L-TOWN); ``kernel="numpy"`` (solver ``"numpy"``) runs
+it here as NumPy array operations per step. Every expression keeps
 TSNet's order of operations, down to the order in which ``np.dot`` adds a junction's pipes
 (:func:`~burstloc.sim.moc_layout.dot_order`, as OpenBLAS does with NumPy 1.26) and the C
 library's ``pow`` for squares: there the heads are TSNet's to the last bit. Where NumPy's BLAS

@@ -359,8 +359,13 @@ def simulate_many(
     workers: int | None = None,
     scheduler: str | None = None,
     progress: bool = True,
+    shrink: Callable[[BurstScenario, ScenarioResult], ScenarioResult] | None = None,
 ) -> SweepReport[BurstScenario, ScenarioResult]:
     """Simulate many scenarios: cached ones load here, the rest run in parallel.
+
+    ``shrink(scenario, result)``, if given, is applied here to each result as it is loaded or
+    arrives (after it is cached): the report holds what it returns, so a caller can consume
+    each result at once and keep a small part of it.
 
     Uncached scenarios run in local worker processes (``workers``, default the CPU count) or,
     with ``scheduler`` (a Dask scheduler address), on that cluster; each result is stored in
@@ -372,20 +377,20 @@ def simulate_many(
     store = resolve_cache(cache)
     todo = list(scenarios)
     keys = [_key_or_none(s) if store is not None else None for s in todo]
-    results: list[ScenarioResult | None] = [
-        from_cache(store, key, s) if store is not None and key is not None else None
-        for s, key in zip(todo, keys, strict=True)
-    ]
+    results: list[ScenarioResult | None] = []
+    for s, key in zip(todo, keys, strict=True):
+        cached = from_cache(store, key, s) if store is not None and key is not None else None
+        results.append(cached if cached is None or shrink is None else shrink(s, cached))
     missing = [i for i, result in enumerate(results) if result is None]
     if missing:
         _tsnet_compat.load()  # no simulator: one error here, not one failure per scenario
 
     def store_result(sub: int, scenario: BurstScenario, result: ScenarioResult) -> None:
         index = missing[sub]
-        results[index] = result
         key = keys[index]
         if store is not None and key is not None:
             store.put(key, result.to_arrays())
+        results[index] = result if shrink is None else shrink(scenario, result)
 
     report = sweep(
         _simulate_uncached,
@@ -396,6 +401,7 @@ def simulate_many(
         desc="simulating bursts",
         label=_label,
         on_result=store_result,
+        keep=False,  # held in ``results`` (shrunk)
     )
     failures = [replace(f, index=missing[f.index]) for f in report.failures]
     return SweepReport(todo, results, failures)
