@@ -15,7 +15,9 @@ process and its workers) and peak resident memory (the largest process):
   of the sample with the ``numpy`` solver and with the default one (the Rust time loop), the
   heads compared bit for bit; their CPU ratio is the speed-up measured in this run;
 * ``evaluate``: ``burstloc evaluate`` (fused localizer, 0.2 s, the 33 sensors, no cache,
-  ``--workers W``) of ``N`` pipes drawn at random with ``--seed`` (``--all``: every pipe).
+  ``--workers W``) of ``N`` pipes drawn at random with ``--seed`` (``--all``: every pipe);
+  beside the largest process's peak, the peak of all its processes together (the parent and
+  its workers, sampled from ``/proc`` every 0.2 s).
 
 The last lines extrapolate the evaluation's CPU per burst to all 905 pipes on ``W`` cores,
 printed as an extrapolation. On a shared machine compare the CPU columns: the wall clock counts
@@ -32,6 +34,7 @@ import random
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 from typing import Any
@@ -60,16 +63,39 @@ def stage_calibrate(network: str, out: str) -> str:
     return out
 
 
-def run_cli(args: list[str]) -> tuple[float, float, float, int]:
+def tree_rss_mb(pid: int) -> float:
+    """Resident memory of ``pid`` and its descendants now, MB (0 for a process gone)."""
+    try:
+        pages = int(Path(f"/proc/{pid}/statm").read_text().split()[1])
+        children = Path(f"/proc/{pid}/task/{pid}/children").read_text().split()
+    except (OSError, IndexError, ValueError):
+        return 0.0
+    own = pages * os.sysconf("SC_PAGE_SIZE") / 2**20
+    return own + sum(tree_rss_mb(int(c)) for c in children)
+
+
+def run_cli(args: list[str]) -> tuple[float, float, float, float, int]:
     """``burstloc ARGS`` in a child process: wall, CPU (with its workers), peak MB of the largest
-    process, exit code."""
+    process, peak MB of all its processes together (sampled every 0.2 s), exit code."""
     env = {**os.environ, "PYTHONPATH": str(REPO / "python")}
     wall = time.perf_counter()
     child = subprocess.Popen([sys.executable, "-m", "burstloc", *args], env=env)
+    total = [0.0]
+    done = threading.Event()
+
+    def sample() -> None:
+        while not done.wait(0.2):
+            total[0] = max(total[0], tree_rss_mb(child.pid))
+
+    sampler = threading.Thread(target=sample, daemon=True)
+    sampler.start()
     _, status, usage = os.wait4(child.pid, 0)
+    done.set()
+    sampler.join()
     child.returncode = os.waitstatus_to_exitcode(status)
     wall = time.perf_counter() - wall
-    return wall, usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024, child.returncode
+    cpu = usage.ru_utime + usage.ru_stime
+    return wall, cpu, usage.ru_maxrss / 1024, total[0], child.returncode
 
 
 def row(what: str, wall: float, cpu: float, peak: float, note: str = "") -> None:
@@ -145,8 +171,15 @@ def main() -> None:
             "--min-pipe-length", str(MIN_PIPE_LENGTH), "--no-cache", "--quiet",
             "--workers", str(args.workers), "--json", str(out), "--pipes", *sample,
         ]  # fmt: skip
-        wall, cpu, peak, code = run_cli(cli)
-        row("evaluate", wall, cpu, peak, f"{len(sample)} pipes, --workers {args.workers}")
+        wall, cpu, peak, together, code = run_cli(cli)
+        row(
+            "evaluate",
+            wall,
+            cpu,
+            peak,
+            f"{len(sample)} pipes, --workers {args.workers}; all processes together: "
+            f"{together:.0f} MB",
+        )
         if code:
             sys.exit(f"evaluate failed (exit {code})")
         scored = json.loads(out.read_text(encoding="utf-8"))
