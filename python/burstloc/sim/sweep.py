@@ -262,7 +262,8 @@ def _run_processes(func: Callable[[T], R], todo: list[T], workers: int, done: _D
             }
         for future in as_completed(futures):
             exc = future.exception()
-            done(futures[future], None if exc else future.result(), exc)
+            # popped: a future holds its result, which ``done`` may have let go of
+            done(futures.pop(future), None if exc else future.result(), exc)
     except BaseException:
         # Workers stopped first: the pool's own thread then sees them gone, fails what is
         # pending and ends, and the shutdown waits for it and frees the pool's queues here.
