@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -148,9 +149,14 @@ def _dead_ends(
 KERNELS = ("rust", "numpy")
 
 
-def solve(tm: Any, friction: str = "steady", kernel: str = "rust") -> Any:
+def solve(
+    tm: Any, friction: str = "steady", kernel: str = "rust", first: Sequence[str] = ()
+) -> Any:
     """Run the transient of a TSNet model initialized by ``tsnet.simulation.Initializer``;
-    return ``tm`` with every node's ``head`` series and ``simulation_timestamps`` set.
+    return ``tm`` with every node's ``head`` series and ``simulation_timestamps`` set, and
+    ``burstloc_heads``: the heads matrix (steps x nodes) those series are columns of and its
+    nodes' names, the nodes named in ``first`` (those TSNet simulates) in its first columns in
+    that order, so that a caller reads them without a copy.
 
     Raises:
         ConfigError: a friction model other than ``steady``, a kernel not in :data:`KERNELS`.
@@ -159,6 +165,7 @@ def solve(tm: Any, friction: str = "steady", kernel: str = "rust") -> Any:
     if kernel not in KERNELS:
         raise ConfigError(f"unknown MOC kernel {kernel!r}; expected one of {KERNELS}")
     lay = layout(tm, friction)
+    columns = _record_first(lay, first)
     junction = _Ends(lay, lay.junction)
     dead = [(_Ends(lay, lay.dead_start), True), (_Ends(lay, lay.dead_end), False)]
     if kernel == "rust":
@@ -171,11 +178,26 @@ def solve(tm: Any, friction: str = "steady", kernel: str = "rust") -> Any:
         _element_warnings(result.element_warnings)
     else:
         heads = _numpy_loop(lay, junction, dead)
-    _report(lay, heads, junction, dead)
+    _report(lay, heads, junction, dead, columns)
     for column, node in enumerate(lay.record_nodes):
         node._head = heads[:, column]
+    tm.burstloc_heads = (heads, [node.name for node in lay.record_nodes])
     tm.simulation_timestamps = list(np.arange(lay.steps) * lay.dt)
     return tm
+
+
+def _record_first(lay: Layout, first: Sequence[str]) -> list[tuple[int, Any]]:
+    """Reorder the recorded nodes: those named in ``first`` first, in that order. Returns the
+    nodes in their layout order with their new columns (the order warnings are given in)."""
+    names = {node.name: i for i, node in enumerate(lay.record_nodes)}
+    head = [names[name] for name in first if name in names]
+    chosen = set(head)
+    order = head + [i for i in range(len(lay.record_nodes)) if i not in chosen]
+    column = {old: new for new, old in enumerate(order)}
+    columns = [(column[i], node) for i, node in enumerate(lay.record_nodes)]
+    lay.record = lay.record[order]
+    lay.record_nodes = [lay.record_nodes[i] for i in order]
+    return columns
 
 
 #: TSNet's warnings from a pump or valve, in the order of ``moc_rust.Run.element_warnings``.
@@ -293,10 +315,15 @@ def _numpy_loop(lay: Layout, junction: _Ends, dead: list[tuple[_Ends, bool]]) ->
 
 
 def _report(
-    lay: Layout, heads: np.ndarray, junction: _Ends, dead: list[tuple[_Ends, bool]]
+    lay: Layout,
+    heads: np.ndarray,
+    junction: _Ends,
+    dead: list[tuple[_Ends, bool]],
+    columns: list[tuple[int, Any]],
 ) -> None:
-    """Warn, once per node with a count, of negative pressure and of equations without a root."""
-    for column, node in enumerate(lay.record_nodes):
+    """Warn, once per node with a count, of negative pressure and of equations without a root
+    (``columns``: each node's column in ``heads``, in the layout's order of the nodes)."""
+    for column, node in columns:
         if node.transient_node_type != "Junction":
             continue
         pressure = heads[:, column] - node.elevation

@@ -248,10 +248,14 @@ def run_transient(
         ConfigError: a time step above TSNet's limit, or too few time steps.
         SimulationError: TSNet failed or produced non-finite heads.
     """
-    tm = _run_tsnet(wn, inp, settings, operate, where)
+    tm = _run_tsnet(wn, inp, settings, operate, where, meters)
     steps = np.asarray(tm.simulation_timestamps, dtype=np.float64)
-    heads = np.column_stack([np.asarray(tm.get_node(j).head, np.float64) for j in meters])
-    heads -= np.array([wn.get_node(j).elevation for j in meters], dtype=np.float64)
+    solved = getattr(tm, "burstloc_heads", None)  # burstloc's solvers: the meters come first
+    if solved is not None and solved[1][: len(meters)] == list(meters):
+        heads = solved[0][:, : len(meters)]  # a view: no copy of the largest array
+    else:
+        heads = np.column_stack([np.asarray(tm.get_node(j).head, np.float64) for j in meters])
+    elevation = np.array([wn.get_node(j).elevation for j in meters], dtype=np.float64)
     if heads.shape[0] != steps.size:
         raise SimulationError(f"the transient simulation produced misshapen heads for {where}")
     broken = [j for j, ok in zip(meters, np.isfinite(heads).all(axis=0), strict=True) if not ok]
@@ -261,6 +265,7 @@ def run_transient(
             f"{len(broken)} junction(s) ({', '.join(broken[:5])}"
             f"{', ...' if len(broken) > 5 else ''}){_negative(tm)}"
         )
+    heads -= elevation  # (in the solver's matrix, once nothing reads its heads any more)
     return steps, heads, float(tm.time_step)
 
 
@@ -278,7 +283,12 @@ def _negative(tm: Any) -> str:
 
 
 def _run_tsnet(
-    wn: Any, inp: str, settings: TransientSettings, operate: Callable[[Any], None], where: str
+    wn: Any,
+    inp: str,
+    settings: TransientSettings,
+    operate: Callable[[Any], None],
+    where: str,
+    meters: Sequence[str] = (),
 ) -> Any:
     tsnet = _tsnet_compat.load()
     import wntr  # loaded with the network (burstloc.network), so known to be installed
@@ -316,7 +326,7 @@ def _run_tsnet(
         hold_valves(tm)
         if settings.solver in ("vectorized", "numpy"):
             kernel = "rust" if settings.solver == "vectorized" else "numpy"
-            return moc.solve(tm, settings.friction, kernel)
+            return moc.solve(tm, settings.friction, kernel, first=meters)
         return tsnet.simulation.MOCSimulator(tm, results_obj="no", friction=settings.friction)
     except SimulationError as exc:
         raise SimulationError(f"{exc} ({where})") from exc
