@@ -56,6 +56,7 @@ def test_streaming_gives_the_same_evaluation(
     assert [r.total for r in streamed.runs] == [3, 3, 3]
     for pipe, result in streamed.results.items():
         assert result.heads.shape == (1, len(held.results[pipe].junctions))
+        assert result.heads.flags.owndata and result.time.flags.owndata  # not views of all
         assert (result.heads[0] == held.results[pipe].heads[0]).all()
         timing = ("cache", "simulation_seconds")  # how each run went, not what it produced
         same = {k: v for k, v in held.results[pipe].metadata.items() if k not in timing}

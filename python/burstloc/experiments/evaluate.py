@@ -355,7 +355,8 @@ def evaluate(
             scoring["sensors"],
         )
         streamed[result.pipe] = {spec: by_pipe[result.pipe] for spec, by_pipe in scored.items()}
-        return replace(result, time=result.time[:1], heads=result.heads[:1])
+        # copies: a slice would keep the whole arrays alive
+        return replace(result, time=result.time[:1].copy(), heads=result.heads[:1].copy())
 
     report = simulate.simulate_many(
         scenarios,
