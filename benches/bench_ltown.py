@@ -182,8 +182,8 @@ def main() -> None:
         )
         if code:
             sys.exit(f"evaluate failed (exit {code})")
-        scored = json.loads(out.read_text(encoding="utf-8"))
-        print(f"  evaluation written: {len(json.dumps(scored)) / 1e6:.1f} MB of JSON")
+        runs = json.loads(out.read_text(encoding="utf-8"))["runs"]
+        print("  localized: " + ", ".join(f"{r['correct']}/{r['total']}" for r in runs))
         per_burst = cpu / len(sample)
         print(f"  per burst: cpu {per_burst:.1f} s, wall {wall / len(sample):.1f} s")
         if not args.all:
