@@ -15,6 +15,7 @@
 
 mod model;
 mod pow;
+mod step;
 
 pub use model::{
     Contribution, DeadEnd, Element, ElementKind, End, Junction, Model, Output, Pipe, Reservoir,
