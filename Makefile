@@ -134,6 +134,7 @@ lint:
 test-rust:
 	cargo test -p cpd-core
 	cargo test -p cpd-core --no-default-features
+	cargo test -p moc-core
 
 test-python:
 	$(BIN)/python -m pytest -q

@@ -16,6 +16,7 @@ __all__ = [
     "__version__",
     "detect_cusum",
     "detect_shewhart",
+    "moc_run",
 ]
 
 __version__: Final[str]
@@ -142,3 +143,36 @@ def detect_shewhart(
     x: _FloatArray, sigma: float, threshold: float
 ) -> tuple[_IndexArray, _FloatArray]:
     """The paper's Algorithm 2 over the whole of ``x``."""
+
+_UIntArray = npt.NDArray[np.uint64]
+
+def moc_run(
+    *,
+    steps: int,
+    pipe_points: _IndexArray,
+    pipes: _FloatArray,
+    h0: _FloatArray,
+    v0: _FloatArray,
+    nodes: _FloatArray,
+    junctions: _IndexArray,
+    junction_values: _FloatArray,
+    contributions: _IndexArray,
+    contribution_signs: _FloatArray,
+    dead_ends: _IndexArray,
+    dead_floors: _FloatArray,
+    reservoirs: _IndexArray,
+    reservoir_values: _FloatArray,
+    valve_ends: _IndexArray,
+    valve_sides: _FloatArray,
+    valve_series: _FloatArray,
+    elements: _IndexArray,
+    element_values: _FloatArray,
+    element_series: _FloatArray,
+    bursts: _IndexArray,
+    burst_series: _FloatArray,
+    pulses: _IndexArray,
+    pulse_series: _FloatArray,
+    record: _IndexArray,
+) -> tuple[_FloatArray, _UIntArray, _UIntArray, _UIntArray]:
+    """TSNet's MOC time loop over a network laid out as arrays (``burstloc.sim.moc_rust``):
+    ``(heads, junction_failed, dead_failed, element_warnings)``."""

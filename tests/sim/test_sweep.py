@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import math
 import operator
+import weakref
 
+import numpy as np
 import pytest
 
 from burstloc.exceptions import ConfigError
@@ -42,6 +44,23 @@ def test_failures_are_reported_and_the_rest_complete(workers: int) -> None:
     )
     _check(report, labelled=True)
     assert sorted(seen) == [(0, 4.0, 2.0), (2, 9.0, 3.0), (3, 16.0, 4.0), (5, 25.0, 5.0)]
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_results_not_kept_are_let_go_once_handed_over(workers: int) -> None:
+    """With keep=False each result lives only as long as ``on_result`` keeps it (a sweep of
+    large results holds one at a time; worker processes' futures held every one before)."""
+    handed: list[weakref.ref[np.ndarray]] = []
+    alive_before: list[int] = []
+
+    def on_result(i: int, item: int, result: np.ndarray) -> None:
+        alive_before.append(sum(ref() is not None for ref in handed))
+        handed.append(weakref.ref(result))
+
+    report = sweep(np.zeros, [10, 20, 30, 40, 50], workers=workers, progress=False,
+                   on_result=on_result, keep=False)  # fmt: skip
+    assert report.results == [None] * 5 and report.ok
+    assert alive_before == [0] * 5
 
 
 def test_empty_and_single_item_sweeps() -> None:

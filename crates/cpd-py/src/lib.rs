@@ -11,6 +11,7 @@ mod bank;
 mod batch;
 mod detectors;
 mod errors;
+mod moc;
 mod state;
 
 use pyo3::prelude::*;
@@ -32,6 +33,8 @@ mod core_module {
     use crate::detectors::{PyCusum, PyShewhart};
     #[pymodule_export]
     use crate::errors::{ConfigError, InputError};
+    #[pymodule_export]
+    use crate::moc::moc_run;
 
     #[pymodule_init]
     fn init(m: &Bound<'_, PyModule>) -> PyResult<()> {

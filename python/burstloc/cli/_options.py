@@ -81,16 +81,17 @@ def add_min_pipe_length_option(parser: argparse.ArgumentParser) -> None:
 
 
 def add_solver_option(parser: argparse.ArgumentParser) -> None:
-    """``--solver {vectorized,tsnet}``: which MOC solver runs the transients."""
+    """``--solver {vectorized,numpy,tsnet}``: which MOC solver runs the transients."""
     from burstloc.sim.scenario import SOLVERS
 
     parser.add_argument(
         "--solver",
         choices=SOLVERS,
         default=SOLVERS[0],
-        help="transient solver: 'vectorized' (default) solves TSNet's model with whole-network "
-        "array operations, the same heads as TSNet's own solver, its time loop 20-70 times "
-        "faster; 'tsnet' runs TSNet's MOCSimulator",
+        help="transient solver: 'vectorized' (default) solves TSNet's model over the whole "
+        "network at once in compiled code, the same heads as TSNet's own solver, its time loop "
+        "hundreds of times faster; 'numpy' runs the same solver's time loop as NumPy array "
+        "operations (the same heads, slower); 'tsnet' runs TSNet's MOCSimulator",
     )
 
 

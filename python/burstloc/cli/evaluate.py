@@ -261,6 +261,8 @@ def run(args: argparse.Namespace) -> int:
         time_step=time_step,
         noise=args.noise,
         noise_seed=args.noise_seed,
+        # each burst scored as it arrives unless the plots or the classifier read its heads
+        keep_heads=bool(args.plot or args.events),
     )
     print(report.format_tables(ev, True if args.paper_tables else None), end="")
     if args.events:

@@ -15,10 +15,14 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["ElementEnd", "G", "between", "source", "valve_end_velocity"]
+__all__ = ["PUMP", "SOURCE", "VALVE", "ElementEnd", "G", "between", "source", "valve_end_velocity"]
 
 #: TSNet's gravitational acceleration, m/s².
 G = 9.8
+
+
+#: :attr:`ElementEnd.kind` of a valve between pipes, a pump between pipes, a source pump.
+VALVE, PUMP, SOURCE = 0, 1, 2
 
 
 @dataclass
@@ -26,11 +30,25 @@ class ElementEnd:
     """A pipe end at a pump or valve, solved by TSNet's own function each step.
 
     ``solve(H, V, ts)`` returns the end's ``(head, velocity)`` from the previous step's flat
-    arrays; ``index`` is the end's point in the flat arrays.
+    arrays; ``index`` is the end's point in the flat arrays. The rest describes the same
+    computation for the Rust time loop (:mod:`burstloc.sim.moc_rust`): ``kind`` (:data:`VALVE`,
+    :data:`PUMP`, :data:`SOURCE`), whether the end is its pipe's start, TSNet's characteristics
+    ``C1`` and ``C2`` as ``(point, pipe, sign)``, the pipe end on the pump's suction side, the
+    sump's head (a source pump) and ``parameter(ts)``: the valve's inverse loss coefficient (in
+    the first of three places) or the pump curve's ``a, b, c`` at step ``ts``, which ``varies``
+    only for a pump or valve operated during the event.
     """
 
     index: int
     solve: Callable[[np.ndarray, np.ndarray, int], tuple[float, float]]
+    kind: int
+    at_start: bool
+    link1: tuple[int, int, float]
+    link2: tuple[int, int, float]
+    parameter: Callable[[int], tuple[float, float, float]]
+    varies: bool
+    suction: bool = False
+    sump: float = 0.0
 
 
 def _pump_curve(pump: Any) -> Callable[[int], Any]:
@@ -95,6 +113,12 @@ def between(builder: Any, pn: int, at_start: bool, links: list[int], index: int)
         parameter = _valve_loss(link)
         function = valve_node
 
+    first = (near[0], abs(links[0]) - 1, float(signs[0]))
+    if at_start:  # TSNet's C1 from the first pipe joined, C2 from this pipe's start
+        link1, link2 = first, (lo + 1, pn, -1.0)
+    else:  # C1 from this pipe's end, C2 from the first pipe joined
+        link1, link2 = (lo + n - 1, pn, 1.0), first
+
     if at_start:
 
         def solve(H: np.ndarray, V: np.ndarray, ts: int) -> tuple[float, float]:
@@ -142,7 +166,17 @@ def between(builder: Any, pn: int, at_start: bool, links: list[int], index: int)
             )
             return float(head), float(velocity)
 
-    return ElementEnd(index, solve)
+    return ElementEnd(
+        index,
+        solve,
+        kind=PUMP if kind == "Pump" else VALVE,
+        at_start=at_start,
+        link1=link1,
+        link2=link2,
+        parameter=_numbers(parameter),
+        varies=bool(getattr(link, "operating", False)),
+        suction=kind == "Pump" and side == "s",
+    )
 
 
 def source(builder: Any, pn: int, index: int) -> ElementEnd:
@@ -161,7 +195,34 @@ def source(builder: Any, pn: int, index: int) -> ElementEnd:
         )
         return float(head), float(velocity)
 
-    return ElementEnd(index, solve)
+    own = (lo + 1, pn, -1.0)
+    return ElementEnd(
+        index,
+        solve,
+        kind=SOURCE,
+        at_start=True,
+        link1=own,
+        link2=own,
+        parameter=_numbers(curve),
+        varies=bool(getattr(pump, "operating", False)),
+        sump=float(sump),
+    )
+
+
+def _numbers(parameter: Callable[[int], Any]) -> Callable[[int], tuple[float, float, float]]:
+    """A pump's ``[curve, side]``, its curve ``(a, b, c)`` or a valve's inverse loss, at step
+    ``ts``, as three floats (the valve's first, then zeros)."""
+
+    def numbers(ts: int) -> tuple[float, float, float]:
+        value = parameter(ts)
+        if isinstance(value, list):  # a pump between pipes: [curve, side]
+            value = value[0]
+        if np.ndim(value) == 0:
+            return (float(value), 0.0, 0.0)
+        a, b, c = (float(x) for x in value)
+        return (a, b, c)
+
+    return numbers
 
 
 def valve_end_velocity(builder: Any, pn: int, at_start: bool, point: int) -> np.ndarray:

@@ -82,8 +82,10 @@ FRICTION_MODELS = ("steady", "quasi-steady", "unsteady")
 
 
 #: The transient solvers: burstloc's vectorized MOC solver (:mod:`burstloc.sim.moc`, steady
-#: friction) and TSNet's own ``MOCSimulator`` (every friction model; the reference).
-SOLVERS = ("vectorized", "tsnet")
+#: friction; its time loop in Rust), the same solver's time loop as NumPy array operations
+#: (``"numpy"``: the same heads to the bit, slower; kept to measure and check the Rust loop)
+#: and TSNet's own ``MOCSimulator`` (every friction model; the reference).
+SOLVERS = ("vectorized", "numpy", "tsnet")
 
 
 def check_solver(solver: Any, friction: str) -> None:
@@ -94,9 +96,9 @@ def check_solver(solver: Any, friction: str) -> None:
     """
     if solver not in SOLVERS:
         raise ConfigError(f"solver must be one of {SOLVERS}, got {solver!r}")
-    if solver == "vectorized" and friction != "steady":
+    if solver in ("vectorized", "numpy") and friction != "steady":
         raise ConfigError(
-            f"the vectorized solver models steady friction only; friction {friction!r} "
+            f"the {solver} solver models steady friction only; friction {friction!r} "
             "needs solver 'tsnet'"
         )
 

@@ -122,6 +122,7 @@ def sweep(
     desc: str = "",
     label: Callable[[T], str] = repr,
     on_result: Callable[[int, T, R], None] | None = None,
+    keep: bool = True,
 ) -> SweepReport[T, R]:
     """Run ``func`` over ``items`` and report results and failures.
 
@@ -136,6 +137,8 @@ def sweep(
         label: names an item in failure messages.
         on_result: called in this process as each item succeeds, ``(index, item, result)``
             (e.g. to store it in a cache as soon as it exists).
+        keep: hold every result in the report; ``False`` leaves the report's results ``None``
+            (results only handed to ``on_result``, e.g. reduced there as they arrive).
 
     Raises:
         ConfigError: ``workers`` is not a positive integer, or the scheduler cannot be reached.
@@ -154,7 +157,8 @@ def sweep(
                 ItemFailure.from_exception(index, todo[index], label(todo[index]), exc)
             )
         else:
-            report.results[index] = result
+            if keep:
+                report.results[index] = result
             if on_result is not None:
                 on_result(index, todo[index], result)  # type: ignore[arg-type]
         bar.update(1)
@@ -258,7 +262,8 @@ def _run_processes(func: Callable[[T], R], todo: list[T], workers: int, done: _D
             }
         for future in as_completed(futures):
             exc = future.exception()
-            done(futures[future], None if exc else future.result(), exc)
+            # popped: a future holds its result, which ``done`` may have let go of
+            done(futures.pop(future), None if exc else future.result(), exc)
     except BaseException:
         # Workers stopped first: the pool's own thread then sees them gone, fails what is
         # pending and ends, and the shutdown waits for it and frees the pool's queues here.

@@ -250,11 +250,14 @@ def run_transient(
         ConfigError: a time step above TSNet's limit, or too few time steps.
         SimulationError: TSNet failed or produced non-finite heads.
     """
-    tm = _run_tsnet(wn, inp, settings, operate, where)
+    tm = _run_tsnet(wn, inp, settings, operate, where, meters)
     steps = np.asarray(tm.simulation_timestamps, dtype=np.float64)
-    heads = np.column_stack([np.asarray(tm.get_node(j).head, np.float64) for j in meters])
+    solved = getattr(tm, "burstloc_heads", None)  # burstloc's solvers: the meters come first
+    if solved is not None and solved[1][: len(meters)] == list(meters):
+        heads = solved[0][:, : len(meters)]  # a view: no copy of the largest array
+    else:
+        heads = np.column_stack([np.asarray(tm.get_node(j).head, np.float64) for j in meters])
     elevation = np.array([wn.get_node(j).elevation for j in meters], dtype=np.float64)
-    heads = heads - elevation
     if heads.shape[0] != steps.size:
         raise SimulationError(f"the transient simulation produced misshapen heads for {where}")
     broken = [j for j, ok in zip(meters, np.isfinite(heads).all(axis=0), strict=True) if not ok]
@@ -264,6 +267,7 @@ def run_transient(
             f"{len(broken)} junction(s) ({', '.join(broken[:5])}"
             f"{', ...' if len(broken) > 5 else ''}){_negative(tm)}"
         )
+    heads -= elevation  # (in the solver's matrix, once nothing reads its heads any more)
     return steps, heads, float(tm.time_step)
 
 
@@ -281,7 +285,12 @@ def _negative(tm: Any) -> str:
 
 
 def _run_tsnet(
-    wn: Any, inp: str, settings: TransientSettings, operate: Callable[[Any], None], where: str
+    wn: Any,
+    inp: str,
+    settings: TransientSettings,
+    operate: Callable[[Any], None],
+    where: str,
+    meters: Sequence[str] = (),
 ) -> Any:
     tsnet = _tsnet_compat.load()
     import wntr  # loaded with the network (burstloc.network), so known to be installed
@@ -315,15 +324,31 @@ def _run_tsnet(
         )
     try:
         operate(tm)
-        tm = tsnet.simulation.Initializer(tm, 0.0, settings.engine)
+        tm = _initialize(tsnet, tm, settings)
         hold_valves(tm)
-        if settings.solver == "vectorized":
-            return moc.solve(tm, settings.friction)
+        if settings.solver in ("vectorized", "numpy"):
+            kernel = "rust" if settings.solver == "vectorized" else "numpy"
+            return moc.solve(tm, settings.friction, kernel, first=meters)
         return tsnet.simulation.MOCSimulator(tm, results_obj="no", friction=settings.friction)
     except SimulationError as exc:
         raise SimulationError(f"{exc} ({where})") from exc
     except Exception as exc:
         raise SimulationError(f"TSNet failed for {where}: {type(exc).__name__}: {exc}") from exc
+
+
+def _initialize(tsnet: Any, tm: Any, settings: TransientSettings) -> Any:
+    """TSNet's ``Initializer``. For burstloc's own solvers it runs over a period of two steps:
+    it allocates six result series per pipe and two per node over the whole period, which only
+    TSNet's solver fills (about 1 GB on L-TOWN's 32 554 steps); burstloc's reads their first
+    value, and the period is restored before the transient runs."""
+    if settings.solver == "tsnet":
+        return tsnet.simulation.Initializer(tm, 0.0, settings.engine)
+    period = tm.simulation_period
+    tm.simulation_period = 2 * tm.time_step
+    try:
+        return tsnet.simulation.Initializer(tm, 0.0, settings.engine)
+    finally:
+        tm.simulation_period = period
 
 
 def _simulate_uncached(scenario: BurstScenario) -> ScenarioResult:
@@ -346,8 +371,13 @@ def simulate_many(
     workers: int | None = None,
     scheduler: str | None = None,
     progress: bool = True,
+    shrink: Callable[[BurstScenario, ScenarioResult], ScenarioResult] | None = None,
 ) -> SweepReport[BurstScenario, ScenarioResult]:
     """Simulate many scenarios: cached ones load here, the rest run in parallel.
+
+    ``shrink(scenario, result)``, if given, is applied here to each result as it is loaded or
+    arrives (after it is cached): the report holds what it returns, so a caller can consume
+    each result at once and keep a small part of it.
 
     Uncached scenarios run in local worker processes (``workers``, default the CPU count) or,
     with ``scheduler`` (a Dask scheduler address), on that cluster; each result is stored in
@@ -359,20 +389,20 @@ def simulate_many(
     store = resolve_cache(cache)
     todo = list(scenarios)
     keys = [_key_or_none(s) if store is not None else None for s in todo]
-    results: list[ScenarioResult | None] = [
-        from_cache(store, key, s) if store is not None and key is not None else None
-        for s, key in zip(todo, keys, strict=True)
-    ]
+    results: list[ScenarioResult | None] = []
+    for s, key in zip(todo, keys, strict=True):
+        cached = from_cache(store, key, s) if store is not None and key is not None else None
+        results.append(cached if cached is None or shrink is None else shrink(s, cached))
     missing = [i for i, result in enumerate(results) if result is None]
     if missing:
         _tsnet_compat.load()  # no simulator: one error here, not one failure per scenario
 
     def store_result(sub: int, scenario: BurstScenario, result: ScenarioResult) -> None:
         index = missing[sub]
-        results[index] = result
         key = keys[index]
         if store is not None and key is not None:
             store.put(key, result.to_arrays())
+        results[index] = result if shrink is None else shrink(scenario, result)
 
     report = sweep(
         _simulate_uncached,
@@ -383,6 +413,7 @@ def simulate_many(
         desc="simulating bursts",
         label=_label,
         on_result=store_result,
+        keep=False,  # held in ``results`` (shrunk)
     )
     failures = [replace(f, index=missing[f.index]) for f in report.failures]
     return SweepReport(todo, results, failures)
