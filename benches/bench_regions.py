@@ -31,7 +31,7 @@ NETWORKS = [
     REPO / "networks/paper15.inp",
     *(REPO / "networks/public" / f"{n}.inp" for n in ("Net1", "Anytown", "Net2", "Net3")),
 ]
-TRANSIENT_READY = {"Net3.inp": 30.0}
+TRANSIENT_READY = {"Net3.inp": 30.0, "L-TOWN.inp": 30.0}
 """Networks simulated on their transient-ready model (``--min-pipe-length``, m): Net3's 0.3 m
 pipes would set TSNet's step to 0.127 ms."""
 
@@ -43,9 +43,15 @@ def _main_length(network: Path) -> float:
     return float(sum(wn.get_link(p).length for p in wn.pipe_name_list))
 
 
-def _run(network: Path, meters_file: Path, out: Path, workers: int | None) -> dict:
-    """``burstloc evaluate`` as on the command line; its JSON's first run."""
+def _run(
+    network: Path, meters_file: Path, out: Path, workers: int | None, sample: int | None
+) -> dict:
+    """``burstloc evaluate`` as on the command line (every open pipe, or ``sample`` of them
+    drawn with a fixed seed); its JSON's first run."""
+    import random
+
     from burstloc.cli import main
+    from burstloc.network import closed_pipes, load_network, pipe_names
 
     args = [
         "evaluate", str(network), "--detector", "cusum", "--capture-interval", "0.2",
@@ -55,6 +61,11 @@ def _run(network: Path, meters_file: Path, out: Path, workers: int | None) -> di
         args += ["--workers", str(workers)]
     if network.name in TRANSIENT_READY:
         args += ["--min-pipe-length", f"{TRANSIENT_READY[network.name]:g}"]
+    if sample is not None:
+        wn = load_network(network)
+        closed = set(closed_pipes(wn))
+        pipes = [p for p in pipe_names(wn) if p not in closed]
+        args += ["--pipes", *sorted(random.Random(2027).sample(pipes, min(sample, len(pipes))))]
     status = main(args)
     if status != 0:
         raise SystemExit(f"evaluate failed on {network.name} ({status})")
@@ -106,6 +117,9 @@ def main() -> None:
     parser.add_argument("--fractions", type=float, nargs="+", default=[0.1, 0.3])
     parser.add_argument("--meters-file", type=Path, nargs="+", default=[])
     parser.add_argument("--workers", type=int)
+    parser.add_argument(
+        "--sample", type=int, help="burst this many pipes (seeded) instead of every pipe"
+    )
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         jobs: list[tuple[Path, Path]] = []
@@ -122,7 +136,7 @@ def main() -> None:
             meters = json.loads(meters_file.read_text())["meters"]
             junctions = len(load_network(network).junction_name_list)
             wall = time.perf_counter()
-            run = _run(network, meters_file, Path(tmp) / "out.json", args.workers)
+            run = _run(network, meters_file, Path(tmp) / "out.json", args.workers, args.sample)
             wall = time.perf_counter() - wall
             _report(network.name, len(meters), junctions, run, _main_length(network), wall)
 

@@ -17,8 +17,10 @@ middle of each segment is a candidate point, with a prior proportional to the se
   error: a Student-t error (:data:`TAIL_DOF` degrees of freedom) of scale ``sqrt((
   TIMING_INTERVALS dt)^2 + TIMING_FLOOR^2)``, mixed with a chance :data:`OUTLIER` that the
   meter's alarm says nothing of the first wave (a weak front heard late, on a later
-  reflection), uniform over the arrival horizon. ``t0`` is the best of the least-squares fit
-  and the window ends of the :data:`ANCHORS` earliest alarms;
+  reflection), uniform over the arrival horizon. A silence is weaker evidence: a meter the
+  wave has reached may stay silent (:data:`SILENT_MISS`), so its misfit costs at most
+  ``-log(SILENT_MISS)``. ``t0`` is the best of the least-squares fit and the window ends of the
+  :data:`ANCHORS` earliest alarms;
 * **the lasting drop**, once the readings have settled (:class:`DropFit`): the signature
   localizer's fit of each pipe (its best position), the same for every point of the pipe. With
   ``n`` meters and the burst size fitted, the residual has ``n - 1`` degrees of freedom and an
@@ -90,6 +92,11 @@ TAIL_DOF = 3.0
 
 OUTLIER = 0.05
 """Chance that a meter's alarm start says nothing of the burst's first wave."""
+
+SILENT_MISS = 0.2
+"""Chance that a meter the burst's wave has reached stays silent: a front near the detection
+threshold, weakened on its way (a silence is weaker evidence than an alarm: its misfit costs at
+most ``-log(SILENT_MISS)``)."""
 
 ANCHORS = 8
 """The burst time is also tried at the window ends of this many alarmed meters (the earliest):
@@ -324,15 +331,21 @@ def _arrival_penalty(
     scale = timing_scale(evidence.capture_interval)
     horizon = max(arrival.horizon, 10 * evidence.capture_interval)
     gap, _, _ = arrival.gaps(dist, evidence, grid.rows)
-    best = np.sum(np.where(says, timing_penalty(gap[:, 0, :], scale, horizon), 0.0), axis=1)
+    cap = np.full(says.shape[1], np.inf)
+    cap[count:] = -math.log(SILENT_MISS)
+
+    def total(miss: NDArray[np.float64]) -> NDArray[np.float64]:
+        pen = np.minimum(timing_penalty(miss, scale, horizon), cap)
+        return np.asarray(np.sum(np.where(says, pen, 0.0), axis=1), dtype=np.float64)
+
+    best = total(gap[:, 0, :])
     starts = [evidence.alarms[m].start for m in arrival.meters if m in evidence.alarms]
     for j in np.argsort(starts, kind="stable")[:ANCHORS].tolist():
         for t0 in (lo[:, j], hi[:, j]):
             t0 = np.where(np.isfinite(t0), t0, 0.0)[:, None]
             miss = np.maximum(lo_f - t0, 0.0) + np.maximum(t0 - hi_f, 0.0)
             miss = np.where(np.isfinite(miss), miss, 0.0)
-            pen = np.sum(np.where(says, timing_penalty(miss, scale, horizon), 0.0), axis=1)
-            best = np.minimum(best, np.where(says[:, j], pen, np.inf))
+            best = np.minimum(best, np.where(says[:, j], total(miss), np.inf))
     placed = says[:, :count].any(axis=1)
     return np.asarray(np.where(placed, best, np.inf), dtype=np.float64)
 
