@@ -48,12 +48,12 @@ from burstloc.localize.evidence import BurstEvidence, Localizer, Ranking, eviden
 from burstloc.localize.fused import FusedLocalizer, decisive, quantisation_margin
 from burstloc.localize.region import (
     REGION_CONFIDENCE,
-    DropFit,
     Posterior,
     SearchRegion,
-    posterior,
+    drop_fit,
+    region_posterior,
 )
-from burstloc.localize.signature import SignatureLocalizer, rank_drop
+from burstloc.localize.signature import SignatureLocalizer
 
 if TYPE_CHECKING:
     from burstloc.localize.classify import Classification
@@ -284,11 +284,11 @@ def rank_alarms(
             return Decision(chosen.rank(early), min(decided, last), first)
         # at the signature's own decision time; the position from the arrivals at their
         # horizon (by the signature's time every meter's wave has come)
-        drop = _signature_of(fused, early, signature_ranking)
+        drop = drop_fit(fused, early, signature_ranking)
         ranking = fused.rank(early, signature_ranking=None if drop is None else drop.ranking)
         arrived = arrivals(min(first + arrival_horizon(fused.arrival, calibration), last))
         at = _position(fused.arrival, arrived, ranking)
-        region = _posterior(fused.arrival, arrived, drop)
+        region = region_posterior(fused.arrival, arrived, drop)
         return Decision(ranking, min(decided, last), first, position=at, posterior=region)
     margin = quantisation_margin(len(arrival.meters)) if fused is None else fused.margin
     start = decided if resume is None else max(decided, resume)
@@ -300,30 +300,30 @@ def rank_alarms(
             first,
             position=_position(arrival, look.evidence, look.ranking),
             look_again=look.again,
-            posterior=_posterior(arrival, look.evidence, None),
+            posterior=region_posterior(arrival, look.evidence, None),
         )
     later = onset + calibration.decision_delay
     if look.decisive or look.again is not None or later <= look.time:
-        drop = _signature_of(fused, look.evidence, None)
+        drop = drop_fit(fused, look.evidence, None)
         ranking = fused.rank(
             look.evidence,
             arrival_ranking=look.ranking,
             signature_ranking=None if drop is None else drop.ranking,
         )
         at = _position(arrival, look.evidence, ranking)
-        region = _posterior(arrival, look.evidence, drop)
+        region = region_posterior(arrival, look.evidence, drop)
         return Decision(
             ranking, look.time, first, position=at, look_again=look.again, posterior=region
         )
     settled = evidence(later)
-    drop = _signature_of(fused, settled, signature_ranking)
+    drop = drop_fit(fused, settled, signature_ranking)
     ranking = fused.rank(
         settled,
         arrival_ranking=look.ranking,
         signature_ranking=None if drop is None else drop.ranking,
     )
     at = _position(arrival, look.evidence, ranking)
-    region = _posterior(arrival, look.evidence, drop)
+    region = region_posterior(arrival, look.evidence, drop)
     return Decision(ranking, min(later, last), first, waited=True, position=at, posterior=region)
 
 
@@ -384,34 +384,6 @@ def _look(
         if following > last + 1e-9:
             return _Look(ranking, seen, at, settled, following)
         at = following
-
-
-def _signature_of(
-    fused: FusedLocalizer, evidence: BurstEvidence, given: Ranking | None
-) -> DropFit | None:
-    """The lasting drop the fused localizer weighs at ``evidence``: ``given`` (the caller's
-    signature ranking of these readings), else the signature localizer's fit when the readings
-    have settled and signatures weigh at this capture interval, else ``None``."""
-    meters = len(fused.signature.signatures.meters)
-    if given is not None:
-        return DropFit(given, meters)
-    if fused.weights(evidence.capture_interval)[1] > 0 and fused.signature_ready(evidence):
-        drop = fused.signature.drop(evidence)
-        ranking = rank_drop(drop, fused.signature.signature_sets)
-        return DropFit(ranking, meters, float(np.sqrt(np.mean(drop**2))))
-    return None
-
-
-def _posterior(
-    arrival: ArrivalLocalizer, evidence: BurstEvidence, drop: DropFit | None
-) -> Posterior | None:
-    """The search posterior (:func:`burstloc.localize.region.posterior`) from the arrivals of
-    ``evidence`` and the lasting ``drop``, or ``None`` when they place the burst
-    nowhere (no alarmed meter of the model)."""
-    try:
-        return posterior(arrival, evidence, drop=drop)
-    except InputError:
-        return None
 
 
 def _position(

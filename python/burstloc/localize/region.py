@@ -48,7 +48,8 @@ from numpy.typing import NDArray
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.localize.arrival import ArrivalLocalizer
 from burstloc.localize.evidence import BurstEvidence, Ranking
-from burstloc.localize.fused import SIGNATURE_FLOOR
+from burstloc.localize.fused import SIGNATURE_FLOOR, FusedLocalizer
+from burstloc.localize.signature import rank_drop
 
 __all__ = [
     "DROP_MODEL_ERROR",
@@ -60,8 +61,10 @@ __all__ = [
     "RegionGrid",
     "SearchRegion",
     "Stretch",
+    "drop_fit",
     "grid_of",
     "posterior",
+    "region_posterior",
     "timing_penalty",
     "timing_scale",
 ]
@@ -377,3 +380,31 @@ def posterior(
         raise InputError("no candidate point explains the alarms")
     weight = np.exp(loglik - loglik.max())
     return Posterior(grid, weight / weight.sum())
+
+
+def drop_fit(
+    fused: FusedLocalizer, evidence: BurstEvidence, given: Ranking | None
+) -> DropFit | None:
+    """The lasting drop the fused localizer weighs at ``evidence``: ``given`` (the caller's
+    signature ranking of these readings), else the signature localizer's fit when the readings
+    have settled and signatures weigh at this capture interval, else ``None``."""
+    meters = len(fused.signature.signatures.meters)
+    if given is not None:
+        return DropFit(given, meters)
+    if fused.weights(evidence.capture_interval)[1] > 0 and fused.signature_ready(evidence):
+        drop = fused.signature.drop(evidence)
+        ranking = rank_drop(drop, fused.signature.signature_sets)
+        return DropFit(ranking, meters, float(np.sqrt(np.mean(drop**2))))
+    return None
+
+
+def region_posterior(
+    arrival: ArrivalLocalizer, evidence: BurstEvidence, drop: DropFit | None
+) -> Posterior | None:
+    """The search posterior (:func:`posterior`) from the arrivals of ``evidence`` and the
+    lasting ``drop``, or ``None`` when they place the burst nowhere (no alarmed meter of the
+    model)."""
+    try:
+        return posterior(arrival, evidence, drop=drop)
+    except InputError:
+        return None
