@@ -47,20 +47,22 @@ def _decision(x: float, heard: tuple[str, ...], at: float) -> Decision:
 def test_an_attempt_is_scored_at_each_confidence_and_for_its_first_short_region() -> None:
     truth = PipePoint("p12", "m1", 100.0)  # 700 m along the line
     near = PositionOutcome(error=40.0)
-    # the early record, heard by one meter: within 300 m of it either way (the others' silence);
-    # the answer, heard by every meter, is much shorter
+    # the early record, heard by one meter: the others' silence keeps it near that meter, but a
+    # silence is weak evidence (a reached meter may stay silent): over a kilometre; the answer,
+    # heard by every meter, is short
     early, answer = _decision(700.0, ("m1",), 1.2), _decision(700.0, METERS, 151.0)
     assert early.region is not None and answer.region is not None
-    assert early.region.length == pytest.approx(600.0)
-    assert answer.region.length < 300.0
+    assert early.region.length > 1000.0 > 300.0 > answer.region.length
+    assert early.region.contains("p12", "m1", 100.0, 600.0)
     attempt = Attempt("p12", 0.0, 1.0, decision=answer, early=(early,))
     outcome = score_region(attempt, truth, 600.0, near)
     assert outcome.covered == (True, True, True)
     assert outcome.lengths[0] <= outcome.lengths[1] <= outcome.lengths[2]
     assert outcome.lengths[2] == pytest.approx(answer.region.length)
-    assert outcome.searchable_after == outcome.first_after == pytest.approx(0.2)  # 600 m
+    assert outcome.first_after == pytest.approx(0.2)  # the early record's region
+    assert outcome.searchable_after == pytest.approx(150.0)  # the first of at most 1 km
     late = score_region(Attempt("p12", 0.0, 1.0, decision=answer), truth, 600.0, near)
-    assert late.searchable_after == pytest.approx(150.0)
+    assert late.searchable_after == late.first_after == pytest.approx(150.0)
     # a burst elsewhere is outside the short region; an attempt without an answer holds nothing
     missed = score_region(attempt, PipePoint("p23", "m2", 500.0), 600.0, PositionOutcome(900.0))
     assert missed.covered == (False, False, False)
@@ -72,7 +74,7 @@ def test_an_attempt_is_scored_at_each_confidence_and_for_its_first_short_region(
     assert scores.within == pytest.approx((1 / 3, 1 / 3))  # 40 m; 900 m; no position
     assert scores.searchable == pytest.approx(2 / 3)
     assert scores.median_time_to_searchable == pytest.approx(150.0)
-    assert scores.median_time_to_region == pytest.approx(150.0)  # late's; missed's early 0.2
+    assert scores.median_time_to_region == pytest.approx(150.0)  # late's 150, missed's 0.2, none
     assert scores.median_length[2] == pytest.approx(answer.region.length)
     cells = region_cells(scores)
     assert cells[1] == "33% / 33% / 33%" and cells[3] == "33% / 33%"
