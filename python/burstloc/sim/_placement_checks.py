@@ -1,0 +1,27 @@
+"""Checks shared by the placement methods (:mod:`burstloc.sim.placement`,
+:mod:`burstloc.sim.region_placement`): the meter count, the wave speed and the capture
+interval."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from burstloc.exceptions import ConfigError
+
+__all__ = ["check_meter_count", "check_timing"]
+
+
+def check_meter_count(count: Any, available: int) -> int:
+    """``count`` if it is an integer in ``[1, available]`` (ConfigError otherwise)."""
+    if isinstance(count, bool) or not isinstance(count, int) or not 1 <= count <= available:
+        raise ConfigError(f"the meter count must be between 1 and {available}, got {count!r}")
+    return count
+
+
+def check_timing(wave_speed: float, resolution: float) -> None:
+    """ConfigError unless the wave speed (m/s) and the resolution (s) are finite and > 0."""
+    if not (math.isfinite(wave_speed) and wave_speed > 0):
+        raise ConfigError(f"wave_speed must be > 0 m/s, got {wave_speed}")
+    if not (math.isfinite(resolution) and resolution > 0):
+        raise ConfigError(f"resolution must be > 0 s, got {resolution}")
