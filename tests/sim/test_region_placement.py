@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from burstloc.exceptions import ConfigError
+from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.localize.arrival import PipeGeometry
 from burstloc.network import load_network
 from burstloc.sim.placement import MeterSet, arrival_meters, place_meters
@@ -17,6 +17,7 @@ from burstloc.sim.region_placement import (
     BURST_SAMPLES,
     ambiguity_grid,
     ambiguous_length,
+    meter_ambiguity,
     region_meters,
 )
 
@@ -170,3 +171,7 @@ def test_region_placement_names_bad_input(paper15: Path) -> None:
         ambiguous_length(pipes, (), distances)
     with pytest.raises(ConfigError, match="meter count must be between 1 and 15"):
         place_meters(paper15, 16, method="region")
+    with pytest.raises(ConfigError, match="no meters"):
+        meter_ambiguity(paper15, [])
+    with pytest.raises(NetworkError):
+        meter_ambiguity(paper15, ["N4", "nowhere"])

@@ -1,15 +1,21 @@
 """Checks shared by the placement methods (:mod:`burstloc.sim.placement`,
 :mod:`burstloc.sim.region_placement`): the meter count, the wave speed and the capture
-interval."""
+interval; the geometry of a meter set on a network file."""
 
 from __future__ import annotations
 
 import math
+import os
+from collections.abc import Sequence
 from typing import Any
 
-from burstloc.exceptions import ConfigError
+import numpy as np
+from numpy.typing import NDArray
 
-__all__ = ["check_meter_count", "check_timing"]
+from burstloc.exceptions import ConfigError
+from burstloc.localize.arrival import PipeGeometry
+
+__all__ = ["check_meter_count", "check_timing", "meter_geometry"]
 
 
 def check_meter_count(count: Any, available: int) -> int:
@@ -25,3 +31,14 @@ def check_timing(wave_speed: float, resolution: float) -> None:
         raise ConfigError(f"wave_speed must be > 0 m/s, got {wave_speed}")
     if not (math.isfinite(resolution) and resolution > 0):
         raise ConfigError(f"resolution must be > 0 s, got {resolution}")
+
+
+def meter_geometry(
+    network: str | os.PathLike[str], meters: Sequence[str]
+) -> tuple[list[PipeGeometry], dict[str, NDArray[np.float64]]]:
+    """:func:`burstloc.sim.prepare.arrival_geometry` of ``meters`` (ConfigError for none)."""
+    from burstloc.sim.prepare import arrival_geometry
+
+    if not meters:
+        raise ConfigError("no meters to separate bursts with")
+    return arrival_geometry(network, list(meters))

@@ -68,7 +68,7 @@ from burstloc.constants import CANDIDATE_POSITIONS, WAVE_SPEED
 from burstloc.exceptions import ConfigError
 from burstloc.inp import network_hash
 from burstloc.localize.arrival import PipeGeometry
-from burstloc.sim._placement_checks import check_meter_count, check_timing
+from burstloc.sim._placement_checks import check_meter_count, check_timing, meter_geometry
 from burstloc.sim.region_placement import region_meters
 
 __all__ = [
@@ -476,9 +476,5 @@ def meter_separation(
         NetworkError: missing or malformed network, or a meter that is not a junction.
         ConfigError: no meter, a bad wave speed or resolution.
     """
-    from burstloc.sim.prepare import arrival_geometry
-
-    if not meters:
-        raise ConfigError("no meters to separate bursts with")
-    pipes, distances = arrival_geometry(network, list(meters))
+    pipes, distances = meter_geometry(network, meters)
     return arrival_separation(pipes, distances, wave_speed=wave_speed, resolution=resolution)

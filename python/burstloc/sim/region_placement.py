@@ -38,6 +38,7 @@ alike (1.7 million pairs x 781 candidates, in single precision).
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -48,7 +49,7 @@ from burstloc.constants import WAVE_SPEED
 from burstloc.exceptions import ConfigError
 from burstloc.localize.arrival import ArrivalLocalizer, PipeGeometry
 from burstloc.localize.region import GRID_STEP, RegionGrid
-from burstloc.sim._placement_checks import check_meter_count, check_timing
+from burstloc.sim._placement_checks import check_meter_count, check_timing, meter_geometry
 
 __all__ = [
     "BURST_SAMPLES",
@@ -58,6 +59,7 @@ __all__ = [
     "AmbiguityGrid",
     "ambiguity_grid",
     "ambiguous_length",
+    "meter_ambiguity",
     "region_meters",
 ]
 
@@ -260,10 +262,12 @@ def ambiguous_length(
     resolution: float = 0.2,
     step: float = REGION_STEP,
     samples: int = BURST_SAMPLES,
+    seed: int = SAMPLE_SEED,
 ) -> float:
     """The expected ambiguous main (m) of ``meters`` (module docstring): the objective the
-    ``region`` method minimises, on the same points and bursts. ``node_distances[n][j]`` is the
-    path length from pipe end node ``n`` to ``meters[j]``.
+    ``region`` method minimises, on the same points and bursts (``seed``: another sample of
+    them, on a network with more than ``samples`` points). ``node_distances[n][j]`` is the path
+    length from pipe end node ``n`` to ``meters[j]``.
 
     Raises:
         ConfigError: no meter, or a bad wave speed, resolution, step or sample count.
@@ -272,6 +276,25 @@ def ambiguous_length(
         raise ConfigError("no meters to separate bursts with")
     check_timing(wave_speed, resolution)
     grid = ambiguity_grid(
-        pipes, meters, node_distances, wave_speed=wave_speed, step=step, samples=samples
+        pipes, meters, node_distances, wave_speed=wave_speed, step=step, samples=samples, seed=seed
     )
     return _Pairs(grid, range(len(meters)), resolution).ambiguous()
+
+
+def meter_ambiguity(
+    network: str | os.PathLike[str],
+    meters: Sequence[str],
+    *,
+    wave_speed: float = WAVE_SPEED,
+    resolution: float = 0.2,
+) -> float:
+    """:func:`ambiguous_length` of ``meters`` on the INP file ``network`` (m).
+
+    Raises:
+        NetworkError: missing or malformed network, or a meter that is not a junction.
+        ConfigError: no meter, a bad wave speed or resolution.
+    """
+    pipes, distances = meter_geometry(network, meters)
+    return ambiguous_length(
+        pipes, tuple(meters), distances, wave_speed=wave_speed, resolution=resolution
+    )
