@@ -32,8 +32,9 @@ first meter, chosen before the objective meant anything, most often). The result
 worse than the greedy's.
 
 Cost: L-TOWN (782 junctions, 905 pipes, 43 km of main; 2 148 points, 1 000 sampled bursts),
-33 meters: about 12 s of CPU, most of it the second meter's step, when every pair is still
-alike (1.7 million pairs x 781 candidates, in single precision).
+33 meters: 12-15 s of CPU (``benches/bench_region_placement.py``), most of it the second
+meter's step, when every pair is still alike (1.7 million pairs x 781 candidates, in single
+precision).
 """
 
 from __future__ import annotations
