@@ -13,6 +13,7 @@ import pytest
 from burstloc.cli import main
 from burstloc.localize.config import Calibration
 from burstloc.sim.placement import meter_separation
+from burstloc.sim.region_placement import meter_ambiguity
 from conftest import write_tiny
 
 SCHEMA = json.loads((Path(__file__).parents[1] / "evaluate_schema.json").read_text())
@@ -30,6 +31,9 @@ def test_place_then_calibrate_and_evaluate_with_the_meter_file(
     told = re.search(r"arrival separation at 0.2 s: (\d+) % of the candidate burst points", out)
     assert told is not None
     assert int(told.group(1)) == round(100 * meter_separation(tiny, chosen, resolution=0.2))
+    ambiguous = re.search(r"expected ambiguous main at 0.2 s: (\d+) m", out)
+    assert ambiguous is not None
+    assert int(ambiguous.group(1)) == round(meter_ambiguity(tiny, chosen, resolution=0.2))
 
     config = tmp_path / "cal.json"
     argv = ["calibrate", str(tiny), "--out", str(config), "--capture-interval", "0.2"]
@@ -87,6 +91,10 @@ def test_a_meter_file_for_another_network_is_refused(
     assert "is for none of the study's networks" in capsys.readouterr().err
     assert main(["place", str(tiny), "--meters", "9"]) == 2
     assert "meter count must be between 1 and 4" in capsys.readouterr().err
+    assert main(["place", str(tiny), "--meters", "0", "--method", "region"]) == 2
+    assert "meter count must be between 1 and 4" in capsys.readouterr().err
+    assert main(["place", str(tiny), "--meters", "2", "--method", "region"]) == 0
+    assert "2 of 4 junctions (region)" in capsys.readouterr().out
 
 
 def test_place_compare_evaluates_every_method(
@@ -102,6 +110,8 @@ def test_place_compare_evaluates_every_method(
         ("| coverage", "fused"),
         ("| arrival", "arrival"),
         ("| arrival", "fused"),
+        ("| region", "arrival"),
+        ("| region", "fused"),
     ]
     for row in body:
         assert len(row[1].split()) == 3  # three meters

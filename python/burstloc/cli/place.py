@@ -22,9 +22,13 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         description="Choose K junctions for pressure meters from the network model alone (no "
         "burst is simulated). 'arrival' (default): greedy separation of the wave arrival-time "
         "patterns of bursts on different pipes, for the arrival and fused localizers; "
-        "'coverage': greedy separation of the steady-state burst signatures. Prints the meters "
-        "and their arrival separation: the share of candidate burst points whose arrival "
-        "pattern is at least one capture interval from every other pipe's. The meter file "
+        "'region': the shortest expected search region, the meters that leave the least main "
+        "whose arrival pattern is within a capture interval of the burst point's; "
+        "'coverage': greedy separation of the steady-state burst signatures. Prints the meters, "
+        "their arrival separation (the share of candidate burst points whose arrival pattern "
+        "is at least one capture interval from every other pipe's) and their expected "
+        "ambiguous main (the metres of main a search region cannot rule out from arrival "
+        "times, averaged over burst points: what 'region' minimises). The meter file "
         "(JSON, format burstloc-meters/1) is accepted by `evaluate`, `calibrate` and `study` "
         "with --meters-file.",
     )
@@ -38,11 +42,11 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         type=float,
         default=0.2,
         metavar="S",
-        help="arrival: the capture interval the meters will report at (default 0.2 s); arrival "
-        "times closer than that count as alike",
+        help="arrival, region: the capture interval the meters will report at (default 0.2 s); "
+        "arrival times closer than that count as alike",
     )
     parser.add_argument(
-        "--wave-speed", type=float, default=WAVE_SPEED, metavar="A", help="arrival: m/s"
+        "--wave-speed", type=float, default=WAVE_SPEED, metavar="A", help="arrival, region: m/s"
     )
     parser.add_argument("--out", default=None, metavar="FILE", help="write the meter file")
     parser.add_argument(
@@ -70,6 +74,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> int:
     """Handle ``burstloc place``: print the meters; write the file with ``--out``."""
     from burstloc.sim.placement import meter_separation, place_meters
+    from burstloc.sim.region_placement import meter_ambiguity
 
     if args.out:
         check_output(args.out)
@@ -92,6 +97,13 @@ def run(args: argparse.Namespace) -> int:
     print(
         f"arrival separation at {args.capture_interval:g} s: {100 * told:.0f} % of the candidate "
         "burst points are at least one capture interval from every point of every other pipe"
+    )
+    ambiguous = meter_ambiguity(
+        args.network, placed.meters, wave_speed=args.wave_speed, resolution=args.capture_interval
+    )
+    print(
+        f"expected ambiguous main at {args.capture_interval:g} s: {ambiguous:.0f} m (the main a "
+        "search region cannot rule out from arrival times, averaged over burst points)"
     )
     if args.out:
         print(f"wrote {placed.save(args.out)}")

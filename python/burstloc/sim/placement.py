@@ -1,7 +1,7 @@
 """Meter placement: which junctions should carry pressure meters, and the meter file.
 
-Two methods, both deterministic and computed from the network model alone (no burst is
-simulated), both greedy: starting from no meter, add one junction at a time.
+Three methods, all deterministic and computed from the network model alone (no burst is
+simulated), all greedy: starting from no meter, add one junction at a time.
 
 * ``coverage`` (:func:`coverage_meters`): separation of the steady-state burst signatures. Add
   the junction that most increases the smallest distance between any two pipes' unit-normalised
@@ -25,6 +25,11 @@ simulated), both greedy: starting from no meter, add one junction at a time.
   :data:`MAX_EXACT` of them): the exact greedy placement on every network with no more
   junctions than that, and wherever the bound settles it (L-TOWN, 33 meters: about 30 s).
 
+* ``region`` (:func:`burstloc.sim.region_placement.region_meters`): the shortest expected search
+  region. Add the junction that most reduces the expected length of main whose arrival pattern
+  is within a capture interval of the burst point's (the points a search region cannot rule out
+  from the arrivals); its own module.
+
 How far a set of meters can go on arrivals alone: :func:`arrival_separation` (and
 :func:`meter_separation` on a network file, printed by ``burstloc place``) is the share of the
 candidate burst points whose arrival pattern at the meters is at least one capture interval from
@@ -39,7 +44,7 @@ as the documented JSON meter file (:data:`METERS_FORMAT`, read by ``burstloc eva
       "format": "burstloc-meters/1",
       "network": "networks/paper15.inp",      # informative
       "network_hash": "sha256:...",           # the INP file's SHA-256: checked on use
-      "method": "arrival",                    # or "coverage", or "manual"
+      "method": "arrival",                    # or "coverage", "region", "manual"
       "meters": ["2", "7", "11", "14"],       # junction IDs, in the network's order
       "junctions": 15                         # junctions the network has
     }
@@ -49,7 +54,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -63,6 +68,8 @@ from burstloc.constants import CANDIDATE_POSITIONS, WAVE_SPEED
 from burstloc.exceptions import ConfigError
 from burstloc.inp import network_hash
 from burstloc.localize.arrival import PipeGeometry
+from burstloc.sim._placement_checks import check_meter_count, check_timing, meter_geometry
+from burstloc.sim.region_placement import region_meters
 
 __all__ = [
     "ARRIVAL_POINTS",
@@ -79,7 +86,7 @@ __all__ = [
 METERS_FORMAT = "burstloc-meters/1"
 """Format tag of a meter file."""
 
-PLACEMENT_METHODS: tuple[str, ...] = ("coverage", "arrival")
+PLACEMENT_METHODS: tuple[str, ...] = ("coverage", "arrival", "region")
 """The placement methods of :func:`place_meters`."""
 
 ARRIVAL_POINTS: tuple[float, ...] = (0.1, 0.5, 0.9)
@@ -92,12 +99,6 @@ exact greedy one (see :func:`arrival_meters`)."""
 
 #: Limit on the junctions of a meter file (the localization model's).
 MAX_METERS = 10_000
-
-
-def _check_count(count: Any, available: int) -> int:
-    if isinstance(count, bool) or not isinstance(count, int) or not 1 <= count <= available:
-        raise ConfigError(f"the meter count must be between 1 and {available}, got {count!r}")
-    return count
 
 
 def coverage_meters(signatures: Any, count: int) -> tuple[str, ...]:
@@ -115,7 +116,7 @@ def coverage_meters(signatures: Any, count: int) -> tuple[str, ...]:
         ConfigError: ``count`` out of range.
     """
     meters = list(signatures.meters)
-    _check_count(count, len(meters))
+    check_meter_count(count, len(meters))
     matrix = np.abs(np.asarray(signatures.matrix, dtype=np.float64))
     strength = matrix.sum(axis=0)
     chosen: list[int] = []
@@ -155,11 +156,8 @@ def arrival_meters(
     Raises:
         ConfigError: ``count`` out of range, or a bad wave speed or resolution.
     """
-    _check_count(count, len(junctions))
-    if not (math.isfinite(wave_speed) and wave_speed > 0):
-        raise ConfigError(f"wave_speed must be > 0 m/s, got {wave_speed}")
-    if not (math.isfinite(resolution) and resolution > 0):
-        raise ConfigError(f"resolution must be > 0 s, got {resolution}")
+    check_meter_count(count, len(junctions))
+    check_timing(wave_speed, resolution)
     travel = _travel(pipes, node_distances, ARRIVAL_POINTS, wave_speed)
     spread_of = travel.std(axis=0)
     chosen = [int(np.argmax(spread_of))]  # peripheral: one meter separates nothing alone
@@ -332,10 +330,7 @@ def arrival_separation(
     Raises:
         ConfigError: a bad wave speed or resolution, or no pipe.
     """
-    if not (math.isfinite(wave_speed) and wave_speed > 0):
-        raise ConfigError(f"wave_speed must be > 0 m/s, got {wave_speed}")
-    if not (math.isfinite(resolution) and resolution > 0):
-        raise ConfigError(f"resolution must be > 0 s, got {resolution}")
+    check_timing(wave_speed, resolution)
     if not pipes:
         raise ConfigError("no pipes to separate")
     from scipy.spatial import cKDTree
@@ -439,7 +434,8 @@ def place_meters(
     resolution: float = 0.2,
 ) -> MeterSet:
     """Place ``count`` meters on the junctions of the INP file ``network`` by ``method``
-    (module docstring); ``resolution`` (s) is the ``arrival`` method's capture interval.
+    (module docstring); ``resolution`` (s) is the ``arrival`` and ``region`` methods' capture
+    interval.
 
     Raises:
         NetworkError: missing or malformed network.
@@ -453,12 +449,15 @@ def place_meters(
         raise ConfigError(f"unknown placement method {method!r}; use one of {PLACEMENT_METHODS}")
     wn = load_network(network)
     junctions = list(wn.junction_name_list)
-    _check_count(count, len(junctions))
+    check_meter_count(count, len(junctions))
     if method == "coverage":
         meters = coverage_meters(cached_signatures(network, junctions), count)
     else:
         pipes, distances = arrival_geometry(wn, junctions)
-        meters = arrival_meters(
+        place: Callable[..., tuple[str, ...]] = arrival_meters
+        if method == "region":
+            place = region_meters
+        meters = place(
             pipes, junctions, distances, count, wave_speed=wave_speed, resolution=resolution
         )
     return MeterSet(os.fspath(network), network_hash(network), method, meters, len(junctions))
@@ -477,9 +476,5 @@ def meter_separation(
         NetworkError: missing or malformed network, or a meter that is not a junction.
         ConfigError: no meter, a bad wave speed or resolution.
     """
-    from burstloc.sim.prepare import arrival_geometry
-
-    if not meters:
-        raise ConfigError("no meters to separate bursts with")
-    pipes, distances = arrival_geometry(network, list(meters))
+    pipes, distances = meter_geometry(network, meters)
     return arrival_separation(pipes, distances, wave_speed=wave_speed, resolution=resolution)

@@ -1,0 +1,44 @@
+"""Checks shared by the placement methods (:mod:`burstloc.sim.placement`,
+:mod:`burstloc.sim.region_placement`): the meter count, the wave speed and the capture
+interval; the geometry of a meter set on a network file."""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from burstloc.exceptions import ConfigError
+from burstloc.localize.arrival import PipeGeometry
+
+__all__ = ["check_meter_count", "check_timing", "meter_geometry"]
+
+
+def check_meter_count(count: Any, available: int) -> int:
+    """``count`` if it is an integer in ``[1, available]`` (ConfigError otherwise)."""
+    if isinstance(count, bool) or not isinstance(count, int) or not 1 <= count <= available:
+        raise ConfigError(f"the meter count must be between 1 and {available}, got {count!r}")
+    return count
+
+
+def check_timing(wave_speed: float, resolution: float) -> None:
+    """ConfigError unless the wave speed (m/s) and the resolution (s) are finite and > 0."""
+    if not (math.isfinite(wave_speed) and wave_speed > 0):
+        raise ConfigError(f"wave_speed must be > 0 m/s, got {wave_speed}")
+    if not (math.isfinite(resolution) and resolution > 0):
+        raise ConfigError(f"resolution must be > 0 s, got {resolution}")
+
+
+def meter_geometry(
+    network: str | os.PathLike[str], meters: Sequence[str]
+) -> tuple[list[PipeGeometry], dict[str, NDArray[np.float64]]]:
+    """:func:`burstloc.sim.prepare.arrival_geometry` of ``meters`` (ConfigError for none)."""
+    from burstloc.sim.prepare import arrival_geometry
+
+    if not meters:
+        raise ConfigError("no meters to separate bursts with")
+    return arrival_geometry(network, list(meters))
