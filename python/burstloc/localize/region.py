@@ -26,8 +26,9 @@ middle of each segment is a candidate point, with a prior proportional to the se
   ``n`` meters and the burst size fitted, the residual has ``n - 1`` degrees of freedom and an
   unknown noise level: the profile likelihood is ``-(n - 1)/2 log(rss)``, with the hydraulic
   model's own error (:data:`DROP_MODEL_ERROR` of the drop, at least
-  :data:`~burstloc.localize.fused.SIGNATURE_FLOOR`) added to every residual. Two meters fit
-  many pipes' signatures; fifteen tell them apart.
+  :data:`~burstloc.localize.fused.SIGNATURE_FLOOR`) added to every residual. The model's error
+  is shared by the meters, so ``n - 1`` is at most :data:`DROP_DOF`: the drop narrows the
+  region, it does not decide it alone.
 
 The region is the highest-density set: segments in decreasing posterior probability per metre
 until they hold the stated probability (the shortest main that does). Adjacent segments of a
@@ -113,6 +114,10 @@ DROP_MODEL_ERROR = 0.1
 """Error of the lasting drop's hydraulic model (EPANET's steady state against the settled
 readings), as a fraction of the drop's RMS over the meters."""
 
+DROP_DOF = 2
+"""Most degrees of freedom the drop's residual counts: the model's error is shared by the
+meters (one burst size, one steady state), not independent at each of them."""
+
 
 @dataclass(frozen=True)
 class DropFit:
@@ -133,7 +138,7 @@ class DropFit:
         rss = {p.pipe: p.score * p.score + floor * floor for p in self.ranking}
         best = min(rss.values(), default=floor * floor)
         worst = max(rss.values(), default=floor * floor)
-        dof = max(self.meters - 1, 1)
+        dof = min(max(self.meters - 1, 1), DROP_DOF)
         values = np.array([rss.get(p, worst) for p in pipes], dtype=np.float64)
         return np.asarray(-0.5 * dof * np.log(values / best), dtype=np.float64)
 
