@@ -52,8 +52,10 @@ __all__ = [
     "ArrivalLocalizer",
     "PipeGeometry",
     "PipePosition",
+    "fit_windows",
     "position_tolerance",
     "silence_counts",
+    "window_misfit",
 ]
 
 DEFAULT_POSITIONS = CANDIDATE_POSITIONS
@@ -137,6 +139,51 @@ def silence_counts(
     weakest = np.where(at_alarms > 0, at_alarms, np.inf).min(axis=1, initial=np.inf)
     weakest = np.where(np.isfinite(weakest), weakest, 0.0)
     return np.asarray(rows[:, list(silent)] >= weakest[:, None], dtype=np.bool_)
+
+
+def window_misfit(
+    lo: NDArray[np.float64], hi: NDArray[np.float64], t0: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Each meter's distance (s) from the burst time ``t0`` (shape ``lo.shape[:-1] + (1,)``) to
+    its window ``[lo, hi]`` (:meth:`ArrivalLocalizer.windows`); 0 where the window says
+    nothing (``lo`` not finite)."""
+    says = np.isfinite(lo)
+    lo_f, hi_f = np.where(says, lo, -np.inf), np.where(says, hi, np.inf)
+    gap = np.maximum(lo_f - t0, 0.0) + np.maximum(t0 - hi_f, 0.0)
+    return np.asarray(np.where(np.isfinite(gap), gap, 0.0), dtype=np.float64)
+
+
+def fit_windows(
+    lo: NDArray[np.float64], hi: NDArray[np.float64], alarmed: int, capture_interval: float
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """The least-squares burst time of each point's windows (:meth:`ArrivalLocalizer.windows`,
+    the first ``alarmed`` of them alarms) and each meter's misfit to it: ``(gap, placed)``,
+    ``placed`` where some alarm's window is finite (the point explains an alarm). The misfit is
+    convex in ``t0``: bisection on its derivative."""
+    dt = capture_interval
+    says = np.isfinite(lo)
+    lo_f, hi_f = np.where(says, lo, -np.inf), np.where(says, hi, np.inf)
+    first = says[..., :alarmed]
+    left = np.where(first, lo[..., :alarmed], np.inf).min(axis=-1) - dt
+    right = (
+        np.maximum(
+            np.where(first, hi[..., :alarmed], -np.inf).max(axis=-1),
+            np.where(says, lo, -np.inf).max(axis=-1),
+        )
+        + dt
+    )
+    a, b = left.copy(), right.copy()
+    for _ in range(64):
+        mid = 0.5 * (a + b)
+        grad = np.sum(
+            np.maximum(mid[..., None] - hi_f, 0.0) - np.maximum(lo_f - mid[..., None], 0.0),
+            axis=-1,
+        )
+        up = grad > 0
+        b = np.where(up, mid, b)
+        a = np.where(up, a, mid)
+    t0 = 0.5 * (a + b)
+    return window_misfit(lo, hi, t0[..., None]), np.asarray(first.any(axis=-1), dtype=np.bool_)
 
 
 def _horizon(dist: NDArray[np.float64]) -> float:
@@ -306,33 +353,9 @@ class ArrivalLocalizer:
         Raises:
             InputError: no meter of the model has alarmed.
         """
-        dt = evidence.capture_interval
         lo, hi, finite, count = self.windows(dist, evidence, rows)
-        lo_f = np.where(finite, lo, -np.inf)
-        hi_f = np.where(finite, hi, np.inf)
-        first = np.isfinite(lo[:, :, :count])
-        left = np.where(first, lo[:, :, :count], np.inf).min(axis=2) - dt
-        right = (
-            np.maximum(
-                np.where(first, hi[:, :, :count], -np.inf).max(axis=2),
-                np.where(finite, lo, -np.inf).max(axis=2),
-            )
-            + dt
-        )
-        a, b = left.copy(), right.copy()
-        for _ in range(64):  # bisection on the (monotone) derivative of the convex misfit
-            mid = 0.5 * (a + b)
-            grad = np.sum(
-                np.maximum(mid[..., None] - hi_f, 0.0) - np.maximum(lo_f - mid[..., None], 0.0),
-                axis=2,
-            )
-            up = grad > 0
-            b = np.where(up, mid, b)
-            a = np.where(up, a, mid)
-        t0 = 0.5 * (a + b)
-        gap = np.maximum(lo_f - t0[..., None], 0.0) + np.maximum(t0[..., None] - hi_f, 0.0)
-        gap = np.where(np.isfinite(gap), gap, 0.0)
-        return gap, finite, first.any(axis=2)
+        gap, placed = fit_windows(lo, hi, count, evidence.capture_interval)
+        return gap, finite, placed
 
     def _rms(
         self,

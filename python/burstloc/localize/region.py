@@ -47,7 +47,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from burstloc.exceptions import ConfigError, InputError
-from burstloc.localize.arrival import ArrivalLocalizer
+from burstloc.localize.arrival import ArrivalLocalizer, fit_windows, window_misfit
 from burstloc.localize.evidence import BurstEvidence, Ranking
 from burstloc.localize.fused import SIGNATURE_FLOOR, FusedLocalizer
 from burstloc.localize.signature import rank_drop
@@ -288,29 +288,21 @@ class Posterior:
         pipes = self.grid.arrival.pipes
         for i in chosen.tolist():
             p = pipes[int(grid.pipe[i])]
+            low, high, mass = float(grid.low[i]), float(grid.high[i]), float(prob[i])
             last = stretches[-1] if stretches else None
-            if last is not None and last.pipe == p.pipe and abs(last.high - grid.low[i]) < 1e-9:
-                stretches[-1] = Stretch(
-                    p.pipe, p.start, last.low, float(grid.high[i]), last.probability + prob[i]
-                )
+            if last is not None and last.pipe == p.pipe and abs(last.high - low) < 1e-9:
+                stretches[-1] = Stretch(p.pipe, p.start, last.low, high, last.probability + mass)
             else:
-                stretches.append(
-                    Stretch(p.pipe, p.start, float(grid.low[i]), float(grid.high[i]), prob[i])
-                )
-        stretches = [
-            Stretch(s.pipe, s.start, s.low, s.high, float(s.probability)) for s in stretches
-        ]
+                stretches.append(Stretch(p.pipe, p.start, low, high, mass))
         stretches.sort(key=lambda s: -s.probability)
-        by_pipe: dict[str, float] = {}
-        for s in stretches:
-            by_pipe[s.pipe] = by_pipe.get(s.pipe, 0.0) + s.probability
         on_pipe = self.pipe_probabilities()
+        held_pipes = dict.fromkeys(s.pipe for s in stretches)  # most probable stretch first
         return SearchRegion(
             confidence=float(confidence),
             probability=float(prob[chosen].sum()),
             length=float(grid.length[chosen].sum()),
             stretches=tuple(stretches),
-            pipes=tuple(sorted(((p, on_pipe[p]) for p in by_pipe), key=lambda t: -t[1])),
+            pipes=tuple(sorted(((p, on_pipe[p]) for p in held_pipes), key=lambda t: -t[1])),
         )
 
 
@@ -331,14 +323,12 @@ def _arrival_penalty(
 ) -> NDArray[np.float64]:
     """Each grid point's timing penalty (module docstring), ``inf`` where it explains no
     alarm."""
-    dist = grid.dist[:, None, :]
-    lo, hi, _, count = arrival.windows(dist, evidence, grid.rows)
+    lo, hi, _, count = arrival.windows(grid.dist[:, None, :], evidence, grid.rows)
     lo, hi = lo[:, 0, :], hi[:, 0, :]
     says = np.isfinite(lo)
-    lo_f, hi_f = np.where(says, lo, -np.inf), np.where(says, hi, np.inf)
     scale = timing_scale(evidence.capture_interval)
     horizon = max(arrival.horizon, 10 * evidence.capture_interval)
-    gap, _, _ = arrival.gaps(dist, evidence, grid.rows)
+    gap, placed = fit_windows(lo, hi, count, evidence.capture_interval)
     cap = np.full(says.shape[1], np.inf)
     cap[count:] = -math.log(SILENT_MISS)
 
@@ -346,15 +336,12 @@ def _arrival_penalty(
         pen = np.minimum(timing_penalty(miss, scale, horizon), cap)
         return np.asarray(np.sum(np.where(says, pen, 0.0), axis=1), dtype=np.float64)
 
-    best = total(gap[:, 0, :])
+    best = total(gap)
     starts = [evidence.alarms[m].start for m in arrival.meters if m in evidence.alarms]
     for j in np.argsort(starts, kind="stable")[:ANCHORS].tolist():
         for t0 in (lo[:, j], hi[:, j]):
-            t0 = np.where(np.isfinite(t0), t0, 0.0)[:, None]
-            miss = np.maximum(lo_f - t0, 0.0) + np.maximum(t0 - hi_f, 0.0)
-            miss = np.where(np.isfinite(miss), miss, 0.0)
+            miss = window_misfit(lo, hi, np.where(np.isfinite(t0), t0, 0.0)[:, None])
             best = np.minimum(best, np.where(says[:, j], total(miss), np.inf))
-    placed = says[:, :count].any(axis=1)
     return np.asarray(np.where(placed, best, np.inf), dtype=np.float64)
 
 
