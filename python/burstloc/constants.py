@@ -20,6 +20,7 @@ __all__ = [
     "CANDIDATE_POSITIONS",
     "CAPTURE_INTERVALS",
     "DETECTORS",
+    "LINEAR_SIGNATURES_ABOVE",
     "LOCALIZERS",
     "MAX_SAMPLE",
     "METER_MODELS",
@@ -72,6 +73,13 @@ that the arrival and signature localizers try; a pipe keeps its best-fitting pos
 
 SIGNATURE_DECISION_DELAY = 150.0
 """Seconds after a burst's onset at which the signature localizer reads the lasting drop."""
+
+LINEAR_SIGNATURES_ABOVE = 3000
+"""Pipes above which the burst signatures come by default from one factorization of the
+linearized steady state (:mod:`burstloc.sim.linear_signatures`) rather than one EPANET steady
+state per pipe: below it the exact ones take seconds to a minute per position (L-TOWN, 905
+pipes: about 4 s); above it they grow with the square of the network (BWSN2, 14 822 pipes: about
+9 minutes per position, nine positions)."""
 
 VACUUM_HEAD = -10.33
 """The pressure head (m of water, gauge) of absolute vacuum at sea level: 101.325 kPa / (rho g).

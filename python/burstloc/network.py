@@ -160,12 +160,14 @@ class SteadyState:
     """A network's steady state at t = 0: ``heads`` per node (m), ``flows`` per link (m³/s,
     sign: INP orientation), ``closed``: the links EPANET reports closed (a closed status, a
     control at the start, a check valve held shut, a pipe at a full or empty tank), ``demands``
-    per junction (m³/s delivered; pressure-driven: what the pressure allows)."""
+    per junction (m³/s delivered; pressure-driven: what the pressure allows), ``active``: the
+    valves EPANET reports active (controlling their pressure or flow)."""
 
     heads: dict[str, float]
     flows: dict[str, float]
     closed: frozenset[str] = frozenset()
     demands: dict[str, float] = field(default_factory=dict)
+    active: frozenset[str] = frozenset()
 
 
 def steady_state(wn: WaterNetworkModel, engine: str = "PDD") -> SteadyState:
@@ -212,6 +214,7 @@ def steady_state(wn: WaterNetworkModel, engine: str = "PDD") -> SteadyState:
         flows={name: float(flows[name]) for name in wn.link_name_list},
         closed=frozenset(name for name in wn.link_name_list if status[name] == 0),
         demands={name: float(demands[name]) for name in wn.junction_name_list},
+        active=frozenset(name for name in wn.link_name_list if status[name] == 2),
     )
 
 

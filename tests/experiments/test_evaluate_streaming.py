@@ -61,3 +61,23 @@ def test_streaming_gives_the_same_evaluation(
         timing = ("cache", "simulation_seconds")  # how each run went, not what it produced
         same = {k: v for k, v in held.results[pipe].metadata.items() if k not in timing}
         assert {k: v for k, v in result.metadata.items() if k not in timing} == same
+
+
+def test_a_dask_cluster_gives_the_same_evaluation_as_local_processes(
+    tiny: Path, tiny_config: Any, dask_scheduler: str
+) -> None:
+    # each burst simulated on the cluster's workers, scored here as it arrives
+    kwargs: dict[str, Any] = {
+        "pipes": ["B", "C", "A"],
+        "phases": 2,
+        "scenario": SHORT,
+        "config": tiny_config,
+        "cache": False,
+        "progress": False,
+        "keep_heads": False,
+    }
+    local = evaluate(tiny, RUNS, workers=2, **kwargs)
+    cluster = evaluate(tiny, RUNS, scheduler=dask_scheduler, **kwargs)
+    assert cluster.to_json() == local.to_json()
+    assert [r.total for r in cluster.runs] == [3, 3, 3]
+    assert sorted(cluster.results) == ["A", "B", "C"]

@@ -7,7 +7,7 @@ from typing import Any
 
 from burstloc._atomic import check_output
 from burstloc.cli._options import add_meters_file_option, meters_of
-from burstloc.constants import CAPTURE_INTERVALS
+from burstloc.constants import CAPTURE_INTERVALS, LINEAR_SIGNATURES_ABOVE
 
 __all__ = ["add_parser", "run"]
 
@@ -58,6 +58,15 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     meters.add_argument("--meters", nargs="+", default=None, help="metered junctions (default all)")
     add_meters_file_option(meters)  # type: ignore[arg-type]
     parser.add_argument("--name", default=None, help="the configuration's name")
+    parser.add_argument(
+        "--signatures",
+        choices=("auto", "epanet", "linear"),
+        default="auto",
+        help="how the burst signatures are computed: 'epanet' one EPANET steady state per pipe "
+        "(exact for the reference burst), 'linear' one factorization of the linearized steady "
+        "state (seconds on any network; a large burst's shape approximated), 'auto' (default) "
+        f"linear above {LINEAR_SIGNATURES_ABOVE} pipes",
+    )
     parser.set_defaults(handler=run)
     return parser
 
@@ -74,6 +83,7 @@ def run(args: argparse.Namespace) -> int:
         false_alarm_rate=args.false_alarm_rate,
         meters=args.meters if args.meters_file is None else meters_of(args, args.network),
         name=args.name,
+        signatures=args.signatures,
     )
     print(f"wrote {config.save(args.out)}")
     return 0

@@ -55,7 +55,7 @@ import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -71,6 +71,9 @@ from burstloc.localize.config import (
     Calibration,
     IntervalCalibration,
 )
+
+if TYPE_CHECKING:
+    from burstloc.sim.signatures import SignatureMethod
 
 __all__ = [
     "Baseline",
@@ -285,16 +288,21 @@ def calibrate(
     wave_speed: float = WAVE_SPEED,
     seed: int = 0,
     max_samples: int = _MAX_SAMPLES,
+    signatures: SignatureMethod = "auto",
 ) -> Calibration:
     """Calibrate every capture interval for ``network`` (see the module docstring).
 
     The noise comes from ``baseline`` (recorded burst-free readings, checked by
     :func:`check_baseline`; their meters are the meters) or from ``noise_sigma`` (default
     :data:`DEFAULT_NOISE_SIGMA`); ``meters`` default to every junction. The localization model
-    (:func:`burstloc.sim.prepare.prepare_model`, signatures cached on disk) is computed here.
+    (:func:`burstloc.sim.prepare.prepare_model`, signatures cached on disk) is computed here,
+    its burst signatures by ``signatures`` (:data:`burstloc.sim.signatures.SignatureMethod`).
     """
     from burstloc.network import junction_names, load_network
     from burstloc.sim.prepare import length_graph, prepare_model, travel_time_spread
+    from burstloc.sim.signatures import signature_method
+
+    signature_method(signatures, 0)  # an unknown method is refused before any work
 
     if not (math.isfinite(false_alarm_rate) and false_alarm_rate > 0):
         raise ConfigError(f"false_alarm_rate must be > 0 per hour, got {false_alarm_rate}")
@@ -372,13 +380,16 @@ def calibrate(
         noise_sigma={m: float(s) for m, s in zip(meter_list, sigmas, strict=True)},
         false_alarm_rate=float(false_alarm_rate),
         intervals=tuple(items),
-        model=prepare_model(network, meter_list, wave_speed=wave_speed, wn=wn),
+        model=prepare_model(
+            network, meter_list, wave_speed=wave_speed, wn=wn, signatures=signatures
+        ),
         provenance={
             "baseline": kind,
             "seed": seed,
             "wave_speed": wave_speed,
             "travel_spread_s": spread,
             "resolution_m": RESOLUTION,
+            "signatures": signature_method(signatures, wn.num_pipes),
             **extra,
         },
     )

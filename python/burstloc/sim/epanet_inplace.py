@@ -32,7 +32,7 @@ from numpy.typing import NDArray
 
 from burstloc.exceptions import ConfigError, NetworkError, SimulationError
 
-__all__ = ["InPlaceSplitter"]
+__all__ = ["InPlaceSplitter", "split_elevation"]
 
 # EPANET 2.2 toolkit codes (epanet2_enums.h)
 _EN_ELEVATION, _EN_EMITTER, _EN_HEAD = 0, 3, 10
@@ -241,12 +241,7 @@ class InPlaceSplitter:
         lib, ph = self._lib, self._ph
         li = self._link_index(pipe)
         start, end = link.start_node, link.end_node
-        if start.node_type == "Reservoir":
-            elevation = end.elevation
-        elif end.node_type == "Reservoir":
-            elevation = start.elevation
-        else:
-            elevation = start.elevation + (end.elevation - start.elevation) * fraction
+        elevation = split_elevation(link, fraction)
         length = self._link_value(li, _EN_LENGTH)
         props = [self._link_value(li, p) for p in (_EN_DIAMETER, _EN_ROUGHNESS, _EN_MINORLOSS)]
         status = self._link_value(li, _EN_INITSTATUS)
@@ -280,3 +275,15 @@ class InPlaceSplitter:
                 lib.EN_setlinktype(ph, ctypes.byref(ctypes.c_int(spare)), _EN_PIPE, 0)
             lib.EN_setlinkvalue(ph, spare, _EN_INITSTATUS, c(0.0))
             lib.EN_setnodevalue(ph, burst, _EN_EMITTER, c(0.0))
+
+
+def split_elevation(link: Any, fraction: float) -> float:
+    """The elevation (m) of the junction splitting the pipe ``link`` (a WNTR pipe) at
+    ``fraction`` of its length from its INP start node: interpolated between its ends, a
+    reservoir end taking the other end's elevation (a reservoir's is its head)."""
+    start, end = link.start_node, link.end_node
+    if start.node_type == "Reservoir":
+        return float(end.elevation)
+    if end.node_type == "Reservoir":
+        return float(start.elevation)
+    return float(start.elevation + (end.elevation - start.elevation) * fraction)

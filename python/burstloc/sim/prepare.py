@@ -28,7 +28,7 @@ from burstloc.localize.arrival import ArrivalLocalizer, PipeGeometry
 from burstloc.localize.decide import RankingLocalizers
 from burstloc.localize.model import LocalizationModel
 from burstloc.network import flow_direction_graph, load_network
-from burstloc.sim.signatures import cached_signature_sets
+from burstloc.sim.signatures import SignatureMethod, cached_signature_sets
 
 if TYPE_CHECKING:
     from wntr.network import WaterNetworkModel
@@ -226,10 +226,12 @@ def prepare_model(
     positions: Sequence[float] = CANDIDATE_POSITIONS,
     cache_dir: str | os.PathLike[str] | None = None,
     wn: WaterNetworkModel | None = None,
+    signatures: SignatureMethod = "auto",
 ) -> LocalizationModel:
     """The :class:`~burstloc.localize.model.LocalizationModel` of ``meters`` (default: every
     junction) on the INP file ``network`` (module docstring). ``wn``: the file's WNTR model, if
-    the caller has it loaded already; ``cache_dir``: where the signatures are cached.
+    the caller has it loaded already; ``cache_dir``: where the signatures are cached;
+    ``signatures``: how they are computed (:data:`burstloc.sim.signatures.SignatureMethod`).
 
     Raises:
         NetworkError: missing or malformed network, or a meter that is not a junction.
@@ -243,7 +245,7 @@ def prepare_model(
         pipes=tuple(pipes),
         node_distances=node_distances,
         signature_sets=cached_signature_sets(
-            network, meter_list, positions=positions, cache_dir=cache_dir
+            network, meter_list, positions=positions, cache_dir=cache_dir, method=signatures
         ),
         wave_speed=wave_speed,
         fronts=wave_fronts(model, meter_list, pipes),

@@ -19,25 +19,30 @@ import math
 import os
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
+from numpy.typing import NDArray
 
 from burstloc._diagnostics import capture_diagnostics
-from burstloc.constants import CANDIDATE_POSITIONS
+from burstloc.constants import CANDIDATE_POSITIONS, LINEAR_SIGNATURES_ABOVE
 from burstloc.exceptions import ConfigError, InputError
-from burstloc.inp import check_meters, network_hash
+from burstloc.inp import check_meters, network_hash, pipe_names_in_file
 from burstloc.localize.signature import SIGNATURE_FORMAT, SignatureSet
-from burstloc.network import load_network, steady_state
+from burstloc.network import SteadyState, load_network, steady_state
 from burstloc.sim.cache import cache_key, default_cache_dir, drop_corrupt
 from burstloc.sim.epanet_inplace import InPlaceSplitter
 
 __all__ = [
     "DEFAULT_BURST_COEFF",
+    "SIGNATURE_METHODS",
     "DemandModel",
+    "SignatureMethod",
     "cached_signature_sets",
     "cached_signatures",
     "compute_signatures",
+    "linear_signature_sets",
+    "signature_method",
 ]
 
 DEFAULT_BURST_COEFF = 0.01
@@ -50,6 +55,14 @@ DemandModel = Literal["pdd", "emitter"]
 """How consumer demands respond to the burst's pressure drop in the steady-state runs: WNTR's
 pressure-driven demand (``"pdd"``, TSNet's initialiser) or TSNet's transient demand law
 ``q = c * sqrt(p)`` (``"emitter"``, each demand becomes an emitter fitted at the base state)."""
+
+SignatureMethod = Literal["auto", "epanet", "linear"]
+"""How the signatures are computed: ``"epanet"`` one EPANET steady state per pipe (exact, for the
+reference burst), ``"linear"`` one factorization of the linearized steady state
+(:mod:`burstloc.sim.linear_signatures`: exact for a small burst, the shape of a large one
+approximated; seconds on any network), ``"auto"`` by size (:func:`signature_method`)."""
+
+SIGNATURE_METHODS = ("auto", "epanet", "linear")
 
 
 def compute_signatures(
@@ -74,12 +87,96 @@ def compute_signatures(
         NetworkError: missing or malformed network, or a meter that is not a junction.
         InputError: no meter.
     """
+    _check_params(burst_coeff, [position], demand_model)
+    wn, state, meter_list = _base_state(network, meters, demand_model)
+    pipes = list(wn.pipe_name_list)
+    matrix = np.empty((len(pipes), len(meter_list)), dtype=np.float64)
+    with capture_diagnostics(), InPlaceSplitter(wn) as splitter:
+        intact = splitter.heads(meter_list)
+        for i, pipe in enumerate(pipes):
+            matrix[i] = intact - splitter.split_heads(pipe, position, burst_coeff, meter_list)
+    return _signature_set(
+        network, wn, state, meter_list, matrix, burst_coeff, position, demand_model
+    )
+
+
+def linear_signature_sets(
+    network: str | os.PathLike[str],
+    meters: Sequence[str] | None = None,
+    *,
+    positions: Sequence[float] = CANDIDATE_POSITIONS,
+    burst_coeff: float = DEFAULT_BURST_COEFF,
+    demand_model: DemandModel = "pdd",
+) -> tuple[SignatureSet, ...]:
+    """:func:`compute_signatures`' sets at every position of ``positions`` from one
+    factorization of the linearized steady state (:mod:`burstloc.sim.linear_signatures`): one
+    EPANET run and one sparse solve per meter, however many pipes. ``params`` record
+    ``"method": "linear"``.
+
+    Raises:
+        ConfigError: a bad ``burst_coeff``, position or ``demand_model``, or no position.
+        NetworkError: missing or malformed network, a meter that is not a junction, or a
+            singular linearized steady state.
+        InputError: no meter.
+    """
+    from burstloc.sim.linear_signatures import burst_signatures, linear_response
+
+    _check_params(burst_coeff, positions, demand_model)
+    wn, state, meter_list = _base_state(network, meters, demand_model)
+    pipes = list(wn.pipe_name_list)
+    with capture_diagnostics():  # e.g. SciPy's fit of a pump curve, kept off the terminal
+        response = linear_response(wn, state, meter_list)
+        matrices = [
+            burst_signatures(wn, state, response, pipes, float(x), burst_coeff) for x in positions
+        ]
+    return tuple(
+        _signature_set(
+            network,
+            wn,
+            state,
+            meter_list,
+            matrix,
+            burst_coeff,
+            float(x),
+            demand_model,
+            method="linear",
+        )
+        for x, matrix in zip(positions, matrices, strict=True)
+    )
+
+
+def signature_method(method: SignatureMethod, pipes: int) -> Literal["epanet", "linear"]:
+    """The method ``method`` stands for on a network of ``pipes`` pipes: ``"auto"`` is
+    ``"linear"`` above :data:`LINEAR_SIGNATURES_ABOVE` pipes, ``"epanet"`` up to it.
+
+    Raises:
+        ConfigError: an unknown method.
+    """
+    if method == "auto":
+        return "linear" if pipes > LINEAR_SIGNATURES_ABOVE else "epanet"
+    if method not in ("epanet", "linear"):
+        raise ConfigError(f"unknown signature method {method!r}; use one of {SIGNATURE_METHODS}")
+    return method
+
+
+def _check_params(burst_coeff: float, positions: Sequence[float], demand_model: str) -> None:
+    """ConfigError for a bad burst coefficient, position or demand model."""
     if not (math.isfinite(burst_coeff) and burst_coeff > 0):
         raise ConfigError(f"burst_coeff must be > 0, got {burst_coeff}")
-    if not 0.0 < position < 1.0:
-        raise ConfigError(f"position must be strictly between 0 and 1, got {position}")
+    if not positions:
+        raise ConfigError("at least one signature position is needed")
+    for position in positions:
+        if not 0.0 < position < 1.0:
+            raise ConfigError(f"position must be strictly between 0 and 1, got {position}")
     if demand_model not in ("pdd", "emitter"):
         raise ConfigError(f"unknown demand model {demand_model!r}; use 'pdd' or 'emitter'")
+
+
+def _base_state(
+    network: str | os.PathLike[str], meters: Sequence[str] | None, demand_model: str
+) -> tuple[Any, SteadyState, list[str]]:
+    """The network's WNTR model (demands turned into emitters for ``"emitter"``), its steady
+    state, and the checked meters (default: every junction)."""
     wn = load_network(network)
     junctions = list(wn.junction_name_list)
     meter_list = check_meters(junctions if meters is None else meters, junctions, network)
@@ -95,26 +192,42 @@ def compute_signatures(
                 node.emitter_coefficient = q0 / math.sqrt(pressure)
             for ts in node.demand_timeseries_list:
                 ts.base_value = 0.0
-    state = steady_state(wn)
-    pipes = list(wn.pipe_name_list)
+    return wn, steady_state(wn), list(meter_list)
+
+
+def _signature_set(
+    network: str | os.PathLike[str],
+    wn: Any,
+    state: SteadyState,
+    meters: list[str],
+    matrix: NDArray[np.float64],
+    burst_coeff: float,
+    position: float,
+    demand_model: str,
+    method: str | None = None,
+) -> SignatureSet:
+    """A :class:`SignatureSet` of ``matrix`` (pipes x meters), pipe ends in the steady flow
+    direction (a pipe with negative flow reversed)."""
     endpoints: dict[str, tuple[str, str]] = {}
-    for pipe in pipes:
+    for pipe in wn.pipe_name_list:
         link = wn.get_link(pipe)
         a, b = link.start_node_name, link.end_node_name
         endpoints[pipe] = (b, a) if state.flows[pipe] < 0 else (a, b)
-    matrix = np.empty((len(pipes), len(meter_list)), dtype=np.float64)
-    with capture_diagnostics(), InPlaceSplitter(wn) as splitter:
-        intact = splitter.heads(meter_list)
-        for i, pipe in enumerate(pipes):
-            matrix[i] = intact - splitter.split_heads(pipe, position, burst_coeff, meter_list)
+    params: dict[str, Any] = {
+        "burst_coeff": burst_coeff,
+        "position": position,
+        "demand_model": demand_model,
+    }
+    if method is not None:
+        params["method"] = method
     return SignatureSet(
         network_hash=network_hash(network),
-        meters=tuple(meter_list),
-        pipes=tuple(pipes),
+        meters=tuple(meters),
+        pipes=tuple(wn.pipe_name_list),
         endpoints=endpoints,
         matrix=matrix,
-        baseline=np.array([state.heads[m] for m in meter_list]),
-        params={"burst_coeff": burst_coeff, "position": position, "demand_model": demand_model},
+        baseline=np.array([state.heads[m] for m in meters]),
+        params=params,
     )
 
 
@@ -163,14 +276,25 @@ def cached_signature_sets(
     cache_dir: str | os.PathLike[str] | None = None,
     burst_coeff: float = DEFAULT_BURST_COEFF,
     demand_model: DemandModel = "pdd",
+    method: SignatureMethod = "auto",
 ) -> tuple[SignatureSet, ...]:
-    """:func:`cached_signatures` at every position of ``positions`` (one set each, same order).
+    """The signature sets at every position of ``positions`` (one set each, same order) by
+    ``method`` (:func:`signature_method`): :func:`cached_signatures` for ``"epanet"``,
+    :func:`linear_signature_sets` (seconds, not cached) for ``"linear"``.
 
     Raises:
-        ConfigError: no position, or a position outside (0, 1).
+        ConfigError: no position, a position outside (0, 1), an unknown method.
     """
     if not positions:
         raise ConfigError("at least one signature position is needed")
+    if signature_method(method, len(pipe_names_in_file(network))) == "linear":
+        return linear_signature_sets(
+            network,
+            meters,
+            positions=positions,
+            burst_coeff=burst_coeff,
+            demand_model=demand_model,
+        )
     return tuple(
         cached_signatures(
             network,
