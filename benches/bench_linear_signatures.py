@@ -1,25 +1,26 @@
-"""Burst signatures from one factorization of the linearized steady state against the exact ones
-(one EPANET steady state per pipe): time, memory and agreement, measured in one run.
+"""Burst signatures from one factorization of the linearized steady state (``linear``), and
+anchored on an exact mid-pipe drop (``hybrid``), against the exact ones (one EPANET steady state
+per pipe and position): time and agreement, measured in one run.
 
 Usage: ``.venv/bin/python benches/bench_linear_signatures.py [NETWORK.inp ...] [--sample N]
 [--meters M] [--seed S]``. Default networks: paper15, Net1, Net2, Anytown, Net3 and, from the
 pinned epyt wheel that ``make networks`` keeps in ``networks/public/`` (extracted into a temporary
-directory, not into the repository), L-TOWN and BWSN_Network_2. Per network, in fresh child
-processes (wall time, CPU time, peak resident memory):
+directory, not into the repository), L-TOWN and BWSN_Network_2. Per network, each stage in a fresh
+child process (wall time, CPU time, peak resident memory):
 
-* ``exact``: :func:`burstloc.sim.signatures.compute_signatures` at mid-pipe (one of the nine
-  positions ``calibrate`` computes); on networks above ``--sample`` pipes only ``--sample`` pipes
-  drawn with ``--seed`` (an in-place EPANET split each) and the time *extrapolated* to every pipe
-  (stated as such);
-* ``linear``: :func:`burstloc.sim.signatures.linear_signature_sets`, all nine positions, every
-  pipe.
+* ``exact``: EPANET steady states of the network split at 10 %, 50 % and 90 % of every pipe (in
+  one project edited in place, as :func:`burstloc.sim.signatures.compute_signatures`); on
+  networks above ``--sample`` pipes only ``--sample`` pipes drawn with ``--seed``. The cost of
+  the nine positions ``calibrate`` computes is *extrapolated* from the CPU per EPANET run (stated
+  as such), plus loading the network once;
+* ``linear``: :func:`burstloc.sim.signatures.linear_signature_sets`, nine positions, every pipe;
+* ``hybrid``: its cost is one exact run per pipe (at the ``exact`` stage's CPU per run) plus the
+  ``linear`` stage; its signatures are :func:`burstloc.sim.linear_signatures.anchored` of those.
 
-Agreement at mid-pipe, over the exact set's pipes: the cosine between each pipe's exact and linear
-signature (the signature localizer fits a free scale, so the shape is what counts), and how often
-the exact signature (the reference burst's own drop at the meters, no noise) is named right by a
-free-scale fit against the linear signatures of every pipe, beside the same fit against the exact
-signatures (the baseline: pipes alike at the meters are confused either way). Meters: ``--meters``
-junctions drawn with ``--seed`` (L-TOWN: BattLeDIM's 33 pressure sensors).
+Agreement: at 10 %, 50 % and 90 % along the (sampled) pipes heard at the meters, the cosine between
+each pipe's exact signature and the linear or hybrid one (the signature localizer fits a free
+scale, so the shape is what counts; the hybrid is exact at mid-pipe by construction). Meters:
+``--meters`` junctions drawn with ``--seed`` (L-TOWN: BattLeDIM's 33 pressure sensors).
 """
 
 from __future__ import annotations
@@ -41,30 +42,39 @@ MEMBERS = {
 }
 
 
+POSITIONS = (0.1, 0.5, 0.9)
+
+
 def stage_exact(network: str, meters: list[str], pipes: list[str]) -> Any:
-    """Mid-pipe exact signatures of ``pipes`` at ``meters`` (every pipe when all are given)."""
+    """Exact signatures of ``pipes`` at ``meters`` at each of :data:`POSITIONS`, and the CPU
+    time of the EPANET runs alone (loading the network is paid once, not per pipe)."""
+    import time
+
     from burstloc._diagnostics import capture_diagnostics
     from burstloc.network import load_network
     from burstloc.sim.epanet_inplace import InPlaceSplitter
     from burstloc.sim.signatures import DEFAULT_BURST_COEFF
 
     wn = load_network(network)
-    matrix = np.empty((len(pipes), len(meters)))
+    out = np.empty((len(POSITIONS), len(pipes), len(meters)))
     with capture_diagnostics(), InPlaceSplitter(wn) as splitter:
         intact = splitter.heads(meters)
-        for i, pipe in enumerate(pipes):
-            matrix[i] = intact - splitter.split_heads(pipe, 0.5, DEFAULT_BURST_COEFF, meters)
-    return matrix
+        start = time.process_time()
+        for k, x in enumerate(POSITIONS):
+            for i, pipe in enumerate(pipes):
+                out[k, i] = intact - splitter.split_heads(pipe, x, DEFAULT_BURST_COEFF, meters)
+        runs = time.process_time() - start
+    return runs, out
 
 
 def stage_linear(network: str, meters: list[str]) -> Any:
-    """The nine linear sets; the mid-pipe matrix and the pipe order."""
+    """The nine linear sets; those at :data:`POSITIONS` and the pipe order."""
     from burstloc.constants import CANDIDATE_POSITIONS
     from burstloc.sim.signatures import linear_signature_sets
 
     sets = linear_signature_sets(network, meters)
-    middle = sets[list(CANDIDATE_POSITIONS).index(0.5)]
-    return np.asarray(middle.matrix), list(middle.pipes)
+    at = [sets[list(CANDIDATE_POSITIONS).index(x)] for x in POSITIONS]
+    return np.array([s.matrix for s in at]), list(at[0].pipes)
 
 
 def unit(matrix: np.ndarray) -> np.ndarray:
@@ -72,11 +82,8 @@ def unit(matrix: np.ndarray) -> np.ndarray:
     return matrix / np.where(norm > 0, norm, 1.0)
 
 
-def named_right(observed: np.ndarray, truth: np.ndarray, candidates: np.ndarray) -> float:
-    """Share of rows of ``observed`` whose best free-scale fit (largest cosine; a scale >= 0)
-    among ``candidates`` is row ``truth``."""
-    scores = unit(observed) @ unit(candidates).T
-    return float(np.mean(np.argmax(scores, axis=1) == truth))
+def cosine(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.sum(unit(a) * unit(b), axis=1)
 
 
 def extract(member: str, directory: Path) -> Path | None:
@@ -93,6 +100,7 @@ def extract(member: str, directory: Path) -> Path | None:
 
 def bench(network: Path, sample: int, count: int, seed: int) -> None:
     from burstloc.inp import junction_names_in_file, pipe_names_in_file
+    from burstloc.sim.linear_signatures import anchored
 
     junctions = junction_names_in_file(network)
     all_pipes = pipe_names_in_file(network)
@@ -105,35 +113,30 @@ def bench(network: Path, sample: int, count: int, seed: int) -> None:
     pipes = sorted(rng.sample(all_pipes, sample), key=all_pipes.index) if sampled else all_pipes
     sizes = f"{len(junctions)} junctions, {len(all_pipes)} pipes, {len(meters)} meters"
     print(f"{network.stem}: {sizes}")
-    ex_wall, ex_cpu, ex_peak, exact = measure(stage_exact, str(network), meters, pipes)
-    li_wall, li_cpu, li_peak, (linear, order) = measure(stage_linear, str(network), meters)
-    scale = len(all_pipes) / len(pipes)
-    note = f" (extrapolated from {len(pipes)} pipes)" if sampled else ""
+    _, ex_cpu, _, (runs, exact) = measure(stage_exact, str(network), meters, pipes)
+    _, li_cpu, li_peak, (linear, order) = measure(stage_linear, str(network), meters)
+    per_run = runs / (len(POSITIONS) * len(pipes))
+    setup = ex_cpu - runs
+    exact_cpu = setup + per_run * 9 * len(all_pipes)
+    hybrid_cpu = li_cpu + per_run * len(all_pipes)
+    note = f" (extrapolated: {per_run * 1e3:.1f} ms per run from {len(pipes)} pipes x 3 positions)"
+    print(f"  exact, nine positions  cpu {exact_cpu:8.1f} s{note}")
+    print(f"  hybrid, nine positions cpu {hybrid_cpu:8.1f} s  (linear + one exact run per pipe)")
+    print(f"  linear, nine positions cpu {li_cpu:8.1f} s  peak {li_peak:.0f} MB")
     print(
-        f"  exact, mid-pipe only   wall {ex_wall * scale:8.1f} s  cpu {ex_cpu * scale:8.1f} s  "
-        f"peak {ex_peak:6.0f} MB{note}"
+        f"  CPU exact / hybrid {exact_cpu / hybrid_cpu:6.1f} x   exact / linear "
+        f"{exact_cpu / li_cpu:8.1f} x"
     )
-    print(
-        f"  linear, nine positions wall {li_wall:8.1f} s  cpu {li_cpu:8.1f} s  "
-        f"peak {li_peak:6.0f} MB"
-    )
-    print(f"  exact one position / linear nine positions, CPU: {ex_cpu * scale / li_cpu:8.0f} x")
     rows = np.array([order.index(p) for p in pipes])
-    mine = linear[rows]
-    heard = (np.linalg.norm(exact, axis=1) > 1e-9) & (np.linalg.norm(mine, axis=1) > 1e-9)
-    cosine = np.sum(unit(exact) * unit(mine), axis=1)[heard]
-    print(
-        f"  cosine exact/linear over {heard.sum()} heard pipes: median {np.median(cosine):.4f}  "
-        f"p5 {np.percentile(cosine, 5):.4f}  min {cosine.min():.4f}"
-    )
-    with_linear = named_right(exact[heard], rows[heard], linear)
-    if sampled:
-        print(f"  burst drop named right (noise-free): against linear {with_linear:.1%}")
-    else:
-        with_exact = named_right(exact[heard], np.flatnonzero(heard), exact)
+    mine = linear[:, rows]
+    heard = (np.linalg.norm(exact[1], axis=1) > 1e-6) & (np.linalg.norm(mine[1], axis=1) > 1e-6)
+    print(f"  cosine to exact over {heard.sum()} heard pipes (p5 / median):")
+    for k, x in enumerate(POSITIONS):
+        hybrid = anchored(exact[1], mine[1], mine[k])
+        lin, hyb = cosine(exact[k], mine[k])[heard], cosine(exact[k], hybrid)[heard]
         print(
-            f"  burst drop named right (noise-free): against exact {with_exact:.1%}, "
-            f"against linear {with_linear:.1%}"
+            f"    at {x:.0%} of the pipe: linear {np.percentile(lin, 5):.4f} / "
+            f"{np.median(lin):.5f}   hybrid {np.percentile(hyb, 5):.4f} / {np.median(hyb):.5f}"
         )
 
 

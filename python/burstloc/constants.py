@@ -20,7 +20,8 @@ __all__ = [
     "CANDIDATE_POSITIONS",
     "CAPTURE_INTERVALS",
     "DETECTORS",
-    "LINEAR_SIGNATURES_ABOVE",
+    "EXACT_SIGNATURES_UP_TO",
+    "HYBRID_SIGNATURES_UP_TO",
     "LOCALIZERS",
     "MAX_SAMPLE",
     "METER_MODELS",
@@ -74,12 +75,17 @@ that the arrival and signature localizers try; a pipe keeps its best-fitting pos
 SIGNATURE_DECISION_DELAY = 150.0
 """Seconds after a burst's onset at which the signature localizer reads the lasting drop."""
 
-LINEAR_SIGNATURES_ABOVE = 3000
-"""Pipes above which the burst signatures come by default from one factorization of the
-linearized steady state (:mod:`burstloc.sim.linear_signatures`) rather than one EPANET steady
-state per pipe: below it the exact ones take seconds to a minute per position (L-TOWN, 905
-pipes: about 4 s); above it they grow with the square of the network (BWSN2, 14 822 pipes: about
-9 minutes per position, nine positions)."""
+EXACT_SIGNATURES_UP_TO = 3000
+"""Pipes up to which ``calibrate`` computes the burst signatures exactly by default (one EPANET
+steady state per pipe and position): seconds to a minute per position (L-TOWN, 905 pipes: about
+4 s). Above it the cost grows with the square of the network (BWSN2, 14 822 pipes: about 8 CPU
+minutes per position, nine positions) and the default is the hybrid method (one exact mid-pipe
+drop per pipe, the positions along it from the linearized steady state:
+:func:`burstloc.sim.signatures.linear_signature_sets`)."""
+
+HYBRID_SIGNATURES_UP_TO = 20000
+"""Pipes up to which the default is the hybrid method; above it the linearized steady state alone
+(seconds on any network; a large burst's shape approximated)."""
 
 VACUUM_HEAD = -10.33
 """The pressure head (m of water, gauge) of absolute vacuum at sea level: 101.325 kPa / (rho g).

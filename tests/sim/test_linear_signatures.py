@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from burstloc.constants import LINEAR_SIGNATURES_ABOVE
+from burstloc.constants import EXACT_SIGNATURES_UP_TO, HYBRID_SIGNATURES_UP_TO
 from burstloc.exceptions import ConfigError
 from burstloc.sim.signatures import (
     cached_signature_sets,
@@ -19,6 +19,7 @@ from burstloc.sim.signatures import (
 
 REPO = Path(__file__).resolve().parents[2]
 PAPER15 = REPO / "networks" / "paper15.inp"
+NET3 = REPO / "networks" / "public" / "Net3.inp"
 
 #: R1 -> pump -> J1 = (B, B2 side by side) => J2 -> {valve} -> J3 -> J4 -> J5 -> J2 (a loop),
 #: a tank on J4 and a dead end J6 with an emitter.
@@ -132,14 +133,37 @@ def test_linear_signatures_keep_the_shape_of_the_reference_burst() -> None:
     # the reference burst drops paper15's heads by metres: no longer linear, the shape close
     exact = cached_signature_sets(PAPER15, positions=[0.5], method="epanet")[0]
     [linear] = linear_signature_sets(PAPER15, positions=[0.5])
-    unit = lambda m: m / np.linalg.norm(m, axis=1, keepdims=True)  # noqa: E731
-    cosine = np.sum(unit(exact.matrix) * unit(linear.matrix), axis=1)
+    cosine = _cosine(exact.matrix, linear.matrix)
     assert np.median(cosine) > 0.99 and cosine.min() > 0.95
 
 
+def test_hybrid_signatures_are_exact_at_mid_pipe_and_near_it_along_the_pipe() -> None:
+    positions = [0.1, 0.5, 0.9]
+    exact = cached_signature_sets(NET3, positions=positions, method="epanet")
+    linear = linear_signature_sets(NET3, positions=positions)
+    hybrid = linear_signature_sets(NET3, positions=positions, method="hybrid")
+    assert all(s.params["method"] == "hybrid" for s in hybrid)
+    assert np.array_equal(hybrid[1].matrix, exact[1].matrix)  # the same EPANET runs
+    heard = (np.linalg.norm(exact[1].matrix, axis=1) > 1e-3) & (
+        np.linalg.norm(linear[1].matrix, axis=1) > 1e-3
+    )
+    assert heard.sum() > 100
+    for k in (0, 2):  # 10 % from either end
+        near = _cosine(exact[k].matrix[heard], hybrid[k].matrix[heard])
+        far = _cosine(exact[k].matrix[heard], linear[k].matrix[heard])
+        assert np.percentile(near, 5) > 0.99 and np.median(near) > 0.999
+        assert np.percentile(near, 5) > np.percentile(far, 5) + 0.01
+
+
+def _cosine(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.sum(a * b, axis=1) / (np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1))
+
+
 def test_the_method_is_chosen_by_size_and_checked() -> None:
-    assert signature_method("auto", LINEAR_SIGNATURES_ABOVE) == "epanet"
-    assert signature_method("auto", LINEAR_SIGNATURES_ABOVE + 1) == "linear"
+    assert signature_method("auto", EXACT_SIGNATURES_UP_TO) == "epanet"
+    assert signature_method("auto", EXACT_SIGNATURES_UP_TO + 1) == "hybrid"
+    assert signature_method("auto", HYBRID_SIGNATURES_UP_TO) == "hybrid"
+    assert signature_method("auto", HYBRID_SIGNATURES_UP_TO + 1) == "linear"
     assert signature_method("epanet", 10**6) == "epanet"
     assert signature_method("linear", 1) == "linear"
     with pytest.raises(ConfigError, match="unknown signature method 'fast'"):

@@ -7,7 +7,11 @@ from typing import Any
 
 from burstloc._atomic import check_output
 from burstloc.cli._options import add_meters_file_option, meters_of
-from burstloc.constants import CAPTURE_INTERVALS, LINEAR_SIGNATURES_ABOVE
+from burstloc.constants import (
+    CAPTURE_INTERVALS,
+    EXACT_SIGNATURES_UP_TO,
+    HYBRID_SIGNATURES_UP_TO,
+)
 
 __all__ = ["add_parser", "run"]
 
@@ -60,12 +64,14 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument("--name", default=None, help="the configuration's name")
     parser.add_argument(
         "--signatures",
-        choices=("auto", "epanet", "linear"),
+        choices=("auto", "epanet", "hybrid", "linear"),
         default="auto",
         help="how the burst signatures are computed: 'epanet' one EPANET steady state per pipe "
-        "(exact for the reference burst), 'linear' one factorization of the linearized steady "
-        "state (seconds on any network; a large burst's shape approximated), 'auto' (default) "
-        f"linear above {LINEAR_SIGNATURES_ABOVE} pipes",
+        "and position (exact for the reference burst), 'hybrid' one per pipe at mid-pipe and the "
+        "other positions from the linearized steady state, 'linear' one factorization of the "
+        "linearized steady state (seconds on any network; a large burst's shape approximated); "
+        f"'auto' (default): epanet up to {EXACT_SIGNATURES_UP_TO} pipes, hybrid up to "
+        f"{HYBRID_SIGNATURES_UP_TO}, linear above",
     )
     parser.set_defaults(handler=run)
     return parser

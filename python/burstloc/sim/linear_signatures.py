@@ -21,8 +21,9 @@ pipe ``a -> b`` (from its INP start node, as the exact signatures split it) with
 a point inside the pipe, which for the rest of the network is ``(1 - f) q`` at ``a`` and ``f q``
 at ``b`` (eliminating the split junction from the linear equations), so its signature at ``m`` is
 ``q ((1 - f) Z[m, a] + f Z[m, b])`` with ``q = C sqrt(p)`` (``C``: the reference burst's emitter
-coefficient, ``p``: the steady pressure interpolated at the point; a closed pipe: 0). Every pipe
-at every position costs a few multiplications.
+coefficient, ``p``: the steady pressure interpolated at the point). A closed pipe has no
+signature; a check valve held shut draws the whole burst from its start node (the part of the
+pipe after the burst stays shut). Every pipe at every position costs a few multiplications.
 
 The signature localizer fits a free scale per pipe, so what matters is each signature's shape;
 it is exact for a vanishing burst and the reference burst is moderate.
@@ -42,7 +43,7 @@ from numpy.typing import NDArray
 from burstloc.exceptions import NetworkError
 from burstloc.network import SteadyState
 
-__all__ = ["LinearResponse", "burst_signatures", "linear_response"]
+__all__ = ["LinearResponse", "anchored", "burst_signatures", "linear_response"]
 
 GRAVITY = 9.81
 """m/s²."""
@@ -168,9 +169,29 @@ def burst_signatures(
     elevation = np.array([split_elevation(wn.get_link(p), f) for p in pipes])
     exponent = float(wn.options.hydraulic.emitter_exponent)
     flow = burst_coeff * np.maximum(point_head - elevation, 0.0) ** exponent
-    flow[[p in state.closed for p in pipes]] = 0.0  # a burst inside a closed pipe is cut off
-    shape = (1 - f) * response.drop[:, starts] + f * response.drop[:, ends]
+    share = np.full(len(pipes), f)  # the part of the burst drawn through the pipe's end
+    for i, p in enumerate(pipes):
+        if p in state.closed:
+            link = wn.get_link(p)
+            if link.check_valve:  # held shut: the burst opens the part from its start
+                share[i] = 0.0
+            else:  # a burst inside a closed pipe is cut off
+                flow[i] = 0.0
+    shape = (1 - share) * response.drop[:, starts] + share * response.drop[:, ends]
     return np.asarray((shape * flow[None, :]).T, dtype=np.float64)
+
+
+def anchored(
+    exact_middle: NDArray[np.float64],
+    linear_middle: NDArray[np.float64],
+    linear: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """The hybrid signatures at a position (pipes x meters): the exact mid-pipe drop plus the
+    linearized change from mid-pipe to the position (``linear - linear_middle``), scaled per
+    pipe by the ratio of the exact to the linearized mid-pipe drop."""
+    size = np.linalg.norm(linear_middle, axis=1, keepdims=True)
+    scale = np.linalg.norm(exact_middle, axis=1, keepdims=True) / np.where(size > 0, size, 1.0)
+    return np.asarray(exact_middle + scale * (linear - linear_middle), dtype=np.float64)
 
 
 def _demand_gradient(wn: Any, node: Any, head: float, engine: str) -> float:

@@ -7,7 +7,9 @@ meters caused by a reference burst (an emitter) at ``x``: what the signature loc
 initialises from) for the base state and one per pipe, in one EPANET project edited in place
 (:mod:`burstloc.sim.epanet_inplace`);
 :func:`cached_signatures` / :func:`cached_signature_sets` keep the result on disk (one
-``.npz`` file per position in burstloc's cache directory).
+``.npz`` file per position in burstloc's cache directory). On large networks
+:func:`linear_signature_sets` takes them from one factorization of the linearized steady state
+(:mod:`burstloc.sim.linear_signatures`), alone or anchored on an exact mid-pipe drop per pipe.
 
 Only ``burstloc calibrate`` and the experiments call this: the stored configuration carries the
 signatures (:class:`burstloc.localize.model.LocalizationModel`), so the live path never runs it.
@@ -25,7 +27,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from burstloc._diagnostics import capture_diagnostics
-from burstloc.constants import CANDIDATE_POSITIONS, LINEAR_SIGNATURES_ABOVE
+from burstloc.constants import (
+    CANDIDATE_POSITIONS,
+    EXACT_SIGNATURES_UP_TO,
+    HYBRID_SIGNATURES_UP_TO,
+)
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.inp import check_meters, network_hash, pipe_names_in_file
 from burstloc.localize.signature import SIGNATURE_FORMAT, SignatureSet
@@ -56,13 +62,15 @@ DemandModel = Literal["pdd", "emitter"]
 pressure-driven demand (``"pdd"``, TSNet's initialiser) or TSNet's transient demand law
 ``q = c * sqrt(p)`` (``"emitter"``, each demand becomes an emitter fitted at the base state)."""
 
-SignatureMethod = Literal["auto", "epanet", "linear"]
-"""How the signatures are computed: ``"epanet"`` one EPANET steady state per pipe (exact, for the
-reference burst), ``"linear"`` one factorization of the linearized steady state
+SignatureMethod = Literal["auto", "epanet", "hybrid", "linear"]
+"""How the signatures are computed: ``"epanet"`` one EPANET steady state per pipe and position
+(exact, for the reference burst), ``"linear"`` one factorization of the linearized steady state
 (:mod:`burstloc.sim.linear_signatures`: exact for a small burst, the shape of a large one
-approximated; seconds on any network), ``"auto"`` by size (:func:`signature_method`)."""
+approximated; seconds on any network), ``"hybrid"`` the exact mid-pipe drop and the linearized
+change along the pipe (:func:`linear_signature_sets`), ``"auto"`` by size
+(:func:`signature_method`)."""
 
-SIGNATURE_METHODS = ("auto", "epanet", "linear")
+SIGNATURE_METHODS = ("auto", "epanet", "hybrid", "linear")
 
 
 def compute_signatures(
@@ -89,12 +97,7 @@ def compute_signatures(
     """
     _check_params(burst_coeff, [position], demand_model)
     wn, state, meter_list = _base_state(network, meters, demand_model)
-    pipes = list(wn.pipe_name_list)
-    matrix = np.empty((len(pipes), len(meter_list)), dtype=np.float64)
-    with capture_diagnostics(), InPlaceSplitter(wn) as splitter:
-        intact = splitter.heads(meter_list)
-        for i, pipe in enumerate(pipes):
-            matrix[i] = intact - splitter.split_heads(pipe, position, burst_coeff, meter_list)
+    matrix = _split_matrix(wn, meter_list, position, burst_coeff)
     return _signature_set(
         network, wn, state, meter_list, matrix, burst_coeff, position, demand_model
     )
@@ -107,21 +110,29 @@ def linear_signature_sets(
     positions: Sequence[float] = CANDIDATE_POSITIONS,
     burst_coeff: float = DEFAULT_BURST_COEFF,
     demand_model: DemandModel = "pdd",
+    method: Literal["linear", "hybrid"] = "linear",
 ) -> tuple[SignatureSet, ...]:
     """:func:`compute_signatures`' sets at every position of ``positions`` from one
-    factorization of the linearized steady state (:mod:`burstloc.sim.linear_signatures`): one
-    EPANET run and one sparse solve per meter, however many pipes. ``params`` record
-    ``"method": "linear"``.
+    factorization of the linearized steady state (:mod:`burstloc.sim.linear_signatures`).
+
+    ``"linear"``: one EPANET run and one sparse solve per meter, however many pipes.
+    ``"hybrid"``: also one EPANET steady state per pipe at mid-pipe (:func:`compute_signatures`
+    at 0.5: the reference burst's own drop, its non-linear part included); at another position
+    ``x`` that drop plus the linearized change from mid-pipe to ``x``, scaled by the ratio of the
+    exact to the linearized mid-pipe drop (a ninth of the exact method's EPANET runs).
+    ``params`` record the method.
 
     Raises:
-        ConfigError: a bad ``burst_coeff``, position or ``demand_model``, or no position.
+        ConfigError: a bad ``burst_coeff``, position, ``demand_model`` or method, or no position.
         NetworkError: missing or malformed network, a meter that is not a junction, or a
             singular linearized steady state.
         InputError: no meter.
     """
-    from burstloc.sim.linear_signatures import burst_signatures, linear_response
+    from burstloc.sim.linear_signatures import anchored, burst_signatures, linear_response
 
     _check_params(burst_coeff, positions, demand_model)
+    if method not in ("linear", "hybrid"):
+        raise ConfigError(f"unknown linearized signature method {method!r}")
     wn, state, meter_list = _base_state(network, meters, demand_model)
     pipes = list(wn.pipe_name_list)
     with capture_diagnostics():  # e.g. SciPy's fit of a pump curve, kept off the terminal
@@ -129,6 +140,10 @@ def linear_signature_sets(
         matrices = [
             burst_signatures(wn, state, response, pipes, float(x), burst_coeff) for x in positions
         ]
+        if method == "hybrid":
+            exact = _split_matrix(wn, meter_list, 0.5, burst_coeff)
+            middle = burst_signatures(wn, state, response, pipes, 0.5, burst_coeff)
+            matrices = [anchored(exact, middle, m) for m in matrices]
     return tuple(
         _signature_set(
             network,
@@ -139,24 +154,41 @@ def linear_signature_sets(
             burst_coeff,
             float(x),
             demand_model,
-            method="linear",
+            method=method,
         )
         for x, matrix in zip(positions, matrices, strict=True)
     )
 
 
-def signature_method(method: SignatureMethod, pipes: int) -> Literal["epanet", "linear"]:
+def signature_method(method: SignatureMethod, pipes: int) -> Literal["epanet", "hybrid", "linear"]:
     """The method ``method`` stands for on a network of ``pipes`` pipes: ``"auto"`` is
-    ``"linear"`` above :data:`LINEAR_SIGNATURES_ABOVE` pipes, ``"epanet"`` up to it.
+    ``"epanet"`` up to :data:`~burstloc.constants.EXACT_SIGNATURES_UP_TO` pipes, ``"hybrid"``
+    up to :data:`~burstloc.constants.HYBRID_SIGNATURES_UP_TO`, ``"linear"`` above.
 
     Raises:
         ConfigError: an unknown method.
     """
     if method == "auto":
-        return "linear" if pipes > LINEAR_SIGNATURES_ABOVE else "epanet"
-    if method not in ("epanet", "linear"):
+        if pipes <= EXACT_SIGNATURES_UP_TO:
+            return "epanet"
+        return "hybrid" if pipes <= HYBRID_SIGNATURES_UP_TO else "linear"
+    if method not in ("epanet", "hybrid", "linear"):
         raise ConfigError(f"unknown signature method {method!r}; use one of {SIGNATURE_METHODS}")
     return method
+
+
+def _split_matrix(
+    wn: Any, meters: list[str], position: float, burst_coeff: float
+) -> NDArray[np.float64]:
+    """The (pipes x meters) head drops of the reference burst at ``position`` along every pipe,
+    one EPANET steady state each in one project edited in place."""
+    pipes = list(wn.pipe_name_list)
+    matrix = np.empty((len(pipes), len(meters)), dtype=np.float64)
+    with capture_diagnostics(), InPlaceSplitter(wn) as splitter:
+        intact = splitter.heads(meters)
+        for i, pipe in enumerate(pipes):
+            matrix[i] = intact - splitter.split_heads(pipe, position, burst_coeff, meters)
+    return matrix
 
 
 def _check_params(burst_coeff: float, positions: Sequence[float], demand_model: str) -> None:
@@ -280,20 +312,22 @@ def cached_signature_sets(
 ) -> tuple[SignatureSet, ...]:
     """The signature sets at every position of ``positions`` (one set each, same order) by
     ``method`` (:func:`signature_method`): :func:`cached_signatures` for ``"epanet"``,
-    :func:`linear_signature_sets` (seconds, not cached) for ``"linear"``.
+    :func:`linear_signature_sets` (not cached) for ``"hybrid"`` and ``"linear"``.
 
     Raises:
         ConfigError: no position, a position outside (0, 1), an unknown method.
     """
     if not positions:
         raise ConfigError("at least one signature position is needed")
-    if signature_method(method, len(pipe_names_in_file(network))) == "linear":
+    chosen = signature_method(method, len(pipe_names_in_file(network)))
+    if chosen != "epanet":
         return linear_signature_sets(
             network,
             meters,
             positions=positions,
             burst_coeff=burst_coeff,
             demand_model=demand_model,
+            method=chosen,
         )
     return tuple(
         cached_signatures(
