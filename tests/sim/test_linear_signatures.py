@@ -183,3 +183,18 @@ def test_calibrate_records_the_linear_signatures() -> None:
     assert all(s.params["method"] == "linear" for s in config.model.signature_sets)
     with pytest.raises(ConfigError, match="unknown signature method"):
         calibrate(PAPER15, capture_intervals=[0.2], signatures="fast")  # type: ignore[arg-type]
+
+
+def test_evaluate_localizes_with_the_configurations_own_signatures() -> None:
+    # before, evaluate --config recomputed the localization model from the network file (its
+    # exact signatures) instead of reading the configuration's, as the monitor does
+    from burstloc.experiments.calibrate import calibrate
+    from burstloc.experiments.harness import RankingSetup
+
+    meters = ["N4", "N7", "5"]
+    config = calibrate(PAPER15, capture_intervals=[0.2], meters=meters, signatures="linear")
+    setup = RankingSetup.build(PAPER15, meters, [0.2], config)
+    used = setup.localizers.signature.signature_sets
+    assert [s.params["method"] for s in used] == ["linear"] * len(used)
+    for mine, stored in zip(used, config.model.signature_sets, strict=True):
+        assert np.array_equal(mine.matrix, stored.matrix)

@@ -46,18 +46,16 @@ from burstloc.live.monitor import BurstMonitor
 from burstloc.live.paper_locator import BurstLocator
 from burstloc.live.windows import replay
 from burstloc.localize.config import Calibration
-from burstloc.localize.decide import Decision
+from burstloc.localize.decide import Decision, RankingLocalizers
 from burstloc.localize.detection import make_detector
 from burstloc.localize.evidence import Ranking
 from burstloc.localize.paper_rules import Localization
 from burstloc.readings import Step
 from burstloc.sim.capture import capture
-from burstloc.sim.prepare import ranking_localizers
 
 if TYPE_CHECKING:
     import networkx as nx
 
-    from burstloc.localize.decide import RankingLocalizers
     from burstloc.sim.scenario import ScenarioResult
     from burstloc.sim.sensors import SensorModel
 
@@ -293,7 +291,9 @@ class RankingSetup:
     ) -> RankingSetup:
         """Localizers for ``meters`` of ``network`` and a calibration covering the intervals.
 
-        Without ``config`` the network is calibrated here
+        The localizers are the calibration's own localization model (``config.model``, what the
+        monitor reads: its signatures as ``calibrate`` computed them). Without ``config`` the
+        network is calibrated here
         (:func:`burstloc.experiments.calibrate.calibrate` with its defaults). A ``config`` for
         another network or other meters is refused by name
         (:meth:`burstloc.experiments.calibrate.Calibration.check`), as is one without an
@@ -306,7 +306,8 @@ class RankingSetup:
             config.check(path, meters)
             for ci in capture_intervals:
                 config.for_interval(ci)
-        return cls(list(meters), config, ranking_localizers(path, meters), path)
+        # the configuration's own localization model, as the monitor reads it
+        return cls(list(meters), config, RankingLocalizers.from_model(config.model), path)
 
 
 def rank_attempts(
