@@ -337,18 +337,22 @@ def _run_tsnet(
 
 
 def _initialize(tsnet: Any, tm: Any, settings: TransientSettings) -> Any:
-    """TSNet's ``Initializer``. For burstloc's own solvers it runs over a period of two steps:
-    it allocates six result series per pipe and two per node over the whole period, which only
-    TSNet's solver fills (about 1 GB on L-TOWN's 32 554 steps); burstloc's reads their first
-    value, and the period is restored before the transient runs."""
-    if settings.solver == "tsnet":
-        return tsnet.simulation.Initializer(tm, 0.0, settings.engine)
-    period = tm.simulation_period
-    tm.simulation_period = 2 * tm.time_step
+    """TSNet's ``Initializer``, its EPANET run over no duration: it reads EPANET's state at the
+    start only, and the extended-period run it makes of the model's own duration solves the
+    same first step and then every later one (L-TOWN's week at 5 min: 2 016 steps, 0.8 s per
+    burst); the duration is restored before the transient runs. For burstloc's own solvers it
+    also runs over a period of two steps: it allocates six result series per pipe and two per
+    node over the whole period, which only TSNet's solver fills (about 1 GB on L-TOWN's 32 554
+    steps); burstloc's reads their first value, and the period is restored too."""
+    times = tm.options.time
+    duration, period = times.duration, tm.simulation_period
+    times.duration = 0
+    if settings.solver != "tsnet":
+        tm.simulation_period = 2 * tm.time_step
     try:
         return tsnet.simulation.Initializer(tm, 0.0, settings.engine)
     finally:
-        tm.simulation_period = period
+        times.duration, tm.simulation_period = duration, period
 
 
 def _simulate_uncached(scenario: BurstScenario) -> ScenarioResult:
