@@ -33,6 +33,7 @@ from burstloc.constants import PRESSURE_NOISE
 from burstloc.exceptions import ConfigError, NetworkError, SimulationError
 from burstloc.sim import _tsnet_compat, moc
 from burstloc.sim.cache import DiskCache, file_sha256, package_versions
+from burstloc.sim.intact import intact
 from burstloc.sim.scenario import SCHEMA, BurstScenario, ScenarioResult
 from burstloc.sim.steady import check_steady_start
 from burstloc.sim.sweep import SweepReport, sweep
@@ -143,15 +144,15 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
     started = time.perf_counter()
     source = os.path.abspath(scenario.network)  # before isolated_run changes directory
     with isolated_run() as tmp, capture_diagnostics() as diag:
-        wn = network.load_network(source)
+        kept = intact(source)  # the steps that do not depend on the pipe: once per process
+        wn = kept.wn
         network.require_pipe(wn, scenario.pipe, open_only=True)
-        state = network.steady_state(wn, scenario.engine)
-        check_steady_state(wn, state, scenario.network)
-        flows = state.flows
-        graph = network.flow_direction_graph(wn, flows)
-        true_start, true_end = network.pipe_endpoints(graph, scenario.pipe)
+        steady = kept.steady(scenario.engine)
+        check_steady_state(wn, steady.state, scenario.network)
+        flows = steady.state.flows
+        true_start, true_end = network.pipe_endpoints(steady.graph, scenario.pipe)
         meters = network.junction_names(wn)
-        model, pipe, position, shortened = transient_model(wn, scenario)
+        model, pipe, position, shortened = kept.transient_model(scenario)
         split = network.split_pipe(model, pipe, position)
         prepared = prepare_for_tsnet(split.network, engine=scenario.engine)
         where = f"pipe {scenario.pipe!r} of {scenario.network}"
@@ -169,7 +170,7 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
             burst,
             where=f"{where} split at {scenario.position:g}",
         )
-    steady = check_steady_start(steps, heads, meters, scenario.burst_start, scenario.network)
+    start = check_steady_start(steps, heads, meters, scenario.burst_start, scenario.network)
     elapsed = time.perf_counter() - started
     meta: dict[str, Any] = {
         "network": scenario.network,
@@ -181,7 +182,7 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
         "steady_flow_m3s": abs(flows[scenario.pipe]),
         "burst_node": split.burst_node,
         "split_pipes": [split.pipe, split.second_pipe],
-        "steady_start": steady.as_metadata(),
+        "steady_start": start.as_metadata(),
         **prepared.as_metadata(),
         **({} if shortened is None else {"transient_model": shortened.summary()}),
         **run_metadata(dt, steps.size, diag, elapsed),
