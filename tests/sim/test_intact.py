@@ -3,6 +3,7 @@ burst simulated with it warm is bit for bit the burst of a fresh process (real T
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import re
 import warnings
@@ -14,7 +15,7 @@ import pytest
 
 from burstloc import _diagnostics
 from burstloc._diagnostics import capture_diagnostics, recording
-from burstloc.sim import intact
+from burstloc.sim import intact, tsnet
 from burstloc.sim.scenario import BurstScenario, ScenarioResult
 from burstloc.sim.time_step import capture_time_step, expected_time_step
 from burstloc.sim.tsnet import simulate_burst
@@ -114,3 +115,15 @@ def test_a_replayed_recording_is_what_the_block_gave() -> None:
     assert direct.warnings == recorded.warnings == replayed.warnings
     assert direct.messages.count("wntr WARNING: logged inside") == 2  # both blocks log it
     assert not _diagnostics._RECORDING
+
+
+@pytest.mark.parametrize("solver", ["vectorized", "tsnet"])
+def test_the_initializer_reads_by_name_the_numbers_pandas_gives(
+    paper15: Path, solver: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    scenario = BurstScenario(paper15, "7", solver=solver, **SHORT)
+    by_name = simulate_burst(scenario, cache=False)
+    monkeypatch.setattr(tsnet, "results_by_name", contextlib.nullcontext)
+    through_pandas = simulate_burst(scenario, cache=False)
+    assert by_name.heads.tobytes() == through_pandas.heads.tobytes()
+    assert comparable(by_name) == comparable(through_pandas)

@@ -32,6 +32,7 @@ from burstloc._diagnostics import capture_diagnostics
 from burstloc.constants import PRESSURE_NOISE
 from burstloc.exceptions import ConfigError, NetworkError, SimulationError
 from burstloc.sim import _tsnet_compat, moc
+from burstloc.sim._tsnet_results import results_by_name
 from burstloc.sim.cache import DiskCache, file_sha256, package_versions
 from burstloc.sim.intact import intact
 from burstloc.sim.scenario import SCHEMA, BurstScenario, ScenarioResult
@@ -344,14 +345,16 @@ def _initialize(tsnet: Any, tm: Any, settings: TransientSettings) -> Any:
     burst); the duration is restored before the transient runs. For burstloc's own solvers it
     also runs over a period of two steps: it allocates six result series per pipe and two per
     node over the whole period, which only TSNet's solver fills (about 1 GB on L-TOWN's 32 554
-    steps); burstloc's reads their first value, and the period is restored too."""
+    steps); burstloc's reads their first value, and the period is restored too. It reads EPANET's
+    results by name (:func:`burstloc.sim._tsnet_results.results_by_name`)."""
     times = tm.options.time
     duration, period = times.duration, tm.simulation_period
     times.duration = 0
     if settings.solver != "tsnet":
         tm.simulation_period = 2 * tm.time_step
     try:
-        return tsnet.simulation.Initializer(tm, 0.0, settings.engine)
+        with results_by_name():
+            return tsnet.simulation.Initializer(tm, 0.0, settings.engine)
     finally:
         times.duration, tm.simulation_period = duration, period
 
