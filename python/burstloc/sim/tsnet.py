@@ -6,7 +6,8 @@ paper does) and runs the MOC transient simulation: TSNet's model, solved by burs
 vectorized solver (:mod:`burstloc.sim.moc`, the default: TSNet's heads, 20-70x faster) or
 by TSNet's own ``MOCSimulator`` (``solver="tsnet"``). Results are cached on disk by content
 (:mod:`burstloc.sim.cache`); :func:`simulate_many` sweeps scenarios over local processes or a
-Dask cluster (:mod:`burstloc.sim.sweep`).
+Dask cluster (:mod:`burstloc.sim.sweep`). What does not depend on the burst pipe (the network,
+its steady state, its transient-ready model) is made once per process (:mod:`burstloc.sim.intact`).
 TSNet prints progress, warns on every time step and writes EPANET scratch files into the
 working directory. Here its output is captured into the metadata (``warnings``,
 ``tsnet_messages``, ``negative_pressure_nodes``) and it runs inside a temporary directory: the
