@@ -3,17 +3,24 @@ burst, the MOC time loop in Rust beside the same loop in NumPy, peak memory, and
 for every pipe.
 
 Usage: ``.venv/bin/python benches/bench_ltown.py [--pipes N] [--seed S] [--workers W]
-[--config PATH] [--compare-pipes K] [--all]``. L-TOWN is extracted from the pinned epyt wheel
-that ``make networks`` keeps in ``networks/public/`` into a temporary directory (not into the
-repository). BattLeDIM's 33 pressure-sensor junctions are the meters (a meter file written in the
-temporary directory). Stages, each in a fresh process, each with wall time, CPU time (the
-process and its workers) and peak resident memory (the largest process):
+[--config PATH] [--compare-pipes K] [--kept-pipes K] [--all]``. L-TOWN is extracted from the
+pinned epyt wheel that ``make networks`` keeps in ``networks/public/`` into a temporary
+directory (not into the repository). BattLeDIM's 33 pressure-sensor junctions are the meters
+(a meter file written in the temporary directory). Stages, each in a fresh process, each with
+wall time, CPU time (the process and its workers) and peak resident memory (the largest
+process):
 
 * ``calibrate``: the 0.2 s calibration with the 33 sensors (skipped with ``--config``);
 * ``simulate, numpy`` and ``simulate, rust``: one burst (the evaluation's scenario: 220 s,
   transient-ready pipes of at least 30 m, TSNet's time step) on each of the first ``K`` pipes
   of the sample with the ``numpy`` solver and with the default one (the Rust time loop), the
   heads compared bit for bit; their CPU ratio is the speed-up measured in this run;
+* ``simulate xK, afresh`` and ``simulate xK, kept``: the first ``K`` (``--kept-pipes``)
+  bursts of the sample in one process, each with the time step the evaluation asks for
+  (:func:`burstloc.sim.time_step.capture_time_step`), with the network, its steady state and
+  transient-ready model made afresh for each burst (as before they were kept), and kept from
+  one burst to the next (:mod:`burstloc.sim.intact`, as an evaluation's workers do), the heads
+  compared bit for bit; their CPU ratio is what keeping them saves;
 * ``evaluate``: ``burstloc evaluate`` (fused localizer, 0.2 s, the 33 sensors, no cache,
   ``--workers W``) of ``N`` pipes drawn at random with ``--seed`` (``--all``: every pipe);
   beside the largest process's peak, the peak of all its processes together (the parent and
@@ -54,6 +61,29 @@ def stage_simulate(network: str, pipe: str, solver: str) -> str:
     scenario = BurstScenario(network, pipe, min_pipe_length=MIN_PIPE_LENGTH, solver=solver)
     result = simulate_burst(scenario, cache=False)
     return hashlib.sha256(result.heads.tobytes()).hexdigest()
+
+
+def stage_simulate_many(network: str, pipes: list[str], kept: bool) -> list[str]:
+    """The bursts of ``pipes`` in one process, as an evaluation's worker simulates them: with
+    what does not depend on the pipe kept from one burst to the next (``kept``), or made
+    afresh for each; each burst with the time step the evaluation asks for at 0.2 s. The
+    SHA-256 of each burst's heads."""
+    from dataclasses import replace
+
+    from burstloc.sim import intact
+    from burstloc.sim.scenario import BurstScenario
+    from burstloc.sim.time_step import capture_time_step
+    from burstloc.sim.tsnet import simulate_burst
+
+    digests = []
+    for pipe in pipes:
+        if not kept:
+            intact.clear()
+        scenario = BurstScenario(network, pipe, min_pipe_length=MIN_PIPE_LENGTH)
+        scenario = replace(scenario, time_step=capture_time_step(scenario, CAPTURE))
+        result = simulate_burst(scenario, cache=False)
+        digests.append(hashlib.sha256(result.heads.tobytes()).hexdigest())
+    return digests
 
 
 def stage_calibrate(network: str, out: str) -> str:
@@ -132,6 +162,12 @@ def main() -> None:
     parser.add_argument(
         "--compare-pipes", type=int, default=1, help="bursts simulated by both loops (default 1)"
     )
+    parser.add_argument(
+        "--kept-pipes",
+        type=int,
+        default=4,
+        help="bursts simulated in one process, the network kept and afresh (default 4)",
+    )
     parser.add_argument("--all", action="store_true", help="evaluate every pipe")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
@@ -163,6 +199,23 @@ def main() -> None:
             print(
                 f"  numpy / rust, CPU per burst (TSNet's preparation included): "
                 f"x{cpu_of['numpy'] / cpu_of['vectorized']:.1f}"
+            )
+        if args.kept_pipes:
+            pipes = sample[: args.kept_pipes]
+            cpu_kept: dict[bool, float] = {}
+            digest_kept: dict[bool, Any] = {}
+            for kept in (False, True):
+                wall, cpu, peak, digest_kept[kept] = measure(
+                    stage_simulate_many, str(network), pipes, kept
+                )
+                cpu_kept[kept] = cpu
+                how = "kept" if kept else "afresh"
+                row(f"simulate x{len(pipes)}, {how}", wall, cpu, peak, "one process")
+            same = "identical" if digest_kept[True] == digest_kept[False] else "DIFFERENT"
+            print(f"  heads with the network kept and made afresh: {same}")
+            print(
+                f"  afresh / kept, CPU per burst: {cpu_kept[False] / len(pipes):.2f} s / "
+                f"{cpu_kept[True] / len(pipes):.2f} s = x{cpu_kept[False] / cpu_kept[True]:.2f}"
             )
         out = directory / "evaluation.json"
         cli = [

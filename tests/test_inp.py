@@ -97,3 +97,19 @@ def test_a_file_that_is_not_utf8_is_named_with_its_line(tmp_path: Path) -> None:
     path.write_bytes(path.read_bytes().replace(b" J3   0      5", b" J\xe93   0      5"))
     with pytest.raises(NetworkError, match=r"tiny\.inp:8: not UTF-8 text \(byte 0xe9\)"):
         inp.pipe_names_in_file(path)
+
+
+def test_names_read_once_follow_the_file_content(tmp_path: Path) -> None:
+    path = write_tiny(tmp_path / "tiny.inp")
+    junctions, pipes = inp.junction_names_in_file(path), inp.pipe_names_in_file(path)
+    junctions.append("changed by the caller")  # a fresh list each time
+    assert inp.junction_names_in_file(path) == junctions[:-1]
+    path.write_text(
+        path.read_text(encoding="utf-8").replace(" J4 ", " J9 "), encoding="utf-8"
+    )  # the same path, another content
+    assert "J9" in inp.junction_names_in_file(path)
+    assert inp.pipe_names_in_file(path) == pipes
+    path.write_text("[JUNCTIONS]\n J1 abc\n", encoding="utf-8")
+    for _ in range(2):  # a malformed file is refused each time, naming its line
+        with pytest.raises(NetworkError, match=r"tiny\.inp:2"):
+            inp.junction_names_in_file(path)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import operator
 import weakref
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -102,3 +103,18 @@ def test_the_same_failure_of_many_items_is_one_line() -> None:
         "7 of 9 (x=-1.0, x=-2.0, x=-3.0, x=-4.0, x=-5.0 and 2 more): ValueError: math domain error",
         "x=x: TypeError: must be real number, not str",
     ]
+
+
+def test_workers_run_ahead_of_the_results_taken_by_one_item_each(tmp_path: Path) -> None:
+    """An item starts only once submitted: at most one per worker, and QUEUED more, beyond the
+    results already handed over (a slow parent does not hold every result made meanwhile)."""
+    files = [tmp_path / f"item{i}" for i in range(12)]
+    taken: list[int] = []
+
+    def on_result(i: int, item: Path, result: None) -> None:
+        taken.append(i)
+        started = sum(f.exists() for f in files)  # each item creates its file
+        assert started <= 2 + sweep_mod.QUEUED + len(taken) - 1
+
+    report = sweep(Path.touch, files, workers=2, progress=False, on_result=on_result)
+    assert report.ok and sorted(taken) == list(range(12))

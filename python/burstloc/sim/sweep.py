@@ -15,6 +15,7 @@ items must be picklable for the parallel modes (a module-level function, plain d
 from __future__ import annotations
 
 import gc
+import itertools
 import os
 import signal
 import sys
@@ -22,7 +23,7 @@ import threading
 import traceback
 import uuid
 from collections.abc import Callable, Iterable, Iterator
-from concurrent.futures import Future, ProcessPoolExecutor, as_completed
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from multiprocessing import active_children, get_context
@@ -36,6 +37,9 @@ __all__ = ["ItemFailure", "SweepReport", "check_scheduler", "sweep"]
 
 T = TypeVar("T")
 R = TypeVar("R")
+
+#: Items submitted to local workers beyond one each, ready for the next worker to be free.
+QUEUED = 1
 
 #: Seconds to wait for a Dask scheduler to answer.
 DASK_CONNECT_TIMEOUT = 10.0
@@ -248,22 +252,36 @@ def _sigint_deferred() -> Iterator[None]:
 
 
 def _run_processes(func: Callable[[T], R], todo: list[T], workers: int, done: _Done) -> None:
-    """Run ``todo`` on ``workers`` spawned processes. On Ctrl-C (or any error of the parent) the
-    pending items are cancelled and the workers stopped at once, then the error goes on."""
+    """Run ``todo`` on ``workers`` spawned processes, at most ``workers +`` :data:`QUEUED` items
+    submitted and not yet handed to ``done``: a parent slower to take results (an evaluation
+    scoring each burst) than its workers are to make them would otherwise hold every result
+    made meanwhile (on L-TOWN 200 MB each). On Ctrl-C (or any error of the parent) the pending
+    items are cancelled and the workers stopped at once, then the error goes on."""
     pool = ProcessPoolExecutor(
         max_workers=workers, mp_context=get_context("spawn"), initializer=_ignore_interrupts
     )
+    items = iter(enumerate(todo))
+    futures: dict[Future[R], int] = {}
+
+    def submit(count: int) -> None:
+        for i, item in itertools.islice(items, count):
+            futures[pool.submit(func, item)] = i
+
     try:
-        # The workers start while the items are submitted: a Ctrl-C then waits for the end of
-        # the submissions here, and for their initializer (which ignores it) in the workers.
+        # The workers start while the first items are submitted: a Ctrl-C then waits for the
+        # end of those submissions here, and for their initializer (which ignores it) in the
+        # workers.
         with _sigint_deferred():
-            futures: dict[Future[R], int] = {
-                pool.submit(func, item): i for i, item in enumerate(todo)
-            }
-        for future in as_completed(futures):
-            exc = future.exception()
-            # popped: a future holds its result, which ``done`` may have let go of
-            done(futures.pop(future), None if exc else future.result(), exc)
+            submit(workers + QUEUED)
+        while futures:
+            finished = wait(futures, return_when=FIRST_COMPLETED).done
+            while finished:
+                # popped from both: a future holds its result, which ``done`` may let go of
+                future = finished.pop()
+                exc = future.exception()
+                done(futures.pop(future), None if exc else future.result(), exc)
+                del future
+                submit(1)
     except BaseException:
         # Workers stopped first: the pool's own thread then sees them gone, fails what is
         # pending and ends, and the shutdown waits for it and frees the pool's queues here.

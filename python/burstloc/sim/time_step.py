@@ -7,6 +7,7 @@ step is requested: TSNet's own, or half the finest capture interval where TSNet'
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import replace
 
@@ -14,10 +15,14 @@ import numpy as np
 
 from burstloc import network
 from burstloc.exceptions import NetworkError
+from burstloc.sim.intact import IntactNetwork, intact
 from burstloc.sim.scenario import BurstScenario
-from burstloc.sim.tsnet_ready import prepare_for_tsnet, transient_model
+from burstloc.sim.tsnet_ready import prepare_for_tsnet
 
 __all__ = ["capture_time_step", "expected_time_step", "with_capture_time_step"]
+
+#: Relative margin kept below a capture interval for the rounding of TSNet's step.
+FLOAT_MARGIN = 1e-9
 
 
 def expected_time_step(scenario: BurstScenario) -> float:
@@ -34,9 +39,9 @@ def expected_time_step(scenario: BurstScenario) -> float:
     Raises:
         NetworkError: the network or pipe cannot be read.
     """
-    wn = network.load_network(scenario.network)
-    network.require_pipe(wn, scenario.pipe)
-    model, pipe, position, _ = transient_model(wn, scenario)
+    kept = intact(scenario.network)
+    network.require_pipe(kept.wn, scenario.pipe)
+    model, pipe, position, _ = kept.transient_model(scenario)
     split = network.split_pipe(model, pipe, position)
     prepare_for_tsnet(split.network)  # the pipes TSNet will see
     lengths = [float(pipe.length) for _, pipe in split.network.pipes()]
@@ -62,10 +67,51 @@ def capture_time_step(
     if requested is not None:
         return requested
     try:
+        if _surely_finer(scenario, finest_interval):
+            return None
         expected = expected_time_step(replace(scenario, time_step=None))
     except NetworkError:
         return None  # an unknown pipe: its simulation fails and names it
     return None if expected <= finest_interval else finest_interval / 2
+
+
+def _surely_finer(scenario: BurstScenario, finest_interval: float) -> bool:
+    """Whether TSNet's own step for ``scenario`` (:func:`expected_time_step`) is surely below
+    ``finest_interval``, seen without splitting the pipe and preparing the model for TSNet
+    (0.35 s a burst on L-TOWN, in the process that sets the steps of a whole sweep).
+
+    TSNet's step is ``sum(phi^2) / sum(phi)`` with every ``phi = L / (a N)`` below twice the
+    requested step ``min L / (2 a)`` (``N = floor(L / (a dt)) > L / (2 a dt)``), so below the
+    travel time ``L / a`` of any pipe of the prepared model. A pipe of the transient-ready model
+    other than the burst's is one of them, as long as it is, in every preparation for TSNet
+    (:func:`~burstloc.sim.tsnet_ready.prepare_for_tsnet`), neither removed nor made a valve:
+    open, without a check valve, named by no control and joined to no tank (the links EPANET
+    may close at the start)."""
+    kept = intact(scenario.network)
+    _, pipe, _, _ = kept.transient_model(scenario)
+    shortest = kept.step(
+        ("lasting pipes", scenario.min_pipe_length),
+        lambda: _lasting(kept, scenario.min_pipe_length),
+    )
+    travel = min((length for length, name in shortest if name != pipe), default=math.inf)
+    return travel / scenario.wave_speed < finest_interval * (1.0 - FLOAT_MARGIN)
+
+
+def _lasting(kept: IntactNetwork, min_pipe_length: float | None) -> list[tuple[float, str]]:
+    """``(length, name)`` of the two shortest pipes of the transient-ready model that every
+    preparation for TSNet keeps as they are (:func:`_surely_finer`)."""
+    model, _ = kept.transient_ready(min_pipe_length)
+    controlled = {obj.name for _, control in model.controls() for obj in control.requires()}
+    tanks = set(model.tank_name_list)
+    lasting = [
+        (float(pipe.length), name)
+        for name, pipe in model.pipes()
+        if pipe.initial_status.name == "Open"
+        and not pipe.check_valve
+        and name not in controlled
+        and not {pipe.start_node_name, pipe.end_node_name} & tanks
+    ]
+    return sorted(lasting)[:2]
 
 
 def with_capture_time_step(

@@ -6,7 +6,8 @@ paper does) and runs the MOC transient simulation: TSNet's model, solved by burs
 vectorized solver (:mod:`burstloc.sim.moc`, the default: TSNet's heads, 20-70x faster) or
 by TSNet's own ``MOCSimulator`` (``solver="tsnet"``). Results are cached on disk by content
 (:mod:`burstloc.sim.cache`); :func:`simulate_many` sweeps scenarios over local processes or a
-Dask cluster (:mod:`burstloc.sim.sweep`).
+Dask cluster (:mod:`burstloc.sim.sweep`). What does not depend on the burst pipe (the network,
+its steady state, its transient-ready model) is made once per process (:mod:`burstloc.sim.intact`).
 TSNet prints progress, warns on every time step and writes EPANET scratch files into the
 working directory. Here its output is captured into the metadata (``warnings``,
 ``tsnet_messages``, ``negative_pressure_nodes``) and it runs inside a temporary directory: the
@@ -32,7 +33,9 @@ from burstloc._diagnostics import capture_diagnostics
 from burstloc.constants import PRESSURE_NOISE
 from burstloc.exceptions import ConfigError, NetworkError, SimulationError
 from burstloc.sim import _tsnet_compat, moc
+from burstloc.sim._tsnet_results import results_by_name
 from burstloc.sim.cache import DiskCache, file_sha256, package_versions
+from burstloc.sim.intact import intact
 from burstloc.sim.scenario import SCHEMA, BurstScenario, ScenarioResult
 from burstloc.sim.steady import check_steady_start
 from burstloc.sim.sweep import SweepReport, sweep
@@ -143,15 +146,15 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
     started = time.perf_counter()
     source = os.path.abspath(scenario.network)  # before isolated_run changes directory
     with isolated_run() as tmp, capture_diagnostics() as diag:
-        wn = network.load_network(source)
+        kept = intact(source)  # the steps that do not depend on the pipe: once per process
+        wn = kept.wn
         network.require_pipe(wn, scenario.pipe, open_only=True)
-        state = network.steady_state(wn, scenario.engine)
-        check_steady_state(wn, state, scenario.network)
-        flows = state.flows
-        graph = network.flow_direction_graph(wn, flows)
-        true_start, true_end = network.pipe_endpoints(graph, scenario.pipe)
+        steady = kept.steady(scenario.engine)
+        check_steady_state(wn, steady.state, scenario.network)
+        flows = steady.state.flows
+        true_start, true_end = network.pipe_endpoints(steady.graph, scenario.pipe)
         meters = network.junction_names(wn)
-        model, pipe, position, shortened = transient_model(wn, scenario)
+        model, pipe, position, shortened = kept.transient_model(scenario)
         split = network.split_pipe(model, pipe, position)
         prepared = prepare_for_tsnet(split.network, engine=scenario.engine)
         where = f"pipe {scenario.pipe!r} of {scenario.network}"
@@ -169,7 +172,7 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
             burst,
             where=f"{where} split at {scenario.position:g}",
         )
-    steady = check_steady_start(steps, heads, meters, scenario.burst_start, scenario.network)
+    start = check_steady_start(steps, heads, meters, scenario.burst_start, scenario.network)
     elapsed = time.perf_counter() - started
     meta: dict[str, Any] = {
         "network": scenario.network,
@@ -181,7 +184,7 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
         "steady_flow_m3s": abs(flows[scenario.pipe]),
         "burst_node": split.burst_node,
         "split_pipes": [split.pipe, split.second_pipe],
-        "steady_start": steady.as_metadata(),
+        "steady_start": start.as_metadata(),
         **prepared.as_metadata(),
         **({} if shortened is None else {"transient_model": shortened.summary()}),
         **run_metadata(dt, steps.size, diag, elapsed),
@@ -337,18 +340,24 @@ def _run_tsnet(
 
 
 def _initialize(tsnet: Any, tm: Any, settings: TransientSettings) -> Any:
-    """TSNet's ``Initializer``. For burstloc's own solvers it runs over a period of two steps:
-    it allocates six result series per pipe and two per node over the whole period, which only
-    TSNet's solver fills (about 1 GB on L-TOWN's 32 554 steps); burstloc's reads their first
-    value, and the period is restored before the transient runs."""
-    if settings.solver == "tsnet":
-        return tsnet.simulation.Initializer(tm, 0.0, settings.engine)
-    period = tm.simulation_period
-    tm.simulation_period = 2 * tm.time_step
+    """TSNet's ``Initializer``, its EPANET run over no duration: it reads EPANET's state at the
+    start only, and the extended-period run it makes of the model's own duration solves the
+    same first step and then every later one (L-TOWN's week at 5 min: 2 016 steps, 0.8 s per
+    burst); the duration is restored before the transient runs. For burstloc's own solvers it
+    also runs over a period of two steps: it allocates six result series per pipe and two per
+    node over the whole period, which only TSNet's solver fills (about 1 GB on L-TOWN's 32 554
+    steps); burstloc's reads their first value, and the period is restored too. It reads EPANET's
+    results by name (:func:`burstloc.sim._tsnet_results.results_by_name`)."""
+    times = tm.options.time
+    duration, period = times.duration, tm.simulation_period
+    times.duration = 0
+    if settings.solver != "tsnet":
+        tm.simulation_period = 2 * tm.time_step
     try:
-        return tsnet.simulation.Initializer(tm, 0.0, settings.engine)
+        with results_by_name():
+            return tsnet.simulation.Initializer(tm, 0.0, settings.engine)
     finally:
-        tm.simulation_period = period
+        times.duration, tm.simulation_period = duration, period
 
 
 def _simulate_uncached(scenario: BurstScenario) -> ScenarioResult:
