@@ -87,9 +87,12 @@ def stage_simulate_many(network: str, pipes: list[str], kept: bool) -> list[str]
 
 
 def stage_calibrate(network: str, out: str) -> str:
-    from burstloc.experiments.calibrate import calibrate
+    """The 0.2 s calibration with an empty signature cache (a temporary one)."""
+    with tempfile.TemporaryDirectory(prefix="bench-ltown-cache-") as cache:
+        os.environ["BURSTLOC_CACHE_DIR"] = cache
+        from burstloc.experiments.calibrate import calibrate
 
-    calibrate(network, meters=BATTLEDIM_SENSORS, capture_intervals=[CAPTURE]).save(out)
+        calibrate(network, meters=BATTLEDIM_SENSORS, capture_intervals=[CAPTURE]).save(out)
     return out
 
 

@@ -141,8 +141,11 @@ def test_hybrid_signatures_are_exact_at_mid_pipe_and_near_it_along_the_pipe() ->
     positions = [0.1, 0.5, 0.9]
     exact = cached_signature_sets(NET3, positions=positions, method="epanet")
     linear = linear_signature_sets(NET3, positions=positions)
-    hybrid = linear_signature_sets(NET3, positions=positions, method="hybrid")
+    hybrid = linear_signature_sets(NET3, positions=positions, method="hybrid", workers=1)
     assert all(s.params["method"] == "hybrid" for s in hybrid)
+    # the EPANET runs shared among processes: the same numbers
+    shared = linear_signature_sets(NET3, positions=positions, method="hybrid", workers=2)
+    assert all(np.array_equal(a.matrix, b.matrix) for a, b in zip(hybrid, shared, strict=True))
     assert np.array_equal(hybrid[1].matrix, exact[1].matrix)  # the same EPANET runs
     heard = (np.linalg.norm(exact[1].matrix, axis=1) > 1e-3) & (
         np.linalg.norm(linear[1].matrix, axis=1) > 1e-3
@@ -183,6 +186,8 @@ def test_calibrate_records_the_linear_signatures() -> None:
     assert all(s.params["method"] == "linear" for s in config.model.signature_sets)
     with pytest.raises(ConfigError, match="unknown signature method"):
         calibrate(PAPER15, capture_intervals=[0.2], signatures="fast")  # type: ignore[arg-type]
+    with pytest.raises(ConfigError, match="workers must be a positive integer, got 0"):
+        calibrate(PAPER15, capture_intervals=[0.2], workers=0)
 
 
 def test_evaluate_localizes_with_the_configurations_own_signatures() -> None:

@@ -73,6 +73,13 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         f"'auto' (default): epanet up to {EXACT_SIGNATURES_UP_TO} pipes, hybrid up to "
         f"{HYBRID_SIGNATURES_UP_TO}, linear above",
     )
+    parser.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        metavar="N",
+        help="local processes for the hybrid signatures' EPANET runs (default: one per CPU)",
+    )
     parser.set_defaults(handler=run)
     return parser
 
@@ -90,6 +97,7 @@ def run(args: argparse.Namespace) -> int:
         meters=args.meters if args.meters_file is None else meters_of(args, args.network),
         name=args.name,
         signatures=args.signatures,
+        workers=args.workers,
     )
     print(f"wrote {config.save(args.out)}")
     return 0

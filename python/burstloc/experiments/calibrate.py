@@ -289,6 +289,7 @@ def calibrate(
     seed: int = 0,
     max_samples: int = _MAX_SAMPLES,
     signatures: SignatureMethod = "auto",
+    workers: int | None = None,
 ) -> Calibration:
     """Calibrate every capture interval for ``network`` (see the module docstring).
 
@@ -296,13 +297,16 @@ def calibrate(
     :func:`check_baseline`; their meters are the meters) or from ``noise_sigma`` (default
     :data:`DEFAULT_NOISE_SIGMA`); ``meters`` default to every junction. The localization model
     (:func:`burstloc.sim.prepare.prepare_model`, signatures cached on disk) is computed here,
-    its burst signatures by ``signatures`` (:data:`burstloc.sim.signatures.SignatureMethod`).
+    its burst signatures by ``signatures`` (:data:`burstloc.sim.signatures.SignatureMethod`;
+    the hybrid method's EPANET runs over ``workers`` local processes, default one per CPU).
     """
     from burstloc.network import junction_names, load_network
     from burstloc.sim.prepare import length_graph, prepare_model, travel_time_spread
     from burstloc.sim.signatures import signature_method
 
     signature_method(signatures, 0)  # an unknown method is refused before any work
+    if workers is not None and (not isinstance(workers, int) or workers < 1):
+        raise ConfigError(f"workers must be a positive integer, got {workers!r}")
 
     if not (math.isfinite(false_alarm_rate) and false_alarm_rate > 0):
         raise ConfigError(f"false_alarm_rate must be > 0 per hour, got {false_alarm_rate}")
@@ -381,7 +385,12 @@ def calibrate(
         false_alarm_rate=float(false_alarm_rate),
         intervals=tuple(items),
         model=prepare_model(
-            network, meter_list, wave_speed=wave_speed, wn=wn, signatures=signatures
+            network,
+            meter_list,
+            wave_speed=wave_speed,
+            wn=wn,
+            signatures=signatures,
+            workers=workers,
         ),
         provenance={
             "baseline": kind,

@@ -227,11 +227,13 @@ def prepare_model(
     cache_dir: str | os.PathLike[str] | None = None,
     wn: WaterNetworkModel | None = None,
     signatures: SignatureMethod = "auto",
+    workers: int | None = None,
 ) -> LocalizationModel:
     """The :class:`~burstloc.localize.model.LocalizationModel` of ``meters`` (default: every
     junction) on the INP file ``network`` (module docstring). ``wn``: the file's WNTR model, if
     the caller has it loaded already; ``cache_dir``: where the signatures are cached;
-    ``signatures``: how they are computed (:data:`burstloc.sim.signatures.SignatureMethod`).
+    ``signatures``: how they are computed (:data:`burstloc.sim.signatures.SignatureMethod`;
+    ``workers``: the local processes of the hybrid method's EPANET runs).
 
     Raises:
         NetworkError: missing or malformed network, or a meter that is not a junction.
@@ -245,7 +247,12 @@ def prepare_model(
         pipes=tuple(pipes),
         node_distances=node_distances,
         signature_sets=cached_signature_sets(
-            network, meter_list, positions=positions, cache_dir=cache_dir, method=signatures
+            network,
+            meter_list,
+            positions=positions,
+            cache_dir=cache_dir,
+            method=signatures,
+            workers=workers,
         ),
         wave_speed=wave_speed,
         fronts=wave_fronts(model, meter_list, pipes),

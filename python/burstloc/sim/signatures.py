@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Sequence
+from functools import partial
 from pathlib import Path
 from typing import Any, Literal
 
@@ -32,7 +33,7 @@ from burstloc.constants import (
     EXACT_SIGNATURES_UP_TO,
     HYBRID_SIGNATURES_UP_TO,
 )
-from burstloc.exceptions import ConfigError, InputError
+from burstloc.exceptions import ConfigError, InputError, SimulationError
 from burstloc.inp import check_meters, network_hash, pipe_names_in_file
 from burstloc.localize.signature import SIGNATURE_FORMAT, SignatureSet
 from burstloc.network import SteadyState, load_network, steady_state
@@ -111,6 +112,7 @@ def linear_signature_sets(
     burst_coeff: float = DEFAULT_BURST_COEFF,
     demand_model: DemandModel = "pdd",
     method: Literal["linear", "hybrid"] = "linear",
+    workers: int | None = None,
 ) -> tuple[SignatureSet, ...]:
     """:func:`compute_signatures`' sets at every position of ``positions`` from one
     factorization of the linearized steady state (:mod:`burstloc.sim.linear_signatures`).
@@ -119,14 +121,16 @@ def linear_signature_sets(
     ``"hybrid"``: also one EPANET steady state per pipe at mid-pipe (:func:`compute_signatures`
     at 0.5: the reference burst's own drop, its non-linear part included); at another position
     ``x`` that drop plus the linearized change from mid-pipe to ``x``, scaled by the ratio of the
-    exact to the linearized mid-pipe drop (a ninth of the exact method's EPANET runs).
-    ``params`` record the method.
+    exact to the linearized mid-pipe drop (a ninth of the exact method's EPANET runs, shared
+    among ``workers`` local processes, default one per CPU). ``params`` record the method.
 
     Raises:
-        ConfigError: a bad ``burst_coeff``, position, ``demand_model`` or method, or no position.
+        ConfigError: a bad ``burst_coeff``, position, ``demand_model``, method or ``workers``,
+            or no position.
         NetworkError: missing or malformed network, a meter that is not a junction, or a
             singular linearized steady state.
         InputError: no meter.
+        SimulationError: EPANET failed on a pipe (hybrid).
     """
     from burstloc.sim.linear_signatures import anchored, burst_signatures, linear_response
 
@@ -141,7 +145,9 @@ def linear_signature_sets(
             burst_signatures(wn, state, response, pipes, float(x), burst_coeff) for x in positions
         ]
         if method == "hybrid":
-            exact = _split_matrix(wn, meter_list, 0.5, burst_coeff)
+            exact = _split_matrix_parallel(
+                network, pipes, meter_list, burst_coeff, demand_model, workers
+            )
             middle = burst_signatures(wn, state, response, pipes, 0.5, burst_coeff)
             matrices = [anchored(exact, middle, m) for m in matrices]
     return tuple(
@@ -178,11 +184,16 @@ def signature_method(method: SignatureMethod, pipes: int) -> Literal["epanet", "
 
 
 def _split_matrix(
-    wn: Any, meters: list[str], position: float, burst_coeff: float
+    wn: Any,
+    meters: list[str],
+    position: float,
+    burst_coeff: float,
+    pipes: Sequence[str] | None = None,
 ) -> NDArray[np.float64]:
-    """The (pipes x meters) head drops of the reference burst at ``position`` along every pipe,
-    one EPANET steady state each in one project edited in place."""
-    pipes = list(wn.pipe_name_list)
+    """The (pipes x meters) head drops of the reference burst at ``position`` along each of
+    ``pipes`` (default: every pipe), one EPANET steady state each in one project edited in
+    place."""
+    pipes = list(wn.pipe_name_list if pipes is None else pipes)
     matrix = np.empty((len(pipes), len(meters)), dtype=np.float64)
     with capture_diagnostics(), InPlaceSplitter(wn) as splitter:
         intact = splitter.heads(meters)
@@ -207,16 +218,23 @@ def _check_params(burst_coeff: float, positions: Sequence[float], demand_model: 
 def _base_state(
     network: str | os.PathLike[str], meters: Sequence[str] | None, demand_model: str
 ) -> tuple[Any, SteadyState, list[str]]:
-    """The network's WNTR model (demands turned into emitters for ``"emitter"``), its steady
-    state, and the checked meters (default: every junction)."""
-    wn = load_network(network)
+    """The network's WNTR model (:func:`_model`), its steady state, and the checked meters
+    (default: every junction)."""
+    wn = _model(network, demand_model)
     junctions = list(wn.junction_name_list)
     meter_list = check_meters(junctions if meters is None else meters, junctions, network)
     if not meter_list:
         raise InputError("at least one meter is needed")
+    return wn, steady_state(wn), list(meter_list)
+
+
+def _model(network: str | os.PathLike[str], demand_model: str) -> Any:
+    """The network's WNTR model, its demands turned into emitters for ``"emitter"`` (each fitted
+    at the base state)."""
+    wn = load_network(network)
     if demand_model == "emitter":
         base = steady_state(wn).heads
-        for name in junctions:
+        for name in wn.junction_name_list:
             node = wn.get_node(name)
             q0 = sum(ts.base_value for ts in node.demand_timeseries_list)
             pressure = base[name] - node.elevation
@@ -224,7 +242,36 @@ def _base_state(
                 node.emitter_coefficient = q0 / math.sqrt(pressure)
             for ts in node.demand_timeseries_list:
                 ts.base_value = 0.0
-    return wn, steady_state(wn), list(meter_list)
+    return wn
+
+
+def _split_matrix_parallel(
+    network: str | os.PathLike[str],
+    pipes: list[str],
+    meters: list[str],
+    burst_coeff: float,
+    demand_model: str,
+    workers: int | None,
+) -> NDArray[np.float64]:
+    """:func:`_split_matrix` at mid-pipe over ``workers`` local processes (default: one per
+    CPU), the pipes in contiguous chunks, each worker with its own EPANET project: the same
+    numbers as one process (every run starts from scratch)."""
+    from burstloc.sim.sweep import sweep
+
+    count = max(1, min(workers or os.cpu_count() or 1, len(pipes)))
+    chunks = [list(c) for c in np.array_split(np.array(pipes, dtype=object), 2 * count) if len(c)]
+    task = partial(_split_chunk, os.fspath(network), tuple(meters), burst_coeff, demand_model)
+    report = sweep(task, chunks, workers=count, progress=False, label=lambda c: f"pipes {c[0]}..")
+    if report.failures:
+        raise SimulationError("; ".join(report.failure_lines()))
+    return np.vstack([r for r in report.results if r is not None])
+
+
+def _split_chunk(
+    network: str, meters: tuple[str, ...], burst_coeff: float, demand_model: str, pipes: list[str]
+) -> NDArray[np.float64]:
+    """A worker's part of :func:`_split_matrix_parallel`."""
+    return _split_matrix(_model(network, demand_model), list(meters), 0.5, burst_coeff, pipes)
 
 
 def _signature_set(
@@ -309,10 +356,12 @@ def cached_signature_sets(
     burst_coeff: float = DEFAULT_BURST_COEFF,
     demand_model: DemandModel = "pdd",
     method: SignatureMethod = "auto",
+    workers: int | None = None,
 ) -> tuple[SignatureSet, ...]:
     """The signature sets at every position of ``positions`` (one set each, same order) by
     ``method`` (:func:`signature_method`): :func:`cached_signatures` for ``"epanet"``,
-    :func:`linear_signature_sets` (not cached) for ``"hybrid"`` and ``"linear"``.
+    :func:`linear_signature_sets` (not cached; the hybrid's EPANET runs over ``workers``
+    processes) for ``"hybrid"`` and ``"linear"``.
 
     Raises:
         ConfigError: no position, a position outside (0, 1), an unknown method.
@@ -328,6 +377,7 @@ def cached_signature_sets(
             burst_coeff=burst_coeff,
             demand_model=demand_model,
             method=chosen,
+            workers=workers,
         )
     return tuple(
         cached_signatures(
