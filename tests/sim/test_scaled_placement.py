@@ -150,3 +150,20 @@ def test_a_meter_file_for_a_network_of_more_than_ten_thousand_junctions(tmp_path
     """BWSN_Network_2 has 12 523 junctions: its meter file is valid (it was refused)."""
     placed = MeterSet("BWSN_Network_2.inp", "sha256:x", "arrival", ("J1", "J2"), 12_523)
     assert MeterSet.load(placed.save(tmp_path / "meters.json")) == placed
+
+
+def test_ambiguous_length_in_blocks_of_bursts(
+    paper15: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A large grid's objective is summed over blocks of bursts (bounded memory): the same
+    value as all pairs at once."""
+    from burstloc.sim import region_placement
+    from burstloc.sim.region_placement import ambiguous_length
+
+    meters = ["N4", "N7", "1", "8"]
+    pipes, distances = arrival_geometry(paper15, meters)
+    whole = ambiguous_length(pipes, meters, distances)
+    points = ambiguity_grid(pipes, meters, distances).length.size
+    monkeypatch.setattr(region_placement, "_PAIRS", 7 * points)  # blocks of 7 bursts
+    assert ambiguous_length(pipes, meters, distances) == pytest.approx(whole, rel=1e-12)
+    assert whole > 0

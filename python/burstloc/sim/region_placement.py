@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -83,6 +83,10 @@ _TIE = 1e-6
 
 _BLOCK = 2_000_000
 """Elements per vectorized pass (bounds the memory of a step)."""
+
+_PAIRS = 4_000_000
+"""Most (burst, point) pairs :func:`ambiguous_length` holds at once: a larger grid (a large
+network's) is summed over blocks of bursts."""
 
 
 @dataclass(frozen=True)
@@ -303,7 +307,15 @@ def ambiguous_length(
     grid = ambiguity_grid(
         pipes, meters, node_distances, wave_speed=wave_speed, step=step, samples=samples, seed=seed
     )
-    return _Pairs(grid, range(len(meters)), resolution).ambiguous()
+    bursts = max(1, _PAIRS // grid.length.size)  # per block: bounded memory
+    if grid.bursts.size <= bursts:
+        return _Pairs(grid, range(len(meters)), resolution).ambiguous()
+    total = 0.0
+    for lo in range(0, grid.bursts.size, bursts):
+        part = slice(lo, lo + bursts)
+        block = replace(grid, bursts=grid.bursts[part], weight=grid.weight[part])
+        total += _Pairs(block, range(len(meters)), resolution).ambiguous()
+    return total
 
 
 def meter_ambiguity(
