@@ -167,3 +167,15 @@ def test_ambiguous_length_in_blocks_of_bursts(
     monkeypatch.setattr(region_placement, "_PAIRS", 7 * points)  # blocks of 7 bursts
     assert ambiguous_length(pipes, meters, distances) == pytest.approx(whole, rel=1e-12)
     assert whole > 0
+
+
+@pytest.mark.parametrize("method", ["arrival", "region"])
+def test_the_seed_draws_another_sample(net3: Path, method: str) -> None:
+    """``Scaling.seed`` reaches both methods' samples: another seed, other meters (Net3
+    reduced), each the same on every run."""
+    from dataclasses import replace
+
+    first = place_meters(net3, 8, method=method, scaling=SMALL).meters
+    other = place_meters(net3, 8, method=method, scaling=replace(SMALL, seed=1)).meters
+    assert first != other
+    assert place_meters(net3, 8, method=method, scaling=replace(SMALL, seed=1)).meters == other

@@ -484,6 +484,7 @@ def place_meters(
                 wave_speed=wave_speed,
                 resolution=resolution,
                 points=scaling.points,
+                seed=scaling.seed,
             )
     else:
         pipes, distances = arrival_geometry(wn, junctions)

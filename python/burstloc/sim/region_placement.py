@@ -243,9 +243,10 @@ def region_meters(
     step: float = REGION_STEP,
     samples: int = BURST_SAMPLES,
     points: int | None = None,
+    seed: int = SAMPLE_SEED,
 ) -> tuple[str, ...]:
     """Choose ``count`` of ``junctions`` that minimise the expected ambiguous main (module
-    docstring); ``node_distances``, ``points`` as for :func:`ambiguity_grid`.
+    docstring); ``node_distances``, ``points`` and ``seed`` as for :func:`ambiguity_grid`.
 
     Returns:
         The chosen junctions, in ``junctions`` order.
@@ -263,6 +264,7 @@ def region_meters(
         wave_speed=wave_speed,
         step=step,
         samples=samples,
+        seed=seed,
         points=points,
     )
     travel = grid.travel
