@@ -179,27 +179,3 @@ def test_the_seed_draws_another_sample(net3: Path, method: str) -> None:
     other = place_meters(net3, 8, method=method, scaling=replace(SMALL, seed=1)).meters
     assert first != other
     assert place_meters(net3, 8, method=method, scaling=replace(SMALL, seed=1)).meters == other
-
-
-def test_arrival_separation_of_many_meters_equals_the_direct_evaluation(net3: Path) -> None:
-    """More meters than the k-d tree indexes (30 on Net3): the same share as comparing every
-    point with every other point."""
-    from burstloc.constants import CANDIDATE_POSITIONS, WAVE_SPEED
-    from burstloc.sim.placement import _TREE_DIMS, _travel, arrival_separation
-
-    meters = list(load_network(net3).junction_name_list)[::3]
-    assert len(meters) > _TREE_DIMS
-    pipes, distances = arrival_geometry(net3, meters)
-    travel = _travel(pipes, distances, CANDIDATE_POSITIONS, WAVE_SPEED)
-    owner = np.repeat(np.arange(len(pipes)), len(CANDIDATE_POSITIONS))
-    nearest = np.full(owner.size, np.inf)
-    for i in range(owner.size):
-        diff = travel[i] - travel
-        spread = diff.max(axis=1) - diff.min(axis=1)
-        nearest[i] = spread[owner != owner[i]].min()
-    shares = []
-    for resolution in (0.02, 0.05, 0.2):
-        expected = float((nearest >= resolution).mean())
-        assert arrival_separation(pipes, distances, resolution=resolution) == expected
-        shares.append(expected)
-    assert len(set(shares)) > 1 and max(shares) > 0

@@ -104,10 +104,6 @@ MAX_EXACT = 48
 (best bound first); below it, and on every network with no more junctions, the choice is the
 exact greedy one (see :func:`arrival_meters`)."""
 
-_TREE_DIMS = 16
-"""Most meters :func:`arrival_separation`'s k-d tree indexes (BWSN_Network_2, 33 meters: 13 s
-of CPU instead of 36 s; the share is the same)."""
-
 #: Limit on the meters of a meter file (the localization model's).
 MAX_METERS = 10_000
 
@@ -353,10 +349,8 @@ def arrival_separation(
     owner = np.repeat(np.arange(len(pipes)), len(CANDIDATE_POSITIONS))
     # The spread of d = t_a - t_b is at least |d_j - d_0| for every meter j: only points whose
     # travel times relative to the first meter lie within ``resolution`` of each other (a k-d
-    # tree query, maximum norm, on the first _TREE_DIMS meters: a superset of the pairs, found
-    # faster than in every dimension) can be closer than that; their spread is then computed
-    # exactly.
-    relative = travel[:, :_TREE_DIMS] - travel[:, :1]
+    # tree query, maximum norm) can be closer than that; their spread is then computed exactly.
+    relative = travel - travel[:, :1]
     a, b = cKDTree(relative).query_pairs(resolution * (1 + 1e-9), p=np.inf, output_type="ndarray").T
     other = owner[a] != owner[b]
     a, b = a[other], b[other]
