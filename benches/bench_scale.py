@@ -116,17 +116,23 @@ def sizes(network: str) -> tuple[int, int]:
     return wn.num_junctions, wn.num_pipes
 
 
-def ltown(directory: Path) -> Path | None:
-    """L-TOWN.inp extracted from the pinned wheel into ``directory`` (None without the wheel)."""
+def from_wheel(member: str, directory: Path) -> Path | None:
+    """The network ``member`` of the pinned epyt wheel, extracted into ``directory`` under its
+    own file name (None without the wheel or the member)."""
     wheels = sorted((REPO / "networks" / "public").glob(WHEEL_GLOB))
     if not wheels:
         return None
     with zipfile.ZipFile(wheels[-1]) as wheel:
-        if LTOWN_MEMBER not in wheel.namelist():
+        if member not in wheel.namelist():
             return None
-        target = directory / "L-TOWN.inp"
-        target.write_bytes(wheel.read(LTOWN_MEMBER))
+        target = directory / Path(member).name
+        target.write_bytes(wheel.read(member))
     return target
+
+
+def ltown(directory: Path) -> Path | None:
+    """L-TOWN.inp extracted from the pinned wheel into ``directory`` (None without the wheel)."""
+    return from_wheel(LTOWN_MEMBER, directory)
 
 
 def row(name: str, what: str, measured: tuple[float, float, float, Any], note: str = "") -> None:

@@ -15,6 +15,7 @@ __all__ = ["add_parser", "run"]
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Register ``burstloc place``."""
     from burstloc.sim.placement import PLACEMENT_METHODS
+    from burstloc.sim.scaled_placement import DEFAULT_SCALING, SCALE_JUNCTIONS
 
     parser = subparsers.add_parser(
         "place",
@@ -24,7 +25,11 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "patterns of bursts on different pipes, for the arrival and fused localizers; "
         "'region': the shortest expected search region, the meters that leave the least main "
         "whose arrival pattern is within a capture interval of the burst point's; "
-        "'coverage': greedy separation of the steady-state burst signatures. Prints the meters, "
+        "'coverage': greedy separation of the steady-state burst signatures. On a network of "
+        f"more than {SCALE_JUNCTIONS} junctions, 'arrival' and 'region' choose among "
+        f"{DEFAULT_SCALING.candidates} junctions spread over the network and score a seeded "
+        "sample of burst points (an approximation, deterministic; smaller networks get the "
+        "exact greedy). Prints the meters, "
         "their arrival separation (the share of candidate burst points whose arrival pattern "
         "is at least one capture interval from every other pipe's) and their expected "
         "ambiguous main (the metres of main a search region cannot rule out from arrival "

@@ -30,6 +30,12 @@ simulated), all greedy: starting from no meter, add one junction at a time.
   is within a capture interval of the burst point's (the points a search region cannot rule out
   from the arrivals); its own module.
 
+On a network of more than :data:`~burstloc.sim.scaled_placement.SCALE_JUNCTIONS` junctions
+(1 000; BWSN_Network_2 has 12 523) ``arrival`` and ``region`` choose among a well-spread subset
+of the junctions and evaluate their objective on a seeded sample of burst points
+(:mod:`burstloc.sim.scaled_placement`): an approximation, deterministic; every smaller network
+gets the exact greedy above.
+
 How far a set of meters can go on arrivals alone: :func:`arrival_separation` (and
 :func:`meter_separation` on a network file, printed by ``burstloc place``) is the share of the
 candidate burst points whose arrival pattern at the meters is at least one capture interval from
@@ -70,6 +76,7 @@ from burstloc.inp import network_hash
 from burstloc.localize.arrival import PipeGeometry
 from burstloc.sim._placement_checks import check_meter_count, check_timing, meter_geometry
 from burstloc.sim.region_placement import region_meters
+from burstloc.sim.scaled_placement import DEFAULT_SCALING, Scaling, reduced_problem
 
 __all__ = [
     "ARRIVAL_POINTS",
@@ -97,8 +104,11 @@ MAX_EXACT = 48
 (best bound first); below it, and on every network with no more junctions, the choice is the
 exact greedy one (see :func:`arrival_meters`)."""
 
-#: Limit on the junctions of a meter file (the localization model's).
+#: Limit on the meters of a meter file (the localization model's).
 MAX_METERS = 10_000
+
+#: Limit on the junctions of the network a meter file is for (BWSN_Network_2 has 12 523).
+MAX_JUNCTIONS = 1_000_000
 
 
 def coverage_meters(signatures: Any, count: int) -> tuple[str, ...]:
@@ -378,7 +388,7 @@ class MeterSet:
                 f"method must be one of {[*PLACEMENT_METHODS, 'manual']}, got {self.method!r}"
             )
         object.__setattr__(self, "meters", check_names(self.meters, "meters", high=MAX_METERS))
-        check_count(self.junctions, "junctions", high=MAX_METERS)
+        check_count(self.junctions, "junctions", high=MAX_JUNCTIONS)
 
     def check(self, network: str | os.PathLike[str]) -> tuple[str, ...]:
         """The meters, once the file is known to be for ``network`` (ConfigError otherwise)."""
@@ -432,10 +442,12 @@ def place_meters(
     method: str = "arrival",
     wave_speed: float = WAVE_SPEED,
     resolution: float = 0.2,
+    scaling: Scaling = DEFAULT_SCALING,
 ) -> MeterSet:
     """Place ``count`` meters on the junctions of the INP file ``network`` by ``method``
     (module docstring); ``resolution`` (s) is the ``arrival`` and ``region`` methods' capture
-    interval.
+    interval. On a network of more junctions than ``scaling.above`` those two methods run on
+    a reduced problem (:mod:`burstloc.sim.scaled_placement`).
 
     Raises:
         NetworkError: missing or malformed network.
@@ -452,6 +464,28 @@ def place_meters(
     check_meter_count(count, len(junctions))
     if method == "coverage":
         meters = coverage_meters(cached_signatures(network, junctions), count)
+    elif scaling.applies(len(junctions)):
+        problem = reduced_problem(wn, count, scaling)
+        if method == "arrival":
+            meters = arrival_meters(
+                problem.arrival_pipes,
+                problem.candidates,
+                problem.distances,
+                count,
+                wave_speed=wave_speed,
+                resolution=resolution,
+            )
+        else:
+            meters = region_meters(
+                problem.pipes,
+                problem.candidates,
+                problem.distances,
+                count,
+                wave_speed=wave_speed,
+                resolution=resolution,
+                points=scaling.points,
+                seed=scaling.seed,
+            )
     else:
         pipes, distances = arrival_geometry(wn, junctions)
         place: Callable[..., tuple[str, ...]] = arrival_meters

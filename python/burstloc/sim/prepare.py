@@ -37,6 +37,7 @@ __all__ = [
     "arrival_geometry",
     "arrival_localizer",
     "length_graph",
+    "pipe_geometry",
     "prepare_model",
     "ranking_localizers",
     "travel_time_spread",
@@ -90,6 +91,18 @@ def _meters_of(wn: WaterNetworkModel, meters: Sequence[str] | None) -> list[str]
     )
 
 
+def pipe_geometry(wn: WaterNetworkModel) -> list[PipeGeometry]:
+    """Every pipe's flow-direction end nodes and length (m), in the network's pipe order.
+
+    One EPANET steady state (:func:`burstloc.network.flow_direction_graph`, pressure-driven).
+    """
+    by_pipe = flow_direction_graph(wn).graph["edges_by_pipe"]
+    return [
+        PipeGeometry(p, str(by_pipe[p][0]), str(by_pipe[p][1]), float(wn.get_link(p).length))
+        for p in wn.pipe_name_list
+    ]
+
+
 def arrival_geometry(
     network: str | os.PathLike[str] | WaterNetworkModel, meters: Sequence[str] | None = None
 ) -> tuple[list[PipeGeometry], dict[str, NDArray[np.float64]]]:
@@ -104,11 +117,7 @@ def arrival_geometry(
     wn = _model_of(network)
     meter_list = _meters_of(wn, meters)
     graph = length_graph(wn)
-    by_pipe = flow_direction_graph(wn).graph["edges_by_pipe"]
-    pipes = [
-        PipeGeometry(p, str(by_pipe[p][0]), str(by_pipe[p][1]), float(wn.get_link(p).length))
-        for p in wn.pipe_name_list
-    ]
+    pipes = pipe_geometry(wn)
     per_meter = {
         m: nx.single_source_dijkstra_path_length(graph, m, weight="length") for m in meter_list
     }

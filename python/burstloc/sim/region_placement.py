@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -84,6 +84,10 @@ _TIE = 1e-6
 _BLOCK = 2_000_000
 """Elements per vectorized pass (bounds the memory of a step)."""
 
+_PAIRS = 4_000_000
+"""Most (burst, point) pairs :func:`ambiguous_length` holds at once: a larger grid (a large
+network's) is summed over blocks of bursts."""
+
 
 @dataclass(frozen=True)
 class AmbiguityGrid:
@@ -107,17 +111,28 @@ def ambiguity_grid(
     step: float = REGION_STEP,
     samples: int = BURST_SAMPLES,
     seed: int = SAMPLE_SEED,
+    points: int | None = None,
 ) -> AmbiguityGrid:
     """The points and bursts of the objective (module docstring) for ``junctions``;
     ``node_distances[n][j]`` is the path length (m) from pipe end node ``n`` to
     ``junctions[j]`` (:func:`burstloc.sim.prepare.arrival_geometry`). An unreachable junction
     is ten times the longest reachable travel away (heard by no burst, alike for all).
 
+    ``points``: at most this many points (default: every segment). A grid with more is
+    replaced by a sample of ``points`` segments drawn with probability proportional to length
+    (seeded by ``seed``; a segment drawn ``c`` times weighs ``c`` times the mean length of
+    main per draw, so the ambiguous main keeps its scale); the bursts are then drawn from
+    those (the scaled placement of large networks, :mod:`burstloc.sim.scaled_placement`).
+
     Raises:
-        ConfigError: no pipe, a bad wave speed, step or sample count.
+        ConfigError: no pipe, a bad wave speed, step, sample or point count.
     """
     if isinstance(samples, bool) or not isinstance(samples, int) or samples < 1:
         raise ConfigError(f"the burst sample count must be an integer >= 1, got {samples!r}")
+    if points is not None and (
+        isinstance(points, bool) or not isinstance(points, int) or points < 1
+    ):
+        raise ConfigError(f"the point count must be an integer >= 1, got {points!r}")
     localizer = ArrivalLocalizer(
         pipes, junctions, node_distances, wave_speed=wave_speed, positions=(0.5,)
     )
@@ -127,6 +142,12 @@ def ambiguity_grid(
     far = 10 * float(travel[finite].max()) if finite.any() else 1.0
     travel = np.where(finite, travel, far).astype(np.float32)
     length = np.asarray(grid.length, dtype=np.float64)
+    if points is not None and length.size > points:
+        share = length / length.sum()
+        drawn = np.random.default_rng(seed).choice(length.size, size=points, p=share)
+        kept, counts = np.unique(drawn, return_counts=True)
+        travel, length = travel[kept], counts * (float(length.sum()) / points)
+        seed += 1  # the bursts: another draw
     share = length / length.sum()
     if length.size <= samples:
         bursts, weight = np.arange(length.size, dtype=np.int64), share
@@ -221,21 +242,30 @@ def region_meters(
     resolution: float = 0.2,
     step: float = REGION_STEP,
     samples: int = BURST_SAMPLES,
+    points: int | None = None,
+    seed: int = SAMPLE_SEED,
 ) -> tuple[str, ...]:
     """Choose ``count`` of ``junctions`` that minimise the expected ambiguous main (module
-    docstring); ``node_distances`` as for :func:`ambiguity_grid`.
+    docstring); ``node_distances``, ``points`` and ``seed`` as for :func:`ambiguity_grid`.
 
     Returns:
         The chosen junctions, in ``junctions`` order.
 
     Raises:
-        ConfigError: ``count`` out of range, or a bad wave speed, resolution, step or sample
-            count.
+        ConfigError: ``count`` out of range, or a bad wave speed, resolution, step, sample or
+            point count.
     """
     check_meter_count(count, len(junctions))
     check_timing(wave_speed, resolution)
     grid = ambiguity_grid(
-        pipes, junctions, node_distances, wave_speed=wave_speed, step=step, samples=samples
+        pipes,
+        junctions,
+        node_distances,
+        wave_speed=wave_speed,
+        step=step,
+        samples=samples,
+        seed=seed,
+        points=points,
     )
     travel = grid.travel
     mean = grid.length @ travel / grid.length.sum()
@@ -279,7 +309,15 @@ def ambiguous_length(
     grid = ambiguity_grid(
         pipes, meters, node_distances, wave_speed=wave_speed, step=step, samples=samples, seed=seed
     )
-    return _Pairs(grid, range(len(meters)), resolution).ambiguous()
+    bursts = max(1, _PAIRS // grid.length.size)  # per block: bounded memory
+    if grid.bursts.size <= bursts:
+        return _Pairs(grid, range(len(meters)), resolution).ambiguous()
+    total = 0.0
+    for lo in range(0, grid.bursts.size, bursts):
+        part = slice(lo, lo + bursts)
+        block = replace(grid, bursts=grid.bursts[part], weight=grid.weight[part])
+        total += _Pairs(block, range(len(meters)), resolution).ambiguous()
+    return total
 
 
 def meter_ambiguity(
