@@ -28,20 +28,14 @@ from __future__ import annotations
 import argparse
 import random
 import tempfile
-import zipfile
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from bench_scale import BATTLEDIM_SENSORS, REPO, WHEEL_GLOB, measure
+from bench_scale import BATTLEDIM_SENSORS, BWSN2_MEMBER, LTOWN_MEMBER, REPO, from_wheel, measure
 
-MEMBERS = {
-    "L-TOWN": "epyt/networks/L-TOWN.inp",
-    "BWSN_Network_2": "epyt/networks/asce-tf-wdst/BWSN_Network_2.inp",
-}
-
-
+MEMBERS = (LTOWN_MEMBER, BWSN2_MEMBER)
 POSITIONS = (0.1, 0.5, 0.9)
 
 
@@ -84,18 +78,6 @@ def unit(matrix: np.ndarray) -> np.ndarray:
 
 def cosine(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.sum(unit(a) * unit(b), axis=1)
-
-
-def extract(member: str, directory: Path) -> Path | None:
-    wheels = sorted((REPO / "networks" / "public").glob(WHEEL_GLOB))
-    if not wheels:
-        return None
-    with zipfile.ZipFile(wheels[-1]) as wheel:
-        if member not in wheel.namelist():
-            return None
-        target = directory / Path(member).name
-        target.write_bytes(wheel.read(member))
-    return target
 
 
 def bench(network: Path, sample: int, count: int, seed: int) -> None:
@@ -153,8 +135,8 @@ def main() -> None:
             public = REPO / "networks" / "public"
             networks = [REPO / "networks" / "paper15.inp"]
             networks += [public / f"{n}.inp" for n in ("Net1", "Net2", "Anytown", "Net3")]
-            for member in MEMBERS.values():
-                path = extract(member, Path(tmp))
+            for member in MEMBERS:
+                path = from_wheel(member, Path(tmp))
                 if path is None:
                     print(f"skipped {member}: the pinned epyt wheel is missing (make networks)")
                 else:

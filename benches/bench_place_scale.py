@@ -40,9 +40,8 @@ from typing import Any
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / "benches"))
 
-from bench_scale import LTOWN_MEMBER, from_wheel, measure  # noqa: E402
+from bench_scale import BWSN2_MEMBER, LTOWN_MEMBER, from_wheel, measure  # noqa: E402
 
-BWSN2_MEMBER = "epyt/networks/asce-tf-wdst/BWSN_Network_2.inp"
 HALF_LTOWN = {"above": 0, "candidates": 400, "pipes": 450, "points": 1000}
 """The scaled placement forced onto L-TOWN at half its size."""
 SAMPLED_PIPES = 1500

@@ -37,6 +37,7 @@ from typing import Any
 REPO = Path(__file__).resolve().parents[1]
 WHEEL_GLOB = "epyt-*-py3-none-any.whl"
 LTOWN_MEMBER = "epyt/networks/L-TOWN.inp"
+BWSN2_MEMBER = "epyt/networks/asce-tf-wdst/BWSN_Network_2.inp"
 BATTLEDIM_SENSORS = (
     [f"n{i}" for i in (1, 4, 31, 54, 105, 114, 163, 188, 215, 229, 288, 296)]
     + [f"n{i}" for i in (332, 342, 410, 415, 429, 458, 469, 495, 506, 516, 519, 549, 613, 636, 644)]
