@@ -81,3 +81,24 @@ def test_a_dask_cluster_gives_the_same_evaluation_as_local_processes(
     assert cluster.to_json() == local.to_json()
     assert [r.total for r in cluster.runs] == [3, 3, 3]
     assert sorted(cluster.results) == ["A", "B", "C"]
+
+
+def test_a_compact_attempt_keeps_the_best_pipes_and_refuses_deeper_questions(
+    tiny: Path, tiny_config: Any
+) -> None:
+    from burstloc.exceptions import InputError
+
+    held = run(tiny, tiny_config, False, keep_heads=True)
+    ranked = [a for r in held.runs[1:] for tries in r.attempts.values() for a in tries]
+    ranked = [a for a in ranked if a.ranking is not None and len(a.ranking) > 2]
+    assert ranked
+    for attempt in ranked:
+        small = attempt.compact(2)
+        assert small.ranking is not None and len(small.ranking) == 2
+        assert [p.pipe for p in small.ranking] == [p.pipe for p in attempt.ranking.top(2)]
+        assert (small.in_top(1), small.in_top(2)) == (attempt.in_top(1), attempt.in_top(2))
+        assert small.decision is not None and attempt.decision is not None
+        assert small.decision.posterior is attempt.decision.posterior  # regions still scored
+        assert len(small.early) == len(attempt.early)
+        with pytest.raises(InputError, match="kept its 2 best pipes, not 3"):
+            small.in_top(3)

@@ -85,6 +85,9 @@ __all__ = [
 #: interval in ``burstloc study`` (docs/study/report.md).
 DEFAULT_LOCALIZER = "fused"
 
+KEPT_PIPES = 10
+"""Best pipes a streamed evaluation keeps of each decision's ranking (the tables read three)."""
+
 
 def evaluate(
     network: str | os.PathLike[str],
@@ -108,10 +111,12 @@ def evaluate(
     """Run the experiment: simulate (cached), stream, localize and score every run.
 
     With ``keep_heads=False`` each burst is scored as its simulation arrives and only its
-    first time step is kept (in ``Evaluation.results``): memory no longer grows with the
-    number of pipes (a 905-pipe network at a 6.8 ms step holds about 200 MB of heads per
-    burst). The scores are the same; what reads a burst's heads afterwards (plots, the event
-    classifier) needs the default.
+    first time step is kept (in ``Evaluation.results``), and each attempt only its decisions'
+    :data:`KEPT_PIPES` best pipes (:meth:`~burstloc.experiments.harness.Attempt.compact`):
+    memory no longer grows with the number of pipes (a 905-pipe network at a 6.8 ms step holds
+    about 200 MB of heads per burst, a ranking of every pipe about 160 KB per attempt). The
+    scores are the same; what reads a burst's heads afterwards (plots, the event classifier)
+    needs the default.
 
     ``time_step`` is TSNet's requested time step (s); ``None`` applies the rule of ``burstloc
     study`` (:func:`burstloc.sim.time_step.capture_time_step`): TSNet's own step, or half the finest
@@ -210,7 +215,10 @@ def evaluate(
             phase_span,
             scoring["sensors"],
         )
-        streamed[result.pipe] = {spec: by_pipe[result.pipe] for spec, by_pipe in scored.items()}
+        streamed[result.pipe] = {
+            spec: [a.compact(KEPT_PIPES) for a in by_pipe[result.pipe]]
+            for spec, by_pipe in scored.items()
+        }
         # copies: a slice would keep the whole arrays alive
         return replace(result, time=result.time[:1].copy(), heads=result.heads[:1].copy())
 

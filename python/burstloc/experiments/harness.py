@@ -31,7 +31,7 @@ import math
 import os
 import statistics
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -195,6 +195,8 @@ class Attempt:
     early: tuple[Decision, ...] = ()
     """The monitor's early (transient) records before ``decision``, in order: located from
     the arrivals, answered later (:class:`burstloc.live.decision.LiveDecision`)."""
+    kept: int | None = None
+    """How many best pipes each ranking kept (:meth:`compact`); ``None``: all."""
 
     @property
     def ranking(self) -> Ranking | None:
@@ -225,10 +227,33 @@ class Attempt:
         return self.predicted_pipe == self.pipe
 
     def in_top(self, k: int) -> bool:
-        """Whether the burst pipe is among the ``k`` best-ranked (the paper's rules name one)."""
+        """Whether the burst pipe is among the ``k`` best-ranked (the paper's rules name one).
+
+        Raises:
+            InputError: ``k`` beyond what a compacted attempt kept (:meth:`compact`).
+        """
         if self.ranking is not None:
+            if self.kept is not None and k > self.kept:
+                raise InputError(f"this attempt kept its {self.kept} best pipes, not {k}")
             return self.ranking.in_top(self.pipe, k)
         return self.correct
+
+    def compact(self, keep: int) -> Attempt:
+        """The attempt with each decision's ranking cut to its ``keep`` best pipes (a ranking
+        of every pipe is about 160 KB on a 900-pipe network; the tables read the first three):
+        what a long evaluation holds per burst."""
+
+        def cut(decision: Decision | None) -> Decision | None:
+            if decision is None or len(decision.ranking) <= keep:
+                return decision
+            return replace(decision, ranking=Ranking(decision.ranking.top(keep)))
+
+        return replace(
+            self,
+            decision=cut(self.decision),
+            early=tuple(d for d in map(cut, self.early) if d is not None),
+            kept=keep,
+        )
 
     @property
     def predicted(self) -> tuple[str, str] | None:
