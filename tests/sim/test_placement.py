@@ -177,7 +177,7 @@ def _reference_arrival_meters(
     candidate points (a points x points matrix per candidate), as the placement was first
     written."""
     from burstloc.constants import WAVE_SPEED
-    from burstloc.sim.placement import ARRIVAL_POINTS, _travel
+    from burstloc.sim.arrival_placement import ARRIVAL_POINTS, _travel
 
     travel = _travel(pipes, distances, ARRIVAL_POINTS, WAVE_SPEED)
     n_pipes, n_points = len(pipes), len(ARRIVAL_POINTS)
@@ -254,7 +254,7 @@ def test_arrival_separation_equals_the_direct_evaluation(paper15: Path) -> None:
     """The k-d tree's candidate pairs miss no pair closer than the capture interval: the same
     share as comparing every point with every other point."""
     from burstloc.constants import CANDIDATE_POSITIONS, WAVE_SPEED
-    from burstloc.sim.placement import _travel
+    from burstloc.sim.arrival_placement import _travel
     from burstloc.sim.prepare import arrival_geometry
 
     shares = []
