@@ -78,8 +78,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Handle ``burstloc place``: print the meters; write the file with ``--out``."""
-    from burstloc.sim.placement import meter_separation, place_meters
-    from burstloc.sim.region_placement import meter_ambiguity
+    from burstloc.sim.placement import meter_scores, place_meters
 
     if args.out:
         check_output(args.out)
@@ -96,15 +95,12 @@ def run(args: argparse.Namespace) -> int:
         f"{len(placed.meters)} of {placed.junctions} junctions ({placed.method}): "
         + " ".join(placed.meters)
     )
-    told = meter_separation(
+    told, ambiguous = meter_scores(
         args.network, placed.meters, wave_speed=args.wave_speed, resolution=args.capture_interval
     )
     print(
         f"arrival separation at {args.capture_interval:g} s: {100 * told:.0f} % of the candidate "
         "burst points are at least one capture interval from every point of every other pipe"
-    )
-    ambiguous = meter_ambiguity(
-        args.network, placed.meters, wave_speed=args.wave_speed, resolution=args.capture_interval
     )
     print(
         f"expected ambiguous main at {args.capture_interval:g} s: {ambiguous:.0f} m (the main a "

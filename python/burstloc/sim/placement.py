@@ -74,7 +74,7 @@ from burstloc.exceptions import ConfigError
 from burstloc.inp import network_hash
 from burstloc.sim._placement_checks import check_meter_count, meter_geometry
 from burstloc.sim.arrival_placement import ARRIVAL_POINTS, arrival_meters, arrival_separation
-from burstloc.sim.region_placement import region_meters
+from burstloc.sim.region_placement import ambiguous_length, region_meters
 from burstloc.sim.scaled_placement import DEFAULT_SCALING, Scaling, reduced_problem
 
 __all__ = [
@@ -85,6 +85,7 @@ __all__ = [
     "arrival_meters",
     "arrival_separation",
     "coverage_meters",
+    "meter_scores",
     "meter_separation",
     "place_meters",
 ]
@@ -283,3 +284,26 @@ def meter_separation(
     """
     pipes, distances = meter_geometry(network, meters)
     return arrival_separation(pipes, distances, wave_speed=wave_speed, resolution=resolution)
+
+
+def meter_scores(
+    network: str | os.PathLike[str],
+    meters: Sequence[str],
+    *,
+    wave_speed: float = WAVE_SPEED,
+    resolution: float = 0.2,
+) -> tuple[float, float]:
+    """:func:`meter_separation` and
+    :func:`~burstloc.sim.region_placement.meter_ambiguity` of ``meters`` at once, from one
+    arrival geometry (what ``burstloc place`` prints).
+
+    Raises:
+        NetworkError: missing or malformed network, or a meter that is not a junction.
+        ConfigError: no meter, a bad wave speed or resolution.
+    """
+    pipes, distances = meter_geometry(network, meters)
+    told = arrival_separation(pipes, distances, wave_speed=wave_speed, resolution=resolution)
+    ambiguous = ambiguous_length(
+        pipes, tuple(meters), distances, wave_speed=wave_speed, resolution=resolution
+    )
+    return told, ambiguous
