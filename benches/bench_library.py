@@ -14,7 +14,7 @@ open: a closed pipe has nothing to burst) and the row says:
 * the model's size: junctions, pipes, pumps, valves, sources (reservoirs + tanks) and parallel
   links (links that share both end nodes with another link);
 * the outcome: ``simulated`` with the largest movement of a junction before the burst (the
-  steady-start check, :mod:`burstloc.sim.steady`), or ``refused`` with burstloc's one-line
+  steady-start check, :mod:`burstloc.sim.transient.steady`), or ``refused`` with burstloc's one-line
   reason, or ``timeout``;
 * the wall-clock seconds of the child (loading, preparation, simulation).
 
@@ -98,8 +98,8 @@ def first_open_pipe(path: Path) -> str:
 def _one(path: str, queue: Any) -> None:
     """Child: simulate one burst as ``burstloc simulate`` does; put the outcome on ``queue``."""
     try:
-        from burstloc.sim.scenario import burst_scenarios
-        from burstloc.sim.tsnet import simulate_burst
+        from burstloc.sim.scenarios.scenario import burst_scenarios
+        from burstloc.sim.transient.tsnet import simulate_burst
 
         pipe = first_open_pipe(Path(path))
         (scenario,) = burst_scenarios(

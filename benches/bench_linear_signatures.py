@@ -9,13 +9,14 @@ directory, not into the repository), L-TOWN and BWSN_Network_2. Per network, eac
 child process (wall time, CPU time, peak resident memory):
 
 * ``exact``: EPANET steady states of the network split at 10 %, 50 % and 90 % of every pipe (in
-  one project edited in place, as :func:`burstloc.sim.signatures.compute_signatures`); on
+  one project edited in place, as :func:`burstloc.sim.signatures.compute.compute_signatures`); on
   networks above ``--sample`` pipes only ``--sample`` pipes drawn with ``--seed``. The cost of
   the nine positions ``calibrate`` computes is *extrapolated* from the CPU per EPANET run (stated
   as such), plus loading the network once;
-* ``linear``: :func:`burstloc.sim.signatures.linear_signature_sets`, nine positions, every pipe;
+* ``linear``: :func:`burstloc.sim.signatures.compute.linear_signature_sets`, nine positions, every
+pipe;
 * ``hybrid``: its cost is one exact run per pipe (at the ``exact`` stage's CPU per run) plus the
-  ``linear`` stage; its signatures are :func:`burstloc.sim.linear_signatures.anchored` of those.
+  ``linear`` stage; its signatures are :func:`burstloc.sim.signatures.linear.anchored` of those.
 
 Agreement: at 10 %, 50 % and 90 % along the (sampled) pipes heard at the meters, the cosine between
 each pipe's exact signature and the linear or hybrid one (the signature localizer fits a free
@@ -46,8 +47,8 @@ def stage_exact(network: str, meters: list[str], pipes: list[str]) -> Any:
 
     from burstloc._diagnostics import capture_diagnostics
     from burstloc.network import load_network
-    from burstloc.sim.epanet_inplace import InPlaceSplitter
-    from burstloc.sim.signatures import DEFAULT_BURST_COEFF
+    from burstloc.sim.signatures.compute import DEFAULT_BURST_COEFF
+    from burstloc.sim.signatures.epanet_inplace import InPlaceSplitter
 
     wn = load_network(network)
     out = np.empty((len(POSITIONS), len(pipes), len(meters)))
@@ -64,7 +65,7 @@ def stage_exact(network: str, meters: list[str], pipes: list[str]) -> Any:
 def stage_linear(network: str, meters: list[str]) -> Any:
     """The nine linear sets; those at :data:`POSITIONS` and the pipe order."""
     from burstloc.constants import CANDIDATE_POSITIONS
-    from burstloc.sim.signatures import linear_signature_sets
+    from burstloc.sim.signatures.compute import linear_signature_sets
 
     sets = linear_signature_sets(network, meters)
     at = [sets[list(CANDIDATE_POSITIONS).index(x)] for x in POSITIONS]
@@ -82,7 +83,7 @@ def cosine(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def bench(network: Path, sample: int, count: int, seed: int) -> None:
     from burstloc.inp import junction_names_in_file, pipe_names_in_file
-    from burstloc.sim.linear_signatures import anchored
+    from burstloc.sim.signatures.linear import anchored
 
     junctions = junction_names_in_file(network)
     all_pipes = pipe_names_in_file(network)

@@ -59,9 +59,9 @@ def main() -> None:
     from burstloc.experiments.calibrate import calibrate
     from burstloc.experiments.harness import Clock, capture_readings
     from burstloc.live import monitor as live
-    from burstloc.sim.cache import DiskCache
-    from burstloc.sim.scenario import BurstScenario
-    from burstloc.sim.tsnet import simulate_burst
+    from burstloc.sim.scenarios.cache import DiskCache
+    from burstloc.sim.scenarios.scenario import BurstScenario
+    from burstloc.sim.transient.tsnet import simulate_burst
 
     if not NET3.is_file():
         raise SystemExit(f"{NET3} is missing: run `make setup`")

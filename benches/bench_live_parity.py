@@ -65,10 +65,10 @@ def main() -> None:
     from burstloc.experiments.calibrate import calibrate
     from burstloc.experiments.harness import Clock, RankingSetup, capture_readings, first_decision
     from burstloc.live.monitor import BurstMonitor
-    from burstloc.sim import tsnet
-    from burstloc.sim.cache import DiskCache
-    from burstloc.sim.scenario import burst_scenarios
-    from burstloc.sim.sensors import SensorModel
+    from burstloc.sim.scenarios.cache import DiskCache
+    from burstloc.sim.scenarios.scenario import burst_scenarios
+    from burstloc.sim.scenarios.sensors import SensorModel
+    from burstloc.sim.transient import tsnet
 
     net = str(NETWORK)
     chosen = paper.TSNET_EXAMPLE_SCENARIO if args.example else paper.SCENARIO

@@ -17,9 +17,11 @@ process):
   heads compared bit for bit; their CPU ratio is the speed-up measured in this run;
 * ``simulate xK, afresh`` and ``simulate xK, kept``: the first ``K`` (``--kept-pipes``)
   bursts of the sample in one process, each with the time step the evaluation asks for
-  (:func:`burstloc.sim.time_step.capture_time_step`), with the network, its steady state and
+  (:func:`burstloc.sim.transient.time_step.capture_time_step`), with the network, its steady state
+  and
   transient-ready model made afresh for each burst (as before they were kept), and kept from
-  one burst to the next (:mod:`burstloc.sim.intact`, as an evaluation's workers do), the heads
+  one burst to the next (:mod:`burstloc.sim.transient.intact`, as an evaluation's workers do), the
+  heads
   compared bit for bit; their CPU ratio is what keeping them saves;
 * ``evaluate``: ``burstloc evaluate`` (fused localizer, 0.2 s, the 33 sensors, no cache,
   ``--workers W``) of ``N`` pipes drawn at random with ``--seed`` (``--all``: every pipe);
@@ -55,8 +57,8 @@ MIN_PIPE_LENGTH = 30.0
 
 def stage_simulate(network: str, pipe: str, solver: str) -> str:
     """One burst of the evaluation's scenario; the SHA-256 of its heads."""
-    from burstloc.sim.scenario import BurstScenario
-    from burstloc.sim.tsnet import simulate_burst
+    from burstloc.sim.scenarios.scenario import BurstScenario
+    from burstloc.sim.transient.tsnet import simulate_burst
 
     scenario = BurstScenario(network, pipe, min_pipe_length=MIN_PIPE_LENGTH, solver=solver)
     result = simulate_burst(scenario, cache=False)
@@ -70,10 +72,10 @@ def stage_simulate_many(network: str, pipes: list[str], kept: bool) -> list[str]
     SHA-256 of each burst's heads."""
     from dataclasses import replace
 
-    from burstloc.sim import intact
-    from burstloc.sim.scenario import BurstScenario
-    from burstloc.sim.time_step import capture_time_step
-    from burstloc.sim.tsnet import simulate_burst
+    from burstloc.sim.scenarios.scenario import BurstScenario
+    from burstloc.sim.transient import intact
+    from burstloc.sim.transient.time_step import capture_time_step
+    from burstloc.sim.transient.tsnet import simulate_burst
 
     digests = []
     for pipe in pipes:
@@ -143,7 +145,7 @@ def pipe_names(network: Path) -> list[str]:
 
 def meter_file(network: Path, directory: Path) -> Path:
     from burstloc.inp import network_hash
-    from burstloc.sim.placement import MeterSet
+    from burstloc.sim.placement.methods import MeterSet
 
     path = directory / "battledim.meters.json"
     MeterSet(

@@ -3,7 +3,8 @@
 Usage: ``.venv/bin/python benches/bench_moc.py [--duration S] [--networks NAME ...]``. Per
 network of the set (paper15, EPANET's Net1, Net2, Anytown, and Net3 on its transient-ready
 model with 30 m pipes), one burst (mid-pipe, from 1 s, opening in 0.3 s, coefficient 0.01) of
-``--duration`` simulated seconds, simulated by ``burstloc.sim.tsnet.simulate_burst`` (no cache)
+``--duration`` simulated seconds, simulated by ``burstloc.sim.transient.tsnet.simulate_burst`` (no
+cache)
 with each solver:
 
 * time steps; CPU seconds of the solver call alone and of the whole simulation (network
@@ -11,7 +12,7 @@ with each solver:
   (TSNet / vectorized) and the vectorized solver's microseconds per step;
 * the largest head difference at the meters and whether the heads are identical to the last
   bit (they are where NumPy's ``np.dot`` sums as OpenBLAS with NumPy 1.26 does; see
-  ``burstloc.sim.moc``).
+  ``burstloc.sim.transient.moc``).
 
 TSNet is the slow side: Net3 costs it about 5 CPU s per simulated second; ``--duration``
 (default 5 s) keeps the whole run to a few minutes. One solve at a time.
@@ -43,7 +44,7 @@ def solve_times(solver: str, scenario: Any) -> tuple[float, float, Any]:
     simulation (network preparation, steady state, discretization, solve), and the result."""
     from dataclasses import replace
 
-    from burstloc.sim import _tsnet_compat, moc, tsnet
+    from burstloc.sim.transient import _tsnet_compat, moc, tsnet
 
     module = _tsnet_compat.load().simulation if solver == "tsnet" else moc
     attribute = "MOCSimulator" if solver == "tsnet" else "solve"
@@ -74,7 +75,7 @@ def main() -> None:
     args = parser.parse_args()
     os.chdir(ROOT)
     sys.path.insert(0, str(ROOT / "python"))
-    from burstloc.sim.scenario import BurstScenario
+    from burstloc.sim.scenarios.scenario import BurstScenario
 
     print(f"one burst, {args.duration:g} s simulated; CPU seconds, one process")
     header = (

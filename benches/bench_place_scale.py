@@ -12,10 +12,11 @@ arrival and region objectives (lower is better for ``alike`` and ``ambiguous``):
   share of pipe pairs' separation missing below one capture interval (0.2 s), over every pipe
   (L-TOWN) or a sample of :data:`SAMPLED_PIPES` (BWSN_Network_2: seed 1, not the sample the
   placement fitted);
-* ``told``: the arrival separation (:func:`burstloc.sim.placement.meter_separation`, the share
+* ``told``: the arrival separation (:func:`burstloc.sim.placement.methods.meter_separation`, the
+share
   of candidate burst points at least one capture interval, 0.2 s, from every other pipe's;
   higher is better; 0 on L-TOWN, whose short pipes lie within 0.2 s of others);
-* ``ambiguous``: the expected ambiguous main (:func:`burstloc.sim.region_placement.
+* ``ambiguous``: the expected ambiguous main (:func:`burstloc.sim.placement.region.
   meter_ambiguity`, m, on the whole network).
 
 On L-TOWN, below the threshold, ``place_meters`` is the exact greedy; it is set beside the
@@ -52,8 +53,8 @@ def stage_place(network: str, count: int, method: str, scaling: dict[str, int] |
     """``place_meters`` (child process): the meters."""
     import warnings
 
-    from burstloc.sim.placement import place_meters
-    from burstloc.sim.scaled_placement import DEFAULT_SCALING, Scaling
+    from burstloc.sim.placement.methods import place_meters
+    from burstloc.sim.placement.scaled import DEFAULT_SCALING, Scaling
 
     warnings.simplefilter("ignore")  # WNTR's unused-curve warning on BWSN2
     chosen = DEFAULT_SCALING if scaling is None else Scaling(**scaling)
@@ -67,7 +68,7 @@ def stage_baselines(network: str, count: int) -> tuple[tuple[str, ...], tuple[st
     import numpy as np
 
     from burstloc.network import load_network
-    from burstloc.sim.scaled_placement import spread_junctions
+    from burstloc.sim.placement.scaled import spread_junctions
 
     warnings.simplefilter("ignore")
     wn = load_network(network)
@@ -79,14 +80,14 @@ def stage_baselines(network: str, count: int) -> tuple[tuple[str, ...], tuple[st
 
 def arrival_objective(network: str, meters: tuple[str, ...], pipes: int | None) -> float:
     """The ``arrival`` method's objective of ``meters`` as a share: the mean over pipe pairs of
-    ``min(separation, 0.2 s) / 0.2 s`` (:mod:`burstloc.sim.placement`; 1: every pair told
+    ``min(separation, 0.2 s) / 0.2 s`` (:mod:`burstloc.sim.placement.methods`; 1: every pair told
     apart), over every pipe (``pipes=None``) or a uniform sample of ``pipes`` (seed 1: not the
     sample the scaled placement fits, seed 0)."""
     import numpy as np
 
     from burstloc.constants import WAVE_SPEED
-    from burstloc.sim.placement import ARRIVAL_POINTS, _travel
-    from burstloc.sim.prepare import arrival_geometry
+    from burstloc.sim.model.prepare import arrival_geometry
+    from burstloc.sim.placement.methods import ARRIVAL_POINTS, _travel
 
     resolution = 0.2
     geometry, distances = arrival_geometry(network, list(meters))
@@ -114,8 +115,8 @@ def stage_quality(
     the objective over every pipe or a sample of ``pipes``, the others on the whole network."""
     import warnings
 
-    from burstloc.sim.placement import meter_separation
-    from burstloc.sim.region_placement import meter_ambiguity
+    from burstloc.sim.placement.methods import meter_separation
+    from burstloc.sim.placement.region import meter_ambiguity
 
     warnings.simplefilter("ignore")
     objective = arrival_objective(network, meters, pipes)

@@ -33,8 +33,8 @@ from burstloc.experiments.position import NetworkDistance, PipePoint, estimated_
 from burstloc.localize.arrival import ArrivalLocalizer
 from burstloc.localize.evidence import BurstEvidence, MeterAlarm
 from burstloc.network import load_network
-from burstloc.sim.placement import PLACEMENT_METHODS, place_meters
-from burstloc.sim.prepare import arrival_localizer
+from burstloc.sim.model.prepare import arrival_localizer
+from burstloc.sim.placement.methods import PLACEMENT_METHODS, place_meters
 
 REPO = Path(__file__).resolve().parents[1]
 NETWORKS = [REPO / "networks" / "paper15.inp", REPO / "networks" / "awumah11.inp"]

@@ -9,9 +9,9 @@ without ``coverage`` (its greedy had not finished after 10 minutes there). Per n
 count and method (``coverage``, ``arrival``, ``region``):
 
 * the placement's CPU time (in this process, the network's geometry included);
-* the *expected ambiguous main* (:func:`burstloc.sim.region_placement.ambiguous_length`, m):
+* the *expected ambiguous main* (:func:`burstloc.sim.placement.region.ambiguous_length`, m):
   the objective the ``region`` method minimises, on its own burst sample (seed 0) and, where
-  the network has more points than :data:`~burstloc.sim.region_placement.BURST_SAMPLES`, on a
+  the network has more points than :data:`~burstloc.sim.placement.region.BURST_SAMPLES`, on a
   fresh one (seed 1): the region method is fitted to the first;
 * unless ``--no-evaluate`` (and not on L-TOWN): the measured search regions of ``burstloc
   evaluate NET --detector cusum --capture-interval 0.2 --localizer fused --meters-file F`` (every
@@ -48,8 +48,8 @@ FRACTIONS = (0.1, 0.3)
 def _objective(network: str, meters: tuple[str, ...], seed: int) -> float:
     """The expected ambiguous main of ``meters`` on burst sample ``seed`` (NaN for another seed
     where every point bursts)."""
-    from burstloc.sim.prepare import arrival_geometry
-    from burstloc.sim.region_placement import ambiguity_grid, ambiguous_length
+    from burstloc.sim.model.prepare import arrival_geometry
+    from burstloc.sim.placement.region import ambiguity_grid, ambiguous_length
 
     pipes, distances = arrival_geometry(network, list(meters))
     if seed != 0:
@@ -61,7 +61,7 @@ def _objective(network: str, meters: tuple[str, ...], seed: int) -> float:
 
 def _evaluate(network: str, meters: tuple[str, ...], workers: int) -> dict[str, Any]:
     """``burstloc evaluate`` of ``meters``: its 95 % region scores."""
-    from burstloc.sim.placement import MeterSet
+    from burstloc.sim.placement.methods import MeterSet
 
     with tempfile.TemporaryDirectory(prefix="bench-region-") as tmp:
         placed = MeterSet(network, _hash(network), "manual", meters, _junctions(network))
@@ -116,7 +116,7 @@ def bench(
     workers: int,
     methods: tuple[str, ...] = METHODS,
 ) -> None:
-    from burstloc.sim.placement import place_meters
+    from burstloc.sim.placement.methods import place_meters
 
     name = str(network)
     main = _main_length(name)
@@ -170,7 +170,7 @@ def main() -> None:
         help="which of the default networks",
     )
     args = parser.parse_args()
-    import burstloc.sim.placement  # noqa: F401  (imports before the clocks start)
+    import burstloc.sim.placement.methods  # noqa: F401  (imports before the clocks start)
 
     with tempfile.TemporaryDirectory(prefix="bench-region-nets-") as tmp:
         for which in args.networks:

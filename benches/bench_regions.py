@@ -110,7 +110,7 @@ def _report(name: str, meters: int, junctions: int, run: dict, main_m: float, wa
 def main() -> None:
     """Place, evaluate and report every network and fraction."""
     from burstloc.network import load_network
-    from burstloc.sim.placement import place_meters
+    from burstloc.sim.placement.methods import place_meters
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("networks", nargs="*", type=Path)

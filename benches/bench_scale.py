@@ -12,7 +12,7 @@ reports its wall time, its CPU time and its peak resident memory:
 * ``calibrate``: ``calibrate`` (every default capture interval) with those meters (on L-TOWN
   BattLeDIM's 33 pressure sensors, as in the competition), signatures included;
 * ``signatures, new``: one signature set (one position, every pipe) from one EPANET project
-  edited in place (:mod:`burstloc.sim.epanet_inplace`);
+  edited in place (:mod:`burstloc.sim.signatures.epanet_inplace`);
 * ``signatures, old``: the method it replaces, a WNTR copy of the model split at the pipe
   (``split_pipe``) and a full EPANET run per pipe, timed on the first ``--old-pipes`` pipes only
   and *extrapolated* to every pipe (stated as such in the output).
@@ -51,8 +51,8 @@ def _measured(stage: Callable[..., Any], args: tuple[Any, ...], queue: Any) -> N
     package and WNTR are imported before the clocks start (what a stage costs, not Python's
     start-up)."""
     import burstloc.experiments.calibrate
-    import burstloc.sim.placement
-    import burstloc.sim.signatures  # noqa: F401  (and WNTR through it)
+    import burstloc.sim.placement.methods
+    import burstloc.sim.signatures.compute  # noqa: F401  (and WNTR through it)
 
     wall, cpu = time.perf_counter(), time.process_time()
     result = stage(*args)
@@ -73,7 +73,7 @@ def measure(stage: Callable[..., Any], *args: Any) -> tuple[float, float, float,
 
 
 def stage_place(network: str, count: int) -> tuple[str, ...]:
-    from burstloc.sim.placement import place_meters
+    from burstloc.sim.placement.methods import place_meters
 
     return place_meters(network, count, method="arrival").meters
 
@@ -88,7 +88,7 @@ def stage_calibrate(network: str, meters: list[str], cache: str) -> int:
 
 
 def stage_signatures_new(network: str) -> int:
-    from burstloc.sim.signatures import compute_signatures
+    from burstloc.sim.signatures.compute import compute_signatures
 
     return len(compute_signatures(network, position=0.5).pipes)
 
@@ -97,7 +97,7 @@ def stage_signatures_old(network: str, pipes: int) -> int:
     """The replaced method on the first ``pipes`` pipes: a copy split per pipe, EPANET run."""
     from burstloc._diagnostics import capture_diagnostics
     from burstloc.network import load_network, split_pipe, steady_state
-    from burstloc.sim.signatures import DEFAULT_BURST_COEFF
+    from burstloc.sim.signatures.compute import DEFAULT_BURST_COEFF
 
     wn = load_network(network)
     with capture_diagnostics():

@@ -53,8 +53,8 @@ from burstloc.live.health import Health, PlausibleRange  # noqa: E402
 from burstloc.live.loop import LiveLoop, Reporter  # noqa: E402
 from burstloc.live.monitor import BurstMonitor  # noqa: E402
 from burstloc.live.parse import parse_payload, parse_row  # noqa: E402
-from burstloc.sim.scenario import burst_scenarios  # noqa: E402
-from burstloc.sim.tsnet import simulate_burst  # noqa: E402
+from burstloc.sim.scenarios.scenario import burst_scenarios  # noqa: E402
+from burstloc.sim.transient.tsnet import simulate_burst  # noqa: E402
 
 NETWORK = ROOT / "networks" / "paper15.inp"
 DT = 0.2

@@ -8,11 +8,13 @@ TSNet's time step to the network's shortest pipe) at ``--onset`` s, simulated ``
 beyond it; printed as a Markdown table row:
 
 * the network's junctions, pipes, pumps / valves / tanks / reservoirs and shortest pipe;
-* what :mod:`burstloc.sim.tsnet_ready` changes (closed pipes and pumps removed, supply junctions
+* what :mod:`burstloc.sim.transient.tsnet_ready` changes (closed pipes and pumps removed, supply
+junctions
   made fixed inflows, connector pipes for pumps and valves at a branch), and the largest change
   it makes to a junction's steady head (EPANET, pressure-driven);
-* TSNet's time step (:func:`burstloc.sim.time_step.expected_time_step`, before running);
-* the steady-start check (:mod:`burstloc.sim.steady`): the largest movement of a junction's
+* TSNet's time step (:func:`burstloc.sim.transient.time_step.expected_time_step`, before running);
+* the steady-start check (:mod:`burstloc.sim.transient.steady`): the largest movement of a
+junction's
   pressure head before the onset, where and when; or the error that stopped the run;
 * CPU seconds of the run and per simulated second.
 
@@ -37,7 +39,7 @@ NETWORKS = [REPO / "networks" / n for n in ("paper15.inp", "paper15_assets.inp")
 def describe(path: Path) -> dict[str, Any]:
     """The network's size and assets, and the burst scenario used on it."""
     from burstloc.network import junction_names, load_network, steady_state
-    from burstloc.sim.tsnet_ready import prepare_for_tsnet
+    from burstloc.sim.transient.tsnet_ready import prepare_for_tsnet
 
     wn = load_network(str(path))
     pipes = {name: float(pipe.length) for name, pipe in wn.pipes()}
@@ -64,8 +66,8 @@ def describe(path: Path) -> dict[str, Any]:
 
 def _run(path: str, pipe: str, onset: float, duration: float, queue: Any) -> None:
     from burstloc.exceptions import UnsteadyStartError
-    from burstloc.sim.scenario import BurstScenario
-    from burstloc.sim.tsnet import simulate_burst
+    from burstloc.sim.scenarios.scenario import BurstScenario
+    from burstloc.sim.transient.tsnet import simulate_burst
 
     scenario = BurstScenario(path, pipe, burst_start=onset, duration=duration)
     cpu = time.process_time()
@@ -85,8 +87,8 @@ def _run(path: str, pipe: str, onset: float, duration: float, queue: Any) -> Non
 
 def measure(path: Path, onset: float, after: float, timeout: float) -> dict[str, Any]:
     """Describe ``path`` and run its burst in a child process (at most ``timeout`` s)."""
-    from burstloc.sim.scenario import BurstScenario
-    from burstloc.sim.time_step import expected_time_step
+    from burstloc.sim.scenarios.scenario import BurstScenario
+    from burstloc.sim.transient.time_step import expected_time_step
 
     row = describe(path)
     duration = onset + after

@@ -20,7 +20,7 @@ merged or lengthened to ``M`` m; the network's junctions kept, so the meters are
   demand) joined to it by an ``L`` m connector as wide as its widest pipe; and the pipe
   ``--split-pipe`` is cut ``L`` m before its end node (a connector in series);
 * with ``--localize``: the arrival localizer of the network as given (every junction metered,
-  :func:`burstloc.sim.prepare.arrival_localizer`) ranks each run's burst from alarms at the
+  :func:`burstloc.sim.model.prepare.arrival_localizer`) ranks each run's burst from alarms at the
   arrival times below (amplitude: the head change then): the pipe it names first, the rank
   of the burst pipe and the position error on it, for the original model and the prepared
   one (whose pipes are the original's: nothing is merged when every junction is kept);
@@ -54,8 +54,8 @@ def _simulate(
     path: str, pipe: str, min_length: float | None, duration: float, out: Any, log: str
 ) -> None:  # pragma: no cover - child process
     from burstloc import network
-    from burstloc.sim import _tsnet_compat
-    from burstloc.sim.tsnet import TransientSettings, isolated_run, run_transient
+    from burstloc.sim.transient import _tsnet_compat
+    from burstloc.sim.transient.tsnet import TransientSettings, isolated_run, run_transient
     from burstloc.skeleton import prepare_transient_model
 
     tsnet = _tsnet_compat.load()
@@ -226,7 +226,7 @@ def compare(original: dict[str, Any], prepared: dict[str, Any]) -> dict[str, Any
 def localize(path: str, pipe: str, run: dict[str, Any]) -> dict[str, Any]:
     """The arrival localizer's first pipe and the burst pipe's rank, from ``run``'s arrivals."""
     from burstloc.localize.evidence import BurstEvidence, MeterAlarm
-    from burstloc.sim.prepare import arrival_localizer
+    from burstloc.sim.model.prepare import arrival_localizer
 
     loc = arrival_localizer(path)
     t, h = np.array(run["time"]), np.array(run["heads"])

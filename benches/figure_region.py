@@ -80,7 +80,7 @@ def main() -> None:
     from burstloc.experiments.evaluate import evaluate
     from burstloc.experiments.runs import ranking_runs
     from burstloc.layout import read_layout
-    from burstloc.sim.placement import place_meters
+    from burstloc.sim.placement.methods import place_meters
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("network", nargs="?", default=str(REPO / "networks/public/Net2.inp"))

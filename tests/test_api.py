@@ -44,7 +44,9 @@ def _loaded_after(statement: str, prefixes: tuple[str, ...]) -> list[str]:
 def test_importing_burstloc_loads_no_layer_and_no_simulator() -> None:
     layers = tuple(f"burstloc.{p}" for p in ("sim", "live", "localize", "experiments", "cli"))
     assert _loaded_after("import burstloc", layers) == []
-    assert "burstloc.sim.tsnet" in _loaded_after("import burstloc.sim.tsnet", layers)
+    assert "burstloc.sim.transient.tsnet" in _loaded_after(
+        "import burstloc.sim.transient.tsnet", layers
+    )
 
 
 def test_the_live_names_do_not_load_the_simulator() -> None:

@@ -377,7 +377,7 @@ def test_public_names() -> None:
 
 
 def test_import_is_cheap() -> None:
-    heavy = "{'tsnet', 'wntr', 'burstloc.sim.tsnet'}"
+    heavy = "{'tsnet', 'wntr', 'burstloc.sim.transient.tsnet'}"
     code = f"import sys, burstloc; print(sorted({heavy} & set(sys.modules)))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"

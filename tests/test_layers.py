@@ -4,7 +4,8 @@ Layers: the base (``exceptions``, ``constants``, ``network``, ``readings``, ``_a
 ``localize`` (base only), ``live`` (base and localize: the live path never reaches the
 simulator), ``web`` (base and live: the control-room page shows the monitor's own records),
 ``sim`` (base and localize, whose model it prepares offline), ``experiments`` (all
-of those) and ``cli`` (anything; nothing imports it).
+of those) and ``cli`` (anything; nothing imports it). Inside ``sim``, its rooms import one
+another in one order too (:data:`SIM_ROOMS`).
 """
 
 from __future__ import annotations
@@ -26,6 +27,17 @@ ALLOWED: dict[str, set[str]] = {
     "sim": {"base", "localize", "sim"},
     "experiments": {"base", "localize", "live", "sim", "experiments"},
     "cli": {"base", "localize", "live", "web", "sim", "experiments", "cli"},
+}
+
+
+#: ``sim``'s sub-packages and the rooms each may import (besides the base and ``localize``).
+SIM_ROOMS: dict[str, set[str]] = {
+    "scenarios": {"scenarios"},
+    "transient": {"scenarios", "transient"},
+    "events": {"scenarios", "transient", "events"},
+    "signatures": {"scenarios", "signatures"},
+    "model": {"scenarios", "signatures", "model"},
+    "placement": {"scenarios", "signatures", "model", "placement"},
 }
 
 
@@ -78,7 +90,7 @@ def _graph() -> nx.DiGraph:
 
 def test_the_graph_sees_the_package() -> None:
     graph = _graph()
-    assert {"burstloc.live.monitor", "burstloc.sim.tsnet", "burstloc.cli"} <= set(graph)
+    assert {"burstloc.live.monitor", "burstloc.sim.transient.tsnet", "burstloc.cli"} <= set(graph)
     assert graph.has_edge("burstloc.live.monitor", "burstloc.localize.config")
 
 
@@ -92,6 +104,33 @@ def test_layers_import_only_downwards(layer: str) -> None:
         and _layer(target) not in ALLOWED[layer]
         and source != "burstloc"  # the façade re-exports from every layer, lazily
     )
+    assert not wrong, wrong
+
+
+def _room(module: str) -> str | None:
+    parts = module.split(".")
+    return parts[2] if len(parts) > 2 and parts[1] == "sim" else None
+
+
+def test_sim_is_rooms_only() -> None:
+    """Every module of ``sim`` lives in a room; no room is unknown to :data:`SIM_ROOMS`."""
+    sim = PACKAGE / "sim"
+    loose = sorted(p.name for p in sim.glob("*.py") if p.name != "__init__.py")
+    rooms = {p.name for p in sim.iterdir() if (p / "__init__.py").is_file()}
+    assert not loose, loose
+    assert rooms == set(SIM_ROOMS)
+
+
+def test_sim_rooms_import_in_order() -> None:
+    graph = _graph()
+    wrong = sorted(
+        f"{source} imports {target}"
+        for source, target in graph.edges
+        if (room := _room(source)) is not None
+        and (other := _room(target)) is not None
+        and other not in SIM_ROOMS[room]
+    )
+    assert graph.has_edge("burstloc.sim.placement.methods", "burstloc.sim.model.prepare")
     assert not wrong, wrong
 
 

@@ -345,7 +345,7 @@ def test_network_module_does_not_import_tsnet() -> None:
         "import sys; from burstloc import network as n; "
         f"g = n.flow_direction_graph(n.load_network({str(PAPER15)!r})); "
         "assert 'tsnet' not in sys.modules, 'tsnet imported'; "
-        "assert 'burstloc.sim.tsnet' not in sys.modules; print('ok')"
+        "assert 'burstloc.sim.transient.tsnet' not in sys.modules; print('ok')"
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
     assert done.returncode == 0, done.stderr

@@ -59,9 +59,9 @@ if TYPE_CHECKING:
     from burstloc.localize.evidence import BurstEvidence, RankedPipe, Ranking
     from burstloc.localize.model import LocalizationModel
     from burstloc.readings import Reading, Step
-    from burstloc.sim.events import EventScenario, simulate_event
-    from burstloc.sim.scenario import BurstScenario
-    from burstloc.sim.tsnet import simulate_burst
+    from burstloc.sim.events.operations import EventScenario, simulate_event
+    from burstloc.sim.scenarios.scenario import BurstScenario
+    from burstloc.sim.transient.tsnet import simulate_burst
 
 #: Names imported on first use, and the module each comes from.
 _LAZY: dict[str, str] = {
@@ -83,10 +83,10 @@ _LAZY: dict[str, str] = {
     "BurstEvidence": "burstloc.localize.evidence",
     "calibrate": "burstloc.experiments.calibrate",
     "evaluate": "burstloc.experiments.evaluate",
-    "BurstScenario": "burstloc.sim.scenario",
-    "simulate_burst": "burstloc.sim.tsnet",
-    "EventScenario": "burstloc.sim.events",
-    "simulate_event": "burstloc.sim.events",
+    "BurstScenario": "burstloc.sim.scenarios.scenario",
+    "simulate_burst": "burstloc.sim.transient.tsnet",
+    "EventScenario": "burstloc.sim.events.operations",
+    "simulate_event": "burstloc.sim.events.operations",
 }
 
 __all__ = [

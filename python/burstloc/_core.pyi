@@ -174,5 +174,6 @@ def moc_run(
     pulse_series: _FloatArray,
     record: _IndexArray,
 ) -> tuple[_FloatArray, _UIntArray, _UIntArray, _UIntArray]:
-    """TSNet's MOC time loop over a network laid out as arrays (``burstloc.sim.moc_rust``):
+    """TSNet's MOC time loop over a network laid out as arrays
+    (``burstloc.sim.transient.moc_rust``):
     ``(heads, junction_failed, dead_failed, element_warnings)``."""

@@ -7,7 +7,7 @@ record (kept in a scenario's metadata) and nothing reaches the terminal.
 Blocks nest: an inner block's records are passed on to the enclosing block when it ends.
 
 Not thread-safe: it swaps process-wide state (``sys.stdout``, the warning filters); callers
-serialise simulations (see :mod:`burstloc.sim.tsnet`).
+serialise simulations (see :mod:`burstloc.sim.transient.tsnet`).
 """
 
 from __future__ import annotations

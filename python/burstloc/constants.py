@@ -81,7 +81,7 @@ steady state per pipe and position): seconds to a minute per position (L-TOWN, 9
 4 s). Above it the cost grows with the square of the network (BWSN2, 14 822 pipes: about 8 CPU
 minutes per position, nine positions) and the default is the hybrid method (one exact mid-pipe
 drop per pipe, the positions along it from the linearized steady state:
-:func:`burstloc.sim.signatures.linear_signature_sets`)."""
+:func:`burstloc.sim.signatures.compute.linear_signature_sets`)."""
 
 HYBRID_SIGNATURES_UP_TO = 20000
 """Pipes up to which the default is the hybrid method; above it the linearized steady state alone

@@ -5,7 +5,7 @@
 * :func:`steady_state` is THE steady-state solver (heads and flows of one EPANET run, solved as
   TSNet's ``Initializer`` solves it: WNTR's EPANET simulator, pressure-driven demand by default;
   what EPANET warns is captured, never printed). The flow-direction graph and the burst
-  signatures (:mod:`burstloc.sim.signatures`) both use it.
+  signatures (:mod:`burstloc.sim.signatures.compute`) both use it.
 * :func:`flow_direction_graph` is the paper's directed graph (section IV.B): one edge per link,
   keyed by the link's name (parallel links are edges of their own), pointing downstream in the
   steady state.
@@ -177,7 +177,8 @@ def steady_state(wn: WaterNetworkModel, engine: str = "PDD") -> SteadyState:
     (``"PDD"`` pressure-driven, ``"DD"`` demand-driven), first time step. EPANET's scratch files
     go to a temporary directory; what it warns (e.g. "REQUIRED PRESSURE raised to 0.1 m") is
     kept out of the terminal (:func:`burstloc._diagnostics.capture_diagnostics`, recorded in a
-    scenario's metadata when :mod:`burstloc.sim.tsnet` calls this). ``wn`` is left as it was
+    scenario's metadata when :mod:`burstloc.sim.transient.tsnet` calls this). ``wn`` is left as it
+    was
     (its demand model and duration are set for the run and restored).
 
     Raises:

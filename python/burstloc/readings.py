@@ -7,7 +7,7 @@ meter), :class:`Window` what one localization attempt of the paper's rules sees.
 The feed's CSV form (``timestamp,meter,value``, :data:`CSV_HEADER`) and its timestamps
 (:func:`timestamp_seconds`: seconds, or ISO 8601 with a UTC offset) are defined here, for the
 monitor that reads feeds (:mod:`burstloc.live.parse`) and the simulator that writes them
-(:mod:`burstloc.sim.feed`).
+(:mod:`burstloc.sim.scenarios.feed`).
 """
 
 from __future__ import annotations

@@ -201,8 +201,8 @@ def _evaluate_long_pipes(tmp_path: Path, *options: str) -> int:
 
 
 def test_the_default_time_step_follows_the_finest_capture_interval(tmp_path: Path) -> None:
-    from burstloc.sim.scenario import BurstScenario
-    from burstloc.sim.time_step import capture_time_step, expected_time_step
+    from burstloc.sim.scenarios.scenario import BurstScenario
+    from burstloc.sim.transient.time_step import capture_time_step, expected_time_step
 
     inp = tmp_path / "long.inp"
     inp.write_text(LONG_PIPES_INP, encoding="utf-8")

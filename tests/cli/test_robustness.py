@@ -273,7 +273,7 @@ INTERRUPTIBLE = ["--capture-interval", "1", "--json"]
 _NEVER_ENDING_SIMULATION = """
 import os
 
-import burstloc.sim.tsnet as _tsnet
+import burstloc.sim.transient.tsnet as _tsnet
 
 _simulate = _tsnet._simulate_uncached
 

@@ -14,7 +14,7 @@ from burstloc.experiments import paper
 from burstloc.experiments.evaluate import evaluate
 from burstloc.experiments.runs import RunSpec
 from burstloc.localize.detection import DetectorConfig, Mode
-from burstloc.sim.cache import DiskCache
+from burstloc.sim.scenarios.cache import DiskCache
 
 SHORT = paper.ScenarioConfig(burst_start=2.0)
 RUNS = [

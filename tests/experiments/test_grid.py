@@ -68,8 +68,8 @@ def test_scenarios_carry_the_factors_and_settings(tiny_network: Path) -> None:
 def test_time_step_rule_keeps_tsnets_step_unless_coarser_than_the_finest_capture(
     tiny_network: Path,
 ) -> None:
-    from burstloc.sim.scenario import BurstScenario
-    from burstloc.sim.time_step import expected_time_step
+    from burstloc.sim.scenarios.scenario import BurstScenario
+    from burstloc.sim.transient.time_step import expected_time_step
 
     scenario = BurstScenario(str(tiny_network), "B")
     tsnet_step = expected_time_step(scenario)

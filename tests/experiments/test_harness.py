@@ -25,8 +25,8 @@ from burstloc.experiments.harness import (
 )
 from burstloc.experiments.runs import RunSpec
 from burstloc.localize.detection import DetectorConfig, Mode
-from burstloc.sim.scenario import ScenarioResult
-from burstloc.sim.sensors import SensorModel
+from burstloc.sim.scenarios.scenario import ScenarioResult
+from burstloc.sim.scenarios.sensors import SensorModel
 from synthetic_bursts import small_graph, synthetic
 
 CUSUM = DetectorConfig("cusum", 0.3)

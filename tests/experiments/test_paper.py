@@ -10,7 +10,7 @@ import pytest
 from burstloc.constants import CAPTURE_INTERVALS
 from burstloc.experiments import paper
 from burstloc.network import flow_direction_graph, load_network
-from burstloc.sim.scenario import BurstScenario
+from burstloc.sim.scenarios.scenario import BurstScenario
 from conftest import PAPER15
 
 

@@ -111,7 +111,7 @@ def test_cli_study_and_calibrate_commands(
 
 
 def test_study_takes_a_meter_file_and_a_placement_method(tiny_network: Path) -> None:
-    from burstloc.sim.placement import place_meters
+    from burstloc.sim.placement.methods import place_meters
 
     meter_set = place_meters(tiny_network, 3, method="arrival")
     settings = StudySettings(

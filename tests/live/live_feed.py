@@ -62,8 +62,8 @@ def burst_steps(
 ) -> list[Step]:
     """Steps of a real TSNet burst on ``pipe`` (burst at ``before`` + 2 s), steady readings
     ``before`` it and the final readings held ``after`` it, plus seeded noise ``sigma``."""
-    from burstloc.sim.scenario import BurstScenario
-    from burstloc.sim.tsnet import simulate_burst
+    from burstloc.sim.scenarios.scenario import BurstScenario
+    from burstloc.sim.transient.tsnet import simulate_burst
 
     scenario = BurstScenario(str(network), pipe, burst_start=2.0, duration=duration)
     result = simulate_burst(scenario).resample(capture_interval)

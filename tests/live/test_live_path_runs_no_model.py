@@ -24,8 +24,8 @@ from burstloc.live.windows import readings_of
 from burstloc.localize.config import Calibration
 from burstloc.localize.detection import DetectorConfig
 from burstloc.readings import Step
-from burstloc.sim.scenario import BurstScenario
-from burstloc.sim.tsnet import simulate_burst
+from burstloc.sim.scenarios.scenario import BurstScenario
+from burstloc.sim.transient.tsnet import simulate_burst
 
 BLOCKED = ("wntr", "tsnet", "burstloc.sim", "burstloc.experiments")
 

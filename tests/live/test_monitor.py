@@ -26,7 +26,7 @@ from burstloc.live.windows import readings_of
 from burstloc.localize.config import Calibration
 from burstloc.localize.detection import DetectorConfig
 from burstloc.readings import Step
-from burstloc.sim.sensors import SensorModel
+from burstloc.sim.scenarios.sensors import SensorModel
 from conftest import write_tiny
 
 SHORT = paper.ScenarioConfig(burst_start=2.0)
@@ -335,8 +335,8 @@ def test_the_monitor_never_loads_the_network(
 @pytest.fixture(scope="module")
 def long_burst(tiny: Path):
     """A burst on pipe B that lasts past the signature's decision time (classification)."""
-    from burstloc.sim.scenario import BurstScenario
-    from burstloc.sim.tsnet import simulate_burst
+    from burstloc.sim.scenarios.scenario import BurstScenario
+    from burstloc.sim.transient.tsnet import simulate_burst
 
     return simulate_burst(BurstScenario(tiny, "B", burst_start=2.0, duration=175.0))
 

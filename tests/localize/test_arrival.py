@@ -1,7 +1,8 @@
 """The arrival localizer: wave travel from a point on a pipe explains the meters' alarm starts.
 
 The localizers on the tiny network are built offline from the network file
-(:func:`burstloc.sim.prepare.arrival_localizer`); the live path builds them from a stored model
+(:func:`burstloc.sim.model.prepare.arrival_localizer`); the live path builds them from a stored
+model
 (tests/localize/test_model.py)."""
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from burstloc.localize.evidence import (
     MeterAlarm,
 )
 from burstloc.network import load_network
-from burstloc.sim.prepare import arrival_localizer, length_graph
+from burstloc.sim.model.prepare import arrival_localizer, length_graph
 
 A = 1000.0  # wave speed used by these tests, m/s
 

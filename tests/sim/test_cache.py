@@ -1,4 +1,4 @@
-"""burstloc.sim.cache: content-addressed keys, atomic NPZ entries, the cache directory."""
+"""burstloc.sim.scenarios.cache: content-addressed keys, atomic NPZ entries, the cache directory."""
 
 from __future__ import annotations
 
@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from burstloc.sim import cache as cache_mod
-from burstloc.sim.cache import DiskCache, arrays_sha256, cache_key, default_cache_dir
-from burstloc.sim.scenario import BurstScenario
-from burstloc.sim.tsnet import simulate_burst
+from burstloc.sim.scenarios import cache as cache_mod
+from burstloc.sim.scenarios.cache import DiskCache, arrays_sha256, cache_key, default_cache_dir
+from burstloc.sim.scenarios.scenario import BurstScenario
+from burstloc.sim.transient.tsnet import simulate_burst
 
 
 def _file(tmp_path: Path, name: str, text: str) -> Path:

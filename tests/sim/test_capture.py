@@ -1,4 +1,4 @@
-"""burstloc.sim.capture: sample-and-hold of a simulated timeline at a capture interval."""
+"""burstloc.sim.scenarios.capture: sample-and-hold of a simulated timeline at a capture interval."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 
 from burstloc.constants import METER_MODELS
 from burstloc.exceptions import ConfigError, InputError
-from burstloc.sim.capture import capture, interval_average, resample, time_step_of
+from burstloc.sim.scenarios.capture import capture, interval_average, resample, time_step_of
 
 
 def test_holds_the_last_simulated_value() -> None:

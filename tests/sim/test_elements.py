@@ -2,7 +2,8 @@
 files: parallel mains, a pump given by its power, an active PRV (also with its downstream pipe
 reversed and a demand at its node), clock times and units, a water-quality option. Each runs a
 short burst (vectorized solver, the default); ``simulate_burst`` refuses a run whose heads move
-more than 5 cm before the onset (``burstloc.sim.steady``), so a result is a steady start."""
+more than 5 cm before the onset (``burstloc.sim.transient.steady``), so a result is a steady
+start."""
 
 from __future__ import annotations
 
@@ -12,9 +13,9 @@ import numpy as np
 import pytest
 
 from burstloc import network
-from burstloc.sim.scenario import BurstScenario, ScenarioResult
-from burstloc.sim.steady import STEADY_TOLERANCE
-from burstloc.sim.tsnet import simulate_burst
+from burstloc.sim.scenarios.scenario import BurstScenario, ScenarioResult
+from burstloc.sim.transient.steady import STEADY_TOLERANCE
+from burstloc.sim.transient.tsnet import simulate_burst
 
 #: Two zones: R1 feeds J1; J2 -> J3 (over the element under test) -> J4 -> J5, a loop J5-J2.
 BASE = """\

@@ -9,7 +9,7 @@ import pytest
 
 from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.network import load_network, split_pipe, steady_state
-from burstloc.sim.epanet_inplace import InPlaceSplitter
+from burstloc.sim.signatures.epanet_inplace import InPlaceSplitter
 
 REPO = Path(__file__).resolve().parents[2]
 

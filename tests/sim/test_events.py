@@ -1,4 +1,5 @@
-"""burstloc.sim.events: valve, pump and demand events on paper15_assets, real TSNet runs (4 s)."""
+"""burstloc.sim.events.operations: valve, pump and demand events on paper15_assets, real TSNet runs
+(4 s)."""
 
 from __future__ import annotations
 
@@ -10,9 +11,9 @@ import pytest
 
 from burstloc.cli import main
 from burstloc.exceptions import ConfigError, NetworkError
-from burstloc.sim.cache import DiskCache
-from burstloc.sim.events import EventScenario, event_output_path, simulate_event
-from burstloc.sim.scenario import ScenarioResult
+from burstloc.sim.events.operations import EventScenario, event_output_path, simulate_event
+from burstloc.sim.scenarios.cache import DiskCache
+from burstloc.sim.scenarios.scenario import ScenarioResult
 
 ASSETS = Path(__file__).resolve().parents[2] / "networks" / "paper15_assets.inp"
 SHORT = {"start": 0.5, "duration": 4.0}

@@ -1,4 +1,5 @@
-"""burstloc.sim.intact: what does not depend on the burst pipe is made once per process, and a
+"""burstloc.sim.transient.intact: what does not depend on the burst pipe is made once per process,
+and a
 burst simulated with it warm is bit for bit the burst of a fresh process (real TSNet runs)."""
 
 from __future__ import annotations
@@ -15,10 +16,10 @@ import pytest
 
 from burstloc import _diagnostics
 from burstloc._diagnostics import capture_diagnostics, recording
-from burstloc.sim import intact, tsnet
-from burstloc.sim.scenario import BurstScenario, ScenarioResult
-from burstloc.sim.time_step import capture_time_step, expected_time_step
-from burstloc.sim.tsnet import simulate_burst
+from burstloc.sim.scenarios.scenario import BurstScenario, ScenarioResult
+from burstloc.sim.transient import intact, tsnet
+from burstloc.sim.transient.time_step import capture_time_step, expected_time_step
+from burstloc.sim.transient.tsnet import simulate_burst
 from conftest import write_tiny
 
 #: Short bursts on transient-ready models (the evaluation's scenario, shorter).

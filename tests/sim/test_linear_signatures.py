@@ -10,7 +10,7 @@ import pytest
 
 from burstloc.constants import EXACT_SIGNATURES_UP_TO, HYBRID_SIGNATURES_UP_TO
 from burstloc.exceptions import ConfigError
-from burstloc.sim.signatures import (
+from burstloc.sim.signatures.compute import (
     cached_signature_sets,
     compute_signatures,
     linear_signature_sets,

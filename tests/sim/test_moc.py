@@ -1,10 +1,11 @@
-"""burstloc.sim.moc: the vectorized MOC solver gives TSNet's heads.
+"""burstloc.sim.transient.moc: the vectorized MOC solver gives TSNet's heads.
 
 Every case runs both solvers on the same scenario (real TSNet runs, short): bursts on the shipped
 paper15 network, on EPANET's Net1 (a pump, a tank) and Net2 (a supply junction made a fixed
 inflow behind a valve leading nowhere), and every kind of event on paper15_assets (a valve
 closing and opening, a pump tripping and starting, a demand step). Where this NumPy's ``np.dot``
-adds a strided column as :func:`burstloc.sim.moc_layout.dot_order` does (OpenBLAS with NumPy
+adds a strided column as :func:`burstloc.sim.transient.moc_layout.dot_order` does (OpenBLAS with
+NumPy
 1.26 here), the heads are identical to the last bit; elsewhere (NumPy 2's OpenBLAS adds in
 another order) they agree within :data:`BLAS_ATOL`: TSNet's junction equation is ill-conditioned
 where a junction has no demand, so a last-place difference in a sum grows to micrometres, and
@@ -20,10 +21,10 @@ import numpy as np
 import pytest
 
 from burstloc.exceptions import ConfigError
-from burstloc.sim.events import EventScenario, simulate_event
-from burstloc.sim.moc_layout import dot_order
-from burstloc.sim.scenario import BurstScenario, ScenarioResult
-from burstloc.sim.tsnet import simulate_burst
+from burstloc.sim.events.operations import EventScenario, simulate_event
+from burstloc.sim.scenarios.scenario import BurstScenario, ScenarioResult
+from burstloc.sim.transient.moc_layout import dot_order
+from burstloc.sim.transient.tsnet import simulate_burst
 
 NETWORKS = Path(__file__).resolve().parents[2] / "networks"
 #: Largest head difference (m) between the solvers where NumPy sums in another order.

@@ -1,4 +1,4 @@
-"""burstloc.sim.moc_rust: the Rust time loop gives the NumPy loop's heads to the last bit.
+"""burstloc.sim.transient.moc_rust: the Rust time loop gives the NumPy loop's heads to the last bit.
 
 The default solver (``"vectorized"``) runs the MOC time loop in Rust (crate ``moc-core``); the
 ``"numpy"`` solver runs the same loop as NumPy array operations. Every expression keeps the same
@@ -28,9 +28,9 @@ from test_moc import EVENTS  # the same events the NumPy loop is checked on agai
 
 from burstloc import InputError
 from burstloc._core import moc_run
-from burstloc.sim.events import EventScenario, simulate_event
-from burstloc.sim.scenario import BurstScenario, ScenarioResult
-from burstloc.sim.tsnet import simulate_burst
+from burstloc.sim.events.operations import EventScenario, simulate_event
+from burstloc.sim.scenarios.scenario import BurstScenario, ScenarioResult
+from burstloc.sim.transient.tsnet import simulate_burst
 
 NETWORKS = Path(__file__).resolve().parents[2] / "networks"
 #: Whether TSNet's pump and valve functions compute in float64 here (see the module docstring).

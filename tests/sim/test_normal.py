@@ -1,4 +1,4 @@
-"""burstloc.sim.normal: a day of background pressure (EPANET extended period + noise)."""
+"""burstloc.sim.events.normal: a day of background pressure (EPANET extended period + noise)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import pytest
 
 from burstloc._diagnostics import capture_diagnostics
 from burstloc.exceptions import ConfigError, NetworkError
-from burstloc.sim.normal import DIURNAL, normal_day
+from burstloc.sim.events.normal import DIURNAL, normal_day
 
 
 def test_pressure_follows_the_demand_pattern(tiny: Path) -> None:

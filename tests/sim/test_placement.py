@@ -1,4 +1,5 @@
-"""burstloc.sim.placement: the coverage and arrival placements, the meter file, place_meters on
+"""burstloc.sim.placement.methods: the coverage and arrival placements, the meter file, place_meters
+on
 the tiny network."""
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ import pytest
 from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.localize.arrival import PipeGeometry
 from burstloc.localize.signature import SignatureSet
-from burstloc.sim.placement import (
+from burstloc.sim.placement.methods import (
     METERS_FORMAT,
     MeterSet,
     arrival_meters,
@@ -177,7 +178,7 @@ def _reference_arrival_meters(
     candidate points (a points x points matrix per candidate), as the placement was first
     written."""
     from burstloc.constants import WAVE_SPEED
-    from burstloc.sim.arrival_placement import ARRIVAL_POINTS, _travel
+    from burstloc.sim.placement.arrival import ARRIVAL_POINTS, _travel
 
     travel = _travel(pipes, distances, ARRIVAL_POINTS, WAVE_SPEED)
     n_pipes, n_points = len(pipes), len(ARRIVAL_POINTS)
@@ -214,7 +215,7 @@ def test_arrival_placement_equals_the_direct_greedy(network: str) -> None:
     """Same meters as the direct evaluation, for every count and two capture intervals (ties
     between junctions, which happen when pairs saturate, included)."""
     from burstloc.network import load_network
-    from burstloc.sim.prepare import arrival_geometry
+    from burstloc.sim.model.prepare import arrival_geometry
 
     wn = load_network(Path(__file__).resolve().parents[2] / "networks" / network)
     junctions = list(wn.junction_name_list)
@@ -254,8 +255,8 @@ def test_arrival_separation_equals_the_direct_evaluation(paper15: Path) -> None:
     """The k-d tree's candidate pairs miss no pair closer than the capture interval: the same
     share as comparing every point with every other point."""
     from burstloc.constants import CANDIDATE_POSITIONS, WAVE_SPEED
-    from burstloc.sim.arrival_placement import _travel
-    from burstloc.sim.prepare import arrival_geometry
+    from burstloc.sim.model.prepare import arrival_geometry
+    from burstloc.sim.placement.arrival import _travel
 
     shares = []
     for meters in (["N4", "N7", "1", "8"], ["N3", "5"], ["N2", "N5", "N8", "2", "4", "6", "7"]):

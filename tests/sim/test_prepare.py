@@ -1,4 +1,4 @@
-"""Preparing the localization model offline (burstloc.sim.prepare): geometry, signatures."""
+"""Preparing the localization model offline (burstloc.sim.model.prepare): geometry, signatures."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from burstloc.exceptions import NetworkError
 from burstloc.inp import network_hash
 from burstloc.localize.decide import RankingLocalizers
 from burstloc.network import load_network
-from burstloc.sim.prepare import (
+from burstloc.sim.model.prepare import (
     arrival_geometry,
     arrival_localizer,
     length_graph,
@@ -22,7 +22,7 @@ from burstloc.sim.prepare import (
     travel_time_spread,
     wave_fronts,
 )
-from burstloc.sim.signatures import cached_signature_sets
+from burstloc.sim.signatures.compute import cached_signature_sets
 from conftest import write_tiny
 
 

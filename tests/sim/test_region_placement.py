@@ -1,4 +1,4 @@
-"""burstloc.sim.region_placement: the ``region`` placement (the least expected ambiguous main)
+"""burstloc.sim.placement.region: the ``region`` placement (the least expected ambiguous main)
 and its objective, on shipped and hand-made networks."""
 
 from __future__ import annotations
@@ -11,9 +11,9 @@ import pytest
 from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.localize.arrival import PipeGeometry
 from burstloc.network import load_network
-from burstloc.sim.placement import MeterSet, arrival_meters, place_meters
-from burstloc.sim.prepare import arrival_geometry
-from burstloc.sim.region_placement import (
+from burstloc.sim.model.prepare import arrival_geometry
+from burstloc.sim.placement.methods import MeterSet, arrival_meters, place_meters
+from burstloc.sim.placement.region import (
     BURST_SAMPLES,
     ambiguity_grid,
     ambiguous_length,

@@ -1,4 +1,4 @@
-"""burstloc.sim.scaled_placement: the reduced problem of large networks (spread candidate
+"""burstloc.sim.placement.scaled: the reduced problem of large networks (spread candidate
 junctions, sampled bursts), tried on real networks with the threshold lowered."""
 
 from __future__ import annotations
@@ -10,10 +10,10 @@ import pytest
 
 from burstloc.exceptions import ConfigError
 from burstloc.network import load_network
-from burstloc.sim.placement import MeterSet, meter_separation, place_meters
-from burstloc.sim.prepare import arrival_geometry
-from burstloc.sim.region_placement import ambiguity_grid, meter_ambiguity
-from burstloc.sim.scaled_placement import (
+from burstloc.sim.model.prepare import arrival_geometry
+from burstloc.sim.placement.methods import MeterSet, meter_separation, place_meters
+from burstloc.sim.placement.region import ambiguity_grid, meter_ambiguity
+from burstloc.sim.placement.scaled import (
     DEFAULT_SCALING,
     Scaling,
     candidate_geometry,
@@ -157,8 +157,8 @@ def test_ambiguous_length_in_blocks_of_bursts(
 ) -> None:
     """A large grid's objective is summed over blocks of bursts (bounded memory): the same
     value as all pairs at once."""
-    from burstloc.sim import region_placement
-    from burstloc.sim.region_placement import ambiguous_length
+    from burstloc.sim.placement.methods import region as region_placement
+    from burstloc.sim.placement.region import ambiguous_length
 
     meters = ["N4", "N7", "1", "8"]
     pipes, distances = arrival_geometry(paper15, meters)

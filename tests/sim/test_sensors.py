@@ -1,4 +1,4 @@
-"""burstloc.sim.sensors: meter subsets and seeded Gaussian noise, off by default."""
+"""burstloc.sim.scenarios.sensors: meter subsets and seeded Gaussian noise, off by default."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from burstloc.exceptions import ConfigError, InputError, NetworkError
-from burstloc.sim.sensors import SensorModel, choose_meters
+from burstloc.sim.scenarios.sensors import SensorModel, choose_meters
 
 JUNCTIONS = ["1", "2", "3", "N2"]
 READINGS = np.arange(40, dtype=float).reshape(10, 4) + 100.0

@@ -17,9 +17,9 @@ import numpy as np
 import pytest
 
 from burstloc.exceptions import ConfigError
-from burstloc.sim.scenario import BurstScenario, ScenarioResult
-from burstloc.sim.time_step import expected_time_step
-from burstloc.sim.tsnet import simulate_burst
+from burstloc.sim.scenarios.scenario import BurstScenario, ScenarioResult
+from burstloc.sim.transient.time_step import expected_time_step
+from burstloc.sim.transient.tsnet import simulate_burst
 from connector_network import CONNECTOR_INP
 
 START = 0.02

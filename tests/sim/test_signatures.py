@@ -14,7 +14,7 @@ from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.inp import network_hash
 from burstloc.localize.signature import SignatureSet, rank_drop
 from burstloc.network import load_network, split_pipe
-from burstloc.sim.signatures import (
+from burstloc.sim.signatures.compute import (
     DEFAULT_BURST_COEFF,
     cached_signature_sets,
     cached_signatures,
@@ -85,7 +85,7 @@ def test_cached_signatures_are_computed_once(
     def boom(*args: object, **kwargs: object) -> SignatureSet:
         raise AssertionError("recomputed although cached")
 
-    monkeypatch.setattr("burstloc.sim.signatures.compute_signatures", boom)
+    monkeypatch.setattr("burstloc.sim.signatures.compute.compute_signatures", boom)
     again = cached_signatures(tiny_network, ["J4", "J2"], cache_dir=tmp_path)
     np.testing.assert_array_equal(again.matrix, first.matrix)
     # another network file is another entry (and here: computed, hence the error)

@@ -1,4 +1,5 @@
-"""burstloc.sim.steady: a simulation whose heads move before the event is refused, by name."""
+"""burstloc.sim.transient.steady: a simulation whose heads move before the event is refused, by
+name."""
 
 from __future__ import annotations
 
@@ -8,16 +9,17 @@ import numpy as np
 import pytest
 
 from burstloc.exceptions import SimulationError, UnsteadyStartError
-from burstloc.sim import tsnet
-from burstloc.sim.scenario import BurstScenario
-from burstloc.sim.steady import STEADY_TOLERANCE, check_steady_start, steady_start
-from burstloc.sim.tsnet import simulate_burst
+from burstloc.sim.scenarios.scenario import BurstScenario
+from burstloc.sim.transient import tsnet
+from burstloc.sim.transient.steady import STEADY_TOLERANCE, check_steady_start, steady_start
+from burstloc.sim.transient.tsnet import simulate_burst
 
 #: A pressure-reducing valve between two pipes, active in EPANET's steady state (it holds J2 at
 #: 20 m): TSNet's own valve model takes an active valve as shut, so without burstloc holding it
-#: at its steady loss (``burstloc.sim.tsnet_elements.hold_valves``) the transient does not start
+# : at its steady loss (``burstloc.sim.transient.tsnet_elements.hold_valves``) the transient does
+# not start
 #: from EPANET's steady state. (A pipe rougher than TSNet's friction cap was the example before
-#: burstloc kept every pipe's steady friction factor: burstloc.sim._tsnet_compat.)
+#: burstloc kept every pipe's steady friction factor: burstloc.sim.transient._tsnet_compat.)
 ACTIVE_VALVE_INP = """\
 [TITLE]
 tiny network with an active pressure-reducing valve

@@ -1,4 +1,4 @@
-"""burstloc.sim.sweep: map a function over items serially, in processes, or on Dask."""
+"""burstloc.sim.scenarios.sweep: map a function over items serially, in processes, or on Dask."""
 
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from burstloc.exceptions import ConfigError
-from burstloc.sim import sweep as sweep_mod
-from burstloc.sim.sweep import sweep
+from burstloc.sim.scenarios import sweep as sweep_mod
+from burstloc.sim.scenarios.sweep import sweep
 
 # math.sqrt fails on negative numbers: a picklable function with a natural per-item failure.
 ITEMS = [4.0, -1.0, 9.0, 16.0, -4.0, 25.0]

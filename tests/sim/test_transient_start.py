@@ -6,7 +6,7 @@ below atmospheric pressure that EPANET delivers nothing (KY15, exnet-3), a pump 
 a control sets at the start (BWSN_Network_2); and the models
 refused as faults of the model (below absolute vacuum, no demand delivered: anytown-exeter,
 hanoi-exeter). Each burst runs on the vectorized solver, and ``simulate_burst`` refuses a run
-whose heads move more than 5 cm before the onset (``burstloc.sim.steady``)."""
+whose heads move more than 5 cm before the onset (``burstloc.sim.transient.steady``)."""
 
 from __future__ import annotations
 
@@ -18,8 +18,8 @@ from test_elements import steady as moved  # the movement before it, within the 
 
 from burstloc import network
 from burstloc.exceptions import NetworkError
-from burstloc.sim.scenario import BurstScenario
-from burstloc.sim.tsnet import simulate_burst
+from burstloc.sim.scenarios.scenario import BurstScenario
+from burstloc.sim.transient.tsnet import simulate_burst
 
 #: R1 -> J1 -> J2 -> J3 -> J4 with {extra} lines added per test.
 CHAIN = """\

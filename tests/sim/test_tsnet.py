@@ -1,4 +1,4 @@
-"""burstloc.sim.tsnet: burst scenarios on split pipes, TSNet output, sweeps, bad input."""
+"""burstloc.sim.transient.tsnet: burst scenarios on split pipes, TSNet output, sweeps, bad input."""
 
 from __future__ import annotations
 
@@ -16,10 +16,15 @@ from hypothesis import strategies as st
 
 from burstloc import inp, network
 from burstloc.exceptions import ConfigError, NetworkError, SimulationError
-from burstloc.sim.cache import DiskCache
-from burstloc.sim.scenario import BurstScenario, ScenarioResult, burst_scenarios, output_path
-from burstloc.sim.time_step import expected_time_step
-from burstloc.sim.tsnet import simulate_burst, simulate_many
+from burstloc.sim.scenarios.cache import DiskCache
+from burstloc.sim.scenarios.scenario import (
+    BurstScenario,
+    ScenarioResult,
+    burst_scenarios,
+    output_path,
+)
+from burstloc.sim.transient.time_step import expected_time_step
+from burstloc.sim.transient.tsnet import simulate_burst, simulate_many
 from conftest import write_tiny
 
 SHORT = {"burst_start": 0.5, "duration": 3.0}

@@ -1,4 +1,5 @@
-"""burstloc.sim._tsnet_compat: TSNet on numpy 2 and WNTR >= 1.4, heads as on the pinned stack.
+"""burstloc.sim.transient._tsnet_compat: TSNet on numpy 2 and WNTR >= 1.4, heads as on the pinned
+stack.
 
 Two bursts (3 s, real TSNet runs): pipe 7 of the shipped paper15 network, and the tiny test
 network with a dead-end branch that carries no flow (the pipe TSNet gives zero roughness).
@@ -29,9 +30,9 @@ import numpy as np
 import pytest
 
 from burstloc.exceptions import SimulationError
-from burstloc.sim import _tsnet_compat
-from burstloc.sim.scenario import BurstScenario
-from burstloc.sim.tsnet import simulate_burst
+from burstloc.sim.scenarios.scenario import BurstScenario
+from burstloc.sim.transient import _tsnet_compat
+from burstloc.sim.transient.tsnet import simulate_burst
 from conftest import TINY_INP
 
 REFERENCE = Path(__file__).with_name("tsnet_reference.npz")
@@ -155,7 +156,7 @@ def test_the_patches_are_the_functions_tsnet_calls() -> None:
         for part in attribute.split("."):
             patched = getattr(patched, part)
         assert patched is not _tsnet_compat._ORIGINALS[name]
-        assert patched.__module__ == "burstloc.sim._tsnet_compat"
+        assert patched.__module__ == "burstloc.sim.transient._tsnet_compat"
 
 
 @pytest.mark.parametrize("name", ["paper15_pipe7", "branch_pipe_E"])

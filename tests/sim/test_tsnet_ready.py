@@ -1,4 +1,5 @@
-"""burstloc.sim.tsnet_ready: a pump into a junction where pipes branch gets a connector pipe, and
+"""burstloc.sim.transient.tsnet_ready: a pump into a junction where pipes branch gets a connector
+pipe, and
 the network then starts steady under TSNet (it does not without one); a supply junction (a
 negative demand) becomes a fixed inflow, and a burst near it then stays bounded (it does not as
 TSNet models it)."""
@@ -15,11 +16,16 @@ import pytest
 from burstloc import network
 from burstloc._diagnostics import capture_diagnostics
 from burstloc.exceptions import SimulationError
-from burstloc.sim.scenario import BurstScenario
-from burstloc.sim.steady import STEADY_TOLERANCE, steady_start
-from burstloc.sim.time_step import expected_time_step
-from burstloc.sim.tsnet import TransientSettings, isolated_run, run_transient, simulate_burst
-from burstloc.sim.tsnet_ready import (
+from burstloc.sim.scenarios.scenario import BurstScenario
+from burstloc.sim.transient.steady import STEADY_TOLERANCE, steady_start
+from burstloc.sim.transient.time_step import expected_time_step
+from burstloc.sim.transient.tsnet import (
+    TransientSettings,
+    isolated_run,
+    run_transient,
+    simulate_burst,
+)
+from burstloc.sim.transient.tsnet_ready import (
     Connector,
     SupplyBoundary,
     add_connectors,

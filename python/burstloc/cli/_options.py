@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 from burstloc.exceptions import ConfigError
 
 if TYPE_CHECKING:
-    from burstloc.sim.cache import DiskCache
+    from burstloc.sim.scenarios.cache import DiskCache
 
 __all__ = [
     "DefaultsFormatter",
@@ -82,7 +82,7 @@ def add_min_pipe_length_option(parser: argparse.ArgumentParser) -> None:
 
 def add_solver_option(parser: argparse.ArgumentParser) -> None:
     """``--solver {vectorized,numpy,tsnet}``: which MOC solver runs the transients."""
-    from burstloc.sim.scenario import SOLVERS
+    from burstloc.sim.scenarios.scenario import SOLVERS
 
     parser.add_argument(
         "--solver",
@@ -100,14 +100,14 @@ def meters_of(args: argparse.Namespace, network: str) -> tuple[str, ...] | None:
     file), or ``None`` without the option."""
     if args.meters_file is None:
         return None
-    from burstloc.sim.placement import MeterSet
+    from burstloc.sim.placement.methods import MeterSet
 
     return MeterSet.load(args.meters_file).check(network)
 
 
 def cache_of(args: argparse.Namespace) -> DiskCache | bool:
     """The simulation cache the options ask for (``False``: none)."""
-    from burstloc.sim.cache import DiskCache
+    from burstloc.sim.scenarios.cache import DiskCache
 
     return False if args.no_cache else DiskCache(args.cache_dir)
 
@@ -116,7 +116,7 @@ def check_run_options(args: argparse.Namespace) -> None:
     """Check before any work that ``--scheduler`` is reachable (ConfigError otherwise), even
     when every result will come from the cache."""
     if args.scheduler is not None:
-        from burstloc.sim.sweep import check_scheduler
+        from burstloc.sim.scenarios.sweep import check_scheduler
 
         check_scheduler(args.scheduler)
 

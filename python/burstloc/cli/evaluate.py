@@ -283,9 +283,9 @@ def _events(args: argparse.Namespace, ev: Any, cache: Any) -> None:
     """Classify the evaluation's bursts and the default events; add the table to ``ev``."""
     from burstloc.experiments.specificity import evaluate_events
     from burstloc.localize.classify import ClassifierConfig
-    from burstloc.sim.scenario import burst_scenarios
-    from burstloc.sim.time_step import with_capture_time_step
-    from burstloc.sim.tsnet import simulate_many
+    from burstloc.sim.scenarios.scenario import burst_scenarios
+    from burstloc.sim.transient.time_step import with_capture_time_step
+    from burstloc.sim.transient.tsnet import simulate_many
 
     intervals = sorted({r.spec.capture_interval for r in ev.runs})
     duration = float(ev.scenario["duration"])

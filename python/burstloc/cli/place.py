@@ -14,8 +14,8 @@ __all__ = ["add_parser", "run"]
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Register ``burstloc place``."""
-    from burstloc.sim.placement import PLACEMENT_METHODS
-    from burstloc.sim.scaled_placement import DEFAULT_SCALING, SCALE_JUNCTIONS
+    from burstloc.sim.placement.methods import PLACEMENT_METHODS
+    from burstloc.sim.placement.scaled import DEFAULT_SCALING, SCALE_JUNCTIONS
 
     parser = subparsers.add_parser(
         "place",
@@ -78,7 +78,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Handle ``burstloc place``: print the meters; write the file with ``--out``."""
-    from burstloc.sim.placement import meter_scores, place_meters
+    from burstloc.sim.placement.methods import meter_scores, place_meters
 
     if args.out:
         check_output(args.out)

@@ -22,7 +22,8 @@ from burstloc.exceptions import ConfigError
 
 __all__ = ["add_parser", "run"]
 
-#: The kinds of ``--event`` (:data:`burstloc.sim.events.EVENT_KINDS`, without importing the
+# : The kinds of ``--event`` (:data:`burstloc.sim.events.operations.EVENT_KINDS`, without importing
+# the
 #: simulator to build the parser).
 EVENT_KINDS = ("valve-closure", "valve-opening", "pump-trip", "pump-start", "demand-step")
 
@@ -157,8 +158,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Handle ``burstloc simulate``."""
-    from burstloc.sim import scenario
-    from burstloc.sim.tsnet import simulate_many
+    from burstloc.sim.scenarios import scenario
+    from burstloc.sim.transient.tsnet import simulate_many
 
     check_output(args.out, directory=True)
     check_run_options(args)
@@ -229,7 +230,7 @@ def _check_feed(args: argparse.Namespace) -> datetime | None:
 
 
 def _write_feed(args: argparse.Namespace, result: Any, start: datetime | None) -> None:
-    from burstloc.sim.feed import write_feed
+    from burstloc.sim.scenarios.feed import write_feed
 
     if args.feed is not None:
         path, count = write_feed(args.feed, result, noise=args.noise, seed=args.seed, start=start)
@@ -238,7 +239,7 @@ def _write_feed(args: argparse.Namespace, result: Any, start: datetime | None) -
 
 def _event(args: argparse.Namespace, start: datetime | None) -> int:
     """``burstloc simulate --event KIND --asset ID``: one event, one NPZ file."""
-    from burstloc.sim.events import EventScenario, event_output_path, simulate_event
+    from burstloc.sim.events.operations import EventScenario, event_output_path, simulate_event
 
     if args.asset is None:
         raise ConfigError(f"--event {args.event} needs --asset (the valve, pump or junction)")

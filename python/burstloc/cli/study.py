@@ -19,7 +19,7 @@ from burstloc.experiments.grid import DEFAULT_LEVELS, DEFAULT_NETWORKS, StudySet
 from burstloc.experiments.report import write_study_report as write_report
 from burstloc.experiments.study import run_study
 from burstloc.inp import network_hash
-from burstloc.sim.placement import PLACEMENT_METHODS, MeterSet
+from burstloc.sim.placement.methods import PLACEMENT_METHODS, MeterSet
 
 __all__ = ["add_parser", "run"]
 

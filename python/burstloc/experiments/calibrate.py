@@ -36,7 +36,8 @@ reached every meter: :func:`burstloc.localize.decide.rank_alarms`).
 **Configuration file.** The result is a :class:`burstloc.localize.config.Calibration` (the stored
 configuration lives in the localize layer, which the live monitor reads without this module):
 :meth:`~burstloc.localize.config.Calibration.save` writes a named JSON document with the network's
-SHA-256, the meter list and the localization model (:func:`burstloc.sim.prepare.prepare_model`:
+SHA-256, the meter list and the localization model
+(:func:`burstloc.sim.model.prepare.prepare_model`:
 pipe geometry and burst signatures, computed here once with WNTR/EPANET);
 :meth:`~burstloc.localize.config.Calibration.check` refuses, by name, a configuration for another
 network or other meters.
@@ -73,7 +74,7 @@ from burstloc.localize.config import (
 )
 
 if TYPE_CHECKING:
-    from burstloc.sim.signatures import SignatureMethod
+    from burstloc.sim.signatures.compute import SignatureMethod
 
 __all__ = [
     "Baseline",
@@ -296,13 +297,13 @@ def calibrate(
     The noise comes from ``baseline`` (recorded burst-free readings, checked by
     :func:`check_baseline`; their meters are the meters) or from ``noise_sigma`` (default
     :data:`DEFAULT_NOISE_SIGMA`); ``meters`` default to every junction. The localization model
-    (:func:`burstloc.sim.prepare.prepare_model`, signatures cached on disk) is computed here,
-    its burst signatures by ``signatures`` (:data:`burstloc.sim.signatures.SignatureMethod`;
+    (:func:`burstloc.sim.model.prepare.prepare_model`, signatures cached on disk) is computed here,
+    its burst signatures by ``signatures`` (:data:`burstloc.sim.signatures.compute.SignatureMethod`;
     the hybrid method's EPANET runs over ``workers`` local processes, default one per CPU).
     """
     from burstloc.network import junction_names, load_network
-    from burstloc.sim.prepare import length_graph, prepare_model, travel_time_spread
-    from burstloc.sim.signatures import signature_method
+    from burstloc.sim.model.prepare import length_graph, prepare_model, travel_time_spread
+    from burstloc.sim.signatures.compute import signature_method
 
     signature_method(signatures, 0)  # an unknown method is refused before any work
     if workers is not None and (not isinstance(workers, int) or workers < 1):

@@ -35,7 +35,7 @@ one pipe, top-3 equals top-1). The arrival and fused localizers also give the bu
 the named pipe; its error is the network distance to the simulated burst point
 (:mod:`burstloc.experiments.position`), reported as mean and 90th percentile over every attempt.
 ``RunSpec.meter_model`` chooses instantaneous samples (the
-paper's) or interval-averaged readings (:func:`burstloc.sim.capture.capture`).
+paper's) or interval-averaged readings (:func:`burstloc.sim.scenarios.capture.capture`).
 """
 
 from __future__ import annotations
@@ -71,8 +71,8 @@ from burstloc.experiments.runs import (
 
 if TYPE_CHECKING:
     from burstloc.localize.config import Calibration
-    from burstloc.sim.scenario import ScenarioResult
-    from burstloc.sim.sensors import SensorModel
+    from burstloc.sim.scenarios.scenario import ScenarioResult
+    from burstloc.sim.scenarios.sensors import SensorModel
 
 __all__ = [
     "DEFAULT_LOCALIZER",
@@ -119,13 +119,14 @@ def evaluate(
     needs the default.
 
     ``time_step`` is TSNet's requested time step (s); ``None`` applies the rule of ``burstloc
-    study`` (:func:`burstloc.sim.time_step.capture_time_step`): TSNet's own step, or half the finest
+    study`` (:func:`burstloc.sim.transient.time_step.capture_time_step`): TSNet's own step, or half
+    the finest
     capture interval where TSNet's would be coarser. The JSON's ``scenario`` records it.
 
     ``config`` is the calibration the ranking localizers' detector bank uses (runs with
     ``localizer != "paper"``); without one the network is calibrated here. ``meters`` are the
     junctions that carry meters for the ranking localizers (default: every junction; e.g. a
-    meter file's, :class:`burstloc.sim.placement.MeterSet`); the paper's rules read every
+    meter file's, :class:`burstloc.sim.placement.methods.MeterSet`); the paper's rules read every
     junction, as in the paper.
 
     With ``pipes=None`` (every pipe) the pipes closed in the network file are left out, and
@@ -146,9 +147,9 @@ def evaluate(
     """
     from burstloc import inp
     from burstloc import network as netmod
-    from burstloc.sim import tsnet as simulate
-    from burstloc.sim.scenario import burst_scenarios
-    from burstloc.sim.time_step import with_capture_time_step
+    from burstloc.sim.scenarios.scenario import burst_scenarios
+    from burstloc.sim.transient import tsnet as simulate
+    from burstloc.sim.transient.time_step import with_capture_time_step
 
     if not runs:
         raise ConfigError("no runs to evaluate")
@@ -306,7 +307,7 @@ def _sensors(
 ) -> dict[str, SensorModel | None]:
     """The sensor model of the paper's rules and of the ranking localizers (see
     :func:`evaluate`'s ``noise``)."""
-    from burstloc.sim.sensors import SensorModel
+    from burstloc.sim.scenarios.sensors import SensorModel
 
     if noise is not None:
         sensor = SensorModel(noise_sigma=noise, seed=seed) if noise > 0 else None

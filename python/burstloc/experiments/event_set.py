@@ -1,7 +1,8 @@
 """The non-burst events ``burstloc evaluate --events`` operates on a network.
 
 Every valve and pump operated (:data:`VALVE_EVENTS`, :data:`PUMP_EVENTS`) and demand steps at the
-largest consumers (:data:`DEMAND_JUNCTIONS`), as :class:`burstloc.sim.events.EventScenario`
+largest consumers (:data:`DEMAND_JUNCTIONS`), as
+:class:`burstloc.sim.events.operations.EventScenario`
 values, and the junctions beside each valve and pump (:func:`asset_nodes`: where the classifier
 expects an operation's wave to be heard first).
 """
@@ -10,7 +11,7 @@ from __future__ import annotations
 
 import os
 
-from burstloc.sim.events import EventScenario
+from burstloc.sim.events.operations import EventScenario
 
 __all__ = [
     "DEMAND_JUNCTIONS",

@@ -22,7 +22,7 @@ from burstloc.constants import (
 )
 from burstloc.exceptions import ConfigError
 from burstloc.inp import network_hash
-from burstloc.sim.placement import PLACEMENT_METHODS, MeterSet
+from burstloc.sim.placement.methods import PLACEMENT_METHODS, MeterSet
 
 if TYPE_CHECKING:
     from burstloc.localize.evidence import MeterModel
@@ -59,10 +59,10 @@ class Factors:
     Attributes:
         noise_sigma: additive Gaussian noise per reading, m.
         meter_fraction: fraction of junctions with meters, in (0, 1] (placed by
-            :func:`burstloc.sim.placement.place_meters`, ``StudySettings.placement``).
+            :func:`burstloc.sim.placement.methods.place_meters`, ``StudySettings.placement``).
         position: burst position along the pipe, fraction of its length.
         burst_coeff: the burst's emitter coefficient (TSNet's ``final_burst_coeff``).
-        friction: TSNet's friction model (:data:`burstloc.sim.scenario.FRICTION_MODELS`).
+        friction: TSNet's friction model (:data:`burstloc.sim.scenarios.scenario.FRICTION_MODELS`).
     """
 
     noise_sigma: float = 0.0
@@ -103,7 +103,7 @@ class StudySettings:
         capture_intervals: seconds.
         detectors: ``"cusum"`` and/or ``"shewhart"``.
         localizers: any of :data:`burstloc.constants.RANKING_LOCALIZERS`.
-        meter_models: any of :data:`burstloc.sim.capture.METER_MODELS`.
+        meter_models: any of :data:`burstloc.sim.scenarios.capture.METER_MODELS`.
         phases: capture-clock phases per burst, spread evenly over one interval.
         duration: simulated seconds per burst (must cover the signature decision, 150 s after
             the burst).
@@ -114,8 +114,9 @@ class StudySettings:
             :func:`study_time_step`, TSNet's own step unless it is coarser than the finest
             capture interval).
         placement: how meters are placed for a meter fraction below 1, one of
-            :data:`burstloc.sim.placement.PLACEMENT_METHODS` (default ``"coverage"``).
-        meter_sets: meter files (:class:`burstloc.sim.placement.MeterSet`); a network with one
+            :data:`burstloc.sim.placement.methods.PLACEMENT_METHODS` (default ``"coverage"``).
+        meter_sets: meter files (:class:`burstloc.sim.placement.methods.MeterSet`); a network with
+        one
             uses its meters instead of every junction at full coverage.
     """
 
@@ -196,7 +197,7 @@ def point_scenarios(point: StudyPoint, settings: StudySettings) -> list[Any]:
     """The point's bursts, one per pipe, with the time step rule of :func:`study_time_step`;
     the vectorized solver at steady friction, TSNet's for the other friction models."""
     from burstloc.network import load_network, pipe_names
-    from burstloc.sim.scenario import BurstScenario
+    from burstloc.sim.scenarios.scenario import BurstScenario
 
     pipes = settings.pipes or tuple(pipe_names(load_network(point.network)))
     f = point.factors
@@ -218,7 +219,7 @@ def point_scenarios(point: StudyPoint, settings: StudySettings) -> list[Any]:
 
 def study_time_step(scenario: Any, settings: StudySettings) -> float | None:
     """TSNet time step for a study burst: ``settings.time_step`` if given, else the rule of
-    :func:`burstloc.sim.time_step.capture_time_step` for the finest capture interval."""
-    from burstloc.sim.time_step import capture_time_step
+    :func:`burstloc.sim.transient.time_step.capture_time_step` for the finest capture interval."""
+    from burstloc.sim.transient.time_step import capture_time_step
 
     return capture_time_step(scenario, min(settings.capture_intervals), settings.time_step)

@@ -4,7 +4,8 @@
 (:mod:`burstloc.experiments.study`) both score through this module, so the two cannot drift
 apart:
 
-1. :func:`capture_readings` turns a simulated burst (:class:`burstloc.sim.scenario.ScenarioResult`)
+1. :func:`capture_readings` turns a simulated burst
+(:class:`burstloc.sim.scenarios.scenario.ScenarioResult`)
    into what meters report: the chosen meters' columns, captured under a meter model on a
    :class:`Clock` (its phase, and the readings of the initial steady state that precede the
    simulated span, a live meter's history), with optional sensor noise;
@@ -51,13 +52,13 @@ from burstloc.localize.detection import make_detector
 from burstloc.localize.evidence import Ranking
 from burstloc.localize.paper_rules import Localization
 from burstloc.readings import Step
-from burstloc.sim.capture import capture
+from burstloc.sim.scenarios.capture import capture
 
 if TYPE_CHECKING:
     import networkx as nx
 
-    from burstloc.sim.scenario import ScenarioResult
-    from burstloc.sim.sensors import SensorModel
+    from burstloc.sim.scenarios.scenario import ScenarioResult
+    from burstloc.sim.scenarios.sensors import SensorModel
 
 __all__ = [
     "Attempt",
@@ -128,7 +129,8 @@ def capture_readings(
     """What the meters report of one simulated burst: ``(times, values)``, (T,) and (T, M).
 
     ``meters`` (default: every junction of ``result``, in its order) are sampled on ``clock``
-    under ``meter_model`` (:func:`burstloc.sim.capture.capture`; sample-and-hold or interval
+    under ``meter_model`` (:func:`burstloc.sim.scenarios.capture.capture`; sample-and-hold or
+    interval
     means of the simulation from its start on), preceded by ``clock.history`` readings of the
     initial steady state. ``sensor`` adds its noise to every reading, history included, drawn
     under ``noise_key``.

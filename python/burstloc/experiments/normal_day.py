@@ -1,6 +1,6 @@
 """False burst reports in normal operation: a day of background pressure through the monitor.
 
-:func:`normal_operation` feeds :func:`burstloc.sim.normal.normal_day` (diurnal demand by an
+:func:`normal_operation` feeds :func:`burstloc.sim.events.normal.normal_day` (diurnal demand by an
 EPANET extended-period run, sensor noise) to the live monitor with the classifier, and counts
 its decisions and how many were reported as bursts (``burstloc evaluate --events``).
 """
@@ -27,13 +27,13 @@ def normal_operation(
     noise_sigma: float = DEFAULT_NOISE_SIGMA,
     seed: int = 0,
 ) -> dict[str, Any]:
-    """A day of normal operation (:func:`burstloc.sim.normal.normal_day`) through the live
+    """A day of normal operation (:func:`burstloc.sim.events.normal.normal_day`) through the live
     monitor with the classifier: how many decisions, how many reported as bursts, and what
     the simulator warned (``simulator_warnings``)."""
     from burstloc._diagnostics import capture_diagnostics
     from burstloc.live.monitor import BurstMonitor
     from burstloc.readings import Step
-    from burstloc.sim.normal import normal_day
+    from burstloc.sim.events.normal import normal_day
 
     with capture_diagnostics() as diagnostics:
         times, values = normal_day(

@@ -205,7 +205,8 @@ class ScenarioConfig:
     solver: str = "vectorized"
 
     def parameters(self) -> dict[str, float | str | None]:
-        """The scenario fields as keyword arguments of ``burstloc.sim.scenario.BurstScenario``
+        """The scenario fields as keyword arguments of
+        ``burstloc.sim.scenarios.scenario.BurstScenario``
         (``min_pipe_length`` only when set)."""
         extra = {} if self.min_pipe_length is None else {"min_pipe_length": self.min_pipe_length}
         return {

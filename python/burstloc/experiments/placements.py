@@ -1,6 +1,7 @@
 """Meter placements side by side: place K meters by every method, evaluate each placement.
 
-:func:`compare_placements` places the meters (:mod:`burstloc.sim.placement`), calibrates for them
+:func:`compare_placements` places the meters (:mod:`burstloc.sim.placement.methods`), calibrates for
+them
 and scores every pipe's burst through ``burstloc evaluate``'s harness
 (:func:`burstloc.experiments.evaluate.evaluate`): top-1 / top-3, the median time to a decision
 and the position errors (:mod:`burstloc.experiments.position`). ``burstloc place --compare``
@@ -17,7 +18,7 @@ from typing import Any
 from burstloc.experiments import paper
 from burstloc.experiments.evaluate import evaluate
 from burstloc.experiments.runs import plan_runs
-from burstloc.sim.placement import PLACEMENT_METHODS, place_meters
+from burstloc.sim.placement.methods import PLACEMENT_METHODS, place_meters
 
 __all__ = ["compare_placements", "format_comparison"]
 

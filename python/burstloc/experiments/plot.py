@@ -27,7 +27,7 @@ import numpy as np
 
 from burstloc._atomic import write_bytes
 from burstloc.experiments.evaluate import Evaluation, RunResult
-from burstloc.sim.capture import resample
+from burstloc.sim.scenarios.capture import resample
 
 __all__ = ["plot_accuracy_by_interval", "plot_network", "plot_traces", "trace_title", "write_plots"]
 

@@ -22,14 +22,14 @@ import networkx as nx
 import numpy as np
 
 from burstloc.exceptions import NetworkError
-from burstloc.sim.prepare import length_graph
+from burstloc.sim.model.prepare import length_graph
 
 if TYPE_CHECKING:
     from wntr.network import WaterNetworkModel
 
     from burstloc.experiments.harness import Attempt
     from burstloc.localize.arrival import PipePosition
-    from burstloc.sim.scenario import ScenarioResult
+    from burstloc.sim.scenarios.scenario import ScenarioResult
 
 __all__ = [
     "NetworkDistance",
@@ -87,7 +87,8 @@ def wave_travel(wn: WaterNetworkModel, wave_speed: float) -> float:
 class NetworkDistance:
     """Shortest path lengths (m) along the pipes between points on pipes of one network.
 
-    Valves and pumps count as length 0 (:func:`burstloc.sim.prepare.length_graph`). Path lengths
+    Valves and pumps count as length 0 (:func:`burstloc.sim.model.prepare.length_graph`). Path
+    lengths
     from a node are computed once and kept.
     """
 

@@ -54,7 +54,8 @@ class RunSpec:
 
     ``label`` names the paper's scenario (``"S_C1"``...) when the run is one of Tables I/II.
     ``localizer`` is one of :data:`LOCALIZERS`; ``meter_model`` one of
-    :data:`burstloc.sim.capture.METER_MODELS`. A ranking localizer uses the detector's kind with the
+    :data:`burstloc.sim.scenarios.capture.METER_MODELS`. A ranking localizer uses the detector's
+    kind with the
     calibrated thresholds (the configuration given to :func:`evaluate`), not ``detector``'s.
     """
 

@@ -2,7 +2,8 @@
 
 Each simulated scenario (bursts on every pipe, and the non-burst events of
 :func:`burstloc.experiments.event_set.default_events`: every valve and pump operated, demand
-steps at the largest consumers; :mod:`burstloc.sim.events`) is captured at each capture interval
+steps at the largest consumers; :mod:`burstloc.sim.events.operations`) is captured at each capture
+interval
 (instantaneous readings, clock phase 0, with the warm-up of ``burstloc evaluate``), run through
 the calibrated CUSUM bank, and, when at least
 :data:`~burstloc.localize.corroborate.CORROBORATE` meters alarm by the corroboration deadline
@@ -12,7 +13,7 @@ classified (:mod:`burstloc.localize.classify`) at the signature's decision time:
 the answer is ``quiet`` (no corroborated alarm), ``burst``,
 ``other`` or ``unsure``. Only ``burst`` is a burst report. Every event is also classified
 with its own operation declared (``asset, start, kind``). And a day of normal operation
-(:func:`burstloc.sim.normal.normal_day`: diurnal demand, sensor noise) runs through the live
+(:func:`burstloc.sim.events.normal.normal_day`: diurnal demand, sensor noise) runs through the live
 monitor with the classifier: its burst reports are false alarms.
 
 **Calibrating the classifier** (:func:`calibrate_classifier`, never on the events): the bursts
@@ -51,8 +52,8 @@ from burstloc.localize.config import calibrated_bank
 from burstloc.localize.corroborate import CORROBORATE, corroborated_at, corroboration_deadline
 from burstloc.localize.decide import decision_time, rank_alarms
 from burstloc.localize.signature import SignatureLocalizer
-from burstloc.sim.events import EventScenario
-from burstloc.sim.scenario import ScenarioResult
+from burstloc.sim.events.operations import EventScenario
+from burstloc.sim.scenarios.scenario import ScenarioResult
 
 __all__ = [
     "ANSWERS",
@@ -349,7 +350,7 @@ def evaluate_events(
     import sys
 
     from burstloc.experiments.normal_day import normal_operation
-    from burstloc.sim.events import simulate_event
+    from burstloc.sim.events.operations import simulate_event
 
     meters = list(next(iter(bursts.values())).junctions)
     if setup is None:

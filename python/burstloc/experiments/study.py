@@ -7,13 +7,14 @@ that carry meters, the burst position along the pipe, the burst coefficient (ove
 TSNet's friction model. The other networks run at the defaults. Every grid point is scored for
 each detector (calibrated CUSUM and Shewhart banks, :mod:`burstloc.experiments.calibrate`: no
 hand tuning), each localizer (``arrival``, ``signature``, ``fused``), each meter model
-(``instantaneous``, ``interval-averaged``; :func:`burstloc.sim.capture.capture`) and each
+(``instantaneous``, ``interval-averaged``; :func:`burstloc.sim.scenarios.capture.capture`) and each
 capture interval, over several phases of the capture clock, as top-1 / top-3 accuracy and the
 median time from the burst to the decision.
 
 The grid (points, factors, settings) is :mod:`burstloc.experiments.grid`. Simulations go
-through :func:`burstloc.sim.tsnet.simulate_many` (the simulation cache and the
-local/Dask executor of :mod:`burstloc.sim.sweep`); the grid points are then scored through the
+through :func:`burstloc.sim.transient.tsnet.simulate_many` (the simulation cache and the
+local/Dask executor of :mod:`burstloc.sim.scenarios.sweep`); the grid points are then scored through
+the
 same executor, one task per point, and through the same harness as ``burstloc evaluate``
 (:mod:`burstloc.experiments.harness`: capture, detector bank, localizers, tally).
 :func:`write_report` (:func:`burstloc.experiments.report.write_study_report`) writes
@@ -21,7 +22,7 @@ same executor, one task per point, and through the same harness as ``burstloc ev
 and localizer).
 
 Meter placement for a fraction ``f < 1``: the greedy coverage of the burst signatures
-(:func:`burstloc.sim.placement.coverage_meters`), or the settings' placement method
+(:func:`burstloc.sim.placement.methods.coverage_meters`), or the settings' placement method
 (``StudySettings.placement``). A meter file (``StudySettings.meters``, ``burstloc study
 --meters-file``) replaces every junction as the meters of its network's points at full
 coverage.
@@ -71,11 +72,11 @@ def score_point(task: tuple[StudyPoint, StudySettings]) -> list[dict[str, Any]]:
     from burstloc.localize.fused import FusedLocalizer
     from burstloc.localize.signature import SignatureLocalizer
     from burstloc.network import load_network
-    from burstloc.sim.placement import place_meters
-    from burstloc.sim.prepare import arrival_localizer
-    from burstloc.sim.sensors import SensorModel
-    from burstloc.sim.signatures import cached_signature_sets
-    from burstloc.sim.tsnet import simulate_burst
+    from burstloc.sim.model.prepare import arrival_localizer
+    from burstloc.sim.placement.methods import place_meters
+    from burstloc.sim.scenarios.sensors import SensorModel
+    from burstloc.sim.signatures.compute import cached_signature_sets
+    from burstloc.sim.transient.tsnet import simulate_burst
 
     point, settings = task
     f = point.factors
@@ -177,8 +178,8 @@ def run_study(
         ``(rows, problems)``: the rows of every point that could be scored, and one message per
         point left out (a simulation or the scoring failed; the message names it and why).
     """
-    from burstloc.sim.sweep import sweep
-    from burstloc.sim.tsnet import simulate_many
+    from burstloc.sim.scenarios.sweep import sweep
+    from burstloc.sim.transient.tsnet import simulate_many
 
     needs = {p: point_scenarios(p, settings) for p in points}
     scenarios = list(dict.fromkeys(s for group in needs.values() for s in group))

@@ -171,7 +171,8 @@ def replay(times: npt.ArrayLike, values: npt.ArrayLike) -> Iterator[Step]:
     """Replay recorded readings as a feed of complete steps.
 
     ``times`` (T,) and ``values`` (T, M) are readings already captured at the capture interval
-    (a simulated timeline is sampled first, e.g. with :func:`burstloc.sim.capture.capture`).
+    (a simulated timeline is sampled first, e.g. with
+    :func:`burstloc.sim.scenarios.capture.capture`).
     Columns must follow the stream's meter order.
     """
     t = np.asarray(times, dtype=np.float64)

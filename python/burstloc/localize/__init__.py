@@ -10,7 +10,7 @@ On the live path: nothing here runs a hydraulic model or imports the simulator.
   :mod:`~burstloc.localize.fused`: the ranking localizers;
 * :mod:`~burstloc.localize.steady_level`: the estimators of a meter's new steady level;
 * :mod:`~burstloc.localize.model`: the stored localization model (what the ranking localizers
-  need of the network, computed offline by :mod:`burstloc.sim.prepare`);
+  need of the network, computed offline by :mod:`burstloc.sim.model.prepare`);
 * :mod:`~burstloc.localize.config`: the stored configuration (calibrated detector settings and
   the model) that ``burstloc calibrate`` writes and the monitor reads;
 * :mod:`~burstloc.localize.decide`: the localizers built from a model, when a ranking localizer

@@ -28,7 +28,8 @@ an interval. One capture interval of timing error is ``wave_speed x dt`` metres 
 one end of the pipe the arrivals cannot tell its points apart and the interval is the whole pipe.
 
 The geometry (flow-direction end nodes and length of every pipe, shortest path lengths from the
-pipes' end nodes to the meters) is computed offline (:func:`burstloc.sim.prepare.arrival_geometry`)
+pipes' end nodes to the meters) is computed offline
+(:func:`burstloc.sim.model.prepare.arrival_geometry`)
 and stored with the calibrated configuration (:class:`burstloc.localize.model.LocalizationModel`);
 ranking is numpy only and on the live path.
 """
@@ -121,7 +122,7 @@ def silence_counts(
     """Which silent meters would have heard each candidate's wave, had it reached them.
 
     ``fronts`` (candidates, meters): the wave front a burst on each candidate sends to each meter,
-    relative to the others (:func:`burstloc.sim.prepare.wave_fronts`); ``alarmed`` and
+    relative to the others (:func:`burstloc.sim.model.prepare.wave_fronts`); ``alarmed`` and
     ``silent``: meter columns. Returns (candidates, len(silent)): ``True`` where the silent
     meter's silence counts against the candidate (its wave has not reached it yet).
 
@@ -204,7 +205,7 @@ class ArrivalLocalizer:
     ``distances[i, j]`` is the shortest path length (m) from ``nodes[i]`` to ``meters[j]``;
     ``pipes`` the candidates. Build it from a stored model
     (:meth:`burstloc.localize.decide.RankingLocalizers.from_model`) or, offline, from a network
-    (:func:`burstloc.sim.prepare.arrival_localizer`).
+    (:func:`burstloc.sim.model.prepare.arrival_localizer`).
     """
 
     def __init__(

@@ -5,7 +5,7 @@ gives: each pipe's end nodes in the steady-state flow direction and its length, 
 lengths from those end nodes to the meters, the wave front a burst on each pipe sends to each
 meter (relative: which silent meters should have heard it) and the burst signatures (steady-state
 head drops at the meters, per pipe and position). ``burstloc calibrate`` computes them once, offline
-(:func:`burstloc.sim.prepare.prepare_model`: WNTR and EPANET), and stores them in the
+(:func:`burstloc.sim.model.prepare.prepare_model`: WNTR and EPANET), and stores them in the
 configuration it writes (:class:`burstloc.localize.config.Calibration`); the live monitor builds
 its localizers from the stored model
 (:meth:`burstloc.localize.decide.RankingLocalizers.from_model`) and never runs a hydraulic model.
@@ -58,7 +58,7 @@ class LocalizationModel:
     ``signature_sets``: the burst signatures at ``meters``, one set per position along the pipes.
     ``wave_speed``: the pressure-wave speed (m/s) the arrival localizer assumes.
     ``fronts[pipe][j]``: the wave front a burst on ``pipe`` sends to ``meters[j]``, relative to
-    the others (:func:`burstloc.sim.prepare.wave_fronts`): which silent meters should have
+    the others (:func:`burstloc.sim.model.prepare.wave_fronts`): which silent meters should have
     heard it (:class:`burstloc.localize.arrival.ArrivalLocalizer`). ``None`` (a model stored
     without them): every silent meter counts as not yet reached.
 

@@ -3,7 +3,7 @@
 A burst on pipe ``p`` moves the network to a new steady state. Its *signature* ``s_p(x)`` is the
 vector of steady-state head drops at the meters caused by an emitter at position ``x`` along the
 pipe, computed offline, once per network, from the hydraulic model (EPANET steady states through
-WNTR: :mod:`burstloc.sim.signatures`) and stored with the calibrated configuration
+WNTR: :mod:`burstloc.sim.signatures.compute`) and stored with the calibrated configuration
 (:class:`burstloc.localize.model.LocalizationModel`): one :class:`SignatureSet` per position, by
 default at the candidate positions 0.1, ..., 0.9 of :data:`burstloc.constants.CANDIDATE_POSITIONS`,
 the arrival localizer's. At run time the localizer estimates the observed drop

@@ -1,5 +1,5 @@
-"""Checks shared by the placement methods (:mod:`burstloc.sim.placement`,
-:mod:`burstloc.sim.region_placement`): the meter count, the wave speed and the capture
+"""Checks shared by the placement methods (:mod:`burstloc.sim.placement.methods`,
+:mod:`burstloc.sim.placement.region`): the meter count, the wave speed and the capture
 interval; the geometry of a meter set on a network file."""
 
 from __future__ import annotations
@@ -36,8 +36,8 @@ def check_timing(wave_speed: float, resolution: float) -> None:
 def meter_geometry(
     network: str | os.PathLike[str], meters: Sequence[str]
 ) -> tuple[list[PipeGeometry], dict[str, NDArray[np.float64]]]:
-    """:func:`burstloc.sim.prepare.arrival_geometry` of ``meters`` (ConfigError for none)."""
-    from burstloc.sim.prepare import arrival_geometry
+    """:func:`burstloc.sim.model.prepare.arrival_geometry` of ``meters`` (ConfigError for none)."""
+    from burstloc.sim.model.prepare import arrival_geometry
 
     if not meters:
         raise ConfigError("no meters to separate bursts with")

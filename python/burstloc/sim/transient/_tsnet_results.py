@@ -62,7 +62,7 @@ class _Simulator:
 @contextlib.contextmanager
 def results_by_name() -> Iterator[None]:
     """Within the block, TSNet's ``Initializer`` reads EPANET's results by name (module
-    docstring). Call with TSNet loaded (:func:`burstloc.sim._tsnet_compat.load`)."""
+    docstring). Call with TSNet loaded (:func:`burstloc.sim.transient._tsnet_compat.load`)."""
     from tsnet.simulation import initialize
 
     wntr = initialize.wntr

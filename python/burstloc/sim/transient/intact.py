@@ -1,7 +1,8 @@
 """What a burst's simulation needs of its network before the burst pipe matters, once per process.
 
 Every burst of a sweep loads the same INP file, solves its steady state (the flow directions)
-and builds its transient-ready model (:func:`~burstloc.sim.tsnet_ready.transient_model`); none
+and builds its transient-ready model (:func:`~burstloc.sim.transient.tsnet_ready.transient_model`);
+none
 of it depends on the burst pipe. :func:`intact` makes each once per process and keeps it, keyed
 by the file's path and the SHA-256 of its bytes (an edited file is read afresh), for the last
 :data:`NETWORKS` files; :class:`IntactNetwork` keeps its steady state per engine and its
@@ -34,7 +35,7 @@ if TYPE_CHECKING:
     import networkx as nx
     from wntr.network import WaterNetworkModel
 
-    from burstloc.sim.scenario import BurstScenario
+    from burstloc.sim.scenarios.scenario import BurstScenario
 
 __all__ = ["NETWORKS", "IntactNetwork", "IntactSteady", "clear", "intact"]
 
@@ -116,7 +117,8 @@ class IntactNetwork:
     def transient_model(
         self, scenario: BurstScenario
     ) -> tuple[WaterNetworkModel, str, float, skeleton.PreparedNetwork | None]:
-        """:func:`burstloc.sim.tsnet_ready.transient_model` of this network for ``scenario``
+        """:func:`burstloc.sim.transient.tsnet_ready.transient_model` of this network for
+        ``scenario``
         (the model not to be changed: split a copy).
 
         Raises:

@@ -6,7 +6,7 @@ pressure-driven demand) with every junction's demand scaled by :data:`DIURNAL` (
 multipliers of a residential day: a night low, a morning and an evening peak; mean 1), samples
 the meters' pressure heads at the capture interval (linear between the hydraulic steps, which
 is what the slow part is: no transient solver is needed) and adds Gaussian sensor noise
-(:class:`burstloc.sim.sensors.SensorModel`). For tests, benchmarks and the monitor's soak.
+(:class:`burstloc.sim.scenarios.sensors.SensorModel`). For tests, benchmarks and the monitor's soak.
 
 What EPANET warns (e.g. WNTR raising a required pressure below EPANET's lower limit of 0.1 in
 the file's pressure unit, as for EPANET's Net1, which sets none) is kept out of the terminal,
@@ -28,7 +28,7 @@ from burstloc import network
 from burstloc._diagnostics import capture_diagnostics
 from burstloc.exceptions import ConfigError
 from burstloc.inp import check_meters
-from burstloc.sim.sensors import SensorModel
+from burstloc.sim.scenarios.sensors import SensorModel
 
 __all__ = ["DIURNAL", "HYDRAULIC_STEP", "normal_day"]
 

@@ -5,11 +5,11 @@ meters caused by a reference burst (an emitter) at ``x``: what the signature loc
 (:class:`burstloc.localize.signature.SignatureLocalizer`) matches the observed lasting drop to.
 :func:`compute_signatures` runs one EPANET steady state (pressure-driven demand, the engine TSNet
 initialises from) for the base state and one per pipe, in one EPANET project edited in place
-(:mod:`burstloc.sim.epanet_inplace`);
+(:mod:`burstloc.sim.signatures.epanet_inplace`);
 :func:`cached_signatures` / :func:`cached_signature_sets` keep the result on disk (one
 ``.npz`` file per position in burstloc's cache directory). On large networks
 :func:`linear_signature_sets` takes them from one factorization of the linearized steady state
-(:mod:`burstloc.sim.linear_signatures`), alone or anchored on an exact mid-pipe drop per pipe.
+(:mod:`burstloc.sim.signatures.linear`), alone or anchored on an exact mid-pipe drop per pipe.
 
 Only ``burstloc calibrate`` and the experiments call this: the stored configuration carries the
 signatures (:class:`burstloc.localize.model.LocalizationModel`), so the live path never runs it.
@@ -37,8 +37,8 @@ from burstloc.exceptions import ConfigError, InputError, SimulationError
 from burstloc.inp import check_meters, network_hash, pipe_names_in_file
 from burstloc.localize.signature import SIGNATURE_FORMAT, SignatureSet
 from burstloc.network import SteadyState, load_network, steady_state
-from burstloc.sim.cache import cache_key, default_cache_dir, drop_corrupt
-from burstloc.sim.epanet_inplace import InPlaceSplitter
+from burstloc.sim.scenarios.cache import cache_key, default_cache_dir, drop_corrupt
+from burstloc.sim.signatures.epanet_inplace import InPlaceSplitter
 
 __all__ = [
     "DEFAULT_BURST_COEFF",
@@ -66,7 +66,7 @@ pressure-driven demand (``"pdd"``, TSNet's initialiser) or TSNet's transient dem
 SignatureMethod = Literal["auto", "epanet", "hybrid", "linear"]
 """How the signatures are computed: ``"epanet"`` one EPANET steady state per pipe and position
 (exact, for the reference burst), ``"linear"`` one factorization of the linearized steady state
-(:mod:`burstloc.sim.linear_signatures`: exact for a small burst, the shape of a large one
+(:mod:`burstloc.sim.signatures.linear`: exact for a small burst, the shape of a large one
 approximated; seconds on any network), ``"hybrid"`` the exact mid-pipe drop and the linearized
 change along the pipe (:func:`linear_signature_sets`), ``"auto"`` by size
 (:func:`signature_method`)."""
@@ -86,7 +86,8 @@ def compute_signatures(
 
     One EPANET steady-state run for the base state and one per pipe with the pipe split at
     ``position`` and an emitter of coefficient ``burst_coeff`` at the new junction, all in one
-    EPANET project edited in place (:class:`burstloc.sim.epanet_inplace.InPlaceSplitter`: no copy
+    EPANET project edited in place (:class:`burstloc.sim.signatures.epanet_inplace.InPlaceSplitter`:
+    no copy
     of the model per pipe). Pipe end nodes are oriented in the base state's flow direction (a
     pipe with negative flow is reversed); ``baseline`` holds :func:`burstloc.network.steady_state`'s
     heads.
@@ -115,7 +116,7 @@ def linear_signature_sets(
     workers: int | None = None,
 ) -> tuple[SignatureSet, ...]:
     """:func:`compute_signatures`' sets at every position of ``positions`` from one
-    factorization of the linearized steady state (:mod:`burstloc.sim.linear_signatures`).
+    factorization of the linearized steady state (:mod:`burstloc.sim.signatures.linear`).
 
     ``"linear"``: one EPANET run and one sparse solve per meter, however many pipes.
     ``"hybrid"``: also one EPANET steady state per pipe at mid-pipe (:func:`compute_signatures`
@@ -132,7 +133,7 @@ def linear_signature_sets(
         InputError: no meter.
         SimulationError: EPANET failed on a pipe (hybrid).
     """
-    from burstloc.sim.linear_signatures import anchored, burst_signatures, linear_response
+    from burstloc.sim.signatures.linear import anchored, burst_signatures, linear_response
 
     _check_params(burst_coeff, positions, demand_model)
     if method not in ("linear", "hybrid"):
@@ -256,7 +257,7 @@ def _split_matrix_parallel(
     """:func:`_split_matrix` at mid-pipe over ``workers`` local processes (default: one per
     CPU), the pipes in contiguous chunks, each worker with its own EPANET project: the same
     numbers as one process (every run starts from scratch)."""
-    from burstloc.sim.sweep import sweep
+    from burstloc.sim.scenarios.sweep import sweep
 
     count = max(1, min(workers or os.cpu_count() or 1, len(pipes)))
     chunks = [list(c) for c in np.array_split(np.array(pipes, dtype=object), 2 * count) if len(c)]
@@ -322,7 +323,8 @@ def cached_signatures(
     """:func:`compute_signatures` for every junction, cached on disk, restricted to ``meters``.
 
     The cache key covers the network file's bytes, the parameters and the package versions
-    (:func:`burstloc.sim.cache.cache_key`), so an edited network file is recomputed. The default
+    (:func:`burstloc.sim.scenarios.cache.cache_key`), so an edited network file is recomputed. The
+    default
     folder is ``signatures/`` in burstloc's cache directory (``$BURSTLOC_CACHE_DIR``).
     """
     key = cache_key(

@@ -5,7 +5,8 @@ simulated), all greedy: starting from no meter, add one junction at a time.
 
 * ``coverage`` (:func:`coverage_meters`): separation of the steady-state burst signatures. Add
   the junction that most increases the smallest distance between any two pipes' unit-normalised
-  signatures (:mod:`burstloc.sim.signatures`) restricted to the chosen meters (ties: the larger
+  signatures (:mod:`burstloc.sim.signatures.compute`) restricted to the chosen meters (ties: the
+  larger
   total signature); every added meter separates the pair of pipes hardest to tell apart so far.
   It serves the signature localizer, which reads the lasting drop.
 * ``arrival`` (:func:`arrival_meters`): separation of wave arrival-time patterns. A burst at a
@@ -22,19 +23,19 @@ simulated), all greedy: starting from no meter, add one junction at a time.
   arrival times at fine capture intervals. Each step looks only at the pairs of points some
   junction could still leave closer than ``resolution``, and evaluates the junctions exactly
   in the order of a cheap upper bound until the bound settles the choice (at most
-  :data:`~burstloc.sim.arrival_placement.MAX_EXACT` of them): the exact greedy placement on
+  :data:`~burstloc.sim.placement.arrival.MAX_EXACT` of them): the exact greedy placement on
   every network with no more junctions than that, and wherever the bound settles it (L-TOWN,
-  33 meters: about 30 s). Its own module, :mod:`burstloc.sim.arrival_placement`.
+  33 meters: about 30 s). Its own module, :mod:`burstloc.sim.placement.arrival`.
 
-* ``region`` (:func:`burstloc.sim.region_placement.region_meters`): the shortest expected search
+* ``region`` (:func:`burstloc.sim.placement.region.region_meters`): the shortest expected search
   region. Add the junction that most reduces the expected length of main whose arrival pattern
   is within a capture interval of the burst point's (the points a search region cannot rule out
   from the arrivals); its own module.
 
-On a network of more than :data:`~burstloc.sim.scaled_placement.SCALE_JUNCTIONS` junctions
+On a network of more than :data:`~burstloc.sim.placement.scaled.SCALE_JUNCTIONS` junctions
 (1 000; BWSN_Network_2 has 12 523) ``arrival`` and ``region`` choose among a well-spread subset
 of the junctions and evaluate their objective on a seeded sample of burst points
-(:mod:`burstloc.sim.scaled_placement`): an approximation, deterministic; every smaller network
+(:mod:`burstloc.sim.placement.scaled`): an approximation, deterministic; every smaller network
 gets the exact greedy above.
 
 How far a set of meters can go on arrivals alone: :func:`arrival_separation` (and
@@ -72,10 +73,10 @@ from burstloc._validate import Fields, check_count, check_names, check_string, r
 from burstloc.constants import WAVE_SPEED
 from burstloc.exceptions import ConfigError
 from burstloc.inp import network_hash
-from burstloc.sim._placement_checks import check_meter_count, meter_geometry
-from burstloc.sim.arrival_placement import ARRIVAL_POINTS, arrival_meters, arrival_separation
-from burstloc.sim.region_placement import ambiguous_length, region_meters
-from burstloc.sim.scaled_placement import DEFAULT_SCALING, Scaling, reduced_problem
+from burstloc.sim.placement._checks import check_meter_count, meter_geometry
+from burstloc.sim.placement.arrival import ARRIVAL_POINTS, arrival_meters, arrival_separation
+from burstloc.sim.placement.region import ambiguous_length, region_meters
+from burstloc.sim.placement.scaled import DEFAULT_SCALING, Scaling, reduced_problem
 
 __all__ = [
     "ARRIVAL_POINTS",
@@ -219,15 +220,15 @@ def place_meters(
     """Place ``count`` meters on the junctions of the INP file ``network`` by ``method``
     (module docstring); ``resolution`` (s) is the ``arrival`` and ``region`` methods' capture
     interval. On a network of more junctions than ``scaling.above`` those two methods run on
-    a reduced problem (:mod:`burstloc.sim.scaled_placement`).
+    a reduced problem (:mod:`burstloc.sim.placement.scaled`).
 
     Raises:
         NetworkError: missing or malformed network.
         ConfigError: unknown method, ``count`` out of range.
     """
     from burstloc.network import load_network
-    from burstloc.sim.prepare import arrival_geometry
-    from burstloc.sim.signatures import cached_signatures
+    from burstloc.sim.model.prepare import arrival_geometry
+    from burstloc.sim.signatures.compute import cached_signatures
 
     if method not in PLACEMENT_METHODS:
         raise ConfigError(f"unknown placement method {method!r}; use one of {PLACEMENT_METHODS}")
@@ -294,7 +295,7 @@ def meter_scores(
     resolution: float = 0.2,
 ) -> tuple[float, float]:
     """:func:`meter_separation` and
-    :func:`~burstloc.sim.region_placement.meter_ambiguity` of ``meters`` at once, from one
+    :func:`~burstloc.sim.placement.region.meter_ambiguity` of ``meters`` at once, from one
     arrival geometry (what ``burstloc place`` prints).
 
     Raises:

@@ -15,9 +15,9 @@ import numpy as np
 
 from burstloc import network
 from burstloc.exceptions import NetworkError
-from burstloc.sim.intact import IntactNetwork, intact
-from burstloc.sim.scenario import BurstScenario
-from burstloc.sim.tsnet_ready import prepare_for_tsnet
+from burstloc.sim.scenarios.scenario import BurstScenario
+from burstloc.sim.transient.intact import IntactNetwork, intact
+from burstloc.sim.transient.tsnet_ready import prepare_for_tsnet
 
 __all__ = ["capture_time_step", "expected_time_step", "with_capture_time_step"]
 
@@ -29,7 +29,7 @@ def expected_time_step(scenario: BurstScenario) -> float:
     """The time step (s) TSNet will use for ``scenario``, without running TSNet.
 
     TSNet's discretisation is arithmetic on the pipe lengths of the split network (of its
-    transient-ready model with ``min_pipe_length``, :func:`~burstloc.sim.tsnet_ready.
+    transient-ready model with ``min_pipe_length``, :func:`~burstloc.sim.transient.tsnet_ready.
     transient_model`, prepared for TSNet): each pipe
     gets ``N = floor(L / (a dt))`` reaches for the requested step ``dt`` (default: the Courant
     limit ``min L / (2 a)``), and the step becomes ``sum(phi^2) / sum(phi)`` with
@@ -84,7 +84,8 @@ def _surely_finer(scenario: BurstScenario, finest_interval: float) -> bool:
     requested step ``min L / (2 a)`` (``N = floor(L / (a dt)) > L / (2 a dt)``), so below the
     travel time ``L / a`` of any pipe of the prepared model. A pipe of the transient-ready model
     other than the burst's is one of them, as long as it is, in every preparation for TSNet
-    (:func:`~burstloc.sim.tsnet_ready.prepare_for_tsnet`), neither removed nor made a valve:
+    (:func:`~burstloc.sim.transient.tsnet_ready.prepare_for_tsnet`), neither removed nor made a
+    valve:
     open, without a check valve, named by no control and joined to no tank (the links EPANET
     may close at the start)."""
     kept = intact(scenario.network)

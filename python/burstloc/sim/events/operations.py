@@ -18,10 +18,11 @@ on an asset of the network file:
 ==================  ========  ==========================================================
 
 ``operation_time`` tells a fast operation (1 s, the default) from a slow one (tens of
-seconds). The result is a :class:`~burstloc.sim.scenario.ScenarioResult` (the meters' pressure
+seconds). The result is a :class:`~burstloc.sim.scenarios.scenario.ScenarioResult` (the meters'
+pressure
 heads; metadata ``kind``, ``asset``, ``asset_nodes``, no ``pipe``), cached like a burst
 (namespace :data:`SCHEMA`) and saved as NPZ. TSNet's valve opening and pump start need the
-patches of :mod:`burstloc.sim._tsnet_compat`.
+patches of :mod:`burstloc.sim.transient._tsnet_compat`.
 """
 
 from __future__ import annotations
@@ -38,22 +39,22 @@ from burstloc import network
 from burstloc._diagnostics import capture_diagnostics
 from burstloc.constants import SCENARIO_DURATION, WAVE_SPEED
 from burstloc.exceptions import ConfigError, NetworkError
-from burstloc.sim.cache import DiskCache, file_sha256, network_cache_key
-from burstloc.sim.scenario import (
+from burstloc.sim.scenarios.cache import DiskCache, file_sha256, network_cache_key
+from burstloc.sim.scenarios.scenario import (
     DEFAULT_BURST_START,
     FRICTION_MODELS,
     ScenarioResult,
     check_solver,
 )
-from burstloc.sim.steady import check_steady_start
-from burstloc.sim.tsnet import (
+from burstloc.sim.transient.steady import check_steady_start
+from burstloc.sim.transient.tsnet import (
     TransientSettings,
     cached,
     isolated_run,
     run_metadata,
     run_transient,
 )
-from burstloc.sim.tsnet_ready import prepare_for_tsnet
+from burstloc.sim.transient.tsnet_ready import prepare_for_tsnet
 
 __all__ = ["EVENT_KINDS", "SCHEMA", "EventScenario", "event_output_path", "simulate_event"]
 
@@ -67,7 +68,7 @@ EVENT_KINDS = {
 }
 
 #: Cache namespace; bump when a change changes what an event simulates (2: supply junctions
-#: are fixed inflows, :func:`burstloc.sim.tsnet_ready.add_supply_boundaries`).
+#: are fixed inflows, :func:`burstloc.sim.transient.tsnet_ready.add_supply_boundaries`).
 SCHEMA = "event-scenario/2"
 
 #: TSNet's closure constant ``m``: the opening changes linearly in time.
@@ -96,7 +97,7 @@ class EventScenario:
             opening; unused otherwise.
         demand_change: a demand step's change, m³/s (non-zero); unused otherwise.
         wave_speed, duration, engine, time_step, friction, solver: as for a burst
-            (:class:`~burstloc.sim.scenario.BurstScenario`).
+            (:class:`~burstloc.sim.scenarios.scenario.BurstScenario`).
 
     Raises:
         ConfigError: a parameter out of range (named with its value).
@@ -189,7 +190,7 @@ def simulate_event(
         ConfigError: a time step above TSNet's limit, or too few time steps.
         SimulationError: TSNet failed, or produced non-finite heads.
         UnsteadyStartError: a junction's head moved more than
-            :data:`~burstloc.sim.steady.STEADY_TOLERANCE` before the event.
+            :data:`~burstloc.sim.transient.steady.STEADY_TOLERANCE` before the event.
         SimulatorMissingError: the simulator (the ``sim`` extra) is not installed.
     """
     key = network_cache_key(SCHEMA, scenario.parameters(), scenario.network)

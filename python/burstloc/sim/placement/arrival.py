@@ -4,7 +4,7 @@ A burst at a point ``x`` reaches meter ``j`` after ``d(x, j) / a`` (path length 
 over the wave speed); the burst time is unknown, so two points look alike to the meters ``S``
 when the differences of their travel times are nearly the same at every meter of ``S``: their
 *separation* is the RMS of those differences about their mean. :func:`arrival_meters` is the
-greedy placement (:mod:`burstloc.sim.placement` describes it with the other methods);
+greedy placement (:mod:`burstloc.sim.placement.methods` describes it with the other methods);
 :func:`arrival_separation` the share of candidate burst points the meters tell from every other
 pipe's by a capture interval.
 """
@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 from burstloc.constants import CANDIDATE_POSITIONS, WAVE_SPEED
 from burstloc.exceptions import ConfigError
 from burstloc.localize.arrival import PipeGeometry
-from burstloc.sim._placement_checks import check_meter_count, check_timing
+from burstloc.sim.placement._checks import check_meter_count, check_timing
 
 __all__ = ["ARRIVAL_POINTS", "MAX_EXACT", "arrival_meters", "arrival_separation"]
 
@@ -47,7 +47,7 @@ def arrival_meters(
     docstring).
 
     ``node_distances[n][j]`` is the path length (m) from pipe end node ``n`` to
-    ``junctions[j]`` (:func:`burstloc.sim.prepare.arrival_geometry` over every junction).
+    ``junctions[j]`` (:func:`burstloc.sim.model.prepare.arrival_geometry` over every junction).
 
     Returns:
         The chosen junctions, in ``junctions`` order.

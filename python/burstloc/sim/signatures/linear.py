@@ -1,6 +1,7 @@
 """Burst signatures from one factorization of the linearized steady state (large networks).
 
-:func:`burstloc.sim.signatures.compute_signatures` solves EPANET once per pipe: exact, but on a
+:func:`burstloc.sim.signatures.compute.compute_signatures` solves EPANET once per pipe: exact, but
+on a
 network of fifteen thousand pipes nine signature sets are over a hundred thousand steady states.
 Here the steady state is solved once and linearized about its solution. Unknowns are the head
 changes at the junctions and the flow changes in the links; equations are
@@ -159,7 +160,7 @@ def burst_signatures(
 ) -> NDArray[np.float64]:
     """The (pipes x meters) signature matrix of a reference burst of emitter coefficient
     ``burst_coeff`` at ``position`` along every pipe of ``pipes`` (module docstring)."""
-    from burstloc.sim.epanet_inplace import split_elevation
+    from burstloc.sim.signatures.epanet_inplace import split_elevation
 
     f = float(position)
     starts = np.array([response.index[wn.get_link(p).start_node_name] for p in pipes], dtype=int)

@@ -61,8 +61,8 @@ from typing import Any
 
 from burstloc import network, skeleton
 from burstloc.network import _fresh_name
-from burstloc.sim.scenario import BurstScenario
-from burstloc.sim.tsnet_elements import PowerPumpCurve, settle_pumps_and_check_valves
+from burstloc.sim.scenarios.scenario import BurstScenario
+from burstloc.sim.transient.tsnet_elements import PowerPumpCurve, settle_pumps_and_check_valves
 
 #: EPANET's trials for the steady state TSNet starts from (see :func:`prepare_for_tsnet`).
 STEADY_TRIALS = 1000
@@ -308,7 +308,8 @@ def prepare_for_tsnet(wn: Any, keep: Collection[str] = (), engine: str = "PDD") 
     check-valve pipes EPANET's steady state (solved with ``engine``) gives no flow made closed
     valves, and pumps
     given by their power made head pumps at their operating point
-    (:func:`burstloc.sim.tsnet_elements.settle_pumps_and_check_valves`), supply junctions except
+    (:func:`burstloc.sim.transient.tsnet_elements.settle_pumps_and_check_valves`), supply junctions
+    except
     ``keep`` made fixed inflows (:func:`add_supply_boundaries`), then connectors
     (:func:`add_connectors`), and pipes from a dead end to a tank or reservoir turned around
     (:func:`turn_dead_ends_from_sources`)."""

@@ -4,7 +4,7 @@ A :class:`BurstScenario` names a network file, a pipe and where along it the bur
 it starts, how long it takes to open fully and how large it ends (TSNet's emitter
 coefficient). A :class:`ScenarioResult` holds the pressure head of every *original* junction
 (the meters; the burst junction is left out) on the simulator's time grid, with the scenario's
-metadata; it saves to and loads from NPZ files. :mod:`burstloc.sim.tsnet` simulates them.
+metadata; it saves to and loads from NPZ files. :mod:`burstloc.sim.transient.tsnet` simulates them.
 The defaults (see ``networks/README.md`` for the reasoning):
 
 ========================  =========  ==================================================
@@ -18,7 +18,8 @@ The defaults (see ``networks/README.md`` for the reasoning):
                                      interval 10), whatever the capture phase
 ``time_step``             None       TSNet's largest stable step, as in the paper
 ``engine``                "PDD"      the paper's pressure-driven initial steady state
-``solver``                vectorized burstloc's vectorized MOC solver (:mod:`burstloc.sim.moc`):
+``solver``                vectorized burstloc's vectorized MOC solver
+(:mod:`burstloc.sim.transient.moc`):
                                      TSNet's model and heads, a 20-70x faster solve
 ========================  =========  ==================================================
 """
@@ -41,8 +42,8 @@ from burstloc import inp
 from burstloc._atomic import write_npz
 from burstloc.constants import SCENARIO_DURATION, WAVE_SPEED
 from burstloc.exceptions import ConfigError
-from burstloc.sim import capture
-from burstloc.sim.cache import network_cache_key
+from burstloc.sim.scenarios import capture
+from burstloc.sim.scenarios.cache import network_cache_key
 
 __all__ = [
     "DEFAULT_BURST_COEFF",
@@ -68,7 +69,8 @@ DEFAULT_BURST_COEFF = 0.01
 
 
 #: Cache namespace; bump when a change changes what a scenario simulates (2: supply junctions
-#: are fixed inflows, :func:`burstloc.sim.tsnet_ready.add_supply_boundaries`; 3: every pipe keeps
+# : are fixed inflows, :func:`burstloc.sim.transient.tsnet_ready.add_supply_boundaries`; 3: every
+# pipe keeps
 #: the friction factor of its steady head loss above TSNet's cap, pipes EPANET closes become
 #: closed valves, EPANET's steady state solved to at least 1000 trials: Anytown's bursts change).
 SCHEMA = "burst-scenario/3"
@@ -81,7 +83,8 @@ _ENGINES = ("PDD", "DD")
 FRICTION_MODELS = ("steady", "quasi-steady", "unsteady")
 
 
-#: The transient solvers: burstloc's vectorized MOC solver (:mod:`burstloc.sim.moc`, steady
+# : The transient solvers: burstloc's vectorized MOC solver (:mod:`burstloc.sim.transient.moc`,
+# steady
 #: friction; its time loop in Rust), the same solver's time loop as NumPy array operations
 #: (``"numpy"``: the same heads to the bit, slower; kept to measure and check the Rust loop)
 #: and TSNet's own ``MOCSimulator`` (every friction model; the reference).
@@ -138,7 +141,8 @@ class BurstScenario:
             step is at least ``min_pipe_length / (2 wave_speed)``. The burst pipe and meters
             keep their original names.
         solver: the transient solver, one of :data:`SOLVERS` (default ``"vectorized"``; its
-            heads are TSNet's, see :mod:`burstloc.sim.moc`; ``"tsnet"`` for the other friction
+            heads are TSNet's, see :mod:`burstloc.sim.transient.moc`; ``"tsnet"`` for the other
+            friction
             models).
 
     Raises:
@@ -260,7 +264,7 @@ class ScenarioResult:
     def node_label(self, node: str) -> str:
         """What a user calls ``node``, a node of the simulated network (as TSNet's messages
         name it): the junction the simulation inserted on the burst pipe is "the burst point on
-        pipe <pipe>", a connector junction (:mod:`burstloc.sim.tsnet_ready`) "the junction
+        pipe <pipe>", a connector junction (:mod:`burstloc.sim.transient.tsnet_ready`) "the junction
         added between link <link> and node <node>"; the network's own nodes keep their names."""
         if node == self.metadata.get("burst_node"):
             return f"the burst point on pipe {self.pipe}"
@@ -275,7 +279,8 @@ class ScenarioResult:
     def resample(self, capture_interval: float, phase: float = 0.0) -> ScenarioResult:
         """Return the readings meters would transmit every ``capture_interval`` seconds.
 
-        See :func:`burstloc.sim.capture.resample` (sample-and-hold; an error if the interval is
+        See :func:`burstloc.sim.scenarios.capture.resample` (sample-and-hold; an error if the
+        interval is
         finer than the time step).
         """
         ticks, samples = capture.resample(self.time, self.heads, capture_interval, phase)

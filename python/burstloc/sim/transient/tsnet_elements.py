@@ -6,7 +6,8 @@ opening (a gate valve's loss at 100 % or 0 % open); EPANET knows two more kinds 
 * **A pump given by its power** (``POWER`` in [PUMPS]: a constant power ``P`` adding the head
   ``H = P / (rho g Q)``; the Kentucky networks KY1, KY3, KY10, ...) stopped TSNet
   ("'PowerPump' object has no attribute 'get_pump_curve'"). :func:`settle_pumps_and_check_valves`
-  (called by :func:`burstloc.sim.tsnet_ready.prepare_for_tsnet`) turns each into a head pump whose
+  (called by :func:`burstloc.sim.transient.tsnet_ready.prepare_for_tsnet`) turns each into a head
+  pump whose
   curve agrees with the constant-power hyperbola at EPANET's operating point ``(Q0, H0)`` in head
   and slope (``dH/dQ = -H0 / Q0``): the parabola ``H = 1.5 H0 - H0 Q^2 / (2 Q0^2)`` through
   ``(0, 1.5 H0)``, ``(Q0, H0)`` and ``(sqrt(3) Q0, 0)``. The steady state is unchanged (the
@@ -50,7 +51,7 @@ from burstloc.constants import VACUUM_HEAD
 from burstloc.exceptions import NetworkError
 from burstloc.inp import node_line
 from burstloc.network import _fresh_name
-from burstloc.sim.moc_elements import G
+from burstloc.sim.transient.moc_elements import G
 
 __all__ = [
     "HeldValve",

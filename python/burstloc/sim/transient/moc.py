@@ -5,15 +5,18 @@ hundred pipes a step costs milliseconds, and a network with short pipes needs te
 of steps (EPANET's Net3: 1.8 CPU s per simulated second on its transient-ready model). This
 solver takes the model TSNet has initialized (discretization, wave speeds, EPANET's steady
 state, demand coefficients, pump curves, the event's controls: everything but the time loop)
-and runs the same equations over the whole network at once (:mod:`burstloc.sim.moc_layout`):
+and runs the same equations over the whole network at once
+(:mod:`burstloc.sim.transient.moc_layout`):
 interior points, junctions (pressure-dependent demand and the burst's emitter, ``Q = k
 sqrt(p)``), dead ends, reservoirs and tanks, valves leading nowhere; pumps and valves between
-pipes keep TSNet's own functions (:mod:`burstloc.sim.moc_elements`). The time loop runs in Rust by
-default (:mod:`burstloc.sim.moc_rust`, the same expressions, pumps and valves ported: the same
+pipes keep TSNet's own functions (:mod:`burstloc.sim.transient.moc_elements`). The time loop runs in
+Rust by
+default (:mod:`burstloc.sim.transient.moc_rust`, the same expressions, pumps and valves ported: the
+same
 heads to the bit, 15-20 times faster on L-TOWN); ``kernel="numpy"`` (solver ``"numpy"``) runs
 it here as NumPy array operations per step. Every expression keeps
 TSNet's order of operations, down to the order in which ``np.dot`` adds a junction's pipes
-(:func:`~burstloc.sim.moc_layout.dot_order`, as OpenBLAS does with NumPy 1.26) and the C
+(:func:`~burstloc.sim.transient.moc_layout.dot_order`, as OpenBLAS does with NumPy 1.26) and the C
 library's ``pow`` for squares: there the heads are TSNet's to the last bit. Where NumPy's BLAS
 adds in another order (NumPy 2) they differ by micrometres to millimetres: TSNet's junction
 equation is ill-conditioned at a junction without demand, and TSNet itself differs by as much
@@ -36,8 +39,8 @@ from typing import Any
 import numpy as np
 
 from burstloc.exceptions import ConfigError
-from burstloc.sim import moc_rust
-from burstloc.sim.moc_layout import Layout, layout
+from burstloc.sim.transient import moc_rust
+from burstloc.sim.transient.moc_layout import Layout, layout
 
 __all__ = ["solve"]
 
@@ -92,7 +95,8 @@ def _characteristic(
 def _lanes(
     end: np.ndarray, slot: np.ndarray, size: int
 ) -> list[tuple[int, np.ndarray, np.ndarray]]:
-    """The junction sums' order (:func:`~burstloc.sim.moc_layout.dot_order`), per slot of the
+    """The junction sums' order (:func:`~burstloc.sim.transient.moc_layout.dot_order`), per slot of
+    the
     junctions' pipe lists: ``(lane, entries, ends)``."""
     degree = np.bincount(end, minlength=size)
     blocked = (4 * (degree // 4))[end]
@@ -144,7 +148,7 @@ def _dead_ends(
     return HP, VP
 
 
-#: The time loops :func:`solve` can run: ``"rust"`` (:mod:`burstloc.sim.moc_rust`, the
+#: The time loops :func:`solve` can run: ``"rust"`` (:mod:`burstloc.sim.transient.moc_rust`, the
 #: default) or ``"numpy"`` (array operations per step, here); their heads are equal to the bit.
 KERNELS = ("rust", "numpy")
 

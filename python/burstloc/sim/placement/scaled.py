@@ -1,10 +1,11 @@
 """Meter placement on large networks: the ``arrival`` and ``region`` methods at utility scale.
 
-The exact methods (:mod:`burstloc.sim.placement`, :mod:`burstloc.sim.region_placement`) hold
+The exact methods (:mod:`burstloc.sim.placement.methods`, :mod:`burstloc.sim.placement.region`) hold
 the path length from every pipe end to every junction and compare every pair of candidate
 burst points: on BWSN_Network_2 (12 523 junctions, 14 822 pipes) that is 1.2 GB of path lengths
 and 10^9 pairs of points before the first meter. Above :attr:`Scaling.above` junctions
-(default :data:`SCALE_JUNCTIONS`), :func:`burstloc.sim.placement.place_meters` runs them on a
+(default :data:`SCALE_JUNCTIONS`), :func:`burstloc.sim.placement.methods.place_meters` runs them on
+a
 reduced problem instead; below it nothing changes (the exact greedy, the same meters):
 
 * **candidate junctions**: :attr:`Scaling.candidates` of the junctions, spread over the network
@@ -12,14 +13,14 @@ reduced problem instead; below it nothing changes (the exact greedy, the same me
   from the first junction, then each time the junction farthest from those chosen; a
   junction no chosen one reaches comes first, so every part of a disconnected network has
   candidates). Path lengths are measured from those candidates only (SciPy's sparse Dijkstra
-  on :func:`burstloc.sim.prepare.length_graph`, the graph the exact methods use: pipes weigh
+  on :func:`burstloc.sim.model.prepare.length_graph`, the graph the exact methods use: pipes weigh
   their length, valves and pumps nothing, parallel links their shortest; lengths are symmetric
   on it, so they are the lengths from the pipe ends to the candidates). Meters are chosen
   among the candidates.
 * **bursts**: the ``arrival`` objective is summed over the pairs of a seeded sample of
   :attr:`Scaling.pipes` pipes (each pipe as likely; the exact objective's pipe pairs, sampled);
   the ``region`` objective over a seeded, length-weighted sample of :attr:`Scaling.points`
-  points of its grid (:func:`burstloc.sim.region_placement.ambiguity_grid`), its bursts drawn
+  points of its grid (:func:`burstloc.sim.placement.region.ambiguity_grid`), its bursts drawn
   from those.
 
 Deterministic: the sampling is seeded (:attr:`Scaling.seed`) and the farthest-point sampling
@@ -42,7 +43,7 @@ from numpy.typing import NDArray
 
 from burstloc.exceptions import ConfigError
 from burstloc.localize.arrival import PipeGeometry
-from burstloc.sim._placement_checks import check_meter_count
+from burstloc.sim.placement._checks import check_meter_count
 
 if TYPE_CHECKING:
     from wntr.network import WaterNetworkModel
@@ -64,7 +65,7 @@ docstring); L-TOWN (782) and every smaller network keep the exact methods."""
 
 @dataclass(frozen=True)
 class Scaling:
-    """When and how far :func:`burstloc.sim.placement.place_meters` reduces the problem
+    """When and how far :func:`burstloc.sim.placement.methods.place_meters` reduces the problem
     (module docstring): above ``above`` junctions, ``candidates`` candidate junctions (at least
     the meter count), ``pipes`` sampled pipes (``arrival``), ``points`` sampled grid points
     (``region``), sampling seeded by ``seed``.
@@ -92,16 +93,16 @@ class Scaling:
 
 
 DEFAULT_SCALING = Scaling()
-"""The scaling :func:`burstloc.sim.placement.place_meters` uses by default."""
+"""The scaling :func:`burstloc.sim.placement.methods.place_meters` uses by default."""
 
 
 def _node_graph(wn: WaterNetworkModel) -> tuple[list[str], object]:
-    """The nodes of :func:`burstloc.sim.prepare.length_graph` and its sparse matrix (one entry
+    """The nodes of :func:`burstloc.sim.model.prepare.length_graph` and its sparse matrix (one entry
     per edge, zero-length valves and pumps kept as explicit zeros: SciPy counts them as
     edges)."""
     from scipy.sparse import csr_matrix
 
-    from burstloc.sim.prepare import length_graph
+    from burstloc.sim.model.prepare import length_graph
 
     graph = length_graph(wn)
     nodes = list(graph.nodes)
@@ -161,14 +162,14 @@ def spread_junctions(
 def candidate_geometry(
     wn: WaterNetworkModel, count: int
 ) -> tuple[list[PipeGeometry], list[str], dict[str, NDArray[np.float64]]]:
-    """Every pipe's geometry (:func:`burstloc.sim.prepare.pipe_geometry`), ``count`` spread
+    """Every pipe's geometry (:func:`burstloc.sim.model.prepare.pipe_geometry`), ``count`` spread
     candidate junctions (:func:`spread_junctions`) and the path lengths from every pipe end
     node to them: the arguments of the exact placements, on the candidates.
 
     Raises:
         ConfigError: ``count`` out of range.
     """
-    from burstloc.sim.prepare import pipe_geometry
+    from burstloc.sim.model.prepare import pipe_geometry
 
     pipes = pipe_geometry(wn)
     names, lengths = spread_junctions(wn, count)

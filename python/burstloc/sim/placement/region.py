@@ -50,7 +50,7 @@ from burstloc.constants import WAVE_SPEED
 from burstloc.exceptions import ConfigError
 from burstloc.localize.arrival import ArrivalLocalizer, PipeGeometry
 from burstloc.localize.region import GRID_STEP, RegionGrid
-from burstloc.sim._placement_checks import check_meter_count, check_timing, meter_geometry
+from burstloc.sim.placement._checks import check_meter_count, check_timing, meter_geometry
 
 __all__ = [
     "BURST_SAMPLES",
@@ -115,14 +115,14 @@ def ambiguity_grid(
 ) -> AmbiguityGrid:
     """The points and bursts of the objective (module docstring) for ``junctions``;
     ``node_distances[n][j]`` is the path length (m) from pipe end node ``n`` to
-    ``junctions[j]`` (:func:`burstloc.sim.prepare.arrival_geometry`). An unreachable junction
+    ``junctions[j]`` (:func:`burstloc.sim.model.prepare.arrival_geometry`). An unreachable junction
     is ten times the longest reachable travel away (heard by no burst, alike for all).
 
     ``points``: at most this many points (default: every segment). A grid with more is
     replaced by a sample of ``points`` segments drawn with probability proportional to length
     (seeded by ``seed``; a segment drawn ``c`` times weighs ``c`` times the mean length of
     main per draw, so the ambiguous main keeps its scale); the bursts are then drawn from
-    those (the scaled placement of large networks, :mod:`burstloc.sim.scaled_placement`).
+    those (the scaled placement of large networks, :mod:`burstloc.sim.placement.scaled`).
 
     Raises:
         ConfigError: no pipe, a bad wave speed, step, sample or point count.

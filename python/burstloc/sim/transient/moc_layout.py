@@ -1,4 +1,5 @@
-"""TSNet's transient model as flat arrays, for the vectorized MOC solver (:mod:`burstloc.sim.moc`).
+"""TSNet's transient model as flat arrays, for the vectorized MOC solver
+(:mod:`burstloc.sim.transient.moc`).
 
 TSNet (0.3.1) discretizes every pipe into ``n`` reaches of ``n + 1`` points and, at each time
 step, loops over its pipes in Python: the interior points from the two characteristics, each
@@ -20,7 +21,7 @@ operations over the whole network:
 Only what TSNet leaves unsimulated is refused (:class:`~burstloc.exceptions.SimulationError`
 naming the pipe): surge tanks and air chambers (burstloc never adds them), a pipe end TSNet
 leaves at zero head (a pipe joining two boundaries) and a pump at a branch (TSNet stops there;
-:func:`burstloc.sim.tsnet_ready.add_connectors` prevents both).
+:func:`burstloc.sim.transient.tsnet_ready.add_connectors` prevents both).
 """
 
 from __future__ import annotations
@@ -31,8 +32,8 @@ from typing import Any
 import numpy as np
 
 from burstloc.exceptions import ConfigError, SimulationError
-from burstloc.sim import moc_elements
-from burstloc.sim.moc_elements import ElementEnd, G
+from burstloc.sim.transient import moc_elements
+from burstloc.sim.transient.moc_elements import ElementEnd, G
 
 _BOUNDARY_NODES = ("Reservoir", "Tank")
 
@@ -57,7 +58,8 @@ class _Group:
 
 @dataclass
 class Layout:
-    """A TSNet model laid out for :func:`burstloc.sim.moc.solve` (built by :func:`layout`).
+    """A TSNet model laid out for :func:`burstloc.sim.transient.moc.solve` (built by
+    :func:`layout`).
 
     Arrays per pipe (``ga`` = g/a, ``gadt`` = g/a·dt, ``cf`` = f·dt/2/D as TSNet groups it,
     ``cf2`` = f·dt/(2D) as its dead end does, ``area`` as TSNet's junction computes it,
@@ -151,7 +153,7 @@ class _Builder:
 
 def _floor(node: Any) -> float:
     """A dead end's lowest head without demand: its start if below its elevation (see
-    :mod:`burstloc.sim._tsnet_compat`), else its elevation (TSNet's zero pressure)."""
+    :mod:`burstloc.sim.transient._tsnet_compat`), else its elevation (TSNet's zero pressure)."""
     return float(min(node.elevation, node.initial_head))
 
 

@@ -31,7 +31,8 @@ class ElementEnd:
 
     ``solve(H, V, ts)`` returns the end's ``(head, velocity)`` from the previous step's flat
     arrays; ``index`` is the end's point in the flat arrays. The rest describes the same
-    computation for the Rust time loop (:mod:`burstloc.sim.moc_rust`): ``kind`` (:data:`VALVE`,
+    computation for the Rust time loop (:mod:`burstloc.sim.transient.moc_rust`): ``kind``
+    (:data:`VALVE`,
     :data:`PUMP`, :data:`SOURCE`), whether the end is its pipe's start, TSNet's characteristics
     ``C1`` and ``C2`` as ``(point, pipe, sign)``, the pipe end on the pump's suction side, the
     sump's head (a source pump) and ``parameter(ts)``: the valve's inverse loss coefficient (in

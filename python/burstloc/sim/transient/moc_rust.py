@@ -1,7 +1,9 @@
 """The vectorized MOC solver's time loop in Rust (``burstloc._core.moc_run``, crate ``moc-core``).
 
-:func:`burstloc.sim.moc.solve` runs TSNet's transient either as NumPy array operations per time
-step or, by default, here: the :class:`~burstloc.sim.moc_layout.Layout` is handed to Rust as
+:func:`burstloc.sim.transient.moc.solve` runs TSNet's transient either as NumPy array operations per
+time
+step or, by default, here: the :class:`~burstloc.sim.transient.moc_layout.Layout` is handed to Rust
+as
 flat arrays once and the whole time loop runs there, pumps and valves between pipes included
 (TSNet's ``valve_node``, ``pump_node`` and ``source_pump``, ported with their order of
 operations), without the Python interpreter between steps. Every expression keeps the NumPy
@@ -17,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from burstloc.sim.moc_layout import Layout
+from burstloc.sim.transient.moc_layout import Layout
 
 __all__ = ["Run", "run"]
 
@@ -52,7 +54,8 @@ def _series(columns: list[np.ndarray], steps: int) -> np.ndarray:
 
 
 def _lanes(end: np.ndarray, slot: np.ndarray) -> np.ndarray:
-    """Each junction-sum entry's ``np.dot`` lane (see :func:`burstloc.sim.moc_layout.dot_order`):
+    """Each junction-sum entry's ``np.dot`` lane (see
+    :func:`burstloc.sim.transient.moc_layout.dot_order`):
     ``slot % 4`` within the full blocks of four, else the first lane."""
     degree = np.bincount(end, minlength=1)
     blocked = (4 * (degree // 4))[end]

@@ -1,7 +1,7 @@
 """Sensor models for robustness studies: meter subsets and additive Gaussian noise.
 
 Off by default: :class:`SensorModel()` keeps every junction's reading exactly. Apply a model
-to captured readings (after :func:`burstloc.sim.capture.resample`), not to the simulated
+to captured readings (after :func:`burstloc.sim.scenarios.capture.resample`), not to the simulated
 timeline, so that the noise is drawn once per transmitted reading.
 
 Pure NumPy: no simulator import.

@@ -3,7 +3,7 @@
 :func:`prepare_model` loads the network with WNTR, solves its steady state once for the flow
 directions (:func:`burstloc.network.flow_direction_graph`), measures the shortest path lengths
 from every pipe's end nodes to the meters (:func:`arrival_geometry`) and takes the burst
-signatures (:func:`burstloc.sim.signatures.cached_signature_sets`). The result, a
+signatures (:func:`burstloc.sim.signatures.compute.cached_signature_sets`). The result, a
 :class:`burstloc.localize.model.LocalizationModel`, is stored in the configuration that
 ``burstloc calibrate`` writes; the live monitor only reads it.
 
@@ -28,7 +28,7 @@ from burstloc.localize.arrival import ArrivalLocalizer, PipeGeometry
 from burstloc.localize.decide import RankingLocalizers
 from burstloc.localize.model import LocalizationModel
 from burstloc.network import flow_direction_graph, load_network
-from burstloc.sim.signatures import SignatureMethod, cached_signature_sets
+from burstloc.sim.signatures.compute import SignatureMethod, cached_signature_sets
 
 if TYPE_CHECKING:
     from wntr.network import WaterNetworkModel
@@ -241,7 +241,7 @@ def prepare_model(
     """The :class:`~burstloc.localize.model.LocalizationModel` of ``meters`` (default: every
     junction) on the INP file ``network`` (module docstring). ``wn``: the file's WNTR model, if
     the caller has it loaded already; ``cache_dir``: where the signatures are cached;
-    ``signatures``: how they are computed (:data:`burstloc.sim.signatures.SignatureMethod`;
+    ``signatures``: how they are computed (:data:`burstloc.sim.signatures.compute.SignatureMethod`;
     ``workers``: the local processes of the hybrid method's EPANET runs).
 
     Raises:

@@ -5,7 +5,8 @@
 capture tick before the next tick's, meters in the network's junction order. ``timestamp`` is
 seconds from the simulation's start, or with a start time the ISO 8601 time (its UTC offset
 kept; ``Z`` for UTC); ``value`` is the pressure head in metres (0.1 mm), with seeded Gaussian
-noise when asked (:class:`burstloc.sim.sensors.SensorModel`: the same seed and pipe, the same
+noise when asked (:class:`burstloc.sim.scenarios.sensors.SensorModel`: the same seed and pipe, the
+same
 noise). ``burstloc monitor --readings FILE`` reads it as it is.
 
 Pure NumPy: no simulator import.
@@ -20,8 +21,8 @@ from pathlib import Path
 from burstloc._atomic import write_text
 from burstloc.exceptions import ConfigError
 from burstloc.readings import CSV_HEADER, format_timestamp
-from burstloc.sim.scenario import ScenarioResult
-from burstloc.sim.sensors import SensorModel
+from burstloc.sim.scenarios.scenario import ScenarioResult
+from burstloc.sim.scenarios.sensors import SensorModel
 
 __all__ = ["feed_text", "write_feed"]
 

@@ -1,13 +1,16 @@
-"""The TSNet driver: simulate a :class:`~burstloc.sim.scenario.BurstScenario`.
+"""The TSNet driver: simulate a :class:`~burstloc.sim.scenarios.scenario.BurstScenario`.
 
 :func:`simulate_burst` splits the pipe with a new junction (:func:`burstloc.network.split_pipe`),
 places TSNet's burst there, solves the initial steady state (pressure-driven demand, as the
 paper does) and runs the MOC transient simulation: TSNet's model, solved by burstloc's
-vectorized solver (:mod:`burstloc.sim.moc`, the default: TSNet's heads, 20-70x faster) or
+vectorized solver (:mod:`burstloc.sim.transient.moc`, the default: TSNet's heads, 20-70x faster) or
 by TSNet's own ``MOCSimulator`` (``solver="tsnet"``). Results are cached on disk by content
-(:mod:`burstloc.sim.cache`); :func:`simulate_many` sweeps scenarios over local processes or a
-Dask cluster (:mod:`burstloc.sim.sweep`). What does not depend on the burst pipe (the network,
-its steady state, its transient-ready model) is made once per process (:mod:`burstloc.sim.intact`).
+(:mod:`burstloc.sim.scenarios.cache`); :func:`simulate_many` sweeps scenarios over local processes
+or a
+Dask cluster (:mod:`burstloc.sim.scenarios.sweep`). What does not depend on the burst pipe (the
+network,
+its steady state, its transient-ready model) is made once per process
+(:mod:`burstloc.sim.transient.intact`).
 TSNet prints progress, warns on every time step and writes EPANET scratch files into the
 working directory. Here its output is captured into the metadata (``warnings``,
 ``tsnet_messages``, ``negative_pressure_nodes``) and it runs inside a temporary directory: the
@@ -32,15 +35,15 @@ from burstloc import network
 from burstloc._diagnostics import capture_diagnostics
 from burstloc.constants import PRESSURE_NOISE
 from burstloc.exceptions import ConfigError, NetworkError, SimulationError
-from burstloc.sim import _tsnet_compat, moc
-from burstloc.sim._tsnet_results import results_by_name
-from burstloc.sim.cache import DiskCache, file_sha256, package_versions
-from burstloc.sim.intact import intact
-from burstloc.sim.scenario import SCHEMA, BurstScenario, ScenarioResult
-from burstloc.sim.steady import check_steady_start
-from burstloc.sim.sweep import SweepReport, sweep
-from burstloc.sim.tsnet_elements import check_steady_state, hold_valves
-from burstloc.sim.tsnet_ready import prepare_for_tsnet, transient_model
+from burstloc.sim.scenarios.cache import DiskCache, file_sha256, package_versions
+from burstloc.sim.scenarios.scenario import SCHEMA, BurstScenario, ScenarioResult
+from burstloc.sim.scenarios.sweep import SweepReport, sweep
+from burstloc.sim.transient import _tsnet_compat, moc
+from burstloc.sim.transient._tsnet_results import results_by_name
+from burstloc.sim.transient.intact import intact
+from burstloc.sim.transient.steady import check_steady_start
+from burstloc.sim.transient.tsnet_elements import check_steady_state, hold_valves
+from burstloc.sim.transient.tsnet_ready import prepare_for_tsnet, transient_model
 
 __all__ = [
     "TransientSettings",
@@ -95,7 +98,8 @@ def simulate_burst(
 
     Args:
         scenario: what to simulate.
-        cache: ``True`` = the default :class:`~burstloc.sim.cache.DiskCache`; a ``DiskCache``;
+        cache: ``True`` = the default :class:`~burstloc.sim.scenarios.cache.DiskCache`; a
+        ``DiskCache``;
             ``False``/``None`` = always simulate, store nothing.
 
     Raises:
@@ -104,7 +108,8 @@ def simulate_burst(
             ``duration`` shorter than TSNet's minimum of 10 time steps.
         SimulationError: TSNet failed, or produced non-finite heads.
         UnsteadyStartError: a junction's head moved more than
-            :data:`~burstloc.sim.steady.STEADY_TOLERANCE` before the burst (nothing is cached).
+            :data:`~burstloc.sim.transient.steady.STEADY_TOLERANCE` before the burst (nothing is
+            cached).
         SimulatorMissingError: the simulator (the ``sim`` extra) is not installed.
     """
     return cached(scenario, None, cache, _simulate)
@@ -214,7 +219,7 @@ def run_metadata(dt: float, samples: int, diag: Any, elapsed: float) -> dict[str
 class TransientSettings:
     """How a transient runs: wave speed (m/s), duration (s), requested time step (s, ``None`` =
     TSNet's largest), initial steady state engine, friction model and solver
-    (:data:`~burstloc.sim.scenario.SOLVERS`)."""
+    (:data:`~burstloc.sim.scenarios.scenario.SOLVERS`)."""
 
     wave_speed: float
     duration: float
@@ -347,7 +352,7 @@ def _initialize(tsnet: Any, tm: Any, settings: TransientSettings) -> Any:
     also runs over a period of two steps: it allocates six result series per pipe and two per
     node over the whole period, which only TSNet's solver fills (about 1 GB on L-TOWN's 32 554
     steps); burstloc's reads their first value, and the period is restored too. It reads EPANET's
-    results by name (:func:`burstloc.sim._tsnet_results.results_by_name`)."""
+    results by name (:func:`burstloc.sim.transient._tsnet_results.results_by_name`)."""
     times = tm.options.time
     duration, period = times.duration, tm.simulation_period
     times.duration = 0
@@ -391,7 +396,7 @@ def simulate_many(
     Uncached scenarios run in local worker processes (``workers``, default the CPU count) or,
     with ``scheduler`` (a Dask scheduler address), on that cluster; each result is stored in
     the cache as soon as it arrives. A failing scenario is reported in the returned
-    :class:`~burstloc.sim.sweep.SweepReport` with its pipe and error; the others complete.
+    :class:`~burstloc.sim.scenarios.sweep.SweepReport` with its pipe and error; the others complete.
     Dask workers read the network file at the scenario's path: on a cluster, give a path all
     workers can read (a shared file system).
     """
