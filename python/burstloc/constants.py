@@ -19,6 +19,7 @@ from typing import Literal
 __all__ = [
     "CANDIDATE_POSITIONS",
     "CAPTURE_INTERVALS",
+    "CLOCK_TOLERANCE",
     "DETECTORS",
     "EXACT_SIGNATURES_UP_TO",
     "HYBRID_SIGNATURES_UP_TO",
@@ -31,6 +32,7 @@ __all__ = [
     "SIGNATURE_DECISION_DELAY",
     "VACUUM_HEAD",
     "WAVE_SPEED",
+    "WAVE_SPEED_TOLERANCE",
     "Detector",
     "MeterModel",
 ]
@@ -45,6 +47,17 @@ MAX_SAMPLE = 1e100
 
 WAVE_SPEED = 1200.0
 """Pressure-wave speed (m/s): TSNet's default, the paper's setting."""
+
+WAVE_SPEED_TOLERANCE = 0.05
+"""Relative uncertainty of the wave's travel time along a path (one standard deviation): the
+wave speed of real mains is known to a few per cent (material, wall thickness, air), and a
+model's pipe lengths and the transient model's short pipes (lengthened to a minimum) add
+their own. The search regions widen with the path: ``tolerance x path / wave speed``."""
+
+CLOCK_TOLERANCE = 0.0
+"""Uncertainty (s, one standard deviation) of each meter's clock: GPS-disciplined loggers are
+within a millisecond, NTP-synchronised ones a few milliseconds (``burstloc calibrate
+--clock-tolerance``)."""
 
 SCENARIO_DURATION = 220.0
 """Simulated seconds of a burst scenario: the burst at 10 s plus the signature's decision delay

@@ -242,3 +242,21 @@ def test_bad_feed_options_are_named_before_any_work(
     assert _run("simulate", tiny, *pipe, "--out", tmp_path / "o", *extra) == 2
     assert says in capsys.readouterr().err
     assert not (tmp_path / "o").exists() or not any((tmp_path / "o").iterdir())
+
+
+def test_a_capture_interval_finer_than_tsnet_s_step_gets_a_step_fine_enough(
+    tmp_path: Path,
+) -> None:
+    """paper15's TSNet step is 0.104 s: readings every 0.05 s ask for a step of half that, as
+    `burstloc evaluate` does, instead of a refusal."""
+    paper15 = Path(__file__).resolve().parents[2] / "networks" / "paper15.inp"
+    out = tmp_path / "out"
+    code = _run(
+        "simulate", paper15, "--pipe", "1", "--capture-interval", "0.05", "--out", out,
+        "--no-cache", *SHORT,
+    )  # fmt: skip
+    assert code == 0
+    with np.load(out / "paper15_pipe-1.npz", allow_pickle=False) as data:
+        meta = json.loads(str(data["metadata"]))
+        np.testing.assert_allclose(np.diff(data["time"]), 0.05)
+    assert meta["time_step"] <= 0.05 and meta["capture_interval"] == 0.05

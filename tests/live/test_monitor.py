@@ -80,7 +80,8 @@ def test_the_live_loop_decides_what_evaluate_decides(tiny: Path, config: Calibra
             monitor = BurstMonitor(
                 tiny, config, capture_interval=spec.capture_interval, localizer=spec.localizer
             )
-            decisions = list(monitor.run(_steps(batch.results[pipe], spec)))
+            records = monitor.run(_steps(batch.results[pipe], spec))
+            decisions = [d for d in records if not d.transient]  # the answers
             assert decisions, (spec, pipe)
             live = decisions[0]
             assert live.pipe == expected.predicted_pipe
@@ -154,7 +155,8 @@ def test_the_live_loop_looks_again_at_the_arrivals_as_evaluate_does(
         for pipe in run.pipes:
             expected = run.attempts[pipe][0]
             monitor = BurstMonitor(tiny, eager, capture_interval=0.2, localizer=run.spec.localizer)
-            live = next(iter(monitor.run(_steps(ev.results[pipe], run.spec))))
+            records = monitor.run(_steps(ev.results[pipe], run.spec))
+            live = next(d for d in records if not d.transient)
             assert live.pipe == expected.predicted_pipe
             assert math.isclose(live.time, expected.decided_at, abs_tol=1e-9)
             later += live.time > live.first_alarm + 1e-9
@@ -348,7 +350,7 @@ def test_classified_decisions_are_bursts_or_events(tiny: Path, config: Calibrati
     loose = ClassifierConfig(max_residual=1.0, min_scale=0.0, rise_tolerance=0.05)
     steps = _steps(long_burst, spec)
     monitor = BurstMonitor(tiny, config, capture_interval=2.0, classify=loose)
-    decisions = list(monitor.run(steps))
+    decisions = [d for d in monitor.run(steps) if not d.transient]
     assert decisions and decisions[0].is_burst
     doc = decisions[0].to_json()
     assert doc["type"] == "decision" and doc["burst"] is True
@@ -361,7 +363,7 @@ def test_classified_decisions_are_bursts_or_events(tiny: Path, config: Calibrati
     base = steps[0].values
     mirrored = [Step(s.timestamp, 2 * base - s.values) for s in steps]
     monitor = BurstMonitor(tiny, config, capture_interval=2.0, classify=loose)
-    events = list(monitor.run(mirrored))
+    events = [d for d in monitor.run(mirrored) if not d.transient]
     assert events and not events[0].is_burst
     doc = events[0].to_json()
     assert doc["type"] == "event" and doc["classification"]["class"] == "other"
@@ -369,7 +371,7 @@ def test_classified_decisions_are_bursts_or_events(tiny: Path, config: Calibrati
     # declared: the burst at 2 s explained by an operation (a demand switched on)
     declared = [Operation("J3", 2.0, "demand on")]
     monitor = BurstMonitor(tiny, config, capture_interval=2.0, classify=loose, operations=declared)
-    explained = list(monitor.run(steps))
+    explained = [d for d in monitor.run(steps) if not d.transient]
     assert explained and explained[0].to_json()["classification"]["reason"].startswith("declared")
 
 
@@ -419,7 +421,37 @@ def test_a_classified_decision_without_a_silent_meter(tiny: Path, config: Calibr
     loose = ClassifierConfig(max_residual=1.0, min_scale=0.0, rise_tolerance=0.05)
     monitor = BurstMonitor(tiny, config, capture_interval=2.0, classify=loose)
     monitor.exclude("J4")
-    decisions = list(monitor.run(_steps(long_burst, spec)))
+    records = list(monitor.run(_steps(long_burst, spec)))
+    assert records[0].transient and records[0].meters == ("J1", "J2", "J3")  # the early answer
+    decisions = [d for d in records if not d.transient]
     assert decisions and decisions[0].meters == ("J1", "J2", "J3")
     assert decisions[0].decision.classification is not None
     assert decisions[0].decision.classification.evidence["falling"] <= 3  # J4 left out
+
+
+def test_the_fused_localizer_answers_early_at_a_coarse_interval(
+    tiny: Path, config: Calibration, long_burst
+) -> None:
+    """At 2 s the arrivals cannot time the wave along the tiny network's pipes, so the fused
+    localizer answers with the lasting drop; before it, at the arrival horizon, it gives an
+    early record: the arrivals' search region, its centre as the named point (inside it), and
+    when the answer is due."""
+    from burstloc.localize.decide import arrival_horizon, fused_of
+
+    spec = RunSpec(DetectorConfig("cusum", 0.3), 2.0, 5, localizer="fused")
+    monitor = BurstMonitor(tiny, config, capture_interval=2.0)
+    fused = fused_of(monitor.localizers)
+    assert fused is not None and not fused.resolves(2.0)
+    records = list(monitor.run(_steps(long_burst, spec)))
+    assert [r.transient for r in records[:2]] == [True, False]
+    early, final = records[0], records[1]
+    horizon = arrival_horizon(fused.arrival, config.for_interval(2.0))
+    assert early.time - early.first_alarm <= horizon + 2.0 + 1e-9  # seconds, not minutes
+    assert final.time - final.first_alarm >= config.for_interval(2.0).decision_delay - 2.0
+    region, at = early.decision.region, early.decision.position
+    assert region is not None and at is not None
+    assert at.pipe == early.pipe  # the named point's pipe leads the ranking
+    assert region.contains(at.pipe, at.start, at.metres, at.length)
+    doc = early.to_json()
+    assert doc["type"] == "transient" and doc["answer_at"] == pytest.approx(final.time, abs=2.0)
+    assert doc["region"]["length_m"] > 0 and doc["position"]["pipe"] == at.pipe

@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+from burstloc.constants import CLOCK_TOLERANCE, WAVE_SPEED_TOLERANCE
 from burstloc.exceptions import ConfigError
 from burstloc.localize.arrival import PipeGeometry
 from burstloc.localize.decide import RankingLocalizers
@@ -165,3 +166,23 @@ def test_wave_fronts_that_do_not_fit_are_refused() -> None:
     doc = _line_model(fronts=_fronts()).to_json()
     with pytest.raises(ConfigError, match="malformed localization model"):
         LocalizationModel.from_json({**doc, "fronts": [1, 2]})
+
+
+def test_the_timing_tolerances_are_stored_checked_and_reach_the_arrival_localizer() -> None:
+    model = _line_model(wave_speed_tolerance=0.12, clock_tolerance=0.004)
+    doc = json.loads(json.dumps(model.to_json()))
+    assert doc["wave_speed_tolerance"] == 0.12 and doc["clock_tolerance_s"] == 0.004
+    back = LocalizationModel.from_json(doc)
+    assert back == model and back != _line_model()
+    arrival = RankingLocalizers.from_model(back).arrival
+    assert (arrival.wave_speed_tolerance, arrival.clock_tolerance) == (0.12, 0.004)
+    # a model stored before they were recorded gets the defaults
+    del doc["wave_speed_tolerance"], doc["clock_tolerance_s"]
+    older = LocalizationModel.from_json(doc)
+    assert older.wave_speed_tolerance == WAVE_SPEED_TOLERANCE
+    assert older.clock_tolerance == CLOCK_TOLERANCE
+    for field, value in (("wave_speed_tolerance", -0.1), ("wave_speed_tolerance", 1.5)):
+        with pytest.raises(ConfigError, match=field):
+            _line_model(**{field: value})
+    with pytest.raises(ConfigError, match="clock_tolerance"):
+        _line_model(clock_tolerance=math.nan)

@@ -166,3 +166,34 @@ def test_a_region_needs_evidence_that_places_the_burst() -> None:
     )  # fmt: skip
     with pytest.raises(InputError, match="no meter of the arrival model has alarmed"):
         posterior(arrival, quiet)
+
+
+def test_a_wave_slower_than_the_model_s_stays_in_the_region_with_a_tolerance() -> None:
+    """Every travel time 1/0.85 of the model's (the mains' wave speed 15 % below the model's):
+    100 m along the line, the region with no tolerance misses the burst; with the default
+    tolerance (5 % of each travel time) it holds it, and a wider tolerance widens it."""
+    from burstloc.constants import WAVE_SPEED_TOLERANCE
+    from burstloc.localize.arrival import ArrivalLocalizer
+
+    def arrival(tolerance: float) -> ArrivalLocalizer:
+        line = line_arrival()
+        nodes = {p.start for p in line.pipes} | {p.end for p in line.pipes}
+        d_start, d_end = line.end_distances
+        distances = {p.start: d_start[i] for i, p in enumerate(line.pipes)}
+        distances |= {p.end: d_end[i] for i, p in enumerate(line.pipes)}
+        assert set(distances) == nodes
+        return ArrivalLocalizer(
+            line.pipes, METERS, distances, wave_speed=WAVE, wave_speed_tolerance=tolerance
+        )
+
+    x = 100.0
+    late = np.array([abs(x - 600.0 * i) / WAVE * (1 / 0.85 - 1) for i in range(len(METERS))])
+    evidence = _evidence(x, 0.01, jitter=late)
+    exact = posterior(arrival(0.0), evidence).region()
+    tolerant = posterior(arrival(WAVE_SPEED_TOLERANCE), evidence).region()
+    wide = posterior(arrival(0.15), evidence).region()
+    assert not exact.contains(*_truth(x))
+    assert tolerant.contains(*_truth(x)) and wide.contains(*_truth(x))
+    assert exact.length < tolerant.length < wide.length
+    # with arrivals as the model says, the tolerance still holds the burst
+    assert posterior(arrival(0.15), _evidence(x, 0.01)).region().contains(*_truth(x))

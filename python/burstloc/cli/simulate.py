@@ -111,7 +111,12 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "--wave-speed", type=float, default=WAVE_SPEED, metavar="M/S", help="pressure wave speed"
     )
     parser.add_argument(
-        "--time-step", type=float, default=None, metavar="S", help="default: TSNet's largest"
+        "--time-step",
+        type=float,
+        default=None,
+        metavar="S",
+        help="default: TSNet's largest stable step, or half the --capture-interval where "
+        "TSNet's is coarser",
     )
     add_min_pipe_length_option(parser)
     add_solver_option(parser)
@@ -159,6 +164,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> int:
     """Handle ``burstloc simulate``."""
     from burstloc.sim.scenarios import scenario
+    from burstloc.sim.transient.time_step import with_capture_time_step
     from burstloc.sim.transient.tsnet import simulate_many
 
     check_output(args.out, directory=True)
@@ -179,6 +185,8 @@ def run(args: argparse.Namespace) -> int:
         min_pipe_length=args.min_pipe_length,
         solver=args.solver,
     )
+    if args.capture_interval is not None:  # a step fine enough for the readings asked for
+        scenarios = with_capture_time_step(scenarios, args.capture_interval)
     cache = cache_of(args)
     report = simulate_many(
         scenarios,

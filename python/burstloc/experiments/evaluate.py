@@ -259,7 +259,9 @@ def evaluate(
     out = []
     for spec in runs:
         positions = scorer.score(attempts[spec])
-        regions = score_regions(attempts[spec], scorer.points, lengths, positions)
+        regions = score_regions(
+            attempts[spec], scorer.points, lengths, positions, error_of=scorer.error
+        )
         offsets = phase_offsets(spec, phases, phase_span)
         out.append(
             RunResult(

@@ -248,7 +248,7 @@ class Attempt:
         def cut(decision: Decision | None) -> Decision | None:
             if decision is None or len(decision.ranking) <= keep:
                 return decision
-            return replace(decision, ranking=Ranking(decision.ranking.top(keep)))
+            return replace(decision, ranking=decision.ranking.head(keep))
 
         return replace(
             self,

@@ -216,6 +216,10 @@ class PositionScorer:
         self.points = {p: true_point(r, wn) for p, r in results.items()}
         """Pipe -> where its burst opened."""
 
+    def error(self, truth: PipePoint, position: PipePosition | None) -> float | None:
+        """Network distance (m) from a named ``position`` to ``truth`` (``None`` without one)."""
+        return score_position(self.distance, truth, position).error
+
     def score(self, attempts: Mapping[str, Sequence[Attempt]]) -> dict[str, list[PositionOutcome]]:
         """Per pipe, the outcome of each attempt (``attempts[pipe][k]``)."""
         return {

@@ -15,7 +15,10 @@ attempt (:func:`score_region`):
   monitor's first early (transient) record or its answer;
 * the **time to a region of at most 1 km** (:data:`SEARCHABLE`): seconds from the burst to the
   first record whose 95 % region is that short: the monitor's early (transient) records, then
-  its answer (``None`` when none is).
+  its answer (``None`` when none is);
+* the **first answer**: whether the first record with a region (early or not) held the burst
+  in its 95 % region, and its named point's network distance to the truth: what the control
+  room has seconds after the burst.
 
 An attempt without an answer counts as a burst outside every region, not within any distance
 and without a region. :class:`RegionScores` summarises a run.
@@ -23,7 +26,7 @@ and without a region. :class:`RegionScores` summarises a run.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -34,6 +37,7 @@ from burstloc.localize.region import REGION_LEVELS
 if TYPE_CHECKING:
     from burstloc.experiments.harness import Attempt
     from burstloc.experiments.position import PipePoint, PositionOutcome
+    from burstloc.localize.arrival import PipePosition
 
 __all__ = [
     "NEAR",
@@ -59,13 +63,17 @@ class RegionOutcome:
     holds it (``covered``) and its length (m, ``lengths``; empty without a region), the named
     point's network distance to the truth (``error``, m, ``None`` without one), the seconds from
     the burst to the first record with a region (``first_after``) and to the first whose 95 %
-    region is at most :data:`SEARCHABLE` m long (``searchable_after``)."""
+    region is at most :data:`SEARCHABLE` m long (``searchable_after``); whether that first
+    record's 95 % region held the burst (``first_covered``) and its named point's distance to
+    the truth (``first_error``, m)."""
 
     covered: tuple[bool, ...] = ()
     lengths: tuple[float, ...] = ()
     error: float | None = None
     searchable_after: float | None = None
     first_after: float | None = None
+    first_covered: bool = False
+    first_error: float | None = None
 
 
 def score_region(
@@ -74,9 +82,12 @@ def score_region(
     truth_length: float,
     position: PositionOutcome,
     levels: Sequence[float] = REGION_LEVELS,
+    error_of: Callable[[PipePosition | None], float | None] | None = None,
 ) -> RegionOutcome:
     """Score ``attempt``'s regions against the burst's true point ``truth`` (on a pipe of
-    ``truth_length`` m); ``position`` is the attempt's scored position."""
+    ``truth_length`` m); ``position`` is the attempt's scored position, ``error_of`` the
+    network distance (m) from a named point to the truth (for the first record's; without it,
+    the answer's ``position.error`` when the answer is the first record)."""
     decision = attempt.decision
     post = None if decision is None else decision.posterior
     if decision is None or post is None:
@@ -85,15 +96,24 @@ def score_region(
     covered = tuple(r.contains(truth.pipe, truth.node, truth.metres, truth_length) for r in regions)
     lengths = tuple(r.length for r in regions)
     after = first = None
+    first_covered, first_error = False, None
     for answer in (*attempt.early, decision):  # the early records first, then the answer
         post = None if answer is None else answer.posterior
         if answer is None or post is None:
             continue
-        first = answer.time - attempt.burst_start if first is None else first
+        if first is None:
+            first = answer.time - attempt.burst_start
+            first_covered = post.region().contains(
+                truth.pipe, truth.node, truth.metres, truth_length
+            )
+            if error_of is not None:
+                first_error = error_of(answer.position)
+            elif answer is decision:
+                first_error = position.error
         if post.region().length <= SEARCHABLE:
             after = answer.time - attempt.burst_start
             break
-    return RegionOutcome(covered, lengths, position.error, after, first)
+    return RegionOutcome(covered, lengths, position.error, after, first, first_covered, first_error)
 
 
 def score_regions(
@@ -101,10 +121,21 @@ def score_regions(
     points: Mapping[str, PipePoint],
     lengths: Mapping[str, float],
     positions: Mapping[str, Sequence[PositionOutcome]],
+    error_of: Callable[[PipePoint, PipePosition | None], float | None] | None = None,
 ) -> dict[str, list[RegionOutcome]]:
-    """Per pipe, the region outcome of each attempt (``attempts[pipe][k]``)."""
+    """Per pipe, the region outcome of each attempt (``attempts[pipe][k]``); ``error_of(truth,
+    position)``: the network distance (m) from a named point to the truth."""
+
+    def scorer(truth: PipePoint) -> Callable[[PipePosition | None], float | None] | None:
+        if error_of is None:
+            return None
+        return lambda position: error_of(truth, position)
+
     return {
-        p: [score_region(a, points[p], lengths[p], positions[p][k]) for k, a in enumerate(runs)]
+        p: [
+            score_region(a, points[p], lengths[p], positions[p][k], error_of=scorer(points[p]))
+            for k, a in enumerate(runs)
+        ]
         for p, runs in attempts.items()
     }
 
@@ -128,7 +159,10 @@ class RegionScores:
     distance of :data:`NEAR`), ``searchable`` (share whose answer's 95 % region is at most
     :data:`SEARCHABLE` m) and ``median_time_to_searchable`` (s from the burst, over every
     attempt, ``None`` when half of them never get one); ``median_time_to_region``: the same for
-    the first region of any length."""
+    the first region of any length. ``first_coverage``, ``first_within`` and
+    ``first_mean_error``: the first record's 95 % coverage, named point within each distance of
+    :data:`NEAR` (shares of every attempt) and mean distance (m, over the attempts that have
+    one)."""
 
     attempts: int
     answered: int
@@ -140,6 +174,9 @@ class RegionScores:
     searchable: float | None
     median_time_to_searchable: float | None
     median_time_to_region: float | None
+    first_coverage: float | None = None
+    first_within: tuple[float | None, ...] = ()
+    first_mean_error: float | None = None
 
     @classmethod
     def of(
@@ -169,6 +206,16 @@ class RegionScores:
             searchable=_share((o.searchable_after is not None for o in items), total),
             median_time_to_searchable=_median_time(o.searchable_after for o in items),
             median_time_to_region=_median_time(o.first_after for o in items),
+            first_coverage=_share((o.first_covered for o in items), total),
+            first_within=tuple(
+                _share((o.first_error is not None and o.first_error <= d for o in items), total)
+                for d in NEAR
+            ),
+            first_mean_error=(
+                float(np.mean(errors))
+                if (errors := [o.first_error for o in items if o.first_error is not None])
+                else None
+            ),
         )
 
     def to_json(self) -> dict[str, Any]:
@@ -190,11 +237,19 @@ class RegionScores:
             "searchable": self.searchable,
             "median_time_to_searchable_s": self.median_time_to_searchable,
             "median_time_to_region_s": self.median_time_to_region,
+            "first_answer": {
+                "coverage_95": self.first_coverage,
+                "within_m": {
+                    f"{d:g}": share for d, share in zip(NEAR, self.first_within, strict=True)
+                },
+                "mean_error_m": self.first_mean_error,
+            },
         }
 
 
 REGION_HEADER = [
     "first region",
+    "first: 95 % held, within 300 m, mean",
     "coverage 50 / 80 / 95 %",
     "95 % region median / p90",
     "within 100 / 300 m",
@@ -213,8 +268,12 @@ def region_cells(scores: RegionScores) -> list[str]:
     median, p90 = scores.median_length[last], scores.p90_length[last]
     time = scores.median_time_to_searchable
     first = scores.median_time_to_region
+    mean = scores.first_mean_error
+    near = scores.first_within[-1] if scores.first_within else None
     return [
         "-" if first is None else f"{first:.1f} s",
+        f"{_percent(scores.first_coverage)}, {_percent(near)}, "
+        + ("-" if mean is None else f"{mean:.0f} m"),
         " / ".join(_percent(c) for c in scores.coverage),
         "-" if median is None or p90 is None else f"{median:.0f} / {p90:.0f} m",
         " / ".join(_percent(w) for w in scores.within),

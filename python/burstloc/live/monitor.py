@@ -65,14 +65,19 @@ from burstloc.localize.classify import ClassifierConfig, EventClassifier, Operat
 from burstloc.localize.config import Calibration, calibrated_bank
 from burstloc.localize.corroborate import CORROBORATE, corroborated_at, corroboration_deadline
 from burstloc.localize.decide import (
+    Decision,
     RankingLocalizers,
     decision_time,
+    early_answer,
+    early_time,
     fused_of,
     horizon_of,
     rank_alarms,
 )
 from burstloc.localize.evidence import IndexedAlarm, Localizer
 from burstloc.readings import Step
+
+_Part = tuple[np.ndarray, np.ndarray, list[IndexedAlarm], tuple[str, ...], Mapping[str, Localizer]]
 
 __all__ = ["HISTORY_BEFORE_ONSET", "QUIET_FACTOR", "QUIET_WINDOW", "BurstMonitor"]
 
@@ -190,6 +195,7 @@ class BurstMonitor:
         self._by: float | None = None  # corroborated by then, or dismissed (the deadline)
         self._resume: float | None = None  # the next look at the arrivals (Decision.look_again)
         self._announced = False  # the pending decision's transient record has been given
+        self._early: float | None = None  # the fused localizer's early answer is due then
         self._quiet_until: float | None = None  # end of the hold-off after a decision
         self._arming = 0  # alarm-free steps still needed after the hold-off
         self._arm_by: float | None = None  # re-arming; re-armed by then even if still ringing
@@ -304,6 +310,11 @@ class BurstMonitor:
             shifted, cal = self._shifted(times.size), self.calibration
             self._due = decision_time(self.localizer, shifted, times, cal, self._fused)
             self._by = corroboration_deadline(self.localizer, self.localizers, shifted, times, cal)
+            self._early = early_time(self.localizer, shifted, times, cal, self._fused)
+        if self._early is not None and t + 1e-9 >= self._early and not self._announced:
+            early = self._early_answer()
+            if early is not None:
+                return early
         if self._due is None or t + 1e-9 < self._due:
             return None
         times = np.fromiter(self._times, dtype=np.float64)
@@ -345,7 +356,7 @@ class BurstMonitor:
     def _forget(self) -> None:
         """Drop the pending alarms and their decision."""
         self._alarms, self._announced = [], False
-        self._due = self._by = self._resume = None
+        self._due = self._by = self._resume = self._early = None
 
     def _restart_bank(self) -> None:
         self.bank.reset()
@@ -360,11 +371,12 @@ class BurstMonitor:
             if a.index >= first
         ]
 
-    def _decide(self) -> LiveDecision | None:
+    def _taking_part(self) -> _Part:
+        """``(times, readings, alarms, meters, localizers)`` of the meters taking part (those
+        not excluded, with their own localizers when some are)."""
         times = np.fromiter(self._times, dtype=np.float64)
         readings = np.array(self._values)
         alarms = self._shifted(times.size)
-        cal = self.calibration
         meters, localizers = self.meters, self.localizers
         part = [j for j, m in enumerate(self.meters) if m not in self.excluded]
         if self._subsets is not None and len(part) < len(self.meters):
@@ -377,6 +389,54 @@ class BurstMonitor:
                 for a in alarms
                 if a.channel in column
             ]
+        return times, readings, alarms, meters, localizers
+
+    def _early_answer(self) -> LiveDecision | None:
+        """The fused localizer's early answer, as a transient record, once enough meters have
+        corroborated the alarms (``None`` before, or when the arrivals place it nowhere)."""
+        times, readings, alarms, meters, localizers = self._taking_part()
+        needed = min(self.corroborate, len(self.meters) - len(self.excluded))
+        if not alarms or corroborated_at(alarms, times, needed, float(times[-1])) is None:
+            return None
+        fused = fused_of(localizers)
+        if fused is None:
+            return None
+        self._early = None
+        cal = self.calibration
+        decision = early_answer(fused, meters, times, readings, alarms, cal, self.meter_model)
+        if decision is None:
+            return None
+        self._announced = True
+        settled = decision_time("signature", alarms, times, cal)
+        return self._record(decision, meters, alarms, localizers, settled)
+
+    def _record(
+        self,
+        decision: Decision,
+        meters: Sequence[str],
+        alarms: Sequence[IndexedAlarm],
+        localizers: Mapping[str, Localizer],
+        answer_at: float | None = None,
+    ) -> LiveDecision:
+        """``decision`` as the monitor reports it, over the meters taking part; with
+        ``answer_at``, the early (transient) record of an answer due then."""
+        alarmed = tuple(sorted({meters[a.channel] for a in alarms}, key=self.meters.index))
+        excluded = tuple(m for m in self.meters if m in self.excluded)
+        if answer_at is not None:
+            classifying = self.classifier is not None
+            return LiveDecision(
+                decision, self.localizer, tuple(meters), excluded, alarmed, False, answer_at,
+                classifying=classifying,
+            )  # fmt: skip
+        looked = horizon_of(localizers, self.calibration)
+        waited = decision.waited or (
+            decision.time - decision.first_alarm > looked + self.calibration.capture_interval + 1e-9
+        )
+        return LiveDecision(decision, self.localizer, tuple(meters), excluded, alarmed, waited)
+
+    def _decide(self) -> LiveDecision | None:
+        times, readings, alarms, meters, localizers = self._taking_part()
+        cal = self.calibration
         try:
             if not alarms:
                 raise InputError("every meter that alarmed has gone silent")
@@ -400,8 +460,6 @@ class BurstMonitor:
             self._due = decision.look_again  # the arrivals are not decisive yet: more are due
             self._resume = decision.look_again
             return None
-        alarmed = tuple(sorted({meters[a.channel] for a in alarms}, key=self.meters.index))
-        excluded = tuple(m for m in self.meters if m in self.excluded)
         settled = decision_time("signature", alarms, times, cal)
         if (decision.waited or self.classifier) and times[-1] + 1e-9 < settled:
             self._due = settled  # the fused localizer or the classifier waits for the signatures
@@ -409,16 +467,7 @@ class BurstMonitor:
                 return None
             # Located now, answered when the lasting change has settled: say where at once.
             self._announced = True
-            return LiveDecision(
-                decision,
-                self.localizer,
-                tuple(meters),
-                excluded,
-                alarmed,
-                False,
-                settled,
-                classifying=self.classifier is not None,
-            )
+            return self._record(decision, meters, alarms, localizers, settled)
         if self.classifier is not None:  # over the meters that take part
             classifier = EventClassifier.of(self.classifier.config, localizers, self.operations)
             kind = classify_alarms(
@@ -428,8 +477,4 @@ class BurstMonitor:
             decision = replace(decision, time=float(times[-1]), classification=kind)
         self._forget()
         self._quiet_until = float(times[-1]) + self.holdoff
-        looked = horizon_of(localizers, cal)
-        waited = decision.waited or (
-            decision.time - decision.first_alarm > looked + cal.capture_interval + 1e-9
-        )
-        return LiveDecision(decision, self.localizer, tuple(meters), excluded, alarmed, waited)
+        return self._record(decision, meters, alarms, localizers)

@@ -36,6 +36,7 @@ def monitor_state(monitor: BurstMonitor) -> dict[str, Any]:
         "due": m._due,
         "corroborate_by": m._by,
         "resume": m._resume,
+        "early": m._early,
         "announced": m._announced,
         "quiet_until": m._quiet_until,
         "arming": m._arming,
@@ -73,6 +74,7 @@ def restore_monitor(monitor: BurstMonitor, state: Mapping[str, Any]) -> None:
     m._by = state.get("corroborate_by", m._due)
     m._resume = state.get("resume")  # states saved before: the looks are taken from the start
     m._announced = bool(state.get("announced", False))  # states saved before: False
+    m._early = state.get("early")  # states saved before: no early answer pending
     m._quiet_until = state["quiet_until"]
     m._arming = int(state["arming"])
     m._arm_by = state["arm_by"]

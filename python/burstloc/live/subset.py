@@ -36,6 +36,9 @@ def restricted_model(model: LocalizationModel, meters: Sequence[str]) -> Localiz
         node_distances={node: row[cols] for node, row in model.node_distances.items()},
         signature_sets=tuple(s.for_meters(meters) for s in model.signature_sets),
         wave_speed=model.wave_speed,
+        wave_speed_tolerance=model.wave_speed_tolerance,
+        clock_tolerance=model.clock_tolerance,
+        fronts=None if model.fronts is None else {p: r[cols] for p, r in model.fronts.items()},
     )
 
 

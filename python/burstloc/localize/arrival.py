@@ -44,7 +44,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from burstloc.constants import CANDIDATE_POSITIONS, WAVE_SPEED
+from burstloc.constants import (
+    CANDIDATE_POSITIONS,
+    CLOCK_TOLERANCE,
+    WAVE_SPEED,
+    WAVE_SPEED_TOLERANCE,
+)
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.localize.evidence import BurstEvidence, RankedPipe, Ranking
 
@@ -220,9 +225,20 @@ class ArrivalLocalizer:
         decision_delay: float | None = None,
         silence: bool = True,
         fronts: Mapping[str, NDArray[np.float64]] | None = None,
+        wave_speed_tolerance: float = WAVE_SPEED_TOLERANCE,
+        clock_tolerance: float = CLOCK_TOLERANCE,
     ) -> None:
         if not (math.isfinite(wave_speed) and wave_speed > 0):
             raise ConfigError(f"wave_speed must be > 0 m/s, got {wave_speed}")
+        if not (math.isfinite(wave_speed_tolerance) and 0 <= wave_speed_tolerance <= 1):
+            raise ConfigError(f"wave_speed_tolerance must be in [0, 1], got {wave_speed_tolerance}")
+        if not (math.isfinite(clock_tolerance) and clock_tolerance >= 0):
+            raise ConfigError(f"clock_tolerance must be >= 0 s, got {clock_tolerance}")
+        self.wave_speed_tolerance = float(wave_speed_tolerance)
+        """Relative uncertainty of a travel time along a path (the search regions' timing
+        error grows with the path: :func:`burstloc.localize.region.timing_scale`)."""
+        self.clock_tolerance = float(clock_tolerance)
+        """Uncertainty (s) of each meter's clock."""
         pos = np.array(sorted(set(float(x) for x in positions)), dtype=np.float64)
         if pos.size == 0 or np.any(pos < 0) or np.any(pos > 1):
             raise ConfigError("positions must be fractions in [0, 1] (at least one)")
@@ -288,6 +304,18 @@ class ArrivalLocalizer:
         """
         return np.asarray(self._rms(self._dist, evidence).min(axis=1), dtype=np.float64)
 
+    def columns(self, evidence: BurstEvidence) -> tuple[list[int], list[int]]:
+        """The meters :meth:`windows` gives a window to, as columns of :attr:`meters`: the
+        alarmed ones, then (with ``silence`` on) the silent ones that read."""
+        alarmed = [j for j, m in enumerate(self.meters) if m in evidence.alarms]
+        silent: list[int] = []
+        if self.silence:
+            reading = set(evidence.meters)
+            silent = [
+                j for j, m in enumerate(self.meters) if m not in evidence.alarms and m in reading
+            ]
+        return alarmed, silent
+
     def windows(
         self,
         dist: NDArray[np.float64],
@@ -309,23 +337,17 @@ class ArrivalLocalizer:
         Raises:
             InputError: no meter of the model has alarmed.
         """
-        alarmed = [j for j, m in enumerate(self.meters) if m in evidence.alarms]
+        alarmed, silent = self.columns(evidence)
         if not alarmed:
             raise InputError("no meter of the arrival model has alarmed: nothing to localize")
         dt = evidence.capture_interval
         tau = np.array([evidence.alarms[self.meters[j]].start for j in alarmed])
         lo_parts = [tau[None, None, :] - dist[:, :, alarmed] / self.wave_speed]
         hi_parts = [lo_parts[0] + dt]
-        silent: list[int] = []
-        if self.silence:
-            reading = set(evidence.meters)
-            silent = [
-                j for j, m in enumerate(self.meters) if m not in evidence.alarms and m in reading
-            ]
-            if silent:
-                bound = evidence.decision_time - 2 * dt
-                lo_parts.append(bound - dist[:, :, silent] / self.wave_speed)
-                hi_parts.append(np.full_like(lo_parts[-1], np.inf))
+        if silent:  # (empty with silence off)
+            bound = evidence.decision_time - 2 * dt
+            lo_parts.append(bound - dist[:, :, silent] / self.wave_speed)
+            hi_parts.append(np.full_like(lo_parts[-1], np.inf))
         lo = np.concatenate(lo_parts, axis=2)  # t0 values that put each arrival in its window
         hi = np.concatenate(hi_parts, axis=2)
         reach = np.isfinite(lo)

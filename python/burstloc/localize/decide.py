@@ -20,7 +20,11 @@ live caller holding the readings so far):
   arrivals as the arrival localizer does. A decisive look is the answer; if none is by the
   horizon (a burst near a junction fits several of the junction's pipes almost equally well in
   time) it waits for the signature's decision time and answers with both, the arrivals as of
-  the horizon. At coarse intervals it answers at the signature's time.
+  the horizon. At coarse intervals it answers at the signature's time, and gives an *early
+  answer* (:func:`early_answer`) at the arrival horizon (:func:`early_time`): the search
+  region from the arrivals and its centre as the named point
+  (:func:`burstloc.localize.center.posterior_center`), seconds after the burst, whatever the
+  pipe lengths.
 
 Every answer of the arrival and fused localizers carries the burst's position on the named pipe
 (metres from its flow-direction start node, with an interval) from the arrival fit at the last
@@ -36,7 +40,7 @@ mapping of names to :class:`burstloc.localize.evidence.Localizer`); every answer
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -44,7 +48,14 @@ import numpy as np
 from burstloc.constants import RANKING_LOCALIZERS, MeterModel
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.localize.arrival import ArrivalLocalizer, PipePosition
-from burstloc.localize.evidence import BurstEvidence, Localizer, Ranking, evidence_at
+from burstloc.localize.center import posterior_center
+from burstloc.localize.evidence import (
+    BurstEvidence,
+    Localizer,
+    RankedPipe,
+    Ranking,
+    evidence_at,
+)
 from burstloc.localize.fused import FusedLocalizer, decisive, quantisation_margin
 from burstloc.localize.region import (
     REGION_CONFIDENCE,
@@ -65,6 +76,8 @@ __all__ = [
     "RankingLocalizers",
     "arrival_horizon",
     "decision_time",
+    "early_answer",
+    "early_time",
     "fused_of",
     "horizon_of",
     "json_time",
@@ -159,6 +172,8 @@ class RankingLocalizers(Mapping[str, Localizer]):
             model.node_distances,
             wave_speed=model.wave_speed,
             fronts=model.fronts,
+            wave_speed_tolerance=model.wave_speed_tolerance,
+            clock_tolerance=model.clock_tolerance,
         )
         signature = SignatureLocalizer(model.signature_sets)
         return cls(arrival, signature, FusedLocalizer(arrival, signature))
@@ -230,6 +245,76 @@ def decision_time(
     return onset + calibration.decision_delay
 
 
+def early_time(
+    localizer: str,
+    alarms: Sequence[Any],
+    times: np.ndarray,
+    calibration: IntervalCalibration,
+    fused: FusedLocalizer | None = None,
+) -> float | None:
+    """When the fused localizer gives its early answer (:func:`early_answer`) where it does not
+    look at the arrivals first (a capture interval too coarse to time the wave along its
+    pipes): the first alarm's reading time plus the arrival horizon (:func:`arrival_horizon`).
+    ``None`` for the other localizers and where the fused localizer looks at the arrivals
+    first (its looks give the early record then).
+
+    Raises:
+        InputError: no alarm.
+    """
+    if localizer != "fused" or fused is None or _arrival_first(localizer, calibration, fused):
+        return None
+    if not alarms:
+        raise InputError("no alarm: nothing to decide")
+    first, _ = _first_and_onset(alarms, times)
+    return first + arrival_horizon(fused.arrival, calibration)
+
+
+def early_answer(
+    fused: FusedLocalizer,
+    meters: Sequence[str],
+    times: np.ndarray,
+    readings: np.ndarray,
+    alarms: Sequence[Any],
+    calibration: IntervalCalibration,
+    meter_model: MeterModel,
+) -> Decision | None:
+    """The arrivals' answer before the lasting drop has settled: the search region from every
+    alarm up to the arrival horizon (capped at the last reading), and its centre as the named
+    point (:func:`burstloc.localize.center.posterior_center`: the point of least expected
+    distance to the burst, inside the region). The ranking holds the region's pipes by the
+    probability that the burst is on them (the score), the centre's pipe first. ``waited`` is
+    set: the answer is refined when the lasting change has settled. ``None`` when the arrivals
+    place the burst nowhere.
+
+    Raises:
+        InputError: no alarm.
+    """
+    if not alarms:
+        raise InputError("no alarm: nothing to decide")
+    first, _ = _first_and_onset(alarms, times)
+    at = min(first + arrival_horizon(fused.arrival, calibration), float(times[-1]))
+    window = max(calibration.arrival_decision_delay, at - first)
+    seen = evidence_at(
+        at, meters, times, readings, alarms, calibration, meter_model, alarm_window=window
+    )
+    posterior = region_posterior(fused.arrival, seen, None)
+    if posterior is None:
+        return None
+    region = posterior.region(REGION_CONFIDENCE)
+    center = posterior_center(posterior, region)
+    on_pipe = dict(region.pipes)
+    named = center.position.pipe
+    ranking = Ranking(
+        (
+            RankedPipe(p.pipe, p.start, p.end, on_pipe.get(p.pipe, 0.0))
+            for p in fused.arrival.pipes
+            if p.pipe in on_pipe or p.pipe == named
+        ),
+        first=named,
+    )
+    return Decision(ranking, at, first, waited=True, position=center.position, posterior=posterior)
+
+
 def rank_alarms(
     localizer: str,
     localizers: Mapping[str, Localizer],
@@ -289,18 +374,16 @@ def rank_alarms(
         arrived = arrivals(min(first + arrival_horizon(fused.arrival, calibration), last))
         at = _position(fused.arrival, arrived, ranking)
         region = region_posterior(fused.arrival, arrived, drop)
+        ranking, at = _named(ranking, at, region)
         return Decision(ranking, min(decided, last), first, position=at, posterior=region)
     margin = quantisation_margin(len(arrival.meters)) if fused is None else fused.margin
     start = decided if resume is None else max(decided, resume)
     look = _look(arrival, margin, arrivals, start, first, last, calibration)
     if fused is None or localizer != "fused":
+        region = region_posterior(arrival, look.evidence, None)
+        ranking, at = _named(look.ranking, _position(arrival, look.evidence, look.ranking), region)
         return Decision(
-            look.ranking,
-            look.time,
-            first,
-            position=_position(arrival, look.evidence, look.ranking),
-            look_again=look.again,
-            posterior=region_posterior(arrival, look.evidence, None),
+            ranking, look.time, first, position=at, look_again=look.again, posterior=region
         )
     later = onset + calibration.decision_delay
     if look.decisive or look.again is not None or later <= look.time:
@@ -312,6 +395,7 @@ def rank_alarms(
         )
         at = _position(arrival, look.evidence, ranking)
         region = region_posterior(arrival, look.evidence, drop)
+        ranking, at = _named(ranking, at, region)
         return Decision(
             ranking, look.time, first, position=at, look_again=look.again, posterior=region
         )
@@ -324,6 +408,7 @@ def rank_alarms(
     )
     at = _position(arrival, look.evidence, ranking)
     region = region_posterior(arrival, look.evidence, drop)
+    ranking, at = _named(ranking, at, region)
     return Decision(ranking, min(later, last), first, waited=True, position=at, posterior=region)
 
 
@@ -384,6 +469,45 @@ def _look(
         if following > last + 1e-9:
             return _Look(ranking, seen, at, settled, following)
         at = following
+
+
+CENTRE_SHARE = 0.25
+"""Largest share of the network's main a 95 % search region may cover for its centre to be the
+named point (:func:`_named`): a wider region is mostly the prior, and the ranking's best pipe
+(the lasting drop's, at coarse capture intervals) names the burst better."""
+
+
+def _named(
+    ranking: Ranking, fitted: PipePosition | None, posterior: Posterior | None
+) -> tuple[Ranking, PipePosition | None]:
+    """The answer's named point and its ranking.
+
+    Where the 95 % search region is narrow (at most :data:`CENTRE_SHARE` of the network's
+    main), or the arrival fit's point on the ranking's best pipe (``fitted``) lies outside it,
+    the named point is the posterior's centre (:func:`burstloc.localize.center.posterior_center`:
+    the point of least expected distance to the burst, inside the region) and its pipe is
+    placed first in the ranking; where ``fitted`` lies in the centre's stretch, it is the
+    point (to a metre; the centre is known to one grid segment). Otherwise, and without a
+    posterior, ``ranking`` and ``fitted`` as they are."""
+    if posterior is None:
+        return ranking, fitted
+    region = posterior.region(REGION_CONFIDENCE)
+    inside = fitted is not None and region.contains(
+        fitted.pipe, fitted.start, fitted.metres, fitted.length
+    )
+    if inside and region.length > CENTRE_SHARE * float(posterior.grid.length.sum()):
+        return ranking, fitted
+    center = posterior_center(posterior, region).position
+    if ranking.rank_of(center.pipe) is None:
+        return ranking, fitted
+    at = center
+    if (
+        fitted is not None
+        and fitted.pipe == center.pipe
+        and center.low - 1e-6 <= fitted.metres <= center.high + 1e-6
+    ):
+        at = replace(fitted, low=center.low, high=center.high)
+    return Ranking(ranking, first=center.pipe), at
 
 
 def _position(

@@ -57,12 +57,17 @@ class RankedPipe:
 class Ranking(Sequence[RankedPipe]):
     """Candidate pipes ordered best first (highest score first; equal scores by pipe name).
 
+    ``first``: a pipe placed first whatever its score: the pipe of the answer's named point
+    (:mod:`burstloc.localize.center`), which the scores of one localizer need not put first.
+
     >>> r = Ranking([RankedPipe("a", "n1", "n2", -0.5), RankedPipe("b", "n2", "n3", -0.1)])
     >>> [p.pipe for p in r.top(2)], r.rank_of("a")
     (['b', 'a'], 2)
+    >>> [p.pipe for p in Ranking(r, first="a")]
+    ['a', 'b']
     """
 
-    def __init__(self, items: Iterable[RankedPipe]) -> None:
+    def __init__(self, items: Iterable[RankedPipe], *, first: str | None = None) -> None:
         entries = list(items)
         seen: set[str] = set()
         for item in entries:
@@ -73,8 +78,12 @@ class Ranking(Sequence[RankedPipe]):
             if item.pipe in seen:
                 raise InputError(f"pipe {item.pipe!r} appears twice in a ranking")
             seen.add(item.pipe)
+        if first is not None and first not in seen:
+            raise InputError(f"pipe {first!r} to place first is not in the ranking")
+        self.first = first
+        """The pipe placed first whatever its score (``None``: the best score leads)."""
         self._items: tuple[RankedPipe, ...] = tuple(
-            sorted(entries, key=lambda p: (-p.score, p.pipe))
+            sorted(entries, key=lambda p: (p.pipe != first, -p.score, p.pipe))
         )
         self._rank = {p.pipe: i + 1 for i, p in enumerate(self._items)}
 
@@ -105,6 +114,12 @@ class Ranking(Sequence[RankedPipe]):
     def best(self) -> RankedPipe | None:
         """The top candidate, or ``None`` for an empty ranking."""
         return self._items[0] if self._items else None
+
+    def head(self, k: int) -> Ranking:
+        """The ranking of the ``k`` first candidates, in the same order."""
+        kept = self.top(k)
+        first = self.first if any(p.pipe == self.first for p in kept) else None
+        return Ranking(kept, first=first)
 
     def top(self, k: int) -> list[RankedPipe]:
         """The ``k`` best candidates (fewer if the ranking is shorter)."""

@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from burstloc._validate import FieldError, check_names, check_number
-from burstloc.constants import WAVE_SPEED
+from burstloc.constants import CLOCK_TOLERANCE, WAVE_SPEED, WAVE_SPEED_TOLERANCE
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.localize.arrival import PipeGeometry
 from burstloc.localize.signature import SignatureSet
@@ -56,7 +56,10 @@ class LocalizationModel:
     ``node_distances[node][j]``: shortest path length (m) along the pipes from ``node`` (an end
     node of a candidate pipe) to ``meters[j]`` (``inf`` when there is no path).
     ``signature_sets``: the burst signatures at ``meters``, one set per position along the pipes.
-    ``wave_speed``: the pressure-wave speed (m/s) the arrival localizer assumes.
+    ``wave_speed``: the pressure-wave speed (m/s) the arrival localizer assumes;
+    ``wave_speed_tolerance`` the relative uncertainty of a travel time along a path, and
+    ``clock_tolerance`` (s) that of each meter's clock: the timing error the search regions
+    allow (:mod:`burstloc.localize.region`).
     ``fronts[pipe][j]``: the wave front a burst on ``pipe`` sends to ``meters[j]``, relative to
     the others (:func:`burstloc.sim.model.prepare.wave_fronts`): which silent meters should have
     heard it (:class:`burstloc.localize.arrival.ArrivalLocalizer`). ``None`` (a model stored
@@ -74,6 +77,8 @@ class LocalizationModel:
     signature_sets: tuple[SignatureSet, ...]
     wave_speed: float = WAVE_SPEED
     fronts: Mapping[str, NDArray[np.float64]] | None = None
+    wave_speed_tolerance: float = WAVE_SPEED_TOLERANCE
+    clock_tolerance: float = CLOCK_TOLERANCE
 
     def __post_init__(self) -> None:
         meters = check_names(self.meters, "meters", high=MAX_METERS)
@@ -82,6 +87,8 @@ class LocalizationModel:
         for i, p in enumerate(self.pipes):
             check_number(p.length, f"pipes[{i}].length", low=0, low_open=True, high=MAX_LENGTH)
         check_number(self.wave_speed, "wave_speed", low=0, low_open=True, high=MAX_WAVE_SPEED)
+        check_number(self.wave_speed_tolerance, "wave_speed_tolerance", low=0, high=1)
+        check_number(self.clock_tolerance, "clock_tolerance_s", low=0, high=60)
         if len(self.signature_sets) > MAX_SIGNATURE_SETS:
             raise FieldError("signature_sets", f"must hold at most {MAX_SIGNATURE_SETS} sets")
         distances: dict[str, NDArray[np.float64]] = {}
@@ -110,6 +117,8 @@ class LocalizationModel:
         object.__setattr__(self, "node_distances", distances)
         object.__setattr__(self, "signature_sets", tuple(self.signature_sets))
         object.__setattr__(self, "wave_speed", float(self.wave_speed))
+        object.__setattr__(self, "wave_speed_tolerance", float(self.wave_speed_tolerance))
+        object.__setattr__(self, "clock_tolerance", float(self.clock_tolerance))
         if self.fronts is not None:
             object.__setattr__(self, "fronts", self._checked_fronts(self.fronts))
 
@@ -161,6 +170,8 @@ class LocalizationModel:
             "network_hash": self.network_hash,
             "meters": list(self.meters),
             "wave_speed": self.wave_speed,
+            "wave_speed_tolerance": self.wave_speed_tolerance,
+            "clock_tolerance_s": self.clock_tolerance,
             "pipes": [
                 {"pipe": p.pipe, "start": p.start, "end": p.end, "length": p.length}
                 for p in self.pipes
@@ -192,6 +203,9 @@ class LocalizationModel:
                 network_hash=str(data["network_hash"]),
                 meters=tuple(data["meters"]),
                 wave_speed=float(data["wave_speed"]),
+                # models stored before these were recorded: the defaults
+                wave_speed_tolerance=float(data.get("wave_speed_tolerance", WAVE_SPEED_TOLERANCE)),
+                clock_tolerance=float(data.get("clock_tolerance_s", CLOCK_TOLERANCE)),
                 pipes=tuple(
                     PipeGeometry(str(p["pipe"]), str(p["start"]), str(p["end"]), float(p["length"]))
                     for p in data["pipes"]

@@ -15,8 +15,10 @@ middle of each segment is a candidate point, with a prior proportional to the se
   start is known to one capture interval ``dt``; a silent meter says the wave has not come
   yet). The misfit beyond the window is the detector's placement of the change and the model's
   error: a Student-t error (:data:`TAIL_DOF` degrees of freedom) of scale ``sqrt((
-  TIMING_INTERVALS dt)^2 + TIMING_FLOOR^2)``, mixed with a chance :data:`OUTLIER` that the
-  meter's alarm says nothing of the first wave (a weak front heard late, on a later
+  TIMING_INTERVALS dt)^2 + TIMING_FLOOR^2 + clock^2 + (tolerance x travel)^2)`` (the meters'
+  clock uncertainty, and the wave speed known to a ``tolerance`` of it along the ``travel``
+  time from the point to the meter: :func:`timing_scale`), mixed with a chance :data:`OUTLIER`
+  that the meter's alarm says nothing of the first wave (a weak front heard late, on a later
   reflection), uniform over the arrival horizon. A silence is weaker evidence: a meter the
   wave has reached may stay silent (:data:`SILENT_MISS`), so its misfit costs at most
   ``-log(SILENT_MISS)``. ``t0`` is the best of the least-squares fit and the window ends of the
@@ -253,9 +255,21 @@ def grid_of(arrival: ArrivalLocalizer) -> RegionGrid:
     return grid
 
 
-def timing_scale(capture_interval: float) -> float:
-    """Scale (s) of the timing error beyond the capture interval (module docstring)."""
-    return math.hypot(TIMING_INTERVALS * capture_interval, TIMING_FLOOR)
+def timing_scale(
+    capture_interval: float,
+    travel: NDArray[np.float64] | float = 0.0,
+    wave_speed_tolerance: float = 0.0,
+    clock_tolerance: float = 0.0,
+) -> NDArray[np.float64] | float:
+    """Scale (s) of the timing error beyond the capture interval (module docstring): the
+    detector's placement of the change, the model's floor, each meter's clock and the wave's
+    travel time ``travel`` (s, from the candidate point to the meter) known to
+    ``wave_speed_tolerance`` of itself, added in quadrature."""
+    base = math.hypot(TIMING_INTERVALS * capture_interval, TIMING_FLOOR, clock_tolerance)
+    if wave_speed_tolerance == 0:
+        return base
+    spread = wave_speed_tolerance * np.where(np.isfinite(travel), travel, 0.0)
+    return np.asarray(np.hypot(base, spread), dtype=np.float64)
 
 
 @dataclass(frozen=True)
@@ -306,12 +320,15 @@ class Posterior:
         )
 
 
-def timing_penalty(gap: NDArray[np.float64], scale: float, horizon: float) -> NDArray[np.float64]:
+def timing_penalty(
+    gap: NDArray[np.float64], scale: NDArray[np.float64] | float, horizon: float
+) -> NDArray[np.float64]:
     """Minus the log-likelihood of timing misfits ``gap`` (s), 0 at no misfit: a Student-t
-    error of ``scale`` s mixed with an :data:`OUTLIER` uniform over ``horizon`` s."""
+    error of ``scale`` s (a number, or one per misfit) mixed with an :data:`OUTLIER` uniform
+    over ``horizon`` s."""
     z = gap / scale
     kernel = np.power(1.0 + z * z / TAIL_DOF, -0.5 * (TAIL_DOF + 1.0))
-    flat = OUTLIER * scale / (max(horizon, scale) * _T_PEAK)
+    flat = OUTLIER * scale / (np.maximum(horizon, scale) * _T_PEAK)
     return np.asarray(
         np.log((1.0 - OUTLIER) + flat) - np.log((1.0 - OUTLIER) * kernel + flat),
         dtype=np.float64,
@@ -326,7 +343,13 @@ def _arrival_penalty(
     lo, hi, _, count = arrival.windows(grid.dist[:, None, :], evidence, grid.rows)
     lo, hi = lo[:, 0, :], hi[:, 0, :]
     says = np.isfinite(lo)
-    scale = timing_scale(evidence.capture_interval)
+    alarmed, silent = arrival.columns(evidence)
+    scale = timing_scale(
+        evidence.capture_interval,
+        grid.dist[:, alarmed + silent] / arrival.wave_speed,
+        arrival.wave_speed_tolerance,
+        arrival.clock_tolerance,
+    )
     horizon = max(arrival.horizon, 10 * evidence.capture_interval)
     gap, placed = fit_windows(lo, hi, count, evidence.capture_interval)
     cap = np.full(says.shape[1], np.inf)
