@@ -173,3 +173,12 @@ def test_a_restart_after_an_outage_of_days_resumes_on_the_new_clock(
     (decision,) = done.decisions
     assert decision["pipes"][0]["pipe"] == "C"
     assert decision["first_alarm"] > outage
+
+
+def test_one_reading_an_hour_off_is_held_back_not_a_clock_offset_of_zero() -> None:
+    health = _health()
+    for k in range(100):
+        _tick(health, 0.2 * k)
+    row = health.admit_row([19.8 + 3600.0], [1], [50.0], "line 9")
+    assert row.refused == [(0, 1, None)] and not row.offsets and not row.times
+    assert health.meter["J2"].counts["off_clock"] == 1 and health.meter["J2"].clock_offset == 0.0
