@@ -350,3 +350,39 @@ def test_network_module_does_not_import_tsnet() -> None:
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "ok"
+
+
+#: A junction with a demand and no way to any source: EPANET cannot solve it demand-driven.
+ISLAND_INP = """\
+[JUNCTIONS]
+ J1 0 5
+ J2 0 5
+ J3 0 5
+[RESERVOIRS]
+ R1 50
+[PIPES]
+ P1 R1 J1 100 200 100 0 Open
+ P2 J2 J3 100 200 100 0 Open
+[OPTIONS]
+ Units LPS
+ Headloss H-W
+[END]
+"""
+
+
+def test_a_steady_state_leaves_no_file_in_the_working_directory(
+    wn, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:  # type: ignore[no-untyped-def]
+    island = tmp_path / "island.inp"
+    island.write_text(ISLAND_INP, encoding="utf-8")
+    unsolvable = network.load_network(island)
+    work = tmp_path / "work"
+    work.mkdir()
+    monkeypatch.chdir(work)
+    network.steady_state(wn)
+    network.steady_state(wn, "DD")
+    # a failed solve: EPANET's scratch file ("en" and 6 characters) stayed here, before
+    with pytest.raises(NetworkError, match=r"\(demand-driven\): \(Error 110\)"):
+        network.steady_state(unsolvable, "DD")
+    assert list(work.iterdir()) == []
+    assert Path.cwd() == work
