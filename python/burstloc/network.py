@@ -212,8 +212,9 @@ def warn_demand_driven(name: str, error: object) -> None:
     """Say (:class:`~burstloc.exceptions.DemandDrivenWarning`) that EPANET cannot solve the
     network ``name`` pressure-driven (``error``: EPANET's) and that its steady state is solved
     demand-driven instead."""
+    reason = str(error).replace(" %s", "")  # WNTR's message of EPANET's Error 200 keeps a %s
     warnings.warn(
-        f"EPANET cannot solve {name} pressure-driven ({error}): its steady state is solved "
+        f"EPANET cannot solve {name} pressure-driven ({reason}): its steady state is solved "
         "demand-driven instead (every demand met in full, whatever the pressure)",
         DemandDrivenWarning,
         stacklevel=3,
@@ -294,7 +295,7 @@ def _solve(wntr: Any, wn: WaterNetworkModel, engine: str) -> Any:
     except Exception as exc:  # EPANET's own error (WNTR's EpanetException), with its code
         if type(exc).__name__ != "EpanetException":
             raise
-        raise _UnsolvedError(str(exc)) from exc
+        raise _UnsolvedError(str(exc).replace(" %s", "")) from exc  # WNTR's Error 200 has a %s
     finally:
         hydraulic.demand_model, times.duration = saved
 
