@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import tempfile
 import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
@@ -132,14 +131,10 @@ def cached(
 
 @contextlib.contextmanager
 def isolated_run() -> Iterator[str]:
-    """Hold the TSNet lock and work in a fresh temporary directory (TSNet writes into cwd)."""
-    with _TSNET_LOCK, tempfile.TemporaryDirectory(prefix="burstloc-tsnet-") as tmp:
-        previous = os.getcwd()
-        os.chdir(tmp)
-        try:
-            yield tmp
-        finally:
-            os.chdir(previous)
+    """Hold the TSNet lock and work in a fresh temporary directory (TSNet writes into cwd, and
+    EPANET its scratch files: :func:`burstloc.network.epanet_workdir`)."""
+    with _TSNET_LOCK, network.epanet_workdir("burstloc-tsnet-") as tmp:
+        yield tmp
 
 
 def _simulate(scenario: BurstScenario) -> ScenarioResult:
