@@ -350,3 +350,82 @@ def test_network_module_does_not_import_tsnet() -> None:
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "ok"
+
+
+#: A junction with a demand and no way to any source: EPANET cannot solve it demand-driven.
+ISLAND_INP = """\
+[JUNCTIONS]
+ J1 0 5
+ J2 0 5
+ J3 0 5
+[RESERVOIRS]
+ R1 50
+[PIPES]
+ P1 R1 J1 100 200 100 0 Open
+ P2 J2 J3 100 200 100 0 Open
+[OPTIONS]
+ Units LPS
+ Headloss H-W
+[END]
+"""
+
+
+def test_a_steady_state_leaves_no_file_in_the_working_directory(
+    wn, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:  # type: ignore[no-untyped-def]
+    island = tmp_path / "island.inp"
+    island.write_text(ISLAND_INP, encoding="utf-8")
+    unsolvable = network.load_network(island)
+    work = tmp_path / "work"
+    work.mkdir()
+    monkeypatch.chdir(work)
+    network.steady_state(wn)
+    network.steady_state(wn, "DD")
+    # a failed solve: EPANET's scratch file ("en" and 6 characters) stayed here, before
+    with pytest.raises(NetworkError, match=r"\(demand-driven\): \(Error 110\)"):
+        network.steady_state(unsolvable, "DD")
+    assert list(work.iterdir()) == []
+    assert Path.cwd() == work
+
+
+#: A network EPANET solves demand-driven only: its pressure law is illegal (the file says how).
+DEMAND_DRIVEN_ONLY = REPO / "tests" / "demand_driven_only.inp"
+
+
+def test_a_network_epanet_solves_only_demand_driven_is_solved_so_and_said(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    wntr = pytest.importorskip("wntr")
+    monkeypatch.chdir(tmp_path)  # WNTR's own runs leave EPANET's scratch files here
+    wn = network.load_network(DEMAND_DRIVEN_ONLY)
+    # EPANET itself, through WNTR: pressure-driven it refuses the model, demand-driven it solves
+    wn.options.hydraulic.demand_model = "PDD"
+    with pytest.raises(wntr.epanet.exceptions.EpanetException, match="Error 200"):
+        wntr.sim.EpanetSimulator(wn).run_sim(file_prefix=str(tmp_path / "pdd"))
+    assert "PDA" in (tmp_path / "pdd.inp").read_text()  # (its report says Error 208, unflushed)
+    wn.options.hydraulic.demand_model = "DD"
+    solved = wntr.sim.EpanetSimulator(wn).run_sim(file_prefix=str(tmp_path / "dd"))
+    wn.options.hydraulic.demand_model = "PDD"
+    with pytest.warns(network.DemandDrivenWarning) as said:
+        state = network.steady_state(wn)
+    (warning,) = said
+    assert str(warning.message) == (
+        f"EPANET cannot solve {DEMAND_DRIVEN_ONLY} pressure-driven ((Error 200) one or more "
+        "errors in input file): its steady state is solved demand-driven instead (every demand "
+        "met in full, whatever the pressure)"
+    )
+    assert state.engine == "DD" and wn.options.hydraulic.demand_model == "PDA"  # as it was
+    heads = solved.node["head"].iloc[0]
+    assert state.heads == pytest.approx({n: float(heads[n]) for n in wn.node_name_list})
+    assert network.steady_state(wn, "DD").engine == "DD"
+    with pytest.raises(NetworkError, match="demand-driven either"):  # neither solves: said
+        network.steady_state(network.load_network(_island(tmp_path)), "PDD")
+
+
+def _island(folder: Path) -> Path:
+    """The island network with the illegal pressure law too: neither engine solves it."""
+    limits = " Demand Model PDA\n Minimum Pressure 30\n Required Pressure 20"
+    text = ISLAND_INP.replace(" Headloss H-W", f" Headloss H-W\n{limits}")
+    path = folder / "island_pda.inp"
+    path.write_text(text, encoding="utf-8")
+    return path

@@ -21,6 +21,10 @@ Every error is a typed subclass of a built-in exception, so callers can catch pr
   missing or read-only directory, a directory where a file is expected, a full disk, a value
   JSON cannot hold); the message is ``cannot write PATH: reason``.
 
+And one warning: :class:`DemandDrivenWarning` (``UserWarning``): EPANET cannot solve a network's
+steady state pressure-driven, so it is solved demand-driven instead; the message names the
+network and EPANET's error.
+
 ``ConfigError`` and ``InputError`` are defined by the native module (so the Rust code raises
 them directly); the others are plain Python.
 """
@@ -29,6 +33,7 @@ from burstloc._core import ConfigError, InputError
 
 __all__ = [
     "ConfigError",
+    "DemandDrivenWarning",
     "InputError",
     "NetworkError",
     "OutputError",
@@ -41,6 +46,11 @@ __all__ = [
 
 class StreamError(InputError):
     """Bad or out-of-order readings fed to a live stream."""
+
+
+class DemandDrivenWarning(UserWarning):
+    """EPANET cannot solve a network's steady state pressure-driven: it is solved demand-driven
+    instead (every demand met in full, whatever the pressure); names the network and the error."""
 
 
 class NetworkError(ValueError):

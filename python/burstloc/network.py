@@ -3,9 +3,12 @@
 * :func:`load_network` reads an EPANET INP file into a WNTR ``WaterNetworkModel``; a malformed
   file raises :class:`~burstloc.exceptions.NetworkError` naming the file and line.
 * :func:`steady_state` is THE steady-state solver (heads and flows of one EPANET run, solved as
-  TSNet's ``Initializer`` solves it: WNTR's EPANET simulator, pressure-driven demand by default;
-  what EPANET warns is captured, never printed). The flow-direction graph and the burst
-  signatures (:mod:`burstloc.sim.signatures.compute`) both use it.
+  TSNet's ``Initializer`` solves it: WNTR's EPANET simulator, pressure-driven demand by default,
+  demand-driven where EPANET cannot solve it pressure-driven, said by a
+  :class:`~burstloc.exceptions.DemandDrivenWarning`; what EPANET warns is captured, never
+  printed; EPANET runs in a temporary working directory, where its scratch files go). The
+  flow-direction graph and the burst signatures (:mod:`burstloc.sim.signatures.compute`) both use
+  it.
 * :func:`flow_direction_graph` is the paper's directed graph (section IV.B): one edge per link,
   keyed by the link's name (parallel links are edges of their own), pointing downstream in the
   steady state.
@@ -19,11 +22,14 @@ is :mod:`burstloc.inp`.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import re
 import tempfile
+import threading
 import warnings
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -32,7 +38,12 @@ import networkx as nx
 import numpy as np
 
 from burstloc._diagnostics import capture_diagnostics
-from burstloc.exceptions import ConfigError, NetworkError, SimulatorMissingError
+from burstloc.exceptions import (
+    ConfigError,
+    DemandDrivenWarning,
+    NetworkError,
+    SimulatorMissingError,
+)
 from burstloc.inp import pipe_names_in_file
 from burstloc.inp_hydraulic import hydraulic_text
 
@@ -43,6 +54,7 @@ __all__ = [
     "SplitPipe",
     "SteadyState",
     "closed_pipes",
+    "epanet_workdir",
     "flow_direction_graph",
     "junction_names",
     "load_network",
@@ -52,6 +64,7 @@ __all__ = [
     "split_pipe",
     "steady_state",
     "steady_state_flows",
+    "warn_demand_driven",
 ]
 
 _WNTR_LINE = re.compile(r"at line (\d+)")
@@ -161,51 +174,97 @@ class SteadyState:
     sign: INP orientation), ``closed``: the links EPANET reports closed (a closed status, a
     control at the start, a check valve held shut, a pipe at a full or empty tank), ``demands``
     per junction (m³/s delivered; pressure-driven: what the pressure allows), ``active``: the
-    valves EPANET reports active (controlling their pressure or flow)."""
+    valves EPANET reports active (controlling their pressure or flow); ``engine``: the demand
+    model EPANET solved it with, ``"PDD"`` or ``"DD"`` (``"DD"`` also where pressure-driven was
+    asked for and EPANET could not solve it so: :func:`steady_state`)."""
 
     heads: dict[str, float]
     flows: dict[str, float]
     closed: frozenset[str] = frozenset()
     demands: dict[str, float] = field(default_factory=dict)
     active: frozenset[str] = frozenset()
+    engine: str = "PDD"
+
+
+_WORKDIR_LOCK = threading.RLock()
+
+
+@contextlib.contextmanager
+def epanet_workdir(prefix: str = "burstloc-epanet-") -> Iterator[str]:
+    """Run EPANET in a fresh temporary directory: the working directory for the block (yielded),
+    deleted after it with whatever EPANET left there.
+
+    EPANET 2.2's toolkit creates its scratch files (``en`` and six random characters) in the
+    working directory and deletes them only when its project is deleted, which WNTR's
+    ``EpanetSimulator`` skips when the solver fails (``Error 110``): they stayed in whatever
+    directory the caller ran from. The working directory is the process's: blocks are
+    serialised (burstloc runs simulations in processes, not threads).
+    """
+    with _WORKDIR_LOCK, tempfile.TemporaryDirectory(prefix=prefix) as tmp:
+        previous = os.getcwd()
+        os.chdir(tmp)
+        try:
+            yield tmp
+        finally:
+            os.chdir(previous)
+
+
+def warn_demand_driven(name: str, error: object) -> None:
+    """Say (:class:`~burstloc.exceptions.DemandDrivenWarning`) that EPANET cannot solve the
+    network ``name`` pressure-driven (``error``: EPANET's) and that its steady state is solved
+    demand-driven instead."""
+    reason = str(error).replace(" %s", "")  # WNTR's message of EPANET's Error 200 keeps a %s
+    warnings.warn(
+        f"EPANET cannot solve {name} pressure-driven ({reason}): its steady state is solved "
+        "demand-driven instead (every demand met in full, whatever the pressure)",
+        DemandDrivenWarning,
+        stacklevel=3,
+    )
+
+
+class _UnsolvedError(Exception):
+    """EPANET's error (WNTR's ``EpanetException``) solving a steady state."""
 
 
 def steady_state(wn: WaterNetworkModel, engine: str = "PDD") -> SteadyState:
     """Solve the steady state at t = 0: heads and flows from one EPANET run.
 
     Solved as TSNet's ``Initializer`` does: WNTR's EPANET simulator with the given demand model
-    (``"PDD"`` pressure-driven, ``"DD"`` demand-driven), first time step. EPANET's scratch files
-    go to a temporary directory; what it warns (e.g. "REQUIRED PRESSURE raised to 0.1 m") is
-    kept out of the terminal (:func:`burstloc._diagnostics.capture_diagnostics`, recorded in a
-    scenario's metadata when :mod:`burstloc.sim.transient.tsnet` calls this). ``wn`` is left as it
-    was
-    (its demand model and duration are set for the run and restored).
+    (``"PDD"`` pressure-driven, ``"DD"`` demand-driven), first time step. Where EPANET cannot
+    solve it pressure-driven (e.g. ``(Error 110) cannot solve network hydraulic equations``) but
+    can demand-driven, it is solved demand-driven, said by a
+    :class:`~burstloc.exceptions.DemandDrivenWarning` naming the network and EPANET's error, and
+    recorded in the result's ``engine``. EPANET runs in a temporary working directory
+    (:func:`epanet_workdir`: its scratch files never stay behind); what it warns (e.g. "REQUIRED
+    PRESSURE raised to 0.1 m") is kept out of the terminal
+    (:func:`burstloc._diagnostics.capture_diagnostics`, recorded in a scenario's metadata when
+    :mod:`burstloc.sim.transient.tsnet` calls this). ``wn`` is left as it was (its demand model and
+    duration are set for the run and restored).
 
     Raises:
         ConfigError: an unknown ``engine``.
-        NetworkError: EPANET cannot solve it (its error code and message).
+        NetworkError: EPANET cannot solve it (its error code and message; pressure-driven, it
+            cannot solve it demand-driven either).
     """
     wntr = _wntr()
 
-    if engine.upper() not in ("PDD", "DD"):
+    solved = engine.upper()
+    if solved not in ("PDD", "DD"):
         raise ConfigError(f"engine must be 'PDD' or 'DD', got {engine!r}")
-    hydraulic, times = wn.options.hydraulic, wn.options.time
-    saved = (hydraulic.demand_model, times.duration)
-    hydraulic.demand_model, times.duration = engine.upper(), 0
+    label = getattr(wn, "name", None) or "the network"
     try:
-        with tempfile.TemporaryDirectory(prefix="burstloc-steady-") as tmp, capture_diagnostics():
-            sim = wntr.sim.EpanetSimulator(wn)
-            results = sim.run_sim(file_prefix=os.path.join(tmp, "steady"))
-    except Exception as exc:  # EPANET's own error (WNTR's EpanetException), with its code
-        if type(exc).__name__ != "EpanetException":
-            raise
-        kind = "pressure-driven" if engine.upper() == "PDD" else "demand-driven"
-        raise NetworkError(
-            f"EPANET cannot solve the steady state of {getattr(wn, 'name', None) or 'the network'}"
-            f" ({kind}): {exc}"
-        ) from exc
-    finally:
-        hydraulic.demand_model, times.duration = saved
+        results = _solve(wntr, wn, solved)
+    except _UnsolvedError as exc:
+        kind = "pressure-driven" if solved == "PDD" else "demand-driven"
+        failed = f"EPANET cannot solve the steady state of {label} ({kind}): {exc}"
+        if solved == "DD":
+            raise NetworkError(failed) from exc.__cause__
+        try:
+            results = _solve(wntr, wn, "DD")
+        except _UnsolvedError as again:
+            raise NetworkError(f"{failed}; demand-driven either: {again}") from again.__cause__
+        warn_demand_driven(label, exc)
+        solved = "DD"
     heads = results.node["head"].iloc[0]
     flows = results.link["flowrate"].iloc[0]
     demands = results.node["demand"].iloc[0]
@@ -216,7 +275,30 @@ def steady_state(wn: WaterNetworkModel, engine: str = "PDD") -> SteadyState:
         closed=frozenset(name for name in wn.link_name_list if status[name] == 0),
         demands={name: float(demands[name]) for name in wn.junction_name_list},
         active=frozenset(name for name in wn.link_name_list if status[name] == 2),
+        engine=solved,
     )
+
+
+def _solve(wntr: Any, wn: WaterNetworkModel, engine: str) -> Any:
+    """WNTR's EPANET results of ``wn``'s first time step with ``engine``, run in
+    :func:`epanet_workdir` (``wn``'s demand model and duration restored after).
+
+    Raises:
+        _UnsolvedError: EPANET's own error (WNTR's ``EpanetException``), with its code.
+    """
+    hydraulic, times = wn.options.hydraulic, wn.options.time
+    saved = (hydraulic.demand_model, times.duration)
+    hydraulic.demand_model, times.duration = engine, 0
+    try:
+        with epanet_workdir("burstloc-steady-") as tmp, capture_diagnostics():
+            sim = wntr.sim.EpanetSimulator(wn)
+            return sim.run_sim(file_prefix=os.path.join(tmp, "steady"))
+    except Exception as exc:  # EPANET's own error (WNTR's EpanetException), with its code
+        if type(exc).__name__ != "EpanetException":
+            raise
+        raise _UnsolvedError(str(exc).replace(" %s", "")) from exc  # WNTR's Error 200 has a %s
+    finally:
+        hydraulic.demand_model, times.duration = saved
 
 
 def steady_state_flows(wn: WaterNetworkModel, engine: str = "PDD") -> dict[str, float]:

@@ -157,3 +157,40 @@ def test_a_configuration_whose_meter_is_not_a_junction_is_refused_by_name(
         "'tiny-calibrated')"
     ]
     assert done.stdout == b""
+
+
+def test_a_feed_line_in_another_time_form_is_named_counted_and_skipped(
+    tiny: Path, cfg: Path, tmp_path: Path
+) -> None:
+    feed = tmp_path / "feed.csv"
+    argv = [sys.executable, "-m", "burstloc", "simulate", str(tiny), "--pipe", "C"]
+    argv += ["--capture-interval", "0.2", "--feed", str(feed), "--noise", "0.002"]
+    argv += ["--out", str(tmp_path / "sims")]
+    subprocess.run(argv, capture_output=True, check=True)
+    lines = feed.read_bytes().splitlines(keepends=True)
+    odd = next(k for k, line in enumerate(lines) if line.startswith(b"40,J2,"))
+    runs = {}
+    for name, stamp in [("clean", b"40"), ("mixed", b"1970-01-01T00:00:40Z")]:
+        lines[odd] = stamp + lines[odd][2:]
+        runs[name] = done = _monitor(tiny, cfg, "--health-every", "1000", stdin=b"".join(lines))
+        assert done.returncode == 0, done.stderr
+    err = runs["mixed"].stderr.decode()
+    said = (
+        f"burstloc monitor: bad reading skipped: line {odd + 1}: timestamp in ISO 8601 in a "
+        "feed of seconds (since line 2): '1970-01-01T00:00:40Z,J2,"
+    )
+    assert said in err, err
+    others = [line for line in err.splitlines() if not line.startswith(said)]
+    assert others == runs["clean"].stderr.decode().splitlines()  # nothing else said
+    records = {
+        name: [json.loads(line) for line in done.stdout.decode().splitlines()]
+        for name, done in runs.items()
+    }
+    decisions = {
+        name: [r for r in found if r["type"] == "decision"] for name, found in records.items()
+    }
+    assert decisions["mixed"][-1]["pipes"][0]["pipe"] == "C"
+    assert [d["time"] for d in decisions["mixed"]] == [d["time"] for d in decisions["clean"]]
+    health = {name: found[-1]["health"]["meters"] for name, found in decisions.items()}
+    assert health["mixed"]["J2"]["bad"] == health["clean"]["J2"]["bad"] + 1
+    assert health["mixed"]["J2"]["readings"] == health["clean"]["J2"]["readings"] - 1

@@ -260,3 +260,25 @@ def test_a_capture_interval_finer_than_tsnet_s_step_gets_a_step_fine_enough(
         meta = json.loads(str(data["metadata"]))
         np.testing.assert_allclose(np.diff(data["time"]), 0.05)
     assert meta["time_step"] <= 0.05 and meta["capture_interval"] == 0.05
+
+
+def test_a_network_epanet_solves_only_demand_driven_is_simulated_so_and_said(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # tests/demand_driven_only.inp: EPANET refuses its pressure law (tests/test_network.py)
+    network = Path(__file__).resolve().parents[1] / "demand_driven_only.inp"
+    out = tmp_path / "out"
+    code = _run("simulate", network, "--pipe", "B", "--out", out, "--cache-dir", tmp_path / "c")
+    assert code == 0  # was refused: "TSNet failed ... EpanetException: (Error 200) ..."
+    said = capsys.readouterr().err
+    assert (
+        f"burstloc: warning: EPANET cannot solve {network} pressure-driven ((Error 200) one or "
+        "more errors in input file): its steady state is solved demand-driven instead" in said
+    ), said
+    with np.load(out / "demand_driven_only_pipe-B.npz", allow_pickle=False) as data:
+        heads = data["heads"]
+        meta = json.loads(str(data["metadata"]))
+    assert np.isfinite(heads).all() and heads[0] == pytest.approx([49.91, 49.84, 49.84], abs=0.01)
+    recorded = [w for w in meta["warnings"] if w.startswith("DemandDrivenWarning: ")]
+    assert len(recorded) == 2  # the network's steady state and the transient model's
+    assert f"pipe 'B' of {network} split at 0.5 pressure-driven" in recorded[1]

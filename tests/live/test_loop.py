@@ -9,7 +9,7 @@ from live_feed import Collected
 
 from burstloc.live.loop import Reporter
 from burstloc.live.monitor import BurstMonitor
-from burstloc.live.parse import BadReading
+from burstloc.live.parse import BadReading, parse_line
 from burstloc.live.state import StateFile, identity
 from burstloc.localize.config import Calibration
 from burstloc.readings import Reading
@@ -164,3 +164,72 @@ def test_a_state_file_that_cannot_be_written_is_reported_and_the_loop_goes_on(
     assert done.loop.failed_saves > 0
     assert any("state not saved" in m for m in done.messages)
     assert blocker.read_text() == "not a directory"
+
+
+def _csv(feed: list[Reading]) -> list[str]:
+    """The feed as the monitor's CSV lines (header first: line k + 1 is reading k)."""
+    return ["timestamp,meter,value", *(f"{r.timestamp!r},{r.meter},{r.value:.4f}" for r in feed)]
+
+
+def _parsed(done: Collected, lines: list[str]):
+    """The lines through the real parser, sharing the loop's timestamp form, as the CLI does."""
+    for number, line in enumerate(lines, start=1):
+        item = parse_line(line, f"line {number}", done.loop.timestamps)
+        if item is not None:
+            yield f"line {number}", item
+
+
+@pytest.mark.parametrize(
+    ("stamp", "reason"),
+    [
+        # the same instant in ISO 8601 (1970 epoch): only its form tells it apart
+        ("1970-01-01T00:00:40Z", "timestamp in ISO 8601 in a feed of seconds (since line 2)"),
+        ("2026-11-26T10:00:40Z", "timestamp in ISO 8601 in a feed of seconds (since line 2)"),
+        # seconds, but from another origin: years from the feed's clock
+        ("1795687240", "timestamp 1795687240 s from meter 'J2' is 2.078e+04 days from the feed's"),
+    ],
+)
+def test_a_line_off_the_feed_s_time_form_or_clock_is_a_bad_reading_and_nothing_else_is_lost(
+    tiny, config, feed, stamp: str, reason: str
+) -> None:
+    lines = _csv(feed)
+    clean = Collected(BurstMonitor(tiny, config, capture_interval=0.2))
+    clean.run(_parsed(clean, lines))
+    odd = next(k for k, line in enumerate(lines) if line.startswith("40.0,J2,"))
+    lines[odd] = stamp + lines[odd].removeprefix("40.0")
+    done = Collected(BurstMonitor(tiny, config, capture_interval=0.2))
+    done.run(_parsed(done, lines))
+    assert f"burstloc monitor: bad reading skipped: line {odd + 1}: {reason}" in "\n".join(
+        done.messages
+    ), done.messages
+    assert len(done.messages) == len(clean.messages) + 1
+    meters, before = done.health.record()["meters"], clean.health.record()["meters"]
+    assert meters["J2"]["bad"] == before["J2"]["bad"] + 1
+    assert meters["J2"]["readings"] == before["J2"]["readings"] - 1
+    assert all(meters[m] == before[m] for m in ("J1", "J3", "J4"))
+    assert done.loop.readings == clean.loop.readings - ("days from" not in reason)  # parsed or not
+    # the burst is located as from the clean feed, at the same time (the skipped reading is
+    # filled with J2's previous one: the scores move in their fifth digit)
+    ranked = [[p["pipe"] for p in d["pipes"]] for d in done.decisions]
+    assert ranked == [[p["pipe"] for p in d["pipes"]] for d in clean.decisions]
+    assert [d["time"] for d in done.decisions] == [d["time"] for d in clean.decisions]
+    assert done.decisions[0]["pipes"][0]["pipe"] == PIPE
+
+
+def test_the_whole_feed_moved_by_days_is_followed_not_refused(tiny, config, feed) -> None:
+    clean = _run(tiny, config, feed).decisions
+    burst_at = clean[0]["first_alarm"]
+    outage = 2 * 86_400.0  # readings resume two days later (a plant network down for a weekend)
+    resume = burst_at - 20.0
+    moved = [
+        Reading(r.timestamp + (outage if r.timestamp >= resume else 0.0), r.meter, r.value)
+        for r in feed
+    ]
+    done = _run(tiny, config, moved)
+    text = "\n".join(done.messages)
+    # the first resumed readings are far from the clock, until those of most meters agree
+    assert text.count("days from the feed's clock") == 2, text
+    assert "the feed's clock moved by +2 days" in text
+    assert [d["pipes"][0]["pipe"] for d in done.decisions] == [PIPE]
+    assert done.decisions[0]["first_alarm"] == pytest.approx(burst_at + outage)
+    assert done.health.reference is not None and done.health.reference > outage

@@ -4,7 +4,14 @@ from __future__ import annotations
 
 import json
 
-from burstloc.live.parse import BadReading, parse_lines, parse_payload
+from burstloc.live.parse import (
+    SECONDS,
+    BadReading,
+    TimestampForm,
+    parse_lines,
+    parse_payload,
+    parse_row,
+)
 from burstloc.readings import Reading
 
 
@@ -19,14 +26,14 @@ def test_iso_8601_and_epoch_timestamps_are_read_as_epoch_seconds() -> None:
     lines = [
         "2026-11-26T10:00:00.2Z,N2,181.5",
         "2026-11-26T12:00:00.400+02:00,N2,181.4",
-        f"{epoch + 0.6},N2,181.3",
         "oops,N2,1.0",
     ]
     items = list(parse_lines(lines))
-    assert [(i.meter, i.value) for i in items[:3]] == [("N2", 181.5), ("N2", 181.4), ("N2", 181.3)]
-    times = [i.timestamp for i in items[:3] if isinstance(i, Reading)]
+    assert [(i.meter, i.value) for i in items[:2]] == [("N2", 181.5), ("N2", 181.4)]
+    times = [i.timestamp for i in items[:2] if isinstance(i, Reading)]
     assert abs(times[0] - (epoch + 0.2)) < 1e-6 and abs(times[1] - (epoch + 0.4)) < 1e-6
-    assert isinstance(items[3], BadReading) and "neither seconds nor an ISO 8601" in items[3].reason
+    assert isinstance(items[2], BadReading) and "neither seconds nor an ISO 8601" in items[2].reason
+    assert list(parse_lines([f"{epoch + 0.6},N2,181.3"])) == [Reading(epoch + 0.6, "N2", 181.3)]
     payload = json.dumps({"t": "2026-11-26T10:00:01Z", "meter": "N3", "value": 1.0}).encode()
     assert parse_payload(payload, "m") == [Reading(epoch + 1.0, "N3", 1.0)]
 
@@ -75,3 +82,43 @@ def test_json_payloads_single_batch_and_csv_form() -> None:
     ]:
         (item,) = parse_payload(payload, "message 9")
         assert isinstance(item, BadReading) and reason in item.reason, (payload, item)
+
+
+def test_a_feed_keeps_the_timestamp_form_of_its_first_reading() -> None:
+    # one line in ISO 8601 among seconds, at the same instant: only its form tells it apart
+    lines = ["timestamp,meter,value", "39.8,N2,181.5", "1970-01-01T00:00:40Z,N2,181.4", "40.2,N2,1"]
+    items = list(parse_lines(lines))
+    assert items[0] == Reading(39.8, "N2", 181.5) and items[2] == Reading(40.2, "N2", 1.0)
+    bad = items[1]
+    assert isinstance(bad, BadReading) and bad.where == "line 3" and bad.meter == "N2"
+    assert bad.reason == (
+        "timestamp in ISO 8601 in a feed of seconds (since line 2): '1970-01-01T00:00:40Z,N2,181.4'"
+    )
+    # a bad line does not fix the form; the first reading does
+    items = list(parse_lines(["x,N2,1", "2026-11-26T10:00:00Z,N2,1", "1795687200.2,N2,1"]))
+    assert isinstance(items[0], BadReading) and isinstance(items[1], Reading)
+    assert isinstance(items[2], BadReading) and "in seconds in a feed of ISO 8601" in str(items[2])
+
+
+def test_json_messages_keep_the_feed_s_timestamp_form_inline_path_included() -> None:
+    form = TimestampForm()
+    columns = {"N2": 0, "N3": 1}
+    first = json.dumps([{"t": 40.0, "meter": "N2", "value": 1.0}]).encode()
+    assert parse_row(first, "message 1", columns, form).times == [40.0]
+    assert form.form == SECONDS and form.since == "message 1 item 0"
+    mixed = [
+        {"t": 40.2, "meter": "N3", "value": 2.0},
+        {"t": "1970-01-01T00:00:40.2Z", "meter": "N2", "value": 2.0},
+    ]
+    row = parse_row(json.dumps(mixed).encode(), "message 2", columns, form)
+    assert row.positions == [0] and [p for p, _ in row.bad] == [1]
+    assert "timestamp in ISO 8601 in a feed of seconds" in str(row.bad[0][1])
+    assert row.bad[0][1].meter == "N2"
+    # a feed of ISO times: a number among them is bad, on the inline path too
+    form = TimestampForm()
+    iso = [{"t": "2026-11-26T10:00:00Z", "meter": "N2", "value": 1.0}, *mixed[:1]]
+    row = parse_row(json.dumps(iso).encode(), "message 1", columns, form)
+    assert row.positions == [0] and [p for p, _ in row.bad] == [1]
+    assert "timestamp in seconds in a feed of ISO 8601" in str(row.bad[0][1])
+    assert isinstance(parse_payload(b"40.4,N3,2.0", "message 2", form)[0], BadReading)
+    assert parse_payload(b"40.4,N3,2.0", "message 2") == [Reading(40.4, "N3", 2.0)]  # no form

@@ -229,7 +229,7 @@ def run(args: argparse.Namespace) -> int:
             items: Iterator[Any] = _from_broker(link, flags)
         else:
             idle = min(max(args.save_every, 0.05), 1.0)
-            items = _from_file(args.readings, flags, idle)
+            items = _from_file(args.readings, flags, idle, loop.timestamps)
             if args.replay_speed is not None:
                 from burstloc.live.replay import paced
 
@@ -265,9 +265,10 @@ def _from_broker(link: Any, flags: dict[str, bool]) -> Iterator[Any]:
         yield f"message {number}", payload  # the loop parses it as one row
 
 
-def _from_file(path: str, flags: dict[str, bool], idle: float) -> Iterator[Any]:
+def _from_file(path: str, flags: dict[str, bool], idle: float, form: Any) -> Iterator[Any]:
     """``(where, item)`` per CSV line of ``path`` (``-``: stdin) and ``None`` after ``idle``
-    seconds without input (the loop then saves its state and checks silence while it waits)."""
+    seconds without input (the loop then saves its state and checks silence while it waits);
+    ``form``: the feed's timestamp form (:class:`~burstloc.live.parse.TimestampForm`)."""
     from burstloc.live.parse import BadReading, parse_line
 
     try:
@@ -285,7 +286,7 @@ def _from_file(path: str, flags: dict[str, bool], idle: float) -> Iterator[Any]:
             if len(line) > _LONGEST:
                 yield where, BadReading(where, f"line longer than {_LONGEST} bytes")
                 continue
-            item = parse_line(line, where)
+            item = parse_line(line, where, form)
             if item is not None:
                 yield where, item
     finally:

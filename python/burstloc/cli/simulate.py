@@ -196,7 +196,12 @@ def run(args: argparse.Namespace) -> int:
         progress=not args.quiet,
     )
     written = 0
+    said: set[str] = set()
     for _, result in report.succeeded():
+        for text in result.metadata.get("warnings", []):  # a fallback the user must hear of
+            if text.startswith("DemandDrivenWarning: ") and text not in said:
+                said.add(text)
+                print(f"burstloc: warning: {text.split(': ', 1)[1]}", file=sys.stderr)
         if args.capture_interval is not None:
             result = result.resample(args.capture_interval, args.capture_phase)
         result.save(scenario.output_path(args.out, result))

@@ -19,6 +19,15 @@ meter's clock is off). The rules:
   longer: the arrival order within a step blurs it by one interval), is **corrected**: the
   meter's later timestamps are shifted by it, and the offset is reported in the health record.
   A meter's data is worth more than its clock; correcting keeps it in the localization.
+* **Far from the clock.** A reading more than :data:`CLOCK_JUMP` (a day) from the reference time
+  (before there is one, from the median of the newest timestamps so far) is a bad reading:
+  counted (``bad``), reported, skipped; it moves no clock. No meter's clock slips by a day, no
+  feed steps by one between two readings: such a timestamp is a wrong one (a line in another
+  time form or origin, a year mistyped). Only the whole feed moves the clock that far (readings
+  resumed after an outage of more than a day): when consecutive readings from more than half of
+  the meters (at least two readings) are all that far from the reference and within a day of
+  one another, the reference moves to them (:attr:`AdmittedRow.moved`); the few readings before
+  that were skipped as bad.
 * **Silence.** A meter with no reading for ``silent_after`` seconds of reference time is
   *silent*: it is excluded (the stream completes steps without it; the localizers run on the
   meters that report) until its next reading, when it is included again.
@@ -44,10 +53,14 @@ from burstloc.exceptions import ConfigError
 from burstloc.live.parse import BadReading, unknown_meter
 from burstloc.readings import Reading
 
-__all__ = ["CLOCK_WINDOW", "AdmittedRow", "Health", "MeterHealth", "PlausibleRange"]
+__all__ = ["CLOCK_JUMP", "CLOCK_WINDOW", "AdmittedRow", "Health", "MeterHealth", "PlausibleRange"]
 
 #: Readings of one meter that must agree before its clock offset is corrected.
 CLOCK_WINDOW = 25
+
+#: Seconds from the feed's clock beyond which a reading's timestamp is wrong, not a clock
+#: offset (module docstring): a day.
+CLOCK_JUMP = 86_400.0
 
 _COUNTS = ("readings", "bad", "implausible", "late", "off_clock", "filled", "replayed")
 
@@ -88,7 +101,8 @@ class AdmittedRow(NamedTuple):
     :class:`~burstloc.live.parse.BadReading`, or ``None``: held back, off the clock) as
     (position, column, what); the clock offsets found, as (position, column, offset); the
     replays that ended, as (position of the meter's first newer reading, column, readings
-    replayed)."""
+    replayed); the moves of the whole feed's clock (module docstring), as (position of the
+    reading that moved it, the reference before, the reference after)."""
 
     positions: list[int]
     times: list[float]
@@ -97,6 +111,7 @@ class AdmittedRow(NamedTuple):
     refused: list[tuple[int, int, BadReading | None]]
     offsets: list[tuple[int, int, float]]
     replayed: list[tuple[int, int, int]]
+    moved: list[tuple[int, float, float]]
 
 
 @dataclass
@@ -117,6 +132,11 @@ class MeterHealth:
             "clock_offset": self.clock_offset,
             **self.counts,
         }
+
+
+def _seconds(t: float) -> str:
+    """A timestamp in seconds, to the millisecond, without trailing zeros."""
+    return f"{t:.3f}".rstrip("0").rstrip(".")
 
 
 class Health:
@@ -164,6 +184,9 @@ class Health:
         self._lead: deque[float] = deque(maxlen=8 * CLOCK_WINDOW)
         self._since = 0
         self.bad_unknown = 0  # bad input naming no meter of the configuration
+        #: Consecutive readings far from the clock, as (column, corrected timestamp): the
+        #: whole feed moving when they come from enough meters (module docstring).
+        self._far: list[tuple[int, float]] = []
 
     # ------------------------------------------------------------------ gate
     @property
@@ -202,7 +225,7 @@ class Health:
         """:meth:`admit` for a row of readings of known meters (columns into :attr:`meters`,
         finite timestamps and values, as :func:`~burstloc.live.parse.parse_row` gives), in
         order; ``positions`` name them in the answer (default: 0, 1, ...)."""
-        out = AdmittedRow([], [], [], [], [], [], [])
+        out = AdmittedRow([], [], [], [], [], [], [], [])
         meters, health, low, high = self.meters, self._health, self._lows, self._highs
         newest, tolerance, m = self._newest, self.clock_tolerance, len(meters)
         lead, corrected, refused = self._lead.append, out.times, out.refused
@@ -221,6 +244,17 @@ class Health:
                 replay[j] = None  # the meter's first newer reading: its replay is over
                 if self._replayed[j]:
                     out.replayed.append((k, j, self._replayed[j]))
+            clock = ref if ref is not None else self._median_newest()
+            if clock is not None and abs(ts - h.clock_offset - clock) > CLOCK_JUMP:
+                moved = self._moved(j, ts - h.clock_offset)
+                if moved is None:
+                    h.counts["bad"] += 1
+                    refused.append((k, j, self._far_off(where, meters[j], ts, clock)))
+                    continue
+                out.moved.append((k, clock, moved))
+                since, ref = 0, moved
+            elif self._far:
+                self._far.clear()  # a reading on the clock: the far ones were wrong timestamps
             if not (low[j] <= value <= high[j]):
                 h.counts["implausible"] += 1
                 refused.append((k, j, self._implausible(where, meters[j], value)))
@@ -236,7 +270,9 @@ class Health:
             if ref is not None:
                 h.deviations.append(ts - ref)
                 if abs(t - ref) > tolerance:
-                    if not self._settle_clock(h, ref):
+                    before = h.clock_offset
+                    # the meter's clock as it was (offset unchanged): this reading alone is off
+                    if not self._settle_clock(h, ref) or h.clock_offset == before:
                         h.counts["off_clock"] += 1
                         refused.append((k, j, None))
                         continue
@@ -248,7 +284,7 @@ class Health:
             corrected.append(t)
         self._since = since
         at = range(len(times)) if positions is None else positions
-        if not refused and not skipped and not out.offsets and not out.replayed:
+        if not (refused or skipped or out.offsets or out.replayed or out.moved):
             out.positions.extend(at)
             out.columns.extend(columns)
             out.values.extend(values)
@@ -261,7 +297,42 @@ class Health:
         out.refused[:] = [(at[k], j, what) for k, j, what in refused]
         out.offsets[:] = [(at[k], j, offset) for k, j, offset in out.offsets]
         out.replayed[:] = [(at[k], j, count) for k, j, count in out.replayed]
+        out.moved[:] = [(at[k], before, after) for k, before, after in out.moved]
         return out
+
+    def _median_newest(self) -> float | None:
+        """Before there is a reference time: the median of the newest timestamps so far."""
+        known = [t for t in self._newest if t == t]  # not NaN
+        return float(statistics.median(known)) if known else None
+
+    def _far_off(self, where: str, meter: str, ts: float, clock: float) -> BadReading:
+        days = abs(ts - clock) / 86_400.0
+        return BadReading(
+            where,
+            f"timestamp {_seconds(ts)} s from meter {meter!r} is {days:.4g} days from the feed's "
+            f"clock (t = {_seconds(clock)} s; more than {CLOCK_JUMP / 86_400.0:g} day is a wrong "
+            "timestamp)",
+            meter,
+        )
+
+    def _moved(self, j: int, t: float) -> float | None:
+        """Note a reading of column ``j`` at ``t`` far from the clock; if the whole feed has
+        moved (module docstring), move the reference and return it, else None."""
+        far = [(i, x) for i, x in self._far if abs(x - t) <= CLOCK_JUMP][-4 * len(self.meters) :]
+        far.append((j, t))
+        latest = dict(far)
+        if len(latest) * 2 <= len(self.meters) or len(far) < 2:
+            self._far = far
+            return None
+        self._far = []
+        self._newest[:] = [latest.get(i, math.nan) for i in range(len(self.meters))]
+        self._reference = self._start = float(statistics.median(latest.values()))
+        self._since = 0
+        for i, h in enumerate(self._health):
+            h.last = latest.get(i)
+            h.deviations.clear()
+        self._lead.clear()
+        return self._reference
 
     def _implausible(self, where: str, meter: str, value: float) -> BadReading:
         return BadReading(

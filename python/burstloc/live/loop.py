@@ -4,9 +4,10 @@
 :class:`~burstloc.live.feeds.StepFeed` (complete steps; silent meters excluded) and
 :class:`~burstloc.live.monitor.BurstMonitor`. For every input item:
 
-* a :class:`~burstloc.live.parse.BadReading`, an implausible reading, a reading from an unknown
-  meter, a step the monitor refuses: counted, reported (rate-limited, :class:`Reporter`),
-  skipped; the loop goes on;
+* a :class:`~burstloc.live.parse.BadReading` (a timestamp in another form than the feed's
+  included), an implausible reading, a reading from an unknown meter, a timestamp more than a
+  day from the feed's clock (:data:`~burstloc.live.health.CLOCK_JUMP`), a step the monitor
+  refuses: counted, reported (rate-limited, :class:`Reporter`), skipped; the loop goes on;
 * a meter that goes silent or comes back, a clock offset found and corrected: reported;
   the monitor and the stream exclude / include the meter;
 * a decision: emitted as a record (``"type": "decision"``, with the health at decision time;
@@ -32,7 +33,7 @@ from burstloc.live.health import AdmittedRow, Health
 from burstloc.live.monitor import BurstMonitor
 from burstloc.live.monitor_state import monitor_state, restore_monitor
 from burstloc.live.observe import LiveObserver
-from burstloc.live.parse import BadReading, Row, parse_row, unknown_meter
+from burstloc.live.parse import BadReading, Row, TimestampForm, parse_row, unknown_meter
 from burstloc.live.state import StateFile
 from burstloc.readings import Reading, Step
 
@@ -126,6 +127,11 @@ class LiveLoop:
         self._items = 0
         self._readings = 0  # items that were readings of a configured meter
         self._columns = {m: j for j, m in enumerate(monitor.meters)}
+        #: The form of the feed's timestamps (seconds or ISO 8601), fixed by its first reading
+        #: in this run (not kept across a restart: a feed may change its form while the monitor
+        #: is down): the messages (:meth:`feed_payload`) and whoever parses the feed's lines
+        #: share it.
+        self.timestamps = TimestampForm()
         self.decisions = 0
         self.events = 0  # alarms classified other or unsure (with a classifier)
         self.transients = 0  # early records of alarms still to be classified
@@ -159,7 +165,7 @@ class LiveLoop:
         of the cost. The health in a decision record is the health after the readings of the
         message up to the next periodic check (one by one: up to the reading that completed
         the decision)."""
-        self._feed_row(parse_row(payload, where, self._columns), where)
+        self._feed_row(parse_row(payload, where, self._columns, self.timestamps), where)
 
     def _feed_row(self, row: Row, where: str) -> None:
         """The items of ``row`` in order, as one by one: the periodic check (:meth:`tick`)
@@ -196,6 +202,13 @@ class LiveLoop:
                 "corrected by it"
             )
             events.append((position, 0, "clock-offset", message))
+        for position, before, after in ok.moved:
+            message = (
+                f"{where}: the feed's clock moved by {(after - before) / 86_400.0:+.4g} days "
+                f"(t = {before:.12g} s to {after:.12g} s): readings of most meters agree; the "
+                "readings far from the clock before them were skipped"
+            )
+            events.append((position, 0, "clock", message))
         for position, j, count in ok.replayed:
             message = (
                 f"meter {meters[j]!r}: {count} readings sent again after the restart (seen "

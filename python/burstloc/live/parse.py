@@ -15,6 +15,13 @@ and goes on.
   as CSV lines (the CSV line form over MQTT). ``t`` may also be an ISO 8601 string, as above.
 
 Values must be finite numbers; meter names non-empty strings (a number is taken as its text).
+
+**One timestamp form per feed.** A feed's first reading fixes its form, seconds or ISO 8601
+(:class:`TimestampForm`); a reading whose timestamp is in the other form is a bad reading (a
+line of ISO time in a feed of seconds is not a time on the feed's clock, and one in seconds
+between ISO times may be seconds from any origin). :func:`parse_lines` keeps one form for its
+lines; the live loop one for its whole feed, file or broker
+(:attr:`burstloc.live.loop.LiveLoop.timestamps`).
 """
 
 from __future__ import annotations
@@ -25,10 +32,14 @@ from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any, NamedTuple
 
+from burstloc.exceptions import ConfigError
 from burstloc.readings import CSV_HEADER, Reading, timestamp_seconds
 
 __all__ = [
+    "ISO_8601",
+    "SECONDS",
     "BadReading",
+    "TimestampForm",
     "located_lines",
     "parse_csv_line",
     "parse_line",
@@ -53,6 +64,48 @@ class BadReading:
         return f"{self.where}: {self.reason}"
 
 
+#: The two forms of a reading's timestamp (:func:`burstloc.readings.timestamp_seconds`).
+SECONDS = "seconds"
+ISO_8601 = "ISO 8601"
+
+
+class TimestampForm:
+    """The form of a feed's timestamps, :data:`SECONDS` or :data:`ISO_8601`: fixed by the feed's
+    first reading (``form``, and ``since``: where that reading was), or given.
+
+    >>> form = TimestampForm()
+    >>> form.check(SECONDS, "line 2", "N2", "1.0,N2,180") is None
+    True
+    >>> form.check(ISO_8601, "line 3", "N2", "2026-11-26T10:00:00Z,N2,180").reason
+    "timestamp in ISO 8601 in a feed of seconds (since line 2): '2026-11-26T10:00:00Z,N2,180'"
+
+    Raises:
+        ConfigError: ``form`` is neither form.
+    """
+
+    def __init__(self, form: str | None = None, since: str = "the start") -> None:
+        if form not in (None, SECONDS, ISO_8601):
+            raise ConfigError(f"timestamp form must be {SECONDS!r} or {ISO_8601!r}, got {form!r}")
+        self.form: str | None = form
+        self.since = since
+
+    def check(self, form: str, where: str, meter: str | None, shown: str) -> BadReading | None:
+        """``None`` if a reading at ``where`` with a timestamp in ``form`` fits the feed (the
+        first reading fixes the form), else the bad reading (``shown``: the item as text)."""
+        if self.form == form:
+            return None
+        if self.form is None:
+            self.form, self.since = form, where
+            return None
+        reason = f"timestamp in {form} in a feed of {self.form} (since {self.since})"
+        return BadReading(where, f"{reason}: {shown!r}", meter)
+
+
+def _form(text: Any) -> str:
+    """The form of a timestamp that :func:`timestamp_seconds` read."""
+    return SECONDS if isinstance(text, (int, float)) or _number(text) is not None else ISO_8601
+
+
 def _number(text: Any) -> float | None:
     try:
         x = float(text)
@@ -61,8 +114,11 @@ def _number(text: Any) -> float | None:
     return x if math.isfinite(x) else None
 
 
-def parse_csv_line(text: str, where: str) -> Reading | BadReading | None:
-    """One CSV line: a reading, a bad reading, or ``None`` (blank, comment or header)."""
+def parse_csv_line(
+    text: str, where: str, form: TimestampForm | None = None
+) -> Reading | BadReading | None:
+    """One CSV line: a reading, a bad reading, or ``None`` (blank, comment or header); with
+    ``form``, a reading whose timestamp is not in the feed's form is a bad reading."""
     text = text.lstrip("\ufeff").strip()
     if not text or text.startswith("#"):
         return None
@@ -82,28 +138,36 @@ def parse_csv_line(text: str, where: str) -> Reading | BadReading | None:
     value = _number(fields[2])
     if value is None:
         return BadReading(where, f"value is not a finite number: {shown!r}", meter)
+    if form is not None:
+        wrong = form.check(_form(fields[0]), where, meter, shown)
+        if wrong is not None:
+            return wrong
     return Reading(t, meter, value)
 
 
 def parse_lines(lines: Iterable[str | bytes]) -> Iterator[Reading | BadReading]:
     """Readings (and bad readings) from CSV lines, numbered from 1; undecodable bytes are bad
-    readings too."""
+    readings too, and so are timestamps in another form than the first reading's."""
     for _, item in located_lines(lines):
         yield item
 
 
 def located_lines(lines: Iterable[str | bytes]) -> Iterator[tuple[str, Reading | BadReading]]:
     """:func:`parse_lines` with where each item comes from (``"line 12"``)."""
+    form = TimestampForm()
     for number, line in enumerate(lines, start=1):
         where = f"line {number}"
-        item = parse_line(line, where)
+        item = parse_line(line, where, form)
         if item is not None:
             yield where, item
 
 
-def parse_line(line: str | bytes, where: str) -> Reading | BadReading | None:
+def parse_line(
+    line: str | bytes, where: str, form: TimestampForm | None = None
+) -> Reading | BadReading | None:
     """One CSV line, text or bytes (``None``: a blank line, a comment or a header); bytes that
-    are not UTF-8, or a NUL byte, make a bad reading."""
+    are not UTF-8, or a NUL byte, make a bad reading; so does, with ``form``, a timestamp not in
+    the feed's form."""
     if isinstance(line, bytes):
         try:
             line = line.decode("utf-8")
@@ -111,7 +175,7 @@ def parse_line(line: str | bytes, where: str) -> Reading | BadReading | None:
             return BadReading(where, "not UTF-8 text")
     if "\x00" in line:
         return BadReading(where, "binary data (NUL byte)")
-    return parse_csv_line(line, where)
+    return parse_csv_line(line, where, form)
 
 
 _NUMBER = (int, float)
@@ -134,9 +198,15 @@ def _plain(obj: Any) -> tuple[float, str, float] | None:
     return None
 
 
-def _from_object(obj: Any, where: str) -> Reading | BadReading:
+def _from_object(obj: Any, where: str, form: TimestampForm | None) -> Reading | BadReading:
     plain = _plain(obj)
-    return _checked(obj, where) if plain is None else Reading(*plain)
+    if plain is None:
+        return _checked(obj, where, form)
+    if form is not None and form.form != SECONDS:
+        wrong = form.check(SECONDS, where, plain[1], _short(obj))
+        if wrong is not None:
+            return wrong
+    return Reading(*plain)
 
 
 def _short(x: Any) -> str:
@@ -144,7 +214,7 @@ def _short(x: Any) -> str:
     return text if len(text) <= 40 else text[:37] + "..."
 
 
-def _checked(obj: Any, where: str) -> Reading | BadReading:
+def _checked(obj: Any, where: str, form: TimestampForm | None = None) -> Reading | BadReading:
     if not isinstance(obj, dict):
         return BadReading(where, f"a reading must be a JSON object, got {type(obj).__name__}")
     meter = obj.get("meter")
@@ -168,11 +238,18 @@ def _checked(obj: Any, where: str) -> Reading | BadReading:
         return BadReading(where, reason, meter)
     if value is None:
         return BadReading(where, f"'value' must be a finite number, got {_short(raw_v)}", meter)
+    if form is not None:
+        wrong = form.check(_form(raw_t), where, meter, _short(obj))
+        if wrong is not None:
+            return wrong
     return Reading(t, meter, value)
 
 
-def parse_payload(payload: bytes, where: str) -> list[Reading | BadReading]:
-    """The readings of one MQTT message (module docstring); never raises."""
+def parse_payload(
+    payload: bytes, where: str, form: TimestampForm | None = None
+) -> list[Reading | BadReading]:
+    """The readings of one MQTT message (module docstring); never raises. With ``form``, a
+    reading whose timestamp is not in the feed's form is a bad reading."""
     try:
         text = payload.decode("utf-8")
     except UnicodeDecodeError:
@@ -185,13 +262,13 @@ def parse_payload(payload: bytes, where: str) -> list[Reading | BadReading]:
             return [BadReading(where, "payload is not valid JSON")]
         items = doc.get("readings", doc) if isinstance(doc, dict) else doc
         if isinstance(items, dict):
-            return [_from_object(items, where)]
+            return [_from_object(items, where, form)]
         if not isinstance(items, list):
             return [BadReading(where, "'readings' must be a list")]
-        return [_from_object(o, f"{where} item {i}") for i, o in enumerate(items)]
+        return [_from_object(o, f"{where} item {i}", form) for i, o in enumerate(items)]
     out: list[Reading | BadReading] = []
     for i, line in enumerate(stripped.splitlines()):
-        item = parse_csv_line(line, where if i == 0 else f"{where} line {i + 1}")
+        item = parse_csv_line(line, where if i == 0 else f"{where} line {i + 1}", form)
         if item is not None:
             out.append(item)
     if not out:
@@ -217,7 +294,9 @@ class Row(NamedTuple):
     size: int
 
 
-def parse_row(payload: bytes, where: str, columns: Mapping[str, int]) -> Row:
+def parse_row(
+    payload: bytes, where: str, columns: Mapping[str, int], form: TimestampForm | None = None
+) -> Row:
     """:func:`parse_payload` as one :class:`Row` over the meters ``columns`` (name → column):
     the same items in the same order, without an object per reading. A reading from a meter
     not in ``columns`` is a bad item (:func:`unknown_meter`). Never raises."""
@@ -228,7 +307,7 @@ def parse_row(payload: bytes, where: str, columns: Mapping[str, int]) -> Row:
         items = None
     row = Row([], [], [], [], [], 0)
     if not isinstance(items, list):  # not the common form: a JSON list of readings
-        parsed = parse_payload(payload, where)
+        parsed = parse_payload(payload, where, form)
         for i, item in enumerate(parsed):
             if isinstance(item, BadReading):
                 row.bad.append((i, item))
@@ -236,6 +315,8 @@ def parse_row(payload: bytes, where: str, columns: Mapping[str, int]) -> Row:
                 _add(row, i, (item.timestamp, item.meter, item.value), where, columns)
         return row._replace(size=len(parsed))
     positions, times, cols, values = row.positions, row.times, row.columns, row.values
+    seconds = form is None or form.form == SECONDS  # the inline case's timestamps are seconds
+    unfixed = form is not None and form.form is None  # the feed's first reading is still to come
     for i, obj in enumerate(items):
         if type(obj) is dict:  # the commonest case inline: float t and value, a known meter
             t: Any = obj.get("t")
@@ -244,20 +325,21 @@ def parse_row(payload: bytes, where: str, columns: Mapping[str, int]) -> Row:
             j = columns.get(meter) if type(meter) is str else None
             # t - t == 0.0: finite (NaN and infinities give NaN)
             finite = type(t) is float and type(value) is float and t - t == value - value == 0.0
-            if j is not None and finite:
-                positions.append(i)
-                times.append(t)
-                cols.append(j)
-                values.append(value)
-                continue
-        plain = _plain(obj)
-        if plain is None:
-            item = _checked(obj, f"{where} item {i}")
-            if isinstance(item, BadReading):
-                row.bad.append((i, item))
-                continue
-            plain = (item.timestamp, item.meter, item.value)
-        _add(row, i, plain, where, columns)
+            if j is not None and finite and (seconds or unfixed):
+                if unfixed and form is not None:  # the form is fixed by now, or by this one
+                    unfixed = False
+                    seconds = form.check(SECONDS, f"{where} item {i}", meter, "") is None
+                if seconds:
+                    positions.append(i)
+                    times.append(t)
+                    cols.append(j)
+                    values.append(value)
+                    continue
+        item = _from_object(obj, f"{where} item {i}", form)
+        if isinstance(item, BadReading):
+            row.bad.append((i, item))
+            continue
+        _add(row, i, (item.timestamp, item.meter, item.value), where, columns)
     return row._replace(size=len(items))
 
 

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import tempfile
 import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
@@ -137,14 +136,10 @@ def cached(
 
 @contextlib.contextmanager
 def isolated_run() -> Iterator[str]:
-    """Hold the TSNet lock and work in a fresh temporary directory (TSNet writes into cwd)."""
-    with _TSNET_LOCK, tempfile.TemporaryDirectory(prefix="burstloc-tsnet-") as tmp:
-        previous = os.getcwd()
-        os.chdir(tmp)
-        try:
-            yield tmp
-        finally:
-            os.chdir(previous)
+    """Hold the TSNet lock and work in a fresh temporary directory (TSNet writes into cwd, and
+    EPANET its scratch files: :func:`burstloc.network.epanet_workdir`)."""
+    with _TSNET_LOCK, network.epanet_workdir("burstloc-tsnet-") as tmp:
+        yield tmp
 
 
 def _simulate(scenario: BurstScenario) -> ScenarioResult:
@@ -332,7 +327,7 @@ def _run_tsnet(
         )
     try:
         operate(tm)
-        tm = _initialize(tsnet, tm, settings)
+        tm = _initialize(tsnet, tm, settings, where)
         hold_valves(tm)
         if settings.solver in ("vectorized", "numpy"):
             kernel = "rust" if settings.solver == "vectorized" else "numpy"
@@ -344,11 +339,14 @@ def _run_tsnet(
         raise SimulationError(f"TSNet failed for {where}: {type(exc).__name__}: {exc}") from exc
 
 
-def _initialize(tsnet: Any, tm: Any, settings: TransientSettings) -> Any:
+def _initialize(tsnet: Any, tm: Any, settings: TransientSettings, where: str = "") -> Any:
     """TSNet's ``Initializer``, its EPANET run over no duration: it reads EPANET's state at the
     start only, and the extended-period run it makes of the model's own duration solves the
     same first step and then every later one (L-TOWN's week at 5 min: 2 016 steps, 0.8 s per
-    burst); the duration is restored before the transient runs. For burstloc's own solvers it
+    burst); the duration is restored before the transient runs. Where EPANET cannot solve the
+    model pressure-driven it is solved demand-driven, as :func:`burstloc.network.steady_state`
+    does (a :class:`~burstloc.exceptions.DemandDrivenWarning`, kept in the scenario's
+    ``warnings``). For burstloc's own solvers it
     also runs over a period of two steps: it allocates six result series per pipe and two per
     node over the whole period, which only TSNet's solver fills (about 1 GB on L-TOWN's 32 554
     steps); burstloc's reads their first value, and the period is restored too. It reads EPANET's
@@ -360,7 +358,13 @@ def _initialize(tsnet: Any, tm: Any, settings: TransientSettings) -> Any:
         tm.simulation_period = 2 * tm.time_step
     try:
         with results_by_name():
-            return tsnet.simulation.Initializer(tm, 0.0, settings.engine)
+            try:
+                return tsnet.simulation.Initializer(tm, 0.0, settings.engine)
+            except Exception as exc:  # EPANET cannot solve it pressure-driven: demand-driven
+                if settings.engine.upper() != "PDD" or type(exc).__name__ != "EpanetException":
+                    raise
+                network.warn_demand_driven(where or "the transient model", exc)
+                return tsnet.simulation.Initializer(tm, 0.0, "DD")
     finally:
         times.duration, tm.simulation_period = duration, period
 
