@@ -238,3 +238,26 @@ def test_the_burst_size_reaches_the_simulation_and_the_record(tmp_path: Path) ->
     assert _evaluate_long_pipes(tmp_path) == 0
     default = json.loads((tmp_path / "r.json").read_text())["scenario"]["burst_coeff"]
     assert default == paper.SCENARIO.burst_coeff == 0.02
+
+
+def test_evaluate_takes_the_configurations_meters_or_the_ones_given(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from burstloc.experiments.calibrate import calibrate
+
+    meters = ("N4", "N7", "1", "8")
+    config = calibrate(PAPER15, capture_intervals=(0.2,), meters=meters).save(tmp_path / "c.json")
+    argv = ["evaluate", str(PAPER15), "--config", str(config), "--pipes", "P7", "--phases", "1"]
+    argv += ["--detector", "cusum", "--capture-interval", "0.2", "--quiet", "--workers", "1"]
+    # before, without --meters-file every junction was metered and the configuration refused
+    assert main([*argv, "--json", str(tmp_path / "a.json")]) == 0
+    assert json.loads((tmp_path / "a.json").read_text())["meters"] == list(meters)
+    # the same meters in another order, as IDs
+    assert main([*argv, "--meters", "8,1", "N7", "N4", "--json", str(tmp_path / "b.json")]) == 0
+    assert json.loads((tmp_path / "b.json").read_text())["meters"] == list(meters)
+    capsys.readouterr()
+    assert main([*argv, "--meters", "N4,N7,N2"]) == 2
+    err = capsys.readouterr().err
+    assert "was calibrated for 4 other meters (2 missing ['1', '8'], 1 extra ['N2'])" in err
+    assert main([*argv, "--meters", "N4", "--meters-file", str(config)]) == 2
+    assert "--meters or --meters-file, not both" in capsys.readouterr().err

@@ -233,6 +233,9 @@ def test_a_feed_from_a_simulation_is_what_the_monitor_reads(
         (["--feed", "f.csv", "--capture-interval", "0.2", "--start", "2026-11-26T10:00"],
          "--start: ISO 8601 timestamp without a UTC offset"),
         (["--feed", "f.csv", "--capture-interval", "0.2", "--noise", "-1"], "--noise must be"),
+        (["--meters", "J1"], "--meters applies to --feed FILE only"),
+        (["--feed", "f.csv", "--capture-interval", "0.2", "--meters", "J1,Q1", "Q2"],
+         "2 meter(s) ['Q1', 'Q2'] are not junctions of"),
     ],
 )  # fmt: skip
 def test_bad_feed_options_are_named_before_any_work(
@@ -242,3 +245,34 @@ def test_bad_feed_options_are_named_before_any_work(
     assert _run("simulate", tiny, *pipe, "--out", tmp_path / "o", *extra) == 2
     assert says in capsys.readouterr().err
     assert not (tmp_path / "o").exists() or not any((tmp_path / "o").iterdir())
+
+
+def test_a_feed_carries_the_configurations_meters_or_the_ones_given(
+    paper15: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from burstloc.experiments.calibrate import calibrate
+
+    meters = ["N4", "N7", "1", "8"]
+    config = calibrate(paper15, capture_intervals=(0.2,), meters=meters).save(tmp_path / "c.json")
+    args = ["simulate", paper15, "--pipe", "P7", "--duration", "14", "--capture-interval", "0.2"]
+    args += ["--out", tmp_path / "out", "--quiet"]
+    every, mine, two = tmp_path / "every.csv", tmp_path / "mine.csv", tmp_path / "two.csv"
+    assert _run(*args, "--feed", every) == 0
+    assert f"wrote {15 * 70} readings of every junction to {every}" in capsys.readouterr().out
+    assert _run(*args, "--feed", mine, "--config", config) == 0
+    assert f"wrote {4 * 70} readings of 4 meters to {mine}" in capsys.readouterr().out
+    rows = [line.split(",") for line in mine.read_text().splitlines()[1:]]
+    assert [m for _, m, _ in rows[:4]] == meters and len(rows) == 4 * 70
+    full = {(t, m): v for t, m, v in (ln.split(",") for ln in every.read_text().splitlines()[1:])}
+    assert all(full[(t, m)] == v for t, m, v in rows)  # noiseless: the same readings
+    done = _monitor(paper15, config, mine)
+    assert done.returncode == 0, done.stderr
+    assert "unknown meter" not in done.stderr
+    decisions = [json.loads(line) for line in done.stdout.splitlines()]
+    assert [d["type"] for d in decisions] == ["decision"]
+    # --meters, in the order given (a text file of IDs), over the configuration's
+    listed = tmp_path / "two.txt"
+    listed.write_text("8\nN4  # by the tank\n")
+    assert _run(*args, "--feed", two, "--config", config, "--meters", listed) == 0
+    rows = [line.split(",") for line in two.read_text().splitlines()[1:]]
+    assert [m for _, m, _ in rows[:2]] == ["8", "N4"] and len(rows) == 2 * 70

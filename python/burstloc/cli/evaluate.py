@@ -10,6 +10,7 @@ from typing import Any
 from burstloc._atomic import check_output
 from burstloc.cli._options import (
     add_meters_file_option,
+    add_meters_option,
     add_min_pipe_length_option,
     add_run_options,
     add_solver_option,
@@ -164,6 +165,11 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="write PNGs: per run, a map of every burst's true and named pipe, and the meters' "
         "traces with their alarms for the first pipe of --pipes",
     )
+    add_meters_option(
+        parser,
+        "default: the configuration's with --config, else every junction (the ranking "
+        "localizers; the paper's rules read every junction)",
+    )
     add_meters_file_option(parser)
     add_time_step_option(parser)
     parser.add_argument(
@@ -228,6 +234,8 @@ def run(args: argparse.Namespace) -> int:
         from burstloc.localize.config import Calibration
 
         config = Calibration.load(args.config)
+        if meters is None or set(meters) == set(config.meters):
+            meters = config.meters  # the meters it was calibrated for, in its order
     cache = cache_of(args)
     scenario = paper.SCENARIO
     if args.position is not None:
