@@ -276,3 +276,40 @@ def test_a_feed_carries_the_configurations_meters_or_the_ones_given(
     assert _run(*args, "--feed", two, "--config", config, "--meters", listed) == 0
     rows = [line.split(",") for line in two.read_text().splitlines()[1:]]
     assert [m for _, m, _ in rows[:2]] == ["8", "N4"] and len(rows) == 2 * 70
+
+
+def test_a_burst_sized_by_its_flow(
+    paper15: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from burstloc.network import load_network
+    from burstloc.sim.scenarios.scenario import ScenarioResult
+
+    out = tmp_path / "out"
+    args = ["simulate", paper15, "--pipe", "P7", "--duration", "11", "--out", out, "--quiet"]
+    assert _run(*args, "--burst-flow", "5") == 0
+    said = capsys.readouterr().out
+    (path,) = out.glob("*.npz")
+    meta = ScenarioResult.load(path).metadata
+    assert meta["burst_flow_lps"] == pytest.approx(5.0)
+    pressure = meta["burst_pressure_m"]
+    assert meta["burst_coeff"] == pytest.approx(0.005 / np.sqrt(pressure))
+    assert said.startswith(
+        f"burst on P7: 5 L/s at the burst point's {pressure:.1f} m of pressure head before it "
+        f"opens (emitter coefficient {meta['burst_coeff']:.3g} m^3/s/m^0.5)"
+    )
+    # the pressure before the burst: the simulation's own heads at the pipe's ends, halfway
+    result = ScenarioResult.load(path)
+    link = load_network(paper15).get_link("P7")
+    ends = [result.heads[0, list(result.junctions).index(n)] for n in ("N5", "N7")]
+    elevation = (link.start_node.elevation + link.end_node.elevation) / 2
+    assert pressure == pytest.approx(sum(ends) / 2 - elevation, abs=0.05)
+    # a coefficient: the flow it draws there is said and recorded too
+    assert _run(*args, "--burst-coeff", "0.01") == 0
+    flow = 10.0 * np.sqrt(pressure)
+    assert capsys.readouterr().out.startswith(f"burst on P7: {flow:.3g} L/s at the burst point's")
+    meta = ScenarioResult.load(path).metadata
+    assert meta["burst_flow_lps"] == pytest.approx(10.0 * np.sqrt(pressure), rel=1e-6)
+    assert _run(*args, "--burst-flow", "-1") == 2
+    assert "--burst-flow must be a positive number of L/s" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        _run(*args, "--burst-flow", "5", "--burst-coeff", "0.01")
