@@ -67,6 +67,12 @@ def test_bursts_sized_by_flow_draw_it_and_a_larger_one_lowers_the_pressures_more
         assert b.lowest_pressure is not None and s.lowest_pressure is not None
         assert b.lowest_pressure < s.lowest_pressure <= lowest + 1e-6
         assert s.lowest_junction in wn.junction_name_list
+        assert s.below_zero == b.below_zero == 0  # Net1 keeps its pressures at 50 L/s
+    # a burst far beyond what the network can feed (3 m^3/s, 43 times its demand) draws less as
+    # the pressure falls: the steady state holds its lowest junction just above zero
+    (huge,) = burst_sizes(wn, ["121"], 0.5, flow=3.0, check=True)
+    assert huge.lowest_pressure is not None and 0.0 <= huge.lowest_pressure < 3.0
+    assert huge.below_zero == 0
     by_coeff = burst_sizes(wn, pipes, 0.5, coeff=0.02)
     assert [x.lowest_pressure for x in by_coeff] == [None] * 3
     assert by_coeff[0].flow == pytest.approx(0.02 * math.sqrt(by_coeff[0].pressure))

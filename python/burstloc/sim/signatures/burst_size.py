@@ -24,6 +24,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
+import numpy as np
+
 from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.sim.scenarios.scenario import BurstScenario, ScenarioResult
 
@@ -41,8 +43,9 @@ __all__ = [
 class BurstSize:
     """One burst's size: ``pipe`` split at ``position``; ``pressure`` (m) at the burst point
     before the burst; the emitter ``coeff`` (m³/s per m^½) and the ``flow`` (m³/s) it draws at
-    that pressure; with a check, the lowest junction pressure (m) once it has opened and that
-    junction (else ``None``)."""
+    that pressure; with a check, the lowest junction pressure (m) once it has opened, that
+    junction, and how many junctions it takes below zero pressure that were at or above it
+    before (else ``None``)."""
 
     pipe: str
     position: float
@@ -51,6 +54,7 @@ class BurstSize:
     flow: float
     lowest_pressure: float | None = None
     lowest_junction: str | None = None
+    below_zero: int | None = None
 
     @property
     def flow_lps(self) -> float:
@@ -129,15 +133,20 @@ def burst_sizes(
     if not check:
         return sizes
     junctions = list(wn.junction_name_list)
-    elevation = [wn.get_node(j).elevation for j in junctions]
+    elevation = np.array([wn.get_node(j).elevation for j in junctions])
+    before = np.array([heads[j] for j in junctions]) - elevation >= 0.0
     checked = []
     with capture_diagnostics(), InPlaceSplitter(wn, engine) as splitter:
         for size in sizes:
-            after = splitter.split_heads(size.pipe, position, size.coeff, junctions)
-            pressures = after - elevation
+            pressures = splitter.split_heads(size.pipe, position, size.coeff, junctions) - elevation
             low = int(pressures.argmin())
             checked.append(
-                replace(size, lowest_pressure=float(pressures[low]), lowest_junction=junctions[low])
+                replace(
+                    size,
+                    lowest_pressure=float(pressures[low]),
+                    lowest_junction=junctions[low],
+                    below_zero=int(np.count_nonzero(before & (pressures < 0.0))),
+                )
             )
     return checked
 
