@@ -261,3 +261,30 @@ def test_evaluate_takes_the_configurations_meters_or_the_ones_given(
     assert "was calibrated for 4 other meters (2 missing ['1', '8'], 1 extra ['N2'])" in err
     assert main([*argv, "--meters", "N4", "--meters-file", str(config)]) == 2
     assert "--meters or --meters-file, not both" in capsys.readouterr().err
+
+
+def test_bursts_sized_by_flow_and_every_bursts_flow_recorded(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from burstloc.network import load_network
+    from burstloc.sim.signatures.burst_size import burst_sizes
+
+    assert _evaluate_long_pipes(tmp_path, "--burst-flow", "5") == 0
+    doc = json.loads((tmp_path / "r.json").read_text())
+    jsonschema.validate(doc, SCHEMA)
+    scenario = doc["scenario"]
+    (size,) = burst_sizes(load_network(tmp_path / "long.inp"), ["B"], 0.5, flow=0.005)
+    assert scenario["burst_flow_lps"] == 5.0 and "burst_coeff" not in scenario
+    assert scenario["burst_coeffs"] == {"B": pytest.approx(size.coeff)}
+    assert scenario["burst_flows_lps"] == {"B": pytest.approx(5.0)}
+    assert "the bursts drew 5-5 L/s (median 5)" in capsys.readouterr().out
+    # by coefficient: the flow it draws recorded and said too
+    assert _evaluate_long_pipes(tmp_path, "--burst-coeff", "0.002") == 0
+    scenario = json.loads((tmp_path / "r.json").read_text())["scenario"]
+    drawn = 0.002 * size.pressure**0.5 * 1000
+    assert scenario["burst_flows_lps"] == {"B": pytest.approx(drawn, abs=1e-3)}
+    assert f"the bursts drew {drawn:.3g}-{drawn:.3g} L/s" in capsys.readouterr().out
+    assert _evaluate_long_pipes(tmp_path, "--burst-coeff", "0.002", "--burst-flow", "5") == 2
+    assert "--burst-flow or --burst-coeff, not both" in capsys.readouterr().err
+    assert _evaluate_long_pipes(tmp_path, "--burst-flow", "0") == 2
+    assert "--burst-flow must be a positive number of L/s" in capsys.readouterr().err

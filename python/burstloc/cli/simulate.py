@@ -204,13 +204,13 @@ def run(args: argparse.Namespace) -> int:
         min_pipe_length=args.min_pipe_length,
         solver=args.solver,
     )
-    from burstloc.sim.signatures.burst_size import sized_scenarios, with_size
+    from burstloc.sim.signatures.burst_size import describe_sizes, sized_scenarios, with_size
 
     flow = None if args.burst_flow is None else args.burst_flow / 1000.0
     if flow is not None and not (math.isfinite(flow) and flow > 0):
         raise ConfigError(f"--burst-flow must be a positive number of L/s, got {args.burst_flow}")
     scenarios, sizes = sized_scenarios(scenarios, flow)
-    print(_sizes_line(sizes))
+    print(describe_sizes(sizes))
     size_of = {s.pipe: size for s, size in zip(scenarios, sizes, strict=True)}
     cache = cache_of(args)
     report = simulate_many(
@@ -232,25 +232,6 @@ def run(args: argparse.Namespace) -> int:
     for line in report.failure_lines():
         print(f"burstloc: failed: {line}", file=sys.stderr)
     return 0 if report.ok else 1
-
-
-def _sizes_line(sizes: list[Any]) -> str:
-    """What the bursts draw: one burst's flow, coefficient and pressure, or the range of
-    several."""
-    if len(sizes) == 1:
-        (size,) = sizes
-        return (
-            f"burst on {size.pipe}: {size.flow_lps:.3g} L/s at the burst point's "
-            f"{size.pressure:.1f} m of pressure head before it opens (emitter coefficient "
-            f"{size.coeff:.3g} m^3/s/m^0.5)"
-        )
-    flows = sorted(s.flow_lps for s in sizes)
-    coeffs = sorted(s.coeff for s in sizes)
-    return (
-        f"{len(sizes)} bursts: {flows[0]:.3g}-{flows[-1]:.3g} L/s (median "
-        f"{flows[len(flows) // 2]:.3g}) at their burst points' pressure before they open "
-        f"(emitter coefficients {coeffs[0]:.3g}-{coeffs[-1]:.3g} m^3/s/m^0.5)"
-    )
 
 
 def _check_feed(args: argparse.Namespace) -> datetime | None:

@@ -34,6 +34,7 @@ __all__ = [
     "burst_point_pressure",
     "burst_sizes",
     "coeff_for_flow",
+    "describe_sizes",
     "sized_scenarios",
     "with_size",
 ]
@@ -196,3 +197,22 @@ def with_size(result: ScenarioResult, size: BurstSize) -> ScenarioResult:
         "burst_pressure_m": round(size.pressure, 6),
     }
     return replace(result, metadata=meta)
+
+
+def describe_sizes(sizes: Sequence[BurstSize]) -> str:
+    """What the bursts draw, in one line: one burst's flow, pressure and coefficient, or the
+    range of several (``burstloc simulate`` and ``evaluate`` print it)."""
+    if len(sizes) == 1:
+        (size,) = sizes
+        return (
+            f"burst on {size.pipe}: {size.flow_lps:.3g} L/s at the burst point's "
+            f"{size.pressure:.1f} m of pressure head before it opens (emitter coefficient "
+            f"{size.coeff:.3g} m^3/s/m^0.5)"
+        )
+    flows = sorted(s.flow_lps for s in sizes)
+    coeffs = sorted(s.coeff for s in sizes)
+    return (
+        f"{len(sizes)} bursts: {flows[0]:.3g}-{flows[-1]:.3g} L/s (median "
+        f"{flows[len(flows) // 2]:.3g}) at their burst points' pressure before they open "
+        f"(emitter coefficients {coeffs[0]:.3g}-{coeffs[-1]:.3g} m^3/s/m^0.5)"
+    )
