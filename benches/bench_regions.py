@@ -43,15 +43,29 @@ def _main_length(network: Path) -> float:
     return float(sum(wn.get_link(p).length for p in wn.pipe_name_list))
 
 
-def _run(
-    network: Path, meters_file: Path, out: Path, workers: int | None, sample: int | None
-) -> dict:
-    """``burstloc evaluate`` as on the command line (every open pipe, or ``sample`` of them
-    drawn with a fixed seed); its JSON's first run."""
+def sample_pipes(network: Path, sample: int) -> list[str]:
+    """``sample`` of the network's open pipes drawn with a fixed seed, sorted by name."""
     import random
 
-    from burstloc.cli import main
     from burstloc.network import closed_pipes, load_network, pipe_names
+
+    wn = load_network(network)
+    closed = set(closed_pipes(wn))
+    pipes = [p for p in pipe_names(wn) if p not in closed]
+    return sorted(random.Random(2027).sample(pipes, min(sample, len(pipes))))
+
+
+def _run(
+    network: Path,
+    meters_file: Path,
+    out: Path,
+    workers: int | None,
+    sample: int | None,
+    pipes: list[str] | None = None,
+) -> dict:
+    """``burstloc evaluate`` as on the command line (every open pipe, ``sample`` of them
+    drawn with a fixed seed, or ``pipes``); its JSON's first run."""
+    from burstloc.cli import main
 
     args = [
         "evaluate", str(network), "--detector", "cusum", "--capture-interval", "0.2",
@@ -62,10 +76,9 @@ def _run(
     if network.name in TRANSIENT_READY:
         args += ["--min-pipe-length", f"{TRANSIENT_READY[network.name]:g}"]
     if sample is not None:
-        wn = load_network(network)
-        closed = set(closed_pipes(wn))
-        pipes = [p for p in pipe_names(wn) if p not in closed]
-        args += ["--pipes", *sorted(random.Random(2027).sample(pipes, min(sample, len(pipes))))]
+        pipes = sample_pipes(network, sample)
+    if pipes is not None:
+        args += ["--pipes", *pipes]
     status = main(args)
     if status != 0:
         raise SystemExit(f"evaluate failed on {network.name} ({status})")

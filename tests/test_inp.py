@@ -54,7 +54,8 @@ def test_junctions_in_file_are_wntrs_and_meters_must_be_among_them(tmp_path: Pat
         assert junctions == junction_names(load_network(network))
         assert inp.check_meters(junctions[:2], junctions, network) == junctions[:2]
     tiny = tmp_path / "tiny.inp"
-    with pytest.raises(NetworkError, match=r"meter\(s\) \['R1', 'Z'\] are not junctions of .*tiny"):
+    unknown = r"2 meter\(s\) \['R1', 'Z'\] are not junctions of .*tiny"
+    with pytest.raises(NetworkError, match=unknown):
         inp.check_meters(["J1", "R1", "Z"], inp.junction_names_in_file(tiny), tiny)
 
 

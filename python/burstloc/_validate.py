@@ -29,6 +29,7 @@ import numpy as np
 from burstloc.exceptions import ConfigError
 
 __all__ = [
+    "LISTED",
     "MAX_JSON_BYTES",
     "FieldError",
     "Fields",
@@ -40,6 +41,7 @@ __all__ = [
     "read_json",
     "read_json_npz",
     "read_npz",
+    "some_names",
 ]
 
 #: The largest JSON file burstloc reads (bytes): far above any configuration it writes.
@@ -263,6 +265,17 @@ def check_count(value: Any, field: str, *, low: int = 1, high: int) -> int:
     if not low <= value <= high:
         raise FieldError(field, f"must be an integer in [{low}, {high}], got {value}")
     return value
+
+
+LISTED = 5
+"""Most names an error message lists (:func:`some_names`); the rest are counted."""
+
+
+def some_names(names: Sequence[str], limit: int = LISTED) -> str:
+    """The first ``limit`` of ``names`` as a list, and how many more there are:
+    ``['n10', 'n11'] and 747 more``; every name when there are no more than ``limit``."""
+    shown = repr(list(names[:limit]))
+    return shown if len(names) <= limit else f"{shown} and {len(names) - limit} more"
 
 
 def check_names(

@@ -85,6 +85,10 @@ CANDIDATE_POSITIONS: tuple[float, ...] = tuple(round(0.1 * i, 1) for i in range(
 """Candidate burst positions along each pipe (fractions of its length from its INP start node)
 that the arrival and signature localizers try; a pipe keeps its best-fitting position."""
 
+SEARCHABLE = 1000.0
+"""Longest search region (m of main) a crew is sent to search: what the evaluation's and the
+placement scores' "searchable" shares count."""
+
 SIGNATURE_DECISION_DELAY = 150.0
 """Seconds after a burst's onset at which the signature localizer reads the lasting drop."""
 

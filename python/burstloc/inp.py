@@ -22,6 +22,7 @@ from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from burstloc._validate import some_names
 from burstloc.exceptions import ConfigError, NetworkError
 
 __all__ = [
@@ -252,14 +253,17 @@ def check_meters(
     """Return ``meters`` as a list if each is one of ``junctions`` (those of ``network``).
 
     Raises:
-        NetworkError: ``meter(s) [...] are not junctions of NETWORK``, naming every one (or
-            ``error``: a :class:`~burstloc.exceptions.ConfigError` where the meters are a
-            parameter, as in ``calibrate``).
+        NetworkError: ``N meter(s) [...] are not junctions of NETWORK``, naming the first few
+            and counting the rest (or ``error``: a :class:`~burstloc.exceptions.ConfigError`
+            where the meters are a parameter, as in ``calibrate``).
     """
     known = set(junctions)
     unknown = [m for m in meters if m not in known]
     if unknown:
-        raise error(f"meter(s) {unknown} are not junctions of {os.fspath(network)}")
+        raise error(
+            f"{len(unknown)} meter(s) {some_names(unknown)} are not junctions of "
+            f"{os.fspath(network)}"
+        )
     return list(meters)
 
 

@@ -8,6 +8,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from conftest import write_tiny
 
 
@@ -28,3 +30,33 @@ def test_a_simulator_warning_is_said_once_per_run(tmp_path: Path) -> None:
     assert len(said) == 1, done.stderr
     assert f'"{network}"' in said[0]
     assert json.loads(out.read_text())["meters"] == ["J1", "J2", "J3", "J4"]
+
+
+def test_calibrate_ends_with_a_summary_an_engineer_checks(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from burstloc.cli import main
+    from burstloc.localize.config import Calibration
+
+    network = write_tiny(tmp_path / "tiny.inp")
+    owned = tmp_path / "owned.txt"
+    owned.write_text("J2, J3\nJ4  # the end of the line\n")
+    out = tmp_path / "cal.json"
+    argv = ["calibrate", str(network), "--out", str(out), "--capture-interval", "0.2", "2"]
+    assert main([*argv, "--meters", str(owned), "--false-alarm-rate", "0.05"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    config = Calibration.load(out)
+    assert config.meters == ("J2", "J3", "J4")  # the file's order
+    assert lines[0] == (
+        f"configuration 'tiny-calibrated': 3 meters of {network} (['J2', 'J3', 'J4']), "
+        "sensor noise 0.01 m, signatures epanet"
+    )
+    for line, item in zip(lines[1:3], config.intervals, strict=True):
+        low, high = min(item.cusum_threshold.values()), max(item.cusum_threshold.values())
+        cusum = f"{low:.3g} m" if low == high else f"{low:.3g}-{high:.3g} m"
+        assert line.startswith(f"  capture {item.capture_interval:g} s: CUSUM threshold {cusum}")
+        assert f"every {item.localization_interval} readings" in line
+    assert lines[3].startswith(
+        "expected false alarms: 0.05 per meter per hour, 3.6 a day over the 3 meters"
+    )
+    assert lines[4].startswith("calibrated in ") and lines[4].endswith(f" s; wrote {out}")

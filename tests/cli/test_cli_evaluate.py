@@ -238,3 +238,53 @@ def test_the_burst_size_reaches_the_simulation_and_the_record(tmp_path: Path) ->
     assert _evaluate_long_pipes(tmp_path) == 0
     default = json.loads((tmp_path / "r.json").read_text())["scenario"]["burst_coeff"]
     assert default == paper.SCENARIO.burst_coeff == 0.02
+
+
+def test_evaluate_takes_the_configurations_meters_or_the_ones_given(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from burstloc.experiments.calibrate import calibrate
+
+    meters = ("N4", "N7", "1", "8")
+    config = calibrate(PAPER15, capture_intervals=(0.2,), meters=meters).save(tmp_path / "c.json")
+    argv = ["evaluate", str(PAPER15), "--config", str(config), "--pipes", "P7", "--phases", "1"]
+    argv += ["--detector", "cusum", "--capture-interval", "0.2", "--quiet", "--workers", "1"]
+    # before, without --meters-file every junction was metered and the configuration refused
+    assert main([*argv, "--json", str(tmp_path / "a.json")]) == 0
+    assert json.loads((tmp_path / "a.json").read_text())["meters"] == list(meters)
+    # the same meters in another order, as IDs
+    assert main([*argv, "--meters", "8,1", "N7", "N4", "--json", str(tmp_path / "b.json")]) == 0
+    assert json.loads((tmp_path / "b.json").read_text())["meters"] == list(meters)
+    capsys.readouterr()
+    assert main([*argv, "--meters", "N4,N7,N2"]) == 2
+    err = capsys.readouterr().err
+    assert "was calibrated for 4 other meters (2 missing ['1', '8'], 1 extra ['N2'])" in err
+    assert main([*argv, "--meters", "N4", "--meters-file", str(config)]) == 2
+    assert "--meters or --meters-file, not both" in capsys.readouterr().err
+
+
+def test_bursts_sized_by_flow_and_every_bursts_flow_recorded(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from burstloc.network import load_network
+    from burstloc.sim.signatures.burst_size import burst_sizes
+
+    assert _evaluate_long_pipes(tmp_path, "--burst-flow", "5") == 0
+    doc = json.loads((tmp_path / "r.json").read_text())
+    jsonschema.validate(doc, SCHEMA)
+    scenario = doc["scenario"]
+    (size,) = burst_sizes(load_network(tmp_path / "long.inp"), ["B"], 0.5, flow=0.005)
+    assert scenario["burst_flow_lps"] == 5.0 and "burst_coeff" not in scenario
+    assert scenario["burst_coeffs"] == {"B": pytest.approx(size.coeff)}
+    assert scenario["burst_flows_lps"] == {"B": pytest.approx(5.0)}
+    assert "the bursts drew 5-5 L/s (median 5)" in capsys.readouterr().out
+    # by coefficient: the flow it draws recorded and said too
+    assert _evaluate_long_pipes(tmp_path, "--burst-coeff", "0.002") == 0
+    scenario = json.loads((tmp_path / "r.json").read_text())["scenario"]
+    drawn = 0.002 * size.pressure**0.5 * 1000
+    assert scenario["burst_flows_lps"] == {"B": pytest.approx(drawn, abs=1e-3)}
+    assert f"the bursts drew {drawn:.3g}-{drawn:.3g} L/s" in capsys.readouterr().out
+    assert _evaluate_long_pipes(tmp_path, "--burst-coeff", "0.002", "--burst-flow", "5") == 2
+    assert "--burst-flow or --burst-coeff, not both" in capsys.readouterr().err
+    assert _evaluate_long_pipes(tmp_path, "--burst-flow", "0") == 2
+    assert "--burst-flow must be a positive number of L/s" in capsys.readouterr().err

@@ -153,7 +153,7 @@ def test_a_configuration_whose_meter_is_not_a_junction_is_refused_by_name(
     done = _monitor(tiny, edited, stdin=_steady(50))
     assert done.returncode == 2, done.stderr
     assert done.stderr.decode().splitlines() == [
-        f"burstloc: error: meter(s) ['{node}'] are not junctions of {tiny} (in configuration "
+        f"burstloc: error: 1 meter(s) ['{node}'] are not junctions of {tiny} (in configuration "
         "'tiny-calibrated')"
     ]
     assert done.stdout == b""

@@ -12,7 +12,7 @@ import pytest
 
 from burstloc.cli import main
 from burstloc.localize.config import Calibration
-from burstloc.sim.placement.methods import meter_separation
+from burstloc.sim.placement.methods import MeterSet, score_meters
 from burstloc.sim.placement.region import meter_ambiguity
 from conftest import write_tiny
 
@@ -28,10 +28,7 @@ def test_place_then_calibrate_and_evaluate_with_the_meter_file(
     assert "3 of 4 junctions (arrival)" in out and f"wrote {meters_file}" in out
     chosen = json.loads(meters_file.read_text())["meters"]
     assert len(chosen) == 3
-    told = re.search(r"arrival separation at 0.2 s: (\d+) % of the candidate burst points", out)
-    assert told is not None
-    assert int(told.group(1)) == round(100 * meter_separation(tiny, chosen, resolution=0.2))
-    ambiguous = re.search(r"expected ambiguous main at 0.2 s: (\d+) m", out)
+    ambiguous = re.search(r"the meters: expected ambiguous main at 0.2 s (\d+) m", out)
     assert ambiguous is not None
     assert int(ambiguous.group(1)) == round(meter_ambiguity(tiny, chosen, resolution=0.2))
 
@@ -116,3 +113,81 @@ def test_place_compare_evaluates_every_method(
     for row in body:
         assert len(row[1].split()) == 3  # three meters
         assert row[5].endswith(" m |")  # every located burst has a position error
+
+
+def _scores(out: str, what: str) -> tuple[int, int, int]:
+    """The expected ambiguous main, median and searchable share printed for ``what``."""
+    found = re.search(
+        re.escape(what) + r": expected ambiguous main at 0.2 s (\d+) m, median burst (\d+) m, "
+        r"(\d+) % of bursts within 1 km",
+        out,
+    )
+    assert found is not None, out
+    return int(found.group(1)), int(found.group(2)), int(found.group(3))
+
+
+def test_place_keep_keeps_the_owned_meters_and_reports_the_gain(
+    paper15: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    owned = tmp_path / "owned.txt"
+    owned.write_text("# the meters we have\nN4\n5  # at the tank\n")
+    out_file = tmp_path / "more.json"
+    argv = ["place", str(paper15), "--keep", str(owned), "--meters", "2", "--out", str(out_file)]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    placed = MeterSet.load(out_file)
+    assert placed.method == "region" and len(placed.meters) == 4
+    assert {"N4", "5"} <= set(placed.meters)
+    added = [m for m in placed.meters if m not in ("N4", "5")]
+    assert f"4 of 15 junctions (region): the 2 kept and 2 added: {' '.join(added)}" in out
+    before, after = score_meters(paper15, ("N4", "5")), score_meters(paper15, placed.meters)
+    assert after.ambiguous < before.ambiguous
+    for what, scores in (("the 2 kept", before), ("with the 2 added", after)):
+        printed = _scores(out, what)
+        expected = (scores.ambiguous, scores.ambiguity.median, 100 * scores.searchable)
+        assert printed == tuple(round(x) for x in expected)
+    gain = before.ambiguous - after.ambiguous
+    assert f"the 2 added rule out {gain:.0f} m ({100 * gain / before.ambiguous:.0f} %)" in out
+    # the same owned meters as IDs, with another method
+    argv = ["place", str(paper15), "--keep", "N4,5", "--meters", "1", "--method", "arrival"]
+    assert main(argv) == 0
+    assert "3 of 15 junctions (arrival): the 2 kept and 1 added:" in capsys.readouterr().out
+
+
+def test_place_score_ranks_the_meters_by_what_each_adds(
+    paper15: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    meters = ["N4", "N7", "1", "8"]
+    assert main(["place", str(paper15), "--score", *meters]) == 0
+    out = capsys.readouterr().out
+    whole = meter_ambiguity(paper15, meters)
+    assert _scores(out, "4 meters")[0] == round(whole)
+    ranked = re.findall(r"^ +(\d+)\. (\S+) +\+(\d+) m$", out, flags=re.M)
+    assert [int(r[0]) for r in ranked] == [1, 2, 3, 4]
+    gains = {m: meter_ambiguity(paper15, [o for o in meters if o != m]) - whole for m in meters}
+    assert [r[1] for r in ranked] == sorted(meters, key=gains.__getitem__)
+    assert [int(r[2]) for r in ranked] == [round(gains[r[1]]) for r in ranked]
+    least = ranked[0][1]
+    assert f"adds least: {least} (+{gains[least]:.0f} m" in out
+
+
+def test_place_refuses_meter_lists_it_cannot_use(
+    paper15: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    unknown = [f"x{i}" for i in range(9)]
+    assert main(["place", str(paper15), "--keep", "N4", *unknown, "--meters", "2"]) == 2
+    err = capsys.readouterr().err
+    assert "9 meter(s) ['x0', 'x1', 'x2', 'x3', 'x4'] and 4 more are not junctions of" in err
+    assert "x5" not in err
+    assert main(["place", str(paper15), "--keep", "N4,N4", "--meters", "2"]) == 2
+    assert "lists ['N4'] more than once" in capsys.readouterr().err
+    empty = tmp_path / "empty.txt"
+    empty.write_text("# nothing yet\n")
+    assert main(["place", str(paper15), "--score", str(empty)]) == 2
+    assert f"meter list {empty} names no meter" in capsys.readouterr().err
+    assert main(["place", str(paper15), "--score", "N4", "--meters", "2"]) == 2
+    assert "--meters does not apply" in capsys.readouterr().err
+    assert main(["place", str(paper15)]) == 2
+    assert "place needs --meters K" in capsys.readouterr().err
+    assert main(["place", str(paper15), "--keep", "N4", "--meters", "15"]) == 2
+    assert "meter count must be between 1 and 14" in capsys.readouterr().err

@@ -233,6 +233,9 @@ def test_a_feed_from_a_simulation_is_what_the_monitor_reads(
         (["--feed", "f.csv", "--capture-interval", "0.2", "--start", "2026-11-26T10:00"],
          "--start: ISO 8601 timestamp without a UTC offset"),
         (["--feed", "f.csv", "--capture-interval", "0.2", "--noise", "-1"], "--noise must be"),
+        (["--meters", "J1"], "--meters applies to --feed FILE only"),
+        (["--feed", "f.csv", "--capture-interval", "0.2", "--meters", "J1,Q1", "Q2"],
+         "2 meter(s) ['Q1', 'Q2'] are not junctions of"),
     ],
 )  # fmt: skip
 def test_bad_feed_options_are_named_before_any_work(
@@ -282,3 +285,72 @@ def test_a_network_epanet_solves_only_demand_driven_is_simulated_so_and_said(
     recorded = [w for w in meta["warnings"] if w.startswith("DemandDrivenWarning: ")]
     assert len(recorded) == 2  # the network's steady state and the transient model's
     assert f"pipe 'B' of {network} split at 0.5 pressure-driven" in recorded[1]
+
+
+def test_a_feed_carries_the_configurations_meters_or_the_ones_given(
+    paper15: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from burstloc.experiments.calibrate import calibrate
+
+    meters = ["N4", "N7", "1", "8"]
+    config = calibrate(paper15, capture_intervals=(0.2,), meters=meters).save(tmp_path / "c.json")
+    args = ["simulate", paper15, "--pipe", "P7", "--duration", "14", "--capture-interval", "0.2"]
+    args += ["--out", tmp_path / "out", "--quiet"]
+    every, mine, two = tmp_path / "every.csv", tmp_path / "mine.csv", tmp_path / "two.csv"
+    assert _run(*args, "--feed", every) == 0
+    assert f"wrote {15 * 70} readings of every junction to {every}" in capsys.readouterr().out
+    assert _run(*args, "--feed", mine, "--config", config) == 0
+    assert f"wrote {4 * 70} readings of 4 meters to {mine}" in capsys.readouterr().out
+    rows = [line.split(",") for line in mine.read_text().splitlines()[1:]]
+    assert [m for _, m, _ in rows[:4]] == meters and len(rows) == 4 * 70
+    full = {(t, m): v for t, m, v in (ln.split(",") for ln in every.read_text().splitlines()[1:])}
+    assert all(full[(t, m)] == v for t, m, v in rows)  # noiseless: the same readings
+    done = _monitor(paper15, config, mine)
+    assert done.returncode == 0, done.stderr
+    assert "unknown meter" not in done.stderr
+    decisions = [json.loads(line) for line in done.stdout.splitlines()]
+    assert [d["type"] for d in decisions] == ["decision"]
+    # --meters, in the order given (a text file of IDs), over the configuration's
+    listed = tmp_path / "two.txt"
+    listed.write_text("8\nN4  # by the tank\n")
+    assert _run(*args, "--feed", two, "--config", config, "--meters", listed) == 0
+    rows = [line.split(",") for line in two.read_text().splitlines()[1:]]
+    assert [m for _, m, _ in rows[:2]] == ["8", "N4"] and len(rows) == 2 * 70
+
+
+def test_a_burst_sized_by_its_flow(
+    paper15: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from burstloc.network import load_network
+    from burstloc.sim.scenarios.scenario import ScenarioResult
+
+    out = tmp_path / "out"
+    args = ["simulate", paper15, "--pipe", "P7", "--duration", "11", "--out", out, "--quiet"]
+    assert _run(*args, "--burst-flow", "5") == 0
+    said = capsys.readouterr().out
+    (path,) = out.glob("*.npz")
+    meta = ScenarioResult.load(path).metadata
+    assert meta["burst_flow_lps"] == pytest.approx(5.0)
+    pressure = meta["burst_pressure_m"]
+    assert meta["burst_coeff"] == pytest.approx(0.005 / np.sqrt(pressure))
+    assert said.startswith(
+        f"burst on P7: 5 L/s at the burst point's {pressure:.1f} m of pressure head before it "
+        f"opens (emitter coefficient {meta['burst_coeff']:.3g} m^3/s/m^0.5)"
+    )
+    # the pressure before the burst: the simulation's own pressure heads at the pipe's ends
+    # (its start node N5, its end node N7), halfway
+    result = ScenarioResult.load(path)
+    link = load_network(paper15).get_link("P7")
+    assert (link.start_node_name, link.end_node_name) == ("N5", "N7")
+    ends = [result.heads[0, list(result.junctions).index(n)] for n in ("N5", "N7")]
+    assert pressure == pytest.approx(sum(ends) / 2, abs=0.05)
+    # a coefficient: the flow it draws there is said and recorded too
+    assert _run(*args, "--burst-coeff", "0.01") == 0
+    flow = 10.0 * np.sqrt(pressure)
+    assert capsys.readouterr().out.startswith(f"burst on P7: {flow:.3g} L/s at the burst point's")
+    meta = ScenarioResult.load(path).metadata
+    assert meta["burst_flow_lps"] == pytest.approx(10.0 * np.sqrt(pressure), rel=1e-6)
+    assert _run(*args, "--burst-flow", "-1") == 2
+    assert "--burst-flow must be a positive number of L/s" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        _run(*args, "--burst-flow", "5", "--burst-coeff", "0.01")

@@ -42,8 +42,15 @@ def test_save_load_and_refuse_other_network(tiny_network: Path, tmp_path: Path) 
     other.write_text(tiny_network.read_text().replace("J4   0      2", "J4   0      3"))
     with pytest.raises(ConfigError, match="'t' was calibrated for network"):
         Calibration.load(path, network=other)
-    with pytest.raises(ConfigError, match=r"other meters \(missing \['J4'\]"):
+    with pytest.raises(ConfigError, match=r"other meters \(1 missing \['J4'\]\)"):
         back.check(tiny_network, ["J1", "J2", "J3"])
+    many = [f"X{i}" for i in range(9)]
+    with pytest.raises(ConfigError) as refused:
+        back.check(tiny_network, ["J1", "J2", "J3", "J4", *many])
+    assert "(9 extra ['X0', 'X1', 'X2', 'X3', 'X4'] and 4 more)" in str(refused.value)
+    assert "X5" not in str(refused.value)
+    with pytest.raises(ConfigError, match="the same meters in another order"):
+        back.check(tiny_network, ["J4", "J3", "J2", "J1"])
     path.write_text('{"format": "nope"}')
     with pytest.raises(ConfigError, match="not a burstloc configuration"):
         Calibration.load(path)

@@ -175,3 +175,72 @@ def test_region_placement_names_bad_input(paper15: Path) -> None:
         meter_ambiguity(paper15, [])
     with pytest.raises(NetworkError):
         meter_ambiguity(paper15, ["N4", "nowhere"])
+
+
+def test_kept_meters_stay_and_the_greedy_completes_them() -> None:
+    # A meter the utility owns mid-line: the two ends are still what separates the rest.
+    names = [f"n{i}" for i in range(5)]
+    pipes = [PipeGeometry(f"p{i}", names[i], names[i + 1], 500.0) for i in range(4)]
+    distances = {a: np.array([500.0 * abs(i - j) for j in range(5)]) for i, a in enumerate(names)}
+    assert region_meters(pipes, names, distances, 2, keep=["n2"]) == ("n0", "n2", "n4")
+    assert arrival_meters(pipes, names, distances, 2, keep=["n2"]) == ("n0", "n2", "n4")
+    # one end owned: the other end, whatever the peripheral start would have been
+    assert region_meters(pipes, names, distances, 1, keep=["n4"]) == ("n0", "n4")
+    assert arrival_meters(pipes, names, distances, 1, keep=["n4"]) == ("n0", "n4")
+    with pytest.raises(ConfigError, match="meter count must be between 1 and 3"):
+        region_meters(pipes, names, distances, 4, keep=["n1", "n2"])
+    with pytest.raises(ConfigError, match=r"kept meter\(s\) \['x'\] are not candidate"):
+        region_meters(pipes, names, distances, 1, keep=["x"])
+    with pytest.raises(ConfigError, match=r"kept meter\(s\) \['n1'\] listed twice"):
+        arrival_meters(pipes, names, distances, 1, keep=["n1", "n1"])
+
+
+@pytest.mark.parametrize("method", ["coverage", "arrival", "region"])
+def test_place_meters_keeps_the_owned_meters_on_a_network_file(paper15: Path, method: str) -> None:
+    placed = place_meters(paper15, 2, method=method, keep=("5", "N4"))
+    assert {"N4", "5"} <= set(placed.meters) and len(placed.meters) == 4
+    junctions = list(load_network(paper15).junction_name_list)
+    assert list(placed.meters) == sorted(placed.meters, key=junctions.index)
+    if method == "region":  # the added meters are the best the greedy finds beside the kept
+        pipes, _, distances = _geometry(paper15)
+        kept = _objective(pipes, junctions, distances, ("N4", "5"))
+        assert _objective(pipes, junctions, distances, placed.meters) < kept
+
+
+@pytest.mark.parametrize("method", ["arrival", "region"])
+def test_the_scaled_placement_keeps_the_owned_meters_among_its_candidates(
+    paper15: Path, method: str
+) -> None:
+    from burstloc.sim.placement.scaled import Scaling, spread_junctions
+
+    wn = load_network(paper15)
+    names, lengths = spread_junctions(wn, 6, first=("N4", "5"))
+    assert {"N4", "5"} <= set(names) and len(names) == 6
+    assert lengths["N4"][names.index("N4")] == 0.0
+    scaling = Scaling(above=5, candidates=6, pipes=10, points=50)
+    placed = place_meters(paper15, 2, method=method, keep=("N4", "5"), scaling=scaling)
+    assert {"N4", "5"} <= set(placed.meters) and len(placed.meters) == 4
+
+
+def test_the_ambiguity_profile_burst_by_burst_and_without_each_meter(paper15: Path) -> None:
+    from burstloc.sim.placement.region import ambiguity_profile
+
+    pipes, junctions, distances = _geometry(paper15)
+    meters = ("N4", "N7", "1", "8")
+    columns = [junctions.index(m) for m in meters]
+    mine = {n: d[columns] for n, d in distances.items()}
+    whole, without = ambiguity_profile(pipes, meters, mine, leave_out=True)
+    assert whole.mean == pytest.approx(ambiguous_length(pipes, meters, mine), rel=1e-9)
+    assert whole.weight.sum() == pytest.approx(1.0)
+    grid = ambiguity_grid(pipes, meters, mine)
+    # every burst is alike at least to its own segment, at most to the whole main
+    assert np.all(whole.length >= grid.length[grid.bursts] - 1e-9)
+    assert np.all(whole.length <= grid.length.sum() + 1e-6)
+    assert whole.share_within(np.inf) == pytest.approx(1.0)
+    assert min(whole.length) <= whole.median <= max(whole.length)
+    assert len(without) == 4
+    for i, profile in enumerate(without):
+        others = meters[:i] + meters[i + 1 :]
+        direct = _objective(pipes, junctions, distances, others)
+        assert profile.mean == pytest.approx(direct, rel=1e-9)
+        assert profile.mean >= whole.mean  # a meter never adds ambiguity

@@ -14,6 +14,7 @@ if TYPE_CHECKING:
 __all__ = [
     "DefaultsFormatter",
     "add_meters_file_option",
+    "add_meters_option",
     "add_min_pipe_length_option",
     "add_run_options",
     "add_solver_option",
@@ -95,14 +96,36 @@ def add_solver_option(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def add_meters_option(parser: argparse.ArgumentParser, help: str) -> None:
+    """``--meters IDS|FILE``: the metered junctions, as IDs or a file
+    (:func:`burstloc.sim.placement.methods.meter_list`); ``help`` says what the default is."""
+    parser.add_argument(
+        "--meters",
+        nargs="+",
+        default=None,
+        metavar="IDS|FILE",
+        help="the metered junctions: IDs separated by spaces or commas, or a file (a meter file "
+        "from `burstloc place`, or a text file of IDs, one or more a line, # comments); " + help,
+    )
+
+
 def meters_of(args: argparse.Namespace, network: str) -> tuple[str, ...] | None:
-    """The meters of ``--meters-file`` for ``network`` (ConfigError: another network or a bad
-    file), or ``None`` without the option."""
-    if args.meters_file is None:
+    """The meters of ``--meters IDS|FILE`` or ``--meters-file`` for ``network`` (ConfigError:
+    both given, another network, an unknown junction or a bad file), or ``None`` without
+    either option."""
+    listed = getattr(args, "meters", None)
+    path = getattr(args, "meters_file", None)
+    if listed is not None and path is not None:
+        raise ConfigError("give the meters once: --meters or --meters-file, not both")
+    if listed is not None:
+        from burstloc.sim.placement.methods import meter_list
+
+        return meter_list(listed, network)
+    if path is None:
         return None
     from burstloc.sim.placement.methods import MeterSet
 
-    return MeterSet.load(args.meters_file).check(network)
+    return MeterSet.load(path).check(network)
 
 
 def cache_of(args: argparse.Namespace) -> DiskCache | bool:

@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import time
 from typing import Any
 
 from burstloc._atomic import check_output
-from burstloc.cli._options import add_meters_file_option, meters_of
+from burstloc.cli._options import add_meters_file_option, add_meters_option, meters_of
 from burstloc.constants import (
     CAPTURE_INTERVALS,
     EXACT_SIGNATURES_UP_TO,
@@ -59,7 +60,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="target false alarms per meter per hour",
     )
     meters = parser.add_mutually_exclusive_group()
-    meters.add_argument("--meters", nargs="+", default=None, help="metered junctions (default all)")
+    add_meters_option(meters, "default: every junction")  # type: ignore[arg-type]
     add_meters_file_option(meters)  # type: ignore[arg-type]
     parser.add_argument("--name", default=None, help="the configuration's name")
     parser.add_argument(
@@ -89,15 +90,19 @@ def run(args: argparse.Namespace) -> int:
     from burstloc.experiments.calibrate import calibrate
 
     check_output(args.out)
+    began = time.perf_counter()
     config = calibrate(
         args.network,
         capture_intervals=args.capture_interval,
         noise_sigma=args.noise,
         false_alarm_rate=args.false_alarm_rate,
-        meters=args.meters if args.meters_file is None else meters_of(args, args.network),
+        meters=meters_of(args, args.network),
         name=args.name,
         signatures=args.signatures,
         workers=args.workers,
     )
-    print(f"wrote {config.save(args.out)}")
+    seconds = time.perf_counter() - began
+    for line in config.summary():
+        print(line)
+    print(f"calibrated in {seconds:.1f} s; wrote {config.save(args.out)}")
     return 0

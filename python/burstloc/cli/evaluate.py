@@ -10,6 +10,7 @@ from typing import Any
 from burstloc._atomic import check_output
 from burstloc.cli._options import (
     add_meters_file_option,
+    add_meters_option,
     add_min_pipe_length_option,
     add_run_options,
     add_solver_option,
@@ -113,6 +114,14 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "measured against this point",
     )
     parser.add_argument(
+        "--burst-flow",
+        type=float,
+        default=None,
+        metavar="L/S",
+        help="size every burst by its flow instead of --burst-coeff: each pipe's emitter "
+        "coefficient draws this many L/s at its burst point's pressure before it opens",
+    )
+    parser.add_argument(
         "--burst-coeff",
         type=float,
         default=None,
@@ -163,6 +172,11 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         metavar="DIR",
         help="write PNGs: per run, a map of every burst's true and named pipe, and the meters' "
         "traces with their alarms for the first pipe of --pipes",
+    )
+    add_meters_option(
+        parser,
+        "default: the configuration's with --config, else every junction (the ranking "
+        "localizers; the paper's rules read every junction)",
     )
     add_meters_file_option(parser)
     add_time_step_option(parser)
@@ -228,6 +242,8 @@ def run(args: argparse.Namespace) -> int:
         from burstloc.localize.config import Calibration
 
         config = Calibration.load(args.config)
+        if meters is None or set(meters) == set(config.meters):
+            meters = config.meters  # the meters it was calibrated for, in its order
     cache = cache_of(args)
     scenario = paper.SCENARIO
     if args.position is not None:
@@ -241,6 +257,15 @@ def run(args: argparse.Namespace) -> int:
         if not (math.isfinite(args.burst_coeff) and args.burst_coeff > 0):
             raise ConfigError(f"--burst-coeff must be a positive number, got {args.burst_coeff}")
         scenario = replace(scenario, burst_coeff=args.burst_coeff)
+    flow = None
+    if args.burst_flow is not None:
+        if args.burst_coeff is not None:
+            raise ConfigError("size the bursts once: --burst-flow or --burst-coeff, not both")
+        if not (math.isfinite(args.burst_flow) and args.burst_flow > 0):
+            raise ConfigError(
+                f"--burst-flow must be a positive number of L/s, got {args.burst_flow}"
+            )
+        flow = args.burst_flow / 1000.0
     if args.noise is not None and not (math.isfinite(args.noise) and args.noise >= 0):
         raise ConfigError(f"--noise must be a number of metres >= 0, got {args.noise}")
     if args.noise_seed < 0:
@@ -263,7 +288,9 @@ def run(args: argparse.Namespace) -> int:
         noise_seed=args.noise_seed,
         # each burst scored as it arrives unless the plots or the classifier read its heads
         keep_heads=bool(args.plot or args.events),
+        burst_flow=flow,
     )
+    print(_flows_line(ev.scenario["burst_flows_lps"]))
     print(report.format_tables(ev, True if args.paper_tables else None), end="")
     if args.events:
         _events(args, ev, cache)
@@ -277,6 +304,15 @@ def run(args: argparse.Namespace) -> int:
         for path in plot.write_plots(ev, args.plot):
             print(f"wrote {path}")
     return 0
+
+
+def _flows_line(flows: dict[str, float]) -> str:
+    """The bursts' nominal flows (L/s) in one line."""
+    ordered = sorted(flows.values())
+    return (
+        f"the bursts drew {ordered[0]:.3g}-{ordered[-1]:.3g} L/s (median "
+        f"{ordered[len(ordered) // 2]:.3g}) at their burst points' pressure before they opened"
+    )
 
 
 def _events(args: argparse.Namespace, ev: Any, cache: Any) -> None:

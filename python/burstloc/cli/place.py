@@ -3,11 +3,15 @@
 from __future__ import annotations
 
 import argparse
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from burstloc._atomic import check_output
 from burstloc.cli._options import add_run_options, check_run_options
-from burstloc.constants import WAVE_SPEED
+from burstloc.constants import SEARCHABLE, WAVE_SPEED
+from burstloc.exceptions import ConfigError
+
+if TYPE_CHECKING:
+    from burstloc.sim.placement.methods import MeterScores
 
 __all__ = ["add_parser", "run"]
 
@@ -19,28 +23,56 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
     parser = subparsers.add_parser(
         "place",
-        help="place K meters on a network's junctions; write a meter file",
+        help="place K meters on a network's junctions (or add K to the meters it has, or "
+        "score a set); write a meter file",
         description="Choose K junctions for pressure meters from the network model alone (no "
         "burst is simulated). 'arrival' (default): greedy separation of the wave arrival-time "
         "patterns of bursts on different pipes, for the arrival and fused localizers; "
-        "'region': the shortest expected search region, the meters that leave the least main "
-        "whose arrival pattern is within a capture interval of the burst point's; "
-        "'coverage': greedy separation of the steady-state burst signatures. On a network of "
-        f"more than {SCALE_JUNCTIONS} junctions, 'arrival' and 'region' choose among "
-        f"{DEFAULT_SCALING.candidates} junctions spread over the network and score a seeded "
-        "sample of burst points (an approximation, deterministic; smaller networks get the "
-        "exact greedy). Prints the meters, "
-        "their arrival separation (the share of candidate burst points whose arrival pattern "
-        "is at least one capture interval from every other pipe's) and their expected "
+        "'region' (default with --keep): the shortest expected search region, the meters "
+        "that leave the least main whose arrival pattern is within a capture interval of the "
+        "burst point's; 'coverage': greedy separation of the steady-state burst signatures. "
+        "With --keep the meters a network has stay and K more are added to them. On a network "
+        f"of more than {SCALE_JUNCTIONS} junctions, 'arrival' and 'region' choose among "
+        f"{DEFAULT_SCALING.candidates} junctions spread over the network (the kept meters among "
+        "them) and score a seeded sample of burst points (an approximation, deterministic; "
+        "smaller networks get the exact greedy). Prints the meters and their expected "
         "ambiguous main (the metres of main a search region cannot rule out from arrival "
-        "times, averaged over burst points: what 'region' minimises). The meter file "
-        "(JSON, format burstloc-meters/1) is accepted by `evaluate`, `calibrate` and `study` "
-        "with --meters-file.",
+        "times, over burst points weighted by pipe length: what 'region' minimises), its "
+        "median over the bursts and the share of bursts it leaves at most 1 km to search. "
+        "--score rates a given set on the same measures and ranks its meters by what each "
+        "adds. The meter file (JSON, format burstloc-meters/1) is accepted by `evaluate`, "
+        "`calibrate`, `simulate` and `study` (--meters-file, or --meters FILE).",
     )
     parser.add_argument("network", metavar="NETWORK.inp", help="EPANET INP file")
-    parser.add_argument("--meters", type=int, required=True, metavar="K", help="how many meters")
     parser.add_argument(
-        "--method", choices=PLACEMENT_METHODS, default="arrival", help="default: arrival"
+        "--meters",
+        type=int,
+        default=None,
+        metavar="K",
+        help="how many meters to place (with --keep: how many to add)",
+    )
+    parser.add_argument(
+        "--keep",
+        nargs="+",
+        default=None,
+        metavar="IDS|FILE",
+        help="the meters the network has (junction IDs, separated by spaces or commas, or a "
+        "file: a meter file or a text file of IDs): kept, and --meters K more added",
+    )
+    parser.add_argument(
+        "--score",
+        nargs="+",
+        default=None,
+        metavar="IDS|FILE",
+        help="rate this meter set (IDs or a file, as --keep) instead of placing: its expected "
+        "ambiguous main, and each meter's contribution (how much longer the search is "
+        "without it), least first",
+    )
+    parser.add_argument(
+        "--method",
+        choices=PLACEMENT_METHODS,
+        default=None,
+        help="default: arrival; with --keep: region",
     )
     parser.add_argument(
         "--capture-interval",
@@ -78,34 +110,56 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Handle ``burstloc place``: print the meters; write the file with ``--out``."""
-    from burstloc.sim.placement.methods import meter_scores, place_meters
+    from burstloc.sim.placement.methods import meter_list, place_meters, score_meters
 
+    if args.score is not None:
+        for option, value in [("--meters", args.meters), ("--keep", args.keep)]:
+            if value is not None:
+                raise ConfigError(f"--score rates a given set: {option} does not apply")
+        if args.out or args.compare:
+            raise ConfigError("--score rates a given set: --out and --compare do not apply")
+        return _score(args, meter_list(args.score, args.network))
+    if args.meters is None:
+        raise ConfigError("place needs --meters K (how many meters to place or add), or --score")
     if args.out:
         check_output(args.out)
     if args.compare:
+        if args.keep is not None:
+            raise ConfigError("--compare places from scratch: it does not take --keep")
         check_run_options(args)
+    keep = () if args.keep is None else meter_list(args.keep, args.network)
+    method = args.method or ("region" if keep else "arrival")
     placed = place_meters(
         args.network,
         args.meters,
-        method=args.method,
+        method=method,
         wave_speed=args.wave_speed,
         resolution=args.capture_interval,
+        keep=keep,
     )
-    print(
-        f"{len(placed.meters)} of {placed.junctions} junctions ({placed.method}): "
-        + " ".join(placed.meters)
-    )
-    told, ambiguous = meter_scores(
-        args.network, placed.meters, wave_speed=args.wave_speed, resolution=args.capture_interval
-    )
-    print(
-        f"arrival separation at {args.capture_interval:g} s: {100 * told:.0f} % of the candidate "
-        "burst points are at least one capture interval from every point of every other pipe"
-    )
-    print(
-        f"expected ambiguous main at {args.capture_interval:g} s: {ambiguous:.0f} m (the main a "
-        "search region cannot rule out from arrival times, averaged over burst points)"
-    )
+    timing = {"wave_speed": args.wave_speed, "resolution": args.capture_interval}
+    if keep:
+        added = [m for m in placed.meters if m not in set(keep)]
+        print(
+            f"{len(placed.meters)} of {placed.junctions} junctions ({placed.method}): the "
+            f"{len(keep)} kept and {len(added)} added: " + " ".join(added)
+        )
+        before = score_meters(args.network, keep, **timing)
+        after = score_meters(args.network, placed.meters, **timing)
+        print(_scores_line(f"the {len(keep)} kept", before))
+        print(_scores_line(f"with the {len(added)} added", after))
+        gain = before.ambiguous - after.ambiguous
+        share = 100 * gain / before.ambiguous if before.ambiguous > 0 else 0.0
+        print(
+            f"the {len(added)} added rule out {gain:.0f} m ({share:.0f} %) of the expected "
+            "ambiguous main (a model measure; `evaluate --meters` measures the search regions)"
+        )
+    else:
+        print(
+            f"{len(placed.meters)} of {placed.junctions} junctions ({placed.method}): "
+            + " ".join(placed.meters)
+        )
+        print(_scores_line("the meters", score_meters(args.network, placed.meters, **timing)))
     if args.out:
         print(f"wrote {placed.save(args.out)}")
     if args.compare:
@@ -122,4 +176,36 @@ def run(args: argparse.Namespace) -> int:
             progress=not args.quiet,
         )
         print(format_comparison(rows), end="")
+    return 0
+
+
+def _scores_line(what: str, scores: MeterScores) -> str:
+    """One line of a meter set's scores."""
+    return (
+        f"{what}: expected ambiguous main at {scores.resolution:g} s {scores.ambiguous:.0f} m, "
+        f"median burst {scores.ambiguity.median:.0f} m, {100 * scores.searchable:.0f} % of "
+        f"bursts within {SEARCHABLE / 1000:g} km (the main a search region cannot rule out "
+        "from arrival times)"
+    )
+
+
+def _score(args: argparse.Namespace, meters: tuple[str, ...]) -> int:
+    """``place --score``: the set's scores and its meters ranked by what each adds."""
+    from burstloc.sim.placement.methods import score_meters
+
+    scores = score_meters(
+        args.network,
+        meters,
+        wave_speed=args.wave_speed,
+        resolution=args.capture_interval,
+        each=True,
+    )
+    print(_scores_line(f"{len(meters)} meters", scores))
+    print("each meter's contribution: the expected ambiguous main without it, minus with it")
+    ranked = scores.contributions()
+    width = max(len(m) for m in meters)
+    for rank, (meter, gain) in enumerate(ranked, 1):
+        print(f"  {rank:>3}. {meter:<{width}}  +{max(gain, 0.0):.0f} m")
+    meter, gain = ranked[0]
+    print(f"adds least: {meter} (+{max(gain, 0.0):.0f} m of expected ambiguous main without it)")
     return 0

@@ -11,11 +11,13 @@ from typing import Any
 
 from burstloc._atomic import check_output
 from burstloc.cli._options import (
+    add_meters_option,
     add_min_pipe_length_option,
     add_run_options,
     add_solver_option,
     cache_of,
     check_run_options,
+    meters_of,
 )
 from burstloc.constants import SCENARIO_DURATION, WAVE_SPEED
 from burstloc.exceptions import ConfigError
@@ -93,12 +95,22 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument(
         "--duration", type=float, default=SCENARIO_DURATION, metavar="S", help="simulated, s"
     )
-    parser.add_argument(
+    size = parser.add_mutually_exclusive_group()
+    size.add_argument(
         "--burst-coeff",
         type=float,
         default=SCENARIO.burst_coeff,
         metavar="C",
         help="final emitter coefficient, m^3/s/m^0.5",
+    )
+    size.add_argument(
+        "--burst-flow",
+        type=float,
+        default=None,
+        metavar="L/S",
+        help="size each burst by its flow instead: the emitter coefficient that draws this "
+        "many L/s at the burst point's pressure before it opens (the flow falls as the "
+        "pressure does); printed and recorded in the NPZ metadata either way",
     )
     parser.add_argument(
         "--opening-time",
@@ -148,6 +160,18 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="--feed: the meters' Gaussian noise, standard deviation in m",
     )
     feed.add_argument("--seed", type=int, default=0, metavar="N", help="--feed: the noise's seed")
+    add_meters_option(
+        feed,  # type: ignore[arg-type]
+        "--feed writes these meters' readings only (default: the configuration's with "
+        "--config, else every junction)",
+    )
+    feed.add_argument(
+        "--config",
+        default=None,
+        metavar="PATH",
+        help="--feed: the configuration the monitor will run (from `burstloc calibrate`): the "
+        "feed carries its meters' readings; refused if made for another network",
+    )
     feed.add_argument(
         "--start",
         default=None,
@@ -170,6 +194,7 @@ def run(args: argparse.Namespace) -> int:
     check_output(args.out, directory=True)
     check_run_options(args)
     start = _check_feed(args)
+    args.feed_meters = _feed_meters(args)
     if args.event is not None:
         return _event(args, start)
     scenarios = scenario.burst_scenarios(
@@ -187,6 +212,14 @@ def run(args: argparse.Namespace) -> int:
     )
     if args.capture_interval is not None:  # a step fine enough for the readings asked for
         scenarios = with_capture_time_step(scenarios, args.capture_interval)
+    from burstloc.sim.signatures.burst_size import describe_sizes, sized_scenarios, with_size
+
+    flow = None if args.burst_flow is None else args.burst_flow / 1000.0
+    if flow is not None and not (math.isfinite(flow) and flow > 0):
+        raise ConfigError(f"--burst-flow must be a positive number of L/s, got {args.burst_flow}")
+    scenarios, sizes = sized_scenarios(scenarios, flow)
+    print(describe_sizes(sizes))
+    size_of = {s.pipe: size for s, size in zip(scenarios, sizes, strict=True)}
     cache = cache_of(args)
     report = simulate_many(
         scenarios,
@@ -202,6 +235,7 @@ def run(args: argparse.Namespace) -> int:
             if text.startswith("DemandDrivenWarning: ") and text not in said:
                 said.add(text)
                 print(f"burstloc: warning: {text.split(': ', 1)[1]}", file=sys.stderr)
+        result = with_size(result, size_of[result.pipe])
         if args.capture_interval is not None:
             result = result.resample(args.capture_interval, args.capture_phase)
         result.save(scenario.output_path(args.out, result))
@@ -218,7 +252,12 @@ def _check_feed(args: argparse.Namespace) -> datetime | None:
     from burstloc.readings import parse_start_time
 
     if args.feed is None:
-        for option, value, unset in [("--noise", args.noise, 0.0), ("--start", args.start, None)]:
+        for option, value, unset in [
+            ("--noise", args.noise, 0.0),
+            ("--start", args.start, None),
+            ("--meters", args.meters, None),
+            ("--config", args.config, None),
+        ]:
             if value != unset:
                 raise ConfigError(f"{option} applies to --feed FILE only")
         return None
@@ -242,12 +281,29 @@ def _check_feed(args: argparse.Namespace) -> datetime | None:
         raise ConfigError(f"--start: {exc}, got {args.start!r}") from None
 
 
+def _feed_meters(args: argparse.Namespace) -> tuple[str, ...] | None:
+    """The feed's meters: ``--meters``, else the ``--config``'s, else ``None`` (every
+    junction); checked against the network before any simulation."""
+    meters = meters_of(args, args.network)
+    if meters is None and args.config is not None:
+        from burstloc.localize.config import Calibration
+
+        config = Calibration.load(args.config)
+        config.check(args.network)
+        meters = config.meters
+    return meters
+
+
 def _write_feed(args: argparse.Namespace, result: Any, start: datetime | None) -> None:
     from burstloc.sim.scenarios.feed import write_feed
 
     if args.feed is not None:
-        path, count = write_feed(args.feed, result, noise=args.noise, seed=args.seed, start=start)
-        print(f"wrote {count} readings to {path} (a `burstloc monitor --readings` feed)")
+        meters = args.feed_meters
+        path, count = write_feed(
+            args.feed, result, noise=args.noise, seed=args.seed, start=start, meters=meters
+        )
+        which = "every junction" if meters is None else f"{len(meters)} meters"
+        print(f"wrote {count} readings of {which} to {path} (a `burstloc monitor --readings` feed)")
 
 
 def _event(args: argparse.Namespace, start: datetime | None) -> int:

@@ -107,6 +107,7 @@ def evaluate(
     noise: float | None = None,
     noise_seed: int = 0,
     keep_heads: bool = True,
+    burst_flow: float | None = None,
 ) -> Evaluation:
     """Run the experiment: simulate (cached), stream, localize and score every run.
 
@@ -139,15 +140,23 @@ def evaluate(
     a number adds that noise to every run's readings, ``0`` none. The JSON's ``scenario``
     records it.
 
+    ``burst_flow`` (m³/s) sizes every burst by its flow instead of the scenario's coefficient:
+    each pipe's coefficient draws it at its burst point's pressure before it opens
+    (:mod:`burstloc.sim.signatures.burst_size`). The JSON's ``scenario`` records each burst's
+    nominal flow either way (``burst_flows_lps``, per pipe) and, sized by flow,
+    ``burst_flow_lps`` and each pipe's coefficient (``burst_coeffs``) in place of
+    ``burst_coeff``.
+
     Raises:
         NetworkError: missing or malformed network, unknown pipe, a named pipe that is closed.
         ConfigError: no runs, bad phases, a time step that is not a positive number of seconds,
-            or a capture interval finer than the simulation's time step.
+            or a capture interval finer than the simulation's time step; a bad burst flow.
         SimulationError: a burst could not be simulated.
     """
     from burstloc import inp
     from burstloc import network as netmod
     from burstloc.sim.scenarios.scenario import burst_scenarios
+    from burstloc.sim.signatures.burst_size import sized_scenarios
     from burstloc.sim.transient import tsnet as simulate
     from burstloc.sim.transient.time_step import with_capture_time_step
 
@@ -187,6 +196,12 @@ def evaluate(
     params["time_step"] = time_step
     finest = min(spec.capture_interval for spec in runs)
     scenarios = with_capture_time_step(burst_scenarios(path, chosen, **params), finest)
+    scenarios, sizes = sized_scenarios(scenarios, burst_flow)
+    if burst_flow is not None:
+        del params["burst_coeff"]
+        params["burst_flow_lps"] = 1000.0 * burst_flow
+        params["burst_coeffs"] = {s.pipe: s.coeff for s in sizes}
+    params["burst_flows_lps"] = {s.pipe: round(s.flow_lps, 3) for s in sizes}
     ranked = [spec for spec in runs if spec.localizer != "paper"]
     scoring: dict[str, Any] = {}  # the ranking setup and sensors, made from the first result
 

@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from burstloc.constants import SEARCHABLE
 from burstloc.localize.region import REGION_LEVELS
 
 if TYPE_CHECKING:
@@ -52,9 +53,6 @@ __all__ = [
 
 NEAR = (100.0, 300.0)
 """Network distances (m) within which a named point counts as found."""
-
-SEARCHABLE = 1000.0
-"""Longest search region (m of main) a crew is sent to search."""
 
 
 @dataclass(frozen=True)

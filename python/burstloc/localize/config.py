@@ -41,6 +41,7 @@ from burstloc._validate import (
     check_string,
     read_json,
     read_json_npz,
+    some_names,
 )
 from burstloc.exceptions import ConfigError
 from burstloc.inp import check_meters, junction_names_in_file, network_hash
@@ -264,10 +265,49 @@ class Calibration:
         if meters is not None and tuple(meters) != self.meters:
             missing = sorted(set(self.meters) - set(meters))
             extra = sorted(set(meters) - set(self.meters))
-            detail = f"missing {missing}, extra {extra}" if missing or extra else "other order"
+            parts = [
+                f"{len(names)} {what} {some_names(names)}"
+                for what, names in (("missing", missing), ("extra", extra))
+                if names
+            ]
+            detail = ", ".join(parts) if parts else "the same meters in another order"
             raise ConfigError(
-                f"configuration {self.name!r} was calibrated for other meters ({detail})"
+                f"configuration {self.name!r} was calibrated for {len(self.meters)} other "
+                f"meters ({detail}); give its meters (--meters, default: the configuration's) "
+                "or calibrate for these"
             )
+
+    def summary(self) -> list[str]:
+        """What an engineer checks before deploying the configuration, one line each: its
+        meters and noise, per capture interval the range of the per-meter thresholds, the
+        false alarms to expect and how the burst signatures were computed."""
+        sigmas = sorted(self.noise_sigma.values())
+        noise = f"{sigmas[0]:g} m" if sigmas[0] == sigmas[-1] else f"{sigmas[0]:g}-{sigmas[-1]:g} m"
+        meters = len(self.meters)
+        lines = [
+            f"configuration {self.name!r}: {meters} meters of {self.network} ("
+            f"{some_names(list(self.meters))}), sensor noise {noise}, signatures "
+            f"{self.provenance.get('signatures', 'unknown')}"
+        ]
+
+        def span(values: Mapping[str, float]) -> str:
+            low, high = min(values.values()), max(values.values())
+            return f"{low:.3g} m" if math.isclose(low, high) else f"{low:.3g}-{high:.3g} m"
+
+        for item in self.intervals:
+            lines.append(
+                f"  capture {item.capture_interval:g} s: CUSUM threshold "
+                f"{span(item.cusum_threshold)} (drift {span(item.cusum_drift)}), Shewhart "
+                f"threshold {span(item.shewhart_threshold)}; localization every "
+                f"{item.localization_interval} readings"
+            )
+        per_day = self.false_alarm_rate * 24 * meters
+        lines.append(
+            f"expected false alarms: {self.false_alarm_rate:g} per meter per hour, "
+            f"{per_day:.3g} a day over the {meters} meters (single-meter alarms: the monitor "
+            "reports a burst only when two meters alarm)"
+        )
+        return lines
 
     def to_json(self) -> dict[str, Any]:
         """JSON-ready dictionary (see :data:`CALIBRATION_FORMAT`)."""

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections import Counter
 from collections.abc import Sequence
 from typing import Any
 
@@ -15,7 +16,7 @@ from numpy.typing import NDArray
 from burstloc.exceptions import ConfigError
 from burstloc.localize.arrival import PipeGeometry
 
-__all__ = ["check_meter_count", "check_timing", "meter_geometry"]
+__all__ = ["check_meter_count", "check_timing", "kept_indices", "meter_geometry"]
 
 
 def check_meter_count(count: Any, available: int) -> int:
@@ -23,6 +24,21 @@ def check_meter_count(count: Any, available: int) -> int:
     if isinstance(count, bool) or not isinstance(count, int) or not 1 <= count <= available:
         raise ConfigError(f"the meter count must be between 1 and {available}, got {count!r}")
     return count
+
+
+def kept_indices(keep: Sequence[str], junctions: Sequence[str]) -> list[int]:
+    """The positions in ``junctions`` of the meters ``keep`` (a set a network already has),
+    in the order given (ConfigError: one is not among ``junctions``, or is listed twice)."""
+    from burstloc._validate import some_names
+
+    index = {name: i for i, name in enumerate(junctions)}
+    unknown = [name for name in keep if name not in index]
+    if unknown:
+        raise ConfigError(f"kept meter(s) {some_names(unknown)} are not candidate junctions")
+    if len(set(keep)) != len(keep):
+        twice = sorted(name for name, n in Counter(keep).items() if n > 1)
+        raise ConfigError(f"kept meter(s) {some_names(twice)} listed twice")
+    return [index[name] for name in keep]
 
 
 def check_timing(wave_speed: float, resolution: float) -> None:

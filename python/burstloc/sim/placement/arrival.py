@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 from burstloc.constants import CANDIDATE_POSITIONS, WAVE_SPEED
 from burstloc.exceptions import ConfigError
 from burstloc.localize.arrival import PipeGeometry
-from burstloc.sim.placement._checks import check_meter_count, check_timing
+from burstloc.sim.placement._checks import check_meter_count, check_timing, kept_indices
 
 __all__ = ["ARRIVAL_POINTS", "MAX_EXACT", "arrival_meters", "arrival_separation"]
 
@@ -42,24 +42,31 @@ def arrival_meters(
     *,
     wave_speed: float = WAVE_SPEED,
     resolution: float = 0.2,
+    keep: Sequence[str] = (),
 ) -> tuple[str, ...]:
     """Choose ``count`` of ``junctions`` by greedy separation of arrival patterns (module
     docstring).
 
     ``node_distances[n][j]`` is the path length (m) from pipe end node ``n`` to
     ``junctions[j]`` (:func:`burstloc.sim.model.prepare.arrival_geometry` over every junction).
+    ``keep``: meters the network has already (junctions of ``junctions``): the greedy starts
+    from them and adds ``count`` more.
 
     Returns:
-        The chosen junctions, in ``junctions`` order.
+        The chosen junctions, kept ones included, in ``junctions`` order.
 
     Raises:
-        ConfigError: ``count`` out of range, or a bad wave speed or resolution.
+        ConfigError: ``count`` out of range, a kept meter not among ``junctions``, or a bad
+            wave speed or resolution.
     """
-    check_meter_count(count, len(junctions))
+    kept = kept_indices(keep, junctions)
+    check_meter_count(count, len(junctions) - len(kept))
     check_timing(wave_speed, resolution)
     travel = _travel(pipes, node_distances, ARRIVAL_POINTS, wave_speed)
     spread_of = travel.std(axis=0)
-    chosen = [int(np.argmax(spread_of))]  # peripheral: one meter separates nothing alone
+    # peripheral: one meter separates nothing alone
+    chosen = list(kept) or [int(np.argmax(spread_of))]
+    count += len(kept)
     while len(chosen) < count:
         chosen.append(_next_arrival_meter(travel, len(pipes), chosen, spread_of, resolution))
     return tuple(junctions[j] for j in sorted(chosen))

@@ -38,29 +38,54 @@ of the junctions and evaluate their objective on a seeded sample of burst points
 (:mod:`burstloc.sim.placement.scaled`): an approximation, deterministic; every smaller network
 gets the exact greedy above.
 
-How far a set of meters can go on arrivals alone: :func:`arrival_separation` (and
-:func:`meter_separation` on a network file, printed by ``burstloc place``) is the share of the
-candidate burst points whose arrival pattern at the meters is at least one capture interval from
-every point of every other pipe (4 of paper15's 15 junctions, N4 N7 1 8: 63 %; all 15: 82 %; 2 of
-Net1's 9, 13 31: 17 %).
+**The meters a utility has.** Every method takes ``keep``: the greedy starts from those
+meters instead of from none and adds ``count`` more (``burstloc place --keep IDS|FILE --meters
+K``; with ``--keep`` the command's default method is ``region``, the measure the search regions
+are scored by). A junction next to an owned meter is added only when the measure says it pays:
+two meters one short pipe apart hear almost the same arrival times, so each separates little of
+what the other does not; the greedy chooses one only where it splits a stretch of main the
+others leave alike (on L-TOWN the arrival method, which counts pipe pairs told apart rather than
+metres of main, did choose such neighbours: n347/n348/n349). :func:`score_meters` rates a given
+set on the ``region`` measure: the expected ambiguous main, its median over the bursts, the
+share of bursts it leaves at most :data:`~burstloc.constants.SEARCHABLE` m to search, and each
+meter's contribution (the expected ambiguous main without it minus with it: the meter that adds
+least is the first to move).
+
+How far a set of meters can go on arrivals alone, pipe by pipe: :func:`arrival_separation` (and
+:func:`meter_separation` on a network file) is the share of the candidate burst points whose
+arrival pattern at the meters is at least one capture interval from every point of every other
+pipe (4 of paper15's 15 junctions, N4 N7 1 8: 63 %; all 15: 82 %; 2 of Net1's 9, 13 31: 17 %).
+It is 0 % on a network of short pipes whatever the meters (L-TOWN: a pipe's candidate points
+lie within half a capture interval's travel, 120 m at 0.2 s, of another pipe's), which is why
+``burstloc place`` prints the ``region`` measure instead.
 
 :func:`place_meters` runs either on a network file and returns a :class:`MeterSet`, which saves
 as the documented JSON meter file (:data:`METERS_FORMAT`, read by ``burstloc evaluate``,
-``calibrate`` and ``study`` with ``--meters-file``)::
+``calibrate``, ``simulate`` and ``study`` with ``--meters-file`` or ``--meters FILE``)::
 
     {
       "format": "burstloc-meters/1",
       "network": "networks/paper15.inp",      # informative
       "network_hash": "sha256:...",           # the INP file's SHA-256: checked on use
-      "method": "arrival",                    # or "coverage", "region", "manual"
-      "meters": ["2", "7", "11", "14"],       # junction IDs, in the network's order
+      "method": "arrival",                    # "coverage", "arrival", "region" or "manual"
+      "meters": ["2", "7", "11", "14"],       # junction IDs
       "junctions": 15                         # junctions the network has
     }
+
+``method`` says how the meters were chosen: by one of :data:`PLACEMENT_METHODS`, or ``"manual"``
+for a set written by hand (a utility's own meters). A hand-made set needs no JSON at all:
+wherever a command takes ``--meters IDS|FILE`` (and ``place --keep`` / ``--score``) it takes the
+IDs themselves (``--meters n1,n4,n31``) or a text file of them (:func:`meter_list`)::
+
+    # BattLeDIM's pressure sensors on L-TOWN
+    n1, n4, n31
+    n54 n105   # any mix of commas, spaces and lines
 """
 
 from __future__ import annotations
 
 import os
+from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -69,26 +94,41 @@ from typing import Any
 import numpy as np
 
 from burstloc._atomic import write_json
-from burstloc._validate import Fields, check_count, check_names, check_string, read_json
-from burstloc.constants import WAVE_SPEED
+from burstloc._validate import (
+    Fields,
+    check_count,
+    check_names,
+    check_string,
+    read_json,
+    some_names,
+)
+from burstloc.constants import SEARCHABLE, WAVE_SPEED
 from burstloc.exceptions import ConfigError
 from burstloc.inp import network_hash
-from burstloc.sim.placement._checks import check_meter_count, meter_geometry
+from burstloc.sim.placement._checks import check_meter_count, kept_indices, meter_geometry
 from burstloc.sim.placement.arrival import ARRIVAL_POINTS, arrival_meters, arrival_separation
-from burstloc.sim.placement.region import ambiguous_length, region_meters
+from burstloc.sim.placement.region import (
+    AmbiguityProfile,
+    ambiguity_profile,
+    ambiguous_length,
+    region_meters,
+)
 from burstloc.sim.placement.scaled import DEFAULT_SCALING, Scaling, reduced_problem
 
 __all__ = [
     "ARRIVAL_POINTS",
     "METERS_FORMAT",
     "PLACEMENT_METHODS",
+    "MeterScores",
     "MeterSet",
     "arrival_meters",
     "arrival_separation",
     "coverage_meters",
+    "meter_list",
     "meter_scores",
     "meter_separation",
     "place_meters",
+    "score_meters",
 ]
 
 METERS_FORMAT = "burstloc-meters/1"
@@ -104,25 +144,26 @@ MAX_METERS = 10_000
 MAX_JUNCTIONS = 1_000_000
 
 
-def coverage_meters(signatures: Any, count: int) -> tuple[str, ...]:
+def coverage_meters(signatures: Any, count: int, keep: Sequence[str] = ()) -> tuple[str, ...]:
     """Choose ``count`` meters by greedy coverage of burst signatures (module docstring).
 
     Args:
         signatures: a :class:`burstloc.localize.signature.SignatureSet` over the candidate
             junctions.
-        count: how many meters, 1..number of candidates.
+        count: how many meters to add, 1..number of candidates not kept.
+        keep: meters the network has already: the greedy starts from them.
 
     Returns:
-        The chosen junctions, in the signature set's meter order.
+        The chosen junctions, kept ones included, in the signature set's meter order.
 
     Raises:
-        ConfigError: ``count`` out of range.
+        ConfigError: ``count`` out of range, a kept meter that is not a candidate.
     """
     meters = list(signatures.meters)
-    check_meter_count(count, len(meters))
+    chosen = kept_indices(keep, meters)
+    check_meter_count(count, len(meters) - len(chosen))
     matrix = np.abs(np.asarray(signatures.matrix, dtype=np.float64))
     strength = matrix.sum(axis=0)
-    chosen: list[int] = []
     pairs = np.triu_indices(matrix.shape[0], k=1)
     for _ in range(count):
         keys = []
@@ -216,15 +257,19 @@ def place_meters(
     wave_speed: float = WAVE_SPEED,
     resolution: float = 0.2,
     scaling: Scaling = DEFAULT_SCALING,
+    keep: Sequence[str] = (),
 ) -> MeterSet:
     """Place ``count`` meters on the junctions of the INP file ``network`` by ``method``
     (module docstring); ``resolution`` (s) is the ``arrival`` and ``region`` methods' capture
     interval. On a network of more junctions than ``scaling.above`` those two methods run on
-    a reduced problem (:mod:`burstloc.sim.placement.scaled`).
+    a reduced problem (:mod:`burstloc.sim.placement.scaled`; the kept meters among its
+    candidates). ``keep``: meters the network has already; each method's greedy starts from
+    them and adds ``count`` more (the set returned holds both).
 
     Raises:
         NetworkError: missing or malformed network.
-        ConfigError: unknown method, ``count`` out of range.
+        ConfigError: unknown method, ``count`` out of range, a kept meter that is not a
+            junction.
     """
     from burstloc.network import load_network
     from burstloc.sim.model.prepare import arrival_geometry
@@ -234,11 +279,13 @@ def place_meters(
         raise ConfigError(f"unknown placement method {method!r}; use one of {PLACEMENT_METHODS}")
     wn = load_network(network)
     junctions = list(wn.junction_name_list)
-    check_meter_count(count, len(junctions))
+    keep = tuple(keep)
+    kept_indices(keep, junctions)
+    check_meter_count(count, len(junctions) - len(keep))
     if method == "coverage":
-        meters = coverage_meters(cached_signatures(network, junctions), count)
+        meters = coverage_meters(cached_signatures(network, junctions), count, keep)
     elif scaling.applies(len(junctions)):
-        problem = reduced_problem(wn, count, scaling)
+        problem = reduced_problem(wn, count, scaling, keep)
         if method == "arrival":
             meters = arrival_meters(
                 problem.arrival_pipes,
@@ -247,6 +294,7 @@ def place_meters(
                 count,
                 wave_speed=wave_speed,
                 resolution=resolution,
+                keep=keep,
             )
         else:
             meters = region_meters(
@@ -258,6 +306,7 @@ def place_meters(
                 resolution=resolution,
                 points=scaling.points,
                 seed=scaling.seed,
+                keep=keep,
             )
     else:
         pipes, distances = arrival_geometry(wn, junctions)
@@ -265,8 +314,16 @@ def place_meters(
         if method == "region":
             place = region_meters
         meters = place(
-            pipes, junctions, distances, count, wave_speed=wave_speed, resolution=resolution
+            pipes,
+            junctions,
+            distances,
+            count,
+            wave_speed=wave_speed,
+            resolution=resolution,
+            keep=keep,
         )
+    order = {name: i for i, name in enumerate(junctions)}
+    meters = tuple(sorted(meters, key=order.__getitem__))  # the network's order
     return MeterSet(os.fspath(network), network_hash(network), method, meters, len(junctions))
 
 
@@ -308,3 +365,110 @@ def meter_scores(
         pipes, tuple(meters), distances, wave_speed=wave_speed, resolution=resolution
     )
     return told, ambiguous
+
+
+@dataclass(frozen=True)
+class MeterScores:
+    """How far a meter set narrows a burst down from arrival times alone, on the measure the
+    ``region`` method minimises (:func:`score_meters`; ``burstloc place`` prints it).
+
+    Attributes:
+        meters: the meters scored.
+        resolution: the capture interval (s) the scores are for.
+        ambiguity: per burst point, the metres of main a search region cannot rule out from
+            the arrivals (:class:`~burstloc.sim.placement.region.AmbiguityProfile`).
+        without: with ``each``, the expected ambiguous main (m) without each meter in turn,
+            in ``meters`` order (empty otherwise).
+    """
+
+    meters: tuple[str, ...]
+    resolution: float
+    ambiguity: AmbiguityProfile
+    without: tuple[float, ...] = ()
+
+    @property
+    def ambiguous(self) -> float:
+        """The expected ambiguous main (m): what the ``region`` method minimises."""
+        return self.ambiguity.mean
+
+    @property
+    def searchable(self) -> float:
+        """The share of bursts whose ambiguous main is at most
+        :data:`~burstloc.constants.SEARCHABLE` m (a search a crew is sent on)."""
+        return self.ambiguity.share_within(SEARCHABLE)
+
+    def contributions(self) -> list[tuple[str, float]]:
+        """Per meter, the metres of expected ambiguous main it alone rules out (how much
+        longer the search would be without it), least first (ties: the network's order)."""
+        gains = [(m, w - self.ambiguous) for m, w in zip(self.meters, self.without, strict=True)]
+        return sorted(gains, key=lambda item: item[1])
+
+
+def score_meters(
+    network: str | os.PathLike[str],
+    meters: Sequence[str],
+    *,
+    wave_speed: float = WAVE_SPEED,
+    resolution: float = 0.2,
+    each: bool = False,
+) -> MeterScores:
+    """:class:`MeterScores` of ``meters`` on the INP file ``network``; with ``each`` also
+    every meter's contribution (the set scored without it).
+
+    Raises:
+        NetworkError: missing or malformed network, or a meter that is not a junction.
+        ConfigError: no meter, a bad wave speed or resolution.
+    """
+    pipes, distances = meter_geometry(network, meters)
+    whole, without = ambiguity_profile(
+        pipes,
+        tuple(meters),
+        distances,
+        wave_speed=wave_speed,
+        resolution=resolution,
+        leave_out=each,
+    )
+    return MeterScores(tuple(meters), resolution, whole, tuple(p.mean for p in without))
+
+
+def meter_list(values: Sequence[str], network: str | os.PathLike[str]) -> tuple[str, ...]:
+    """The meters ``values`` name on the INP file ``network``, in the order given.
+
+    ``values`` are junction IDs (each may hold several, separated by commas), or one file: a
+    meter file (:data:`METERS_FORMAT`, refused if made for another network) or a text file of
+    junction IDs separated by spaces, commas or new lines (``#`` starts a comment). What a
+    utility's list of its own meters looks like, e.g. ``n1,n4,n31`` or ``owned.txt``.
+
+    Raises:
+        ConfigError: no ID, an ID that is not a junction of ``network`` (the first
+            :data:`~burstloc._validate.LISTED` named, the rest counted) or listed twice, an
+            unreadable or malformed file.
+        NetworkError: missing or malformed network.
+    """
+    from burstloc.inp import check_meters, junction_names_in_file
+
+    if len(values) == 1 and os.path.isfile(values[0]):
+        names = _meters_in_file(values[0], network)
+        source = f"meter list {values[0]}"
+    else:
+        names = [n for value in values for n in value.split(",") if n]
+        source = "the meter list"
+    if not names:
+        raise ConfigError(f"{source} names no meter")
+    check_meters(names, junction_names_in_file(network), network, ConfigError)
+    twice = sorted(n for n, c in Counter(names).items() if c > 1)
+    if twice:
+        raise ConfigError(f"{source} lists {some_names(twice)} more than once")
+    return tuple(names)
+
+
+def _meters_in_file(path: str, network: str | os.PathLike[str]) -> list[str]:
+    """The junction IDs of a meter file or of a text file of IDs (:func:`meter_list`)."""
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"cannot read meter list {path}: {exc}") from None
+    if text.lstrip().startswith("{"):
+        return list(MeterSet.load(path).check(network))
+    words = (line.split("#", 1)[0].replace(",", " ").split() for line in text.splitlines())
+    return [w for line in words for w in line]

@@ -50,7 +50,12 @@ from burstloc.constants import WAVE_SPEED
 from burstloc.exceptions import ConfigError
 from burstloc.localize.arrival import ArrivalLocalizer, PipeGeometry
 from burstloc.localize.region import GRID_STEP, RegionGrid
-from burstloc.sim.placement._checks import check_meter_count, check_timing, meter_geometry
+from burstloc.sim.placement._checks import (
+    check_meter_count,
+    check_timing,
+    kept_indices,
+    meter_geometry,
+)
 
 __all__ = [
     "BURST_SAMPLES",
@@ -58,7 +63,9 @@ __all__ = [
     "SAMPLE_SEED",
     "SWAP_PASSES",
     "AmbiguityGrid",
+    "AmbiguityProfile",
     "ambiguity_grid",
+    "ambiguity_profile",
     "ambiguous_length",
     "meter_ambiguity",
     "region_meters",
@@ -214,14 +221,19 @@ def _best(gain: NDArray[np.float64], spread_of: NDArray[np.float64], candidates:
 
 
 def _swap_pass(
-    grid: AmbiguityGrid, chosen: list[int], spread_of: NDArray[np.float64], resolution: float
+    grid: AmbiguityGrid,
+    chosen: list[int],
+    spread_of: NDArray[np.float64],
+    resolution: float,
+    fixed: int = 0,
 ) -> bool:
-    """Each meter of ``chosen`` in turn (in the order chosen) replaced by the junction that
-    separates the most given the others, if it beats the meter by more than rounding; whether
-    any was replaced. ``chosen`` is changed in place."""
+    """Each meter of ``chosen`` in turn (in the order chosen; the first ``fixed``, meters kept
+    by the caller, never) replaced by the junction that separates the most given the others,
+    if it beats the meter by more than rounding; whether any was replaced. ``chosen`` is
+    changed in place."""
     everyone = np.arange(grid.travel.shape[1], dtype=np.int64)
     changed = False
-    for i in range(len(chosen)):
+    for i in range(fixed, len(chosen)):
         others = chosen[:i] + chosen[i + 1 :]
         candidates = np.setdiff1d(everyone, others)
         gain = _Pairs(grid, others, resolution).separated(grid.travel, candidates)
@@ -244,18 +256,23 @@ def region_meters(
     samples: int = BURST_SAMPLES,
     points: int | None = None,
     seed: int = SAMPLE_SEED,
+    keep: Sequence[str] = (),
 ) -> tuple[str, ...]:
     """Choose ``count`` of ``junctions`` that minimise the expected ambiguous main (module
     docstring); ``node_distances``, ``points`` and ``seed`` as for :func:`ambiguity_grid`.
 
+    ``keep``: meters the network has already (junctions of ``junctions``): the greedy starts
+    from them and adds ``count`` more; the swaps move the added meters only.
+
     Returns:
-        The chosen junctions, in ``junctions`` order.
+        The chosen junctions, kept ones included, in ``junctions`` order.
 
     Raises:
-        ConfigError: ``count`` out of range, or a bad wave speed, resolution, step, sample or
-            point count.
+        ConfigError: ``count`` out of range, a kept meter not among ``junctions``, or a bad
+            wave speed, resolution, step, sample or point count.
     """
-    check_meter_count(count, len(junctions))
+    kept = kept_indices(keep, junctions)
+    check_meter_count(count, len(junctions) - len(kept))
     check_timing(wave_speed, resolution)
     grid = ambiguity_grid(
         pipes,
@@ -270,16 +287,17 @@ def region_meters(
     travel = grid.travel
     mean = grid.length @ travel / grid.length.sum()
     spread_of = np.sqrt(grid.length @ (travel - mean) ** 2 / grid.length.sum())
-    chosen = [int(np.argmax(spread_of))]  # peripheral: one meter separates nothing alone
+    # peripheral: one meter separates nothing alone
+    chosen = list(kept) or [int(np.argmax(spread_of))]
     pairs = _Pairs(grid, chosen, resolution)
     everyone = np.arange(travel.shape[1], dtype=np.int64)
-    while len(chosen) < count:
+    while len(chosen) < count + len(kept):
         candidates = np.setdiff1d(everyone, chosen)
         j = _best(pairs.separated(travel, candidates), spread_of, candidates)
         chosen.append(j)
         pairs.add(travel, j)
     for _ in range(SWAP_PASSES):
-        if not _swap_pass(grid, chosen, spread_of, resolution):
+        if not _swap_pass(grid, chosen, spread_of, resolution, fixed=len(kept)):
             break
     return tuple(junctions[j] for j in sorted(chosen))
 
@@ -318,6 +336,79 @@ def ambiguous_length(
         block = replace(grid, bursts=grid.bursts[part], weight=grid.weight[part])
         total += _Pairs(block, range(len(meters)), resolution).ambiguous()
     return total
+
+
+@dataclass(frozen=True)
+class AmbiguityProfile:
+    """A meter set's ambiguous main burst by burst (:func:`ambiguity_profile`): ``length[i]``
+    (m) of main whose arrival pattern is within a capture interval of burst point ``i``'s
+    (its own segment included), ``weight[i]`` the burst point's weight (summing to 1)."""
+
+    length: NDArray[np.float64]
+    weight: NDArray[np.float64]
+
+    @property
+    def mean(self) -> float:
+        """The expected ambiguous main (m): :func:`ambiguous_length`."""
+        return float(self.weight @ self.length)
+
+    @property
+    def median(self) -> float:
+        """The weighted median of the bursts' ambiguous main (m)."""
+        order = np.argsort(self.length, kind="stable")
+        cumulative = np.cumsum(self.weight[order])
+        return float(self.length[order][np.searchsorted(cumulative, 0.5 * cumulative[-1])])
+
+    def share_within(self, limit: float) -> float:
+        """The weighted share of bursts whose ambiguous main is at most ``limit`` m."""
+        return float(self.weight[self.length <= limit].sum())
+
+
+def _profile(grid: AmbiguityGrid, columns: Sequence[int], resolution: float) -> NDArray:
+    """Per burst of ``grid``, the metres of main still alike to the meters ``columns`` (columns
+    of ``grid.travel``), summed over blocks of bursts (bounded memory)."""
+    out = np.zeros(grid.bursts.size)
+    bursts = max(1, _PAIRS // grid.length.size)
+    for lo in range(0, grid.bursts.size, bursts):
+        part = slice(lo, lo + bursts)
+        block = replace(grid, bursts=grid.bursts[part], weight=grid.weight[part])
+        pairs = _Pairs(block, columns, resolution)
+        where = np.searchsorted(block.bursts, pairs.b)  # bursts are sorted, unique
+        out[part] = np.bincount(where, grid.length[pairs.q], minlength=block.bursts.size)
+    return out
+
+
+def ambiguity_profile(
+    pipes: Sequence[PipeGeometry],
+    meters: Sequence[str],
+    node_distances: dict[str, NDArray[np.float64]],
+    *,
+    wave_speed: float = WAVE_SPEED,
+    resolution: float = 0.2,
+    leave_out: bool = False,
+) -> tuple[AmbiguityProfile, tuple[AmbiguityProfile, ...]]:
+    """The ambiguous main of ``meters`` burst by burst, on the points and bursts of
+    :func:`ambiguous_length` (its mean is that function's value), and with ``leave_out`` the
+    same without each meter in turn (one profile per meter, in ``meters`` order; a meter whose
+    absence leaves the mean unchanged adds nothing the others do not give).
+
+    Raises:
+        ConfigError: no meter, or a bad wave speed or resolution.
+    """
+    if not meters:
+        raise ConfigError("no meters to separate bursts with")
+    check_timing(wave_speed, resolution)
+    grid = ambiguity_grid(pipes, meters, node_distances, wave_speed=wave_speed)
+    weight = grid.weight
+    every = list(range(len(meters)))
+    whole = AmbiguityProfile(_profile(grid, every, resolution), weight)
+    if not leave_out:
+        return whole, ()
+    without = tuple(
+        AmbiguityProfile(_profile(grid, every[:i] + every[i + 1 :], resolution), weight)
+        for i in every
+    )
+    return whole, without
 
 
 def meter_ambiguity(

@@ -43,7 +43,7 @@ from numpy.typing import NDArray
 
 from burstloc.exceptions import ConfigError
 from burstloc.localize.arrival import PipeGeometry
-from burstloc.sim.placement._checks import check_meter_count
+from burstloc.sim.placement._checks import check_meter_count, kept_indices
 
 if TYPE_CHECKING:
     from wntr.network import WaterNetworkModel
@@ -118,14 +118,17 @@ def _node_graph(wn: WaterNetworkModel) -> tuple[list[str], object]:
 
 
 def spread_junctions(
-    wn: WaterNetworkModel, count: int
+    wn: WaterNetworkModel, count: int, first: Sequence[str] = ()
 ) -> tuple[list[str], dict[str, NDArray[np.float64]]]:
     """``count`` junctions spread by farthest-point sampling on path length (module
     docstring), in the network's junction order, and the path lengths (m) from every node to
     them (``inf`` without a path): ``lengths[node][j]`` to the ``j``-th chosen junction.
+    ``first``: junctions taken before the sampling starts (a network's own meters; the others
+    are then spread away from them); ``count`` includes them.
 
     Raises:
-        ConfigError: ``count`` is not an integer in ``[1, junctions]``.
+        ConfigError: ``count`` is not an integer in ``[1, junctions]``, or below the number of
+            ``first``; one of ``first`` is not a junction.
     """
     from scipy.sparse.csgraph import dijkstra
 
@@ -137,13 +140,21 @@ def spread_junctions(
     nodes, matrix = _node_graph(wn)
     index = {n: i for i, n in enumerate(nodes)}
     columns = np.array([index[j] for j in junctions], dtype=np.int64)
-    first = dijkstra(matrix, directed=False, indices=int(columns[0]))[columns]
-    reached = np.isfinite(first)
-    start = int(np.argmax(np.where(reached, first, -1.0)))
+    start = dijkstra(matrix, directed=False, indices=int(columns[0]))[columns]
+    reached = np.isfinite(start)
+    seeds = kept_indices(first, junctions) or [int(np.argmax(np.where(reached, start, -1.0)))]
+    if count < len(seeds):
+        raise ConfigError(f"the candidate count {count} is below the {len(seeds)} kept meters")
     chosen: list[int] = []
     rows: list[NDArray[np.float64]] = []
     nearest = np.full(len(junctions), math.inf)
-    pick = start
+    for pick in seeds[:-1]:
+        chosen.append(pick)
+        row = np.asarray(dijkstra(matrix, directed=False, indices=int(columns[pick])))
+        rows.append(row)
+        nearest = np.minimum(nearest, row[columns])
+    nearest[seeds[:-1]] = -1.0
+    pick = seeds[-1]
     while True:
         chosen.append(pick)
         row = np.asarray(dijkstra(matrix, directed=False, indices=int(columns[pick])))
@@ -160,11 +171,11 @@ def spread_junctions(
 
 
 def candidate_geometry(
-    wn: WaterNetworkModel, count: int
+    wn: WaterNetworkModel, count: int, first: Sequence[str] = ()
 ) -> tuple[list[PipeGeometry], list[str], dict[str, NDArray[np.float64]]]:
     """Every pipe's geometry (:func:`burstloc.sim.model.prepare.pipe_geometry`), ``count`` spread
-    candidate junctions (:func:`spread_junctions`) and the path lengths from every pipe end
-    node to them: the arguments of the exact placements, on the candidates.
+    candidate junctions (:func:`spread_junctions`, ``first`` among them) and the path lengths
+    from every pipe end node to them: the arguments of the exact placements, on the candidates.
 
     Raises:
         ConfigError: ``count`` out of range.
@@ -172,7 +183,7 @@ def candidate_geometry(
     from burstloc.sim.model.prepare import pipe_geometry
 
     pipes = pipe_geometry(wn)
-    names, lengths = spread_junctions(wn, count)
+    names, lengths = spread_junctions(wn, count, first)
     ends = dict.fromkeys(n for p in pipes for n in (p.start, p.end))
     return pipes, names, {n: lengths[n] for n in ends}
 
@@ -200,15 +211,20 @@ class ReducedProblem:
 
 
 def reduced_problem(
-    wn: WaterNetworkModel, count: int, scaling: Scaling = DEFAULT_SCALING
+    wn: WaterNetworkModel,
+    count: int,
+    scaling: Scaling = DEFAULT_SCALING,
+    keep: Sequence[str] = (),
 ) -> ReducedProblem:
     """The reduced problem for ``count`` meters on the WNTR model ``wn``: ``scaling.candidates``
     candidates (at least ``count``, at most every junction), ``scaling.pipes`` sampled pipes.
+    ``keep``: meters the network has, always candidates (``count`` more are to be added).
 
     Raises:
-        ConfigError: ``count`` out of range.
+        ConfigError: ``count`` out of range, a kept meter that is not a junction.
     """
     junctions = wn.num_junctions
-    check_meter_count(count, junctions)
-    pipes, names, distances = candidate_geometry(wn, min(junctions, max(scaling.candidates, count)))
+    check_meter_count(count, junctions - len(keep))
+    wanted = min(junctions, max(scaling.candidates, count + len(keep)))
+    pipes, names, distances = candidate_geometry(wn, wanted, keep)
     return ReducedProblem(pipes, names, distances, _sample(pipes, scaling.pipes, scaling.seed))

@@ -2,7 +2,8 @@
 
 ``burstloc simulate ... --feed FILE`` writes one: a header line ``timestamp,meter,value``
 (:data:`burstloc.readings.CSV_HEADER`), then one line per reading, every meter's reading of a
-capture tick before the next tick's, meters in the network's junction order. ``timestamp`` is
+capture tick before the next tick's, meters in the network's junction order (or the order of
+the meters given: a utility's own meters only). ``timestamp`` is
 seconds from the simulation's start, or with a start time the ISO 8601 time (its UTC offset
 kept; ``Z`` for UTC); ``value`` is the pressure head in metres (0.1 mm), with seeded Gaussian
 noise when asked (:class:`burstloc.sim.scenarios.sensors.SensorModel`: the same seed and pipe, the
@@ -15,6 +16,7 @@ Pure NumPy: no simulator import.
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from datetime import datetime
 from pathlib import Path
 
@@ -33,6 +35,7 @@ def feed_text(
     noise: float = 0.0,
     seed: int = 0,
     start: datetime | None = None,
+    meters: Sequence[str] | None = None,
 ) -> str:
     """The feed of ``result``, captured readings (module docstring), as CSV text.
 
@@ -42,15 +45,19 @@ def feed_text(
         seed: the noise's seed (drawn per pipe or event, as in the study).
         start: the wall-clock time of the simulation's start (ISO timestamps), or ``None``
             (seconds from the simulation's start).
+        meters: the junctions that carry meters, in the feed's order (default: every
+            junction of ``result``, in the network's order).
 
     Raises:
         ConfigError: ``result`` is on the simulation's grid, not a capture interval's; a bad
-            ``noise`` or ``seed``.
+            ``noise`` or ``seed``; no meter or one listed twice.
+        NetworkError: a meter that is not a junction of ``result``.
     """
     if result.metadata.get("capture_interval") is None:
         raise ConfigError("a feed needs readings at a capture interval (--capture-interval S)")
     key = str(result.metadata.get("pipe") or result.metadata.get("label") or "")
-    meters, values = SensorModel(noise_sigma=noise, seed=seed).apply(
+    chosen = None if meters is None else tuple(meters)
+    meters, values = SensorModel(noise_sigma=noise, seed=seed, meters=chosen).apply(
         result.junctions, result.heads, key=key
     )
     lines = [",".join(CSV_HEADER)]
@@ -67,8 +74,9 @@ def write_feed(
     noise: float = 0.0,
     seed: int = 0,
     start: datetime | None = None,
+    meters: Sequence[str] | None = None,
 ) -> tuple[Path, int]:
     """Write :func:`feed_text` to ``path`` (atomically); return the path and the number of
     readings written."""
-    text = feed_text(result, noise=noise, seed=seed, start=start)
+    text = feed_text(result, noise=noise, seed=seed, start=start, meters=meters)
     return write_text(path, text), text.count("\n") - 1

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from burstloc._validate import some_names
 from burstloc.exceptions import ConfigError, InputError, NetworkError
 
 __all__ = ["SensorModel", "choose_meters"]
@@ -100,7 +101,10 @@ class SensorModel:
             column = {name: i for i, name in enumerate(names)}
             unknown = [m for m in self.meters if m not in column]
             if unknown:
-                raise NetworkError(f"unknown meter junction(s) {unknown}; known: {names}")
+                raise NetworkError(
+                    f"{len(unknown)} unknown meter junction(s) {some_names(unknown)}; known: "
+                    f"{some_names(names)}"
+                )
             names = list(self.meters)
             values = values[:, [column[m] for m in names]]
         else:
