@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import math
 import os
-import tempfile
 from collections.abc import Sequence
 
 import numpy as np
@@ -83,7 +82,8 @@ def normal_day(
     wn.options.time.report_timestep = HYDRAULIC_STEP
     wn.options.time.pattern_timestep = 3600
     wn.options.hydraulic.demand_model = "PDD"
-    with tempfile.TemporaryDirectory(prefix="burstloc-eps-") as tmp, capture_diagnostics():
+    # EPANET's scratch files go to the temporary directory too, a failed run's as well
+    with network.epanet_workdir(prefix="burstloc-eps-") as tmp, capture_diagnostics():
         sim = wntr.sim.EpanetSimulator(wn)
         results = sim.run_sim(file_prefix=os.path.join(tmp, "normal"))
     pressure = results.node["pressure"]
