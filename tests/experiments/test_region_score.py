@@ -77,7 +77,17 @@ def test_an_attempt_is_scored_at_each_confidence_and_for_its_first_short_region(
     assert scores.median_time_to_region == pytest.approx(150.0)  # late's 150, missed's 0.2, none
     assert scores.median_length[2] == pytest.approx(answer.region.length)
     cells = region_cells(scores)
-    assert cells[1] == "33% / 33% / 33%" and cells[3] == "33% / 33%"
+    assert cells[2] == "33% / 33% / 33%" and cells[4] == "33% / 33%"
+    # the first answer: the early record's region held the burst; its named point's distance
+    # comes from the scorer given (the answer's own, when the answer is the first record)
+    assert outcome.first_covered and outcome.first_error is None
+    assert late.first_covered and late.first_error == 40.0
+    assert not missed.first_covered
+    scored = score_region(attempt, truth, 600.0, near, error_of=lambda at: 25.0)
+    assert scored.first_error == 25.0 and scored.error == 40.0
+    assert scores.first_coverage == pytest.approx(1 / 3) and scores.first_mean_error == 40.0
+    assert scores.first_within == pytest.approx((1 / 3, 1 / 3))
+    assert cells[1] == "33%, 33%, 40 m"
     assert RegionScores.of([none]).median_time_to_searchable is None
 
 
