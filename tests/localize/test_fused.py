@@ -107,3 +107,15 @@ def test_the_arrivals_are_looked_at_early_while_the_longest_pipe_can_be_timed() 
     assert fused.decision_delay(4.0) == 60.0
     with pytest.raises(InputError):
         fused.resolves(0.0)
+
+
+def test_the_fused_score_is_zero_at_its_best_pipe_when_the_parts_disagree() -> None:
+    """Arrivals at 0.2 s point at p12, the lasting drop at p01: the fused best pipe scores 0
+    and every other pipe less, as each part's log-likelihood does."""
+    matrix = np.array([[1.0, 1.0, 0.5, 0.2], [1.0, 1.02, 0.55, 0.2], [0.1, 0.3, 1.0, 1.0]])
+    fused = FusedLocalizer(line_arrival(), line_signature(matrix))
+    evidence = _evidence(0.2, burst_pipe=1, drop=0.5 * matrix[0], until=80.0)
+    assert fused.arrival.rank(evidence).best.pipe != fused.signature.rank(evidence).best.pipe  # type: ignore[union-attr]
+    ranking = fused.rank(evidence)
+    scores = [p.score for p in ranking]
+    assert scores[0] == 0.0 and all(s < 0.0 for s in scores[1:])

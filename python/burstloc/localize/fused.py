@@ -17,7 +17,9 @@ Each localizer's ranking is turned into a log-likelihood-like score that is 0 fo
 * signature: ``-(rms^2 - rms_best^2) / (2 sigma^2)`` with ``sigma = max(rms_best, 1 mm)``: the
   best pipe's residual is the noise level of the drop estimate.
 
-The fused score is ``w_arrival * L_arrival + w_signature * L_signature``.
+The fused score is ``w_arrival * L_arrival + w_signature * L_signature`` (over the weights'
+sum), less the best pipe's: 0 for the best pipe, as each part's is, even where the two parts'
+best pipes differ.
 
 When the localizer answers: signatures need ``settle`` seconds of settled readings, so the fused
 localizer first looks at the arrivals at the arrival localizer's (short) delay where they can time
@@ -206,11 +208,6 @@ class FusedLocalizer:
         pipes = set.intersection(*(set(loglik) for _, loglik, _ in parts))
         ends = {p.pipe: (p.start, p.end) for _, _, r in parts for p in r}
         total = sum(w for w, _, _ in parts)
-        return Ranking(
-            RankedPipe(
-                pipe,
-                *ends[pipe],
-                score=sum(w * loglik[pipe] for w, loglik, _ in parts) / total,
-            )
-            for pipe in pipes
-        )
+        fused = {p: sum(w * loglik[p] for w, loglik, _ in parts) / total for p in pipes}
+        best = max(fused.values(), default=0.0)  # 0 for the best pipe, as each part's is
+        return Ranking(RankedPipe(pipe, *ends[pipe], score=s - best) for pipe, s in fused.items())
