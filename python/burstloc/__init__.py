@@ -7,7 +7,7 @@ What a user imports (``docs/api.md`` describes each):
   :func:`detect_shewhart`;
 * the errors: :class:`ConfigError`, :class:`InputError`, :class:`StreamError`,
   :class:`NetworkError` (all ``ValueError``), :class:`SimulationError` and its
-  :class:`UnsteadyStartError`;
+  :class:`UnsteadyStartError`; the warning :class:`DemandDrivenWarning`;
 * the live path: :class:`BurstMonitor`, fed complete time steps (:class:`Step`) that a
   :class:`StepFeed` assembles from readings (:class:`Reading`; :func:`parse_lines` reads them,
   and :class:`BadReading` what is not one, from CSV lines), :class:`ReadingStream` (the paper's
@@ -39,6 +39,7 @@ from burstloc._core import (
 )
 from burstloc.exceptions import (
     ConfigError,
+    DemandDrivenWarning,
     InputError,
     NetworkError,
     SimulationError,
@@ -101,6 +102,7 @@ __all__ = [
     "ConfigError",
     "Cusum",
     "Decision",
+    "DemandDrivenWarning",
     "DetectorBank",
     "EventScenario",
     "InputError",

@@ -3,6 +3,7 @@ by Selenium) over a real monitor process fed a real simulated burst on its stdin
 
 from __future__ import annotations
 
+import math
 import subprocess
 import sys
 import urllib.error
@@ -128,7 +129,8 @@ def test_a_burst_is_highlighted_and_a_second_browser_joining_sees_it(
         lambda: (
             (text := browser.find_element("id", "answer").text.upper()).startswith("BURST")
             and f"PIPE {pipe}\n" in text
-            and f"SEARCH REGION {record['region']['length_m']:.0f} M" in text
+            # the page rounds half up (JavaScript's toFixed), Python's format half to even
+            and f"SEARCH REGION {math.floor(record['region']['length_m'] + 0.5)} M" in text
         ),
         "the incident panel names the pipe and the search region",
     )
