@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 
 use super::cusum_resident::{tile_resident, TILE as TILE_R};
 use super::cusum_tiles::{tile, Block, Chunk, TILE};
-use super::{check_channels, check_matrix, check_readings, checked, drive, tiles, Kernel};
+use super::{check_channels, check_matrix, check_readings, checked, drive, Kernel};
 use crate::alarm::ChannelAlarm;
 use crate::cusum::CusumConfig;
 use crate::cusum::CusumLane;
@@ -138,12 +138,21 @@ impl Kernel for CusumBank {
         };
         let one_row = rows.len() == n;
         let mut lanes = self.block(0, n);
-        for (c, whole) in tiles(n, if one_row { TILE } else { TILE_R }) {
-            match (whole, one_row) {
-                (true, true) => tile::<TILE, true>(&mut lanes, c, chunk, out),
-                (true, false) => tile_resident(&mut lanes, c, &chunk, out),
-                (false, _) => tile::<1, false>(&mut lanes, c, chunk, out),
+        let mut c = 0;
+        if one_row {
+            while c + TILE <= n {
+                tile::<TILE, true>(&mut lanes, c, chunk, out);
+                c += TILE;
             }
+        } else {
+            while c + TILE_R <= n {
+                tile_resident(&mut lanes, c, &chunk, out);
+                c += TILE_R;
+            }
+        }
+        while c < n {
+            tile::<1, false>(&mut lanes, c, chunk, out);
+            c += 1;
         }
         self.steps += (rows.len() / n) as u64;
     }

@@ -91,17 +91,6 @@ fn checked<K: Kernel>(
     Ok(())
 }
 
-/// The tiles of a row of `channels`: `(c, true)` for each whole tile of `width` channels from
-/// channel `c`, then `(c, false)` for each channel left, one by one.
-#[inline(always)]
-fn tiles(channels: usize, width: usize) -> impl Iterator<Item = (usize, bool)> {
-    let whole = channels / width * width;
-    (0..whole)
-        .step_by(width)
-        .map(|c| (c, true))
-        .chain((whole..channels).map(|c| (c, false)))
-}
-
 /// Asks for the cache lines of `xs` (a hint: no fault, no effect on results).
 #[inline(always)]
 fn prefetch(xs: &[f64]) {

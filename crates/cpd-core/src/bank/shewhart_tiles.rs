@@ -18,7 +18,7 @@
 
 use alloc::vec::Vec;
 
-use super::{prefetch, tiles};
+use super::prefetch;
 use crate::alarm::{Alarm, ChannelAlarm};
 use crate::shewhart::{exact_decision, Lane, ShewhartConfig, Sums};
 
@@ -354,12 +354,17 @@ pub(super) fn chunk<const FULL: bool, const WRAP: bool>(
     k: &Chunk<'_>,
     out: &mut Vec<ChannelAlarm>,
 ) {
-    for (c, whole) in tiles(k.channels, TILE) {
-        if whole {
-            tile::<F, G, FULL, WRAP>(l, c, k, out);
-        } else {
-            tile::<f64, 1, FULL, WRAP>(l, c, k, out);
-        }
+    // Two plain loops, not one over an iterator or a closure: `tile` is inlined here, and
+    // anything more live across it (an iterator's state, a closure's captured references)
+    // costs the kernel registers (measured: 8 % more instructions at 1 024 channels).
+    let mut c = 0;
+    while c + TILE <= k.channels {
+        tile::<F, G, FULL, WRAP>(l, c, k, out);
+        c += TILE;
+    }
+    while c < k.channels {
+        tile::<f64, 1, FULL, WRAP>(l, c, k, out);
+        c += 1;
     }
     if k.rows.len() > k.channels {
         let at = k.slot * k.channels;
