@@ -110,9 +110,11 @@ impl Kernel for CusumBank {
         self.channels
     }
 
-    /// Row 0 of a fresh bank alone (it only primes), then [`rows_per_chunk`] rows.
+    /// Row 0 of a fresh bank alone (it only primes), then [`rows_per_chunk`] rows (a `step`'s
+    /// one row without the division).
+    #[inline]
     fn chunk_rows(&self, rows: usize) -> usize {
-        if self.steps == 0 {
+        if self.steps == 0 || rows == 1 {
             1
         } else {
             rows.min(rows_per_chunk(self.channels))
@@ -123,7 +125,7 @@ impl Kernel for CusumBank {
     /// stepped in memory, its start values blended in place; the channels past the last whole
     /// tile one by one.
     #[inline]
-    fn run_chunk(&mut self, rows: &[f64], out: &mut Vec<ChannelAlarm>) {
+    fn run_chunk(&mut self, rows: &[f64], len: usize, out: &mut Vec<ChannelAlarm>) {
         let n = self.channels;
         if self.steps == 0 {
             self.prime(rows);
@@ -136,7 +138,7 @@ impl Kernel for CusumBank {
             threshold: self.config.threshold(),
             drift: self.config.drift(),
         };
-        let one_row = rows.len() == n;
+        let one_row = len == 1;
         let mut lanes = self.block(0, n);
         let mut c = 0;
         if one_row {
@@ -154,7 +156,7 @@ impl Kernel for CusumBank {
             tile::<1, false>(&mut lanes, c, chunk, out);
             c += 1;
         }
-        self.steps += (rows.len() / n) as u64;
+        self.steps += len as u64;
     }
 }
 

@@ -57,9 +57,9 @@ trait Kernel {
     fn width(&self) -> usize;
     /// Rows in the next chunk, `rows >= 1` rows being left: from 1 to `rows`.
     fn chunk_rows(&self, rows: usize) -> usize;
-    /// Steps every channel over a chunk of validated rows and counts them; appends the alarms
-    /// tile after tile (each tile's in row order).
-    fn run_chunk(&mut self, rows: &[f64], out: &mut Vec<ChannelAlarm>);
+    /// Steps every channel over a chunk of `len` validated rows and counts them; appends the
+    /// alarms tile after tile (each tile's in row order).
+    fn run_chunk(&mut self, rows: &[f64], len: usize, out: &mut Vec<ChannelAlarm>);
 }
 
 /// Steps every row of a validated row-major matrix, a chunk of rows at a time. The tiles of a
@@ -68,23 +68,29 @@ trait Kernel {
 #[inline]
 fn drive<K: Kernel>(bank: &mut K, matrix: &[f64], out: &mut Vec<ChannelAlarm>) {
     let n = bank.width();
+    // Rows counted once per call (a division: a `step` of few channels feels it).
+    let mut left = matrix.len() / n;
     let mut rows = matrix;
-    while !rows.is_empty() {
-        let (now, rest) = rows.split_at(bank.chunk_rows(rows.len() / n) * n);
+    while left > 0 {
+        let len = bank.chunk_rows(left);
+        let (now, rest) = rows.split_at(len * n);
         let start = out.len();
-        bank.run_chunk(now, out);
+        bank.run_chunk(now, len, out);
         out[start..].sort_unstable_by_key(|a| (a.alarm.index, a.channel));
-        rows = rest;
+        (rows, left) = (rest, left - len);
     }
 }
 
 /// Validates `rows` with `check` ([`check_readings`] for one step, [`check_matrix`] for a
-/// matrix), then runs the kernel over them; on error the bank is unchanged.
+/// matrix), then runs the kernel over them; on error the bank is unchanged. `check` is a
+/// generic parameter, not a function pointer: the check is inlined (a `step` of 16 channels
+/// took 4 % more instructions with an indirect call).
+#[inline]
 fn checked<K: Kernel>(
     bank: &mut K,
     rows: &[f64],
     out: &mut Vec<ChannelAlarm>,
-    check: fn(&[f64], usize) -> Result<(), Error>,
+    check: impl Fn(&[f64], usize) -> Result<(), Error>,
 ) -> Result<(), Error> {
     check(rows, bank.width())?;
     drive(bank, rows, out);

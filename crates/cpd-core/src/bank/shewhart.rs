@@ -133,13 +133,12 @@ impl Kernel for ShewhartBank {
     }
 
     #[inline]
-    fn run_chunk(&mut self, rows: &[f64], out: &mut Vec<ChannelAlarm>) {
+    fn run_chunk(&mut self, rows: &[f64], len: usize, out: &mut Vec<ChannelAlarm>) {
         let (w, n) = (self.config.window(), self.channels);
         let (i, slot) = (self.steps, self.pos);
         if i == 0 {
             self.reference.copy_from_slice(&rows[..n]);
         }
-        let len = rows.len() / n;
         let full = i >= w as u64;
         let wrap = slot + 1 == w;
         // At a ring wrap, every channel is rebuilt periodically, and off-centre ones always.
