@@ -50,8 +50,8 @@ fn check_readings(readings: &[f64], channels: usize) -> Result<(), Error> {
 }
 
 /// What a kind of bank supplies to the shared driver ([`drive`]): how many rows its next chunk
-/// takes and how it runs one. The validated entry points ([`checked_step`], [`checked_many`])
-/// and the walk over a matrix are the same for every kind.
+/// takes and how it runs one. The validated entry points ([`checked`]) and the walk over a
+/// matrix are the same for every kind.
 trait Kernel {
     /// Number of channels.
     fn width(&self) -> usize;
