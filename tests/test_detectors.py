@@ -27,6 +27,7 @@ from burstloc import Alarm, ConfigError, Cusum, InputError, Shewhart
 from burstloc.constants import MAX_SAMPLE
 from reference import RefAlarm, amplitude_tolerance, cusum_online, shewhart_streaming
 from signals import build_signal, cusum_parameters, pressure_signals
+from snapshot_frame import payload, seal
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -225,13 +226,17 @@ def test_restore_rejects_foreign_or_corrupt_snapshots() -> None:
         Cusum.restore(b"not a snapshot")
     with pytest.raises(InputError, match="snapshot"):
         Cusum.restore(cusum[: len(cusum) // 2])
-    # The core re-validates what it decodes: a negative threshold (a CBOR float64 is 0xfb and
-    # eight big-endian bytes) is refused with the parameter named.
+    # Behind a valid checksum, the core re-validates what it decodes: a negative threshold (a
+    # CBOR float64 is 0xfb and eight big-endian bytes) is refused with the parameter named.
     threshold = b"\xfb" + struct.pack(">d", 0.1234567)
-    assert cusum.count(threshold) == 1
-    negative = cusum.replace(threshold, b"\xfb" + struct.pack(">d", -0.1234567))
+    cbor = payload(cusum)
+    assert cbor.count(threshold) == 1
+    negative = seal(cbor.replace(threshold, b"\xfb" + struct.pack(">d", -0.1234567)))
     with pytest.raises(InputError, match="threshold"):
         Cusum.restore(negative)
+    # Without one, the same edit is refused before anything is decoded.
+    with pytest.raises(InputError, match="checksum mismatch"):
+        Cusum.restore(cusum.replace(threshold, b"\xfb" + struct.pack(">d", -0.1234567)))
 
 
 def test_the_packages_max_sample_is_the_detectors() -> None:

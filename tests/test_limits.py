@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from burstloc import ConfigError, Cusum, DetectorBank, InputError, Shewhart
+from snapshot_frame import payload, seal
 
 
 @pytest.mark.parametrize(
@@ -35,10 +36,12 @@ def test_huge_sizes_are_config_errors_not_aborts(make, name: str) -> None:
 
 
 def _replace_float(snapshot: bytes, old: float, new: float) -> bytes:
-    """The snapshot with its one CBOR float64 ``old`` (0xfb + 8 big-endian bytes) replaced."""
+    """The snapshot with its one CBOR float64 ``old`` (0xfb + 8 big-endian bytes) replaced,
+    sealed with a valid checksum (the state validation is what lies behind it)."""
     encoded = b"\xfb" + struct.pack(">d", old)
-    assert snapshot.count(encoded) == 1
-    return snapshot.replace(encoded, b"\xfb" + struct.pack(">d", new))
+    cbor = payload(snapshot)
+    assert cbor.count(encoded) == 1
+    return seal(cbor.replace(encoded, b"\xfb" + struct.pack(">d", new)))
 
 
 def test_restore_rejects_a_non_finite_previous_value() -> None:
@@ -121,10 +124,12 @@ def _fed(kind: str) -> Cusum | Shewhart | DetectorBank:
 @pytest.mark.parametrize("kind", ["cusum", "shewhart", "bank_cusum", "bank_shewhart"])
 def test_a_non_finite_value_in_any_float_field_is_refused_by_name(kind: str) -> None:
     """Through the binding: every float of the snapshot (configs, sums, compensations, samples,
-    rings) replaced in turn by NaN, +inf and -inf; each restore refused, naming the field."""
+    rings) replaced in turn by NaN, +inf and -inf, the snapshot sealed with a valid checksum;
+    each restore refused, naming the field."""
     det = _fed(kind)
     snapshot = det.snapshot()
-    floats = _floats(snapshot)
+    cbor = payload(snapshot)
+    floats = _floats(cbor)
     fields = {name for _, _, name in floats}
     want = {
         "cusum": {"threshold", "drift", "x_prev", "gp", "gn", "gp_real", "gn_real", "x_tap"},
@@ -133,7 +138,7 @@ def test_a_non_finite_value_in_any_float_field_is_refused_by_name(kind: str) -> 
     assert want <= fields, fields
     for start, end, name in floats:
         for bad in (float("nan"), float("inf"), float("-inf")):
-            edited = snapshot[:start] + b"\xfb" + struct.pack(">d", bad) + snapshot[end:]
+            edited = seal(cbor[:start] + b"\xfb" + struct.pack(">d", bad) + cbor[end:])
             with pytest.raises(InputError, match=f"`{name}`"):
                 type(det).restore(edited)
     assert type(det).restore(snapshot).snapshot() == snapshot

@@ -60,9 +60,17 @@ class Alarm:
 class _Snapshots:
     """Stub-only: the snapshot methods every detector class has (pickle, copy)."""
 
-    def snapshot(self) -> bytes: ...
+    def snapshot(self) -> bytes:
+        """The configuration and full state as bytes (format 2: version, length, CBOR payload,
+        CRC-32C)."""
     @classmethod
-    def restore(cls, state: bytes) -> Self: ...
+    def restore(cls, state: bytes) -> Self:
+        """An object in exactly the state captured by ``snapshot()`` (or a format-1 snapshot).
+
+        Raises:
+            InputError: altered, truncated or extended bytes (checksum or length mismatch), an
+                unknown format version, another kind, or an invalid state; named.
+        """
     def __reduce__(self) -> tuple[Any, ...]: ...
     def __copy__(self) -> Self: ...
     def __deepcopy__(self, memo: Any, /) -> Self: ...

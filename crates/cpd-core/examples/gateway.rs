@@ -17,7 +17,8 @@
 //! "channel", "direction", "start", "amplitude"}`. Options: `--kind cusum|shewhart`,
 //! `--threshold`, `--drift` (CUSUM), `--window`, `--sigma` (Shewhart; `sigma` defaults to the
 //! threshold), `--restore FILE`, `--snapshot FILE`. The snapshot is the bytes the Python
-//! package's `DetectorBank.restore` reads. Rows are stepped in batches of whatever input is
+//! package's `DetectorBank.restore` reads (`cpd_core::snapshot`: checksummed, so a file altered
+//! on disk is refused by name). Rows are stepped in batches of whatever input is
 //! already buffered, so a live stream is answered line by line and a file at full speed.
 
 use std::fmt::Write as _;
@@ -456,6 +457,13 @@ mod tests {
             err.contains("cannot read") && err.contains("missing.cbor"),
             "{err}"
         );
+        let mut altered = std::fs::read(&state).unwrap();
+        let mid = altered.len() / 2;
+        altered[mid] ^= 0x20;
+        std::fs::write(&state, &altered).unwrap();
+        let (code, out, err) = program(restore.clone(), &tail);
+        assert_eq!((code, out.as_str()), (1, ""));
+        assert!(err.contains("checksum mismatch"), "{err}");
         std::fs::write(&state, b"not a snapshot").unwrap();
         let (code, _, err) = program(restore, &tail);
         assert_eq!(code, 1);

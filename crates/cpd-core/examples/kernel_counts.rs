@@ -21,7 +21,7 @@
 //! then never sees again (a trace, or one row that primes a bank), and only the calls on
 //! fresh data are counted (`measure`). Single detectors see 4 traces of 100 000 samples;
 //! banks one `T x channels` matrix of about 2 M readings (`T` as in the benchmarks), in one
-//! call (`step_many`) or, for `cusum_bank_step_1024`, one call per row (`step`).
+//! call (`step_many`) or, for the `*_bank_step_*` kernels, one call per row (`step`).
 
 use std::hint::black_box;
 use std::process::{Command, ExitCode};
@@ -61,6 +61,13 @@ fn kernels() -> Vec<(String, Kernel)> {
         "shewhart_bank_w50_1024".to_string(),
         Kernel::ShewhartBank(50, 1024),
     ));
+    k.push(("cusum_bank_step_16".to_string(), Kernel::CusumBankStep(16)));
+    for c in [16, 1024] {
+        k.push((
+            format!("shewhart_bank_step_w50_{c}"),
+            Kernel::ShewhartBankStep(50, c),
+        ));
+    }
     k
 }
 
@@ -81,6 +88,8 @@ enum Kernel {
     CusumBankStep(usize),
     /// `ShewhartBank::step_many`, window `W`, over `channels`.
     ShewhartBank(usize, usize),
+    /// `ShewhartBank::step` row by row, window `W`, over `channels`.
+    ShewhartBankStep(usize, usize),
 }
 
 /// The counted region: Callgrind collects only inside this function (`--toggle-collect`).
@@ -177,9 +186,10 @@ fn run(kernel: Kernel) -> usize {
             let by_row = matches!(kernel, Kernel::CusumBankStep(_));
             bank(b.into(), 1, by_row, &mut traces)
         }
-        Kernel::ShewhartBank(w, channels) => {
+        Kernel::ShewhartBank(w, channels) | Kernel::ShewhartBankStep(w, channels) => {
             let b = ShewhartBank::new(channels, shewhart_config(w)).unwrap();
-            bank(b.into(), w, false, &mut traces)
+            let by_row = matches!(kernel, Kernel::ShewhartBankStep(..));
+            bank(b.into(), w, by_row, &mut traces)
         }
     }
 }

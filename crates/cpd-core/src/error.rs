@@ -90,6 +90,74 @@ pub enum Error {
         /// What is wrong, e.g. the decoder's message.
         detail: String,
     },
+    /// Snapshot bytes refused before their content is decoded (see `cpd_core::snapshot`): not a
+    /// snapshot, truncated or extended, altered (checksum mismatch), or of a format version this
+    /// version does not read.
+    UnreadableSnapshot {
+        /// The kind that was expected (`"Cusum"`, `"Shewhart"`, `"DetectorBank"`).
+        kind: &'static str,
+        /// What is wrong with the bytes.
+        problem: SnapshotProblem,
+    },
+}
+
+/// Why snapshot bytes are unreadable ([`Error::UnreadableSnapshot`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum SnapshotProblem {
+    /// The bytes begin neither with the snapshot magic `CPDS` nor as a format-1 snapshot.
+    NotASnapshot,
+    /// Fewer bytes than the snapshot's header declares (or than a header and checksum take).
+    Truncated {
+        /// Bytes given.
+        len: usize,
+        /// Bytes expected.
+        expected: u64,
+    },
+    /// More bytes than the snapshot's header declares.
+    TrailingBytes {
+        /// Bytes given.
+        len: usize,
+        /// Bytes expected.
+        expected: u64,
+    },
+    /// The CRC-32C stored at the end is not that of the bytes before it: they were altered.
+    ChecksumMismatch {
+        /// The checksum stored in the snapshot.
+        stored: u32,
+        /// The checksum of the bytes as given.
+        computed: u32,
+    },
+    /// An intact snapshot of a format version this version does not read (a newer one).
+    UnknownVersion {
+        /// The snapshot's format version.
+        version: u8,
+    },
+}
+
+impl fmt::Display for SnapshotProblem {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            SnapshotProblem::NotASnapshot => write!(f, "not a snapshot (no snapshot header)"),
+            SnapshotProblem::Truncated { len, expected } => {
+                write!(f, "truncated: {len} bytes of {expected}")
+            }
+            SnapshotProblem::TrailingBytes { len, expected } => write!(
+                f,
+                "{} bytes after its end ({len} bytes, the snapshot is {expected})",
+                *len as u64 - expected
+            ),
+            SnapshotProblem::ChecksumMismatch { stored, computed } => write!(
+                f,
+                "checksum mismatch (CRC-32C stored {stored:#010x}, computed {computed:#010x}): \
+                 the bytes were altered"
+            ),
+            SnapshotProblem::UnknownVersion { version } => write!(
+                f,
+                "unknown format version {version} (this version reads formats 1 and 2)"
+            ),
+        }
+    }
 }
 
 impl Error {
@@ -158,6 +226,9 @@ impl fmt::Display for Error {
             }
             Error::InvalidSnapshot { kind, detail } => {
                 write!(f, "invalid {kind} snapshot: {detail}")
+            }
+            Error::UnreadableSnapshot { kind, problem } => {
+                write!(f, "unreadable {kind} snapshot: {problem}")
             }
         }
     }

@@ -1,7 +1,9 @@
 //! API (for binding authors; everything is re-exported at the crate root):
 //! - errors: [`Error`] (`InvalidParameter`, `NonFiniteSample`, `NonFiniteReading`,
 //!   `NonFiniteMatrixReading`, `ChannelCount`, `MatrixShape`, `CorruptState`,
-//!   `InvalidState`, `InvalidSnapshot`), [`Error::is_config`], [`MAX_SAMPLE`];
+//!   `InvalidState`, `InvalidSnapshot`, `UnreadableSnapshot`), [`SnapshotProblem`]
+//!   (`NotASnapshot`, `Truncated`, `TrailingBytes`, `ChecksumMismatch`, `UnknownVersion`),
+//!   [`Error::is_config`], [`MAX_SAMPLE`];
 //! - results: [`Alarm`] `{ index, start, direction, amplitude }`, [`Direction`] `{ Rise, Drop }`,
 //!   [`ChannelAlarm`] `{ channel, alarm }`;
 //! - CUSUM: [`CusumConfig::new`]`(threshold, drift)`, [`Cusum::new`]`(config)` with `update`,
@@ -21,8 +23,9 @@
 //!   [`ShewhartChanges`] `{ index, amplitude }`;
 //! - feature `serde`: every config, detector, bank and result type is `Serialize + Deserialize`
 //!   (deserialization re-validates configs and every state field);
-//! - feature `snapshot`: `snapshot::to_bytes` / `snapshot::from_bytes`, the versioned CBOR
-//!   snapshots the Python package reads and writes.
+//! - feature `snapshot`: `snapshot::to_bytes` / `snapshot::from_bytes`, the versioned,
+//!   checksummed (CRC-32C) CBOR snapshots the Python package reads and writes (format 2; format
+//!   1 still read), `snapshot::crc32c`.
 //!
 //! Non-finite input policy: a NaN, ±inf or out-of-range (beyond ±[`MAX_SAMPLE`] = 1e100)
 //! sample/reading is *rejected* with a typed error and the detector or bank is left exactly as
@@ -52,5 +55,5 @@ pub use alarm::{Alarm, ChannelAlarm, Direction};
 pub use bank::{Bank, CusumBank, ShewhartBank};
 pub use batch::{detect_cusum, detect_shewhart, CusumChanges, ShewhartChanges};
 pub use cusum::{Cusum, CusumConfig};
-pub use error::{Error, MAX_SAMPLE};
+pub use error::{Error, SnapshotProblem, MAX_SAMPLE};
 pub use shewhart::{Shewhart, ShewhartConfig};

@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::{signal, snapshots, Rng};
+use common::{payload, seal, signal, snapshots, Rng};
 use cpd_core::snapshot::{self, Snapshot};
 use cpd_core::{Bank, Cusum, CusumBank, CusumConfig, Shewhart, ShewhartBank, ShewhartConfig};
 use proptest::prelude::*;
@@ -227,9 +227,14 @@ proptest! {
         seed in any::<u64>(), n in 0usize..80, edits in prop::collection::vec(edit(), 1..6)
     ) {
         for (_, mut bytes) in snapshots(seed, n) {
+            // The payload edited and sealed with a valid checksum (a hostile or buggy writer:
+            // the decoder behind the checksum), then the snapshot itself edited.
+            let mut inner = payload(&bytes).to_vec();
             for e in &edits {
+                apply(&mut inner, e);
                 apply(&mut bytes, e);
             }
+            decode_all(&seal(&inner))?;
             decode_all(&bytes)?;
         }
     }
@@ -337,9 +342,12 @@ fn huge_declared_lengths_are_refused() {
         let mut bytes = vec![header];
         bytes.extend_from_slice(&u64::MAX.to_be_bytes());
         assert!(snapshot::from_bytes::<Cusum>(&bytes).is_err());
-        // The same after the first bytes of a valid snapshot.
+        // The same after the first bytes of a valid snapshot's payload, sealed with a valid
+        // checksum.
+        let valid = payload(valid);
         let mut inner = valid[..valid.len() - 9].to_vec();
         inner.extend_from_slice(&bytes);
+        let inner = seal(&inner);
         assert!(snapshot::from_bytes::<Cusum>(&inner).is_err());
         assert!(snapshot::from_bytes::<Bank>(&inner).is_err());
     }

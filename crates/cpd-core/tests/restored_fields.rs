@@ -2,14 +2,16 @@
 //! any float field of any snapshot kind (single CUSUM, single Shewhart, both banks) is refused
 //! with an error naming the field, and so are finite values out of a field's range.
 //!
-//! The snapshots are decoded to CBOR values, every float found by walking them (configs, sums,
-//! samples, rings, the compensations of the running sums), each one replaced in turn, and the
-//! bytes re-encoded: the test follows the serde form, whatever fields it grows.
+//! The snapshots' payloads are decoded to CBOR values, every float found by walking them
+//! (configs, sums, samples, rings, the compensations of the running sums), each one replaced in
+//! turn, and the payload re-encoded and sealed with a valid checksum (the field validation is
+//! what a snapshot written with bad values, not one altered later, meets): the test follows the
+//! serde form, whatever fields it grows.
 
 mod common;
 
 use ciborium::Value;
-use common::snapshots;
+use common::{payload, seal, snapshots};
 use cpd_core::snapshot::{self, Snapshot};
 use cpd_core::{Bank, Cusum, Error, Shewhart, ShewhartBank, ShewhartConfig};
 
@@ -66,13 +68,18 @@ fn field(path: &[Step]) -> &str {
         .expect("a field")
 }
 
-/// `bytes` with the float at `path` replaced by `x`.
+/// The CBOR value of a snapshot's payload.
+fn value(bytes: &[u8]) -> Value {
+    ciborium::from_reader(payload(bytes)).unwrap()
+}
+
+/// Snapshot `bytes` with the float at `path` replaced by `x`, sealed with a valid checksum.
 fn with_float(bytes: &[u8], path: &[Step], x: f64) -> Vec<u8> {
-    let mut v: Value = ciborium::from_reader(bytes).unwrap();
+    let mut v = value(bytes);
     *at(&mut v, path) = Value::Float(x);
     let mut out = Vec::new();
     ciborium::into_writer(&v, &mut out).unwrap();
-    out
+    seal(&out)
 }
 
 fn restore(kind: &str, bytes: &[u8]) -> Result<(), Error> {
@@ -89,7 +96,7 @@ fn a_non_finite_value_in_any_float_field_of_any_snapshot_is_refused_by_name() {
     for (n, seed) in [(0usize, 1u64), (3, 2), (9, 3), (2_500, 4), (2_501, 5)] {
         for (kind, bytes) in snapshots(seed, n) {
             restore(kind, &bytes).expect("a reached state restores");
-            let v: Value = ciborium::from_reader(bytes.as_slice()).unwrap();
+            let v = value(&bytes);
             let mut paths = Vec::new();
             floats(&v, &mut Vec::new(), &mut paths);
             assert!(!paths.is_empty());
@@ -141,7 +148,7 @@ fn a_non_finite_value_in_any_float_field_of_any_snapshot_is_refused_by_name() {
 #[test]
 fn finite_values_no_detector_reaches_are_refused_by_name() {
     for (kind, bytes) in snapshots(7, 40) {
-        let v: Value = ciborium::from_reader(bytes.as_slice()).unwrap();
+        let v = value(&bytes);
         let mut paths = Vec::new();
         floats(&v, &mut Vec::new(), &mut paths);
         for path in &paths {
@@ -177,7 +184,7 @@ fn an_invalid_state_error_names_the_channel_and_the_value() {
         "{err}"
     );
     let bytes = snapshot::to_bytes(&Bank::from(bank));
-    let v: Value = ciborium::from_reader(bytes.as_slice()).unwrap();
+    let v = value(&bytes);
     let mut paths = Vec::new();
     floats(&v, &mut Vec::new(), &mut paths);
     let s2 = paths.iter().find(|p| field(p) == "s2").unwrap();

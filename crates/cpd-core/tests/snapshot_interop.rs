@@ -1,11 +1,14 @@
-//! Snapshots cross the language boundary both ways (fixtures in `tests/data/snapshots/`, see
-//! `gen_snapshots.py` there):
+//! Snapshots cross the language boundary both ways, and old snapshots still restore (fixtures
+//! in `tests/data/snapshots/`, see `gen_snapshots.py` there):
 //! - the `py_*.cbor` files, written by the Python package, decode here into detectors equal to
 //!   ones fed the same samples in Rust, which then raise the same alarms, and Rust re-encodes
-//!   them to the very same bytes (format 1 unchanged);
+//!   them to the very same bytes (format 2);
 //! - the `rust_*.cbor` files are what this test writes (`CPD_WRITE_SNAPSHOTS=1`); without the
 //!   variable it checks that the committed files are still exactly what Rust writes. Python's
-//!   `tests/test_snapshot_interop.py` restores them.
+//!   `tests/test_snapshot_interop.py` restores them;
+//! - the `format1_*.cbor` files are format-1 snapshots (no header, no checksum), written by the
+//!   Python package before format 2 at the same point of the trace as `py_*.cbor`: they still
+//!   restore into the same detectors, which write format 2 from then on.
 
 use std::path::PathBuf;
 
@@ -145,6 +148,43 @@ fn python_snapshots_restore_in_rust_and_continue_identically() {
         want.bank_shewhart.iter().any(|a| a.channel == 2),
         "{want:?}"
     );
+}
+
+#[test]
+fn format1_snapshots_still_restore_and_are_written_back_as_format_2() {
+    let t = trace();
+    let mut fed = Fresh::new(&t);
+    fed.feed(&t, 0..t.py_cut);
+    let (b_c, cusum) = read::<Cusum>("format1_cusum.cbor");
+    let (b_s, shewhart) = read::<Shewhart>("format1_shewhart.cbor");
+    let (b_bc, bank_cusum) = read::<Bank>("format1_bank_cusum.cbor");
+    let (b_bs, bank_shewhart) = read::<Bank>("format1_bank_shewhart.cbor");
+    for old in [&b_c, &b_s, &b_bc, &b_bs] {
+        // The format-1 envelope `{format: 1, kind, state}`, not the format-2 frame.
+        assert_eq!(old[..9], *b"\xa3\x66format\x01");
+    }
+    assert_eq!(cusum, fed.cusum);
+    assert_eq!(shewhart, fed.shewhart);
+    assert_eq!(bank_cusum, fed.bank_cusum);
+    assert_eq!(bank_shewhart, fed.bank_shewhart);
+    // Written back in format 2: the bytes of the Python package's snapshots of the same state.
+    assert_eq!(snapshot::to_bytes(&cusum), read::<Cusum>("py_cusum.cbor").0);
+    assert_eq!(snapshot::to_bytes(&bank_shewhart)[..4], snapshot::MAGIC);
+    let mut restored = Fresh {
+        cusum,
+        shewhart,
+        bank_cusum,
+        bank_shewhart,
+    };
+    let n = t.rows.len();
+    assert_eq!(restored.feed(&t, t.py_cut..n), fed.feed(&t, t.py_cut..n));
+    // Format 1 is read as it always was: the same validation, nothing after the CBOR map.
+    let mut longer = b_c.clone();
+    longer.push(0);
+    let err = snapshot::from_bytes::<Cusum>(&longer).unwrap_err();
+    assert!(err.to_string().contains("1 bytes after the end"), "{err}");
+    assert!(snapshot::from_bytes::<Cusum>(&b_c[..b_c.len() - 1]).is_err());
+    assert!(snapshot::from_bytes::<Cusum>(&b_s).is_err());
 }
 
 #[test]

@@ -15,9 +15,9 @@ create_exception!(
     InputError,
     PyValueError,
     "A detector was fed invalid input (a NaN, infinite or out-of-range sample, beyond \
-     +-1e100; a wrong dtype, shape or channel count; a snapshot holding an invalid state); the \
-     message names the sample, channel, argument or state field. The detector's state is \
-     unchanged."
+     +-1e100; a wrong dtype, shape or channel count; a snapshot that is altered, truncated or \
+     of an unknown format version, or holds an invalid state); the message names the sample, \
+     channel, argument, snapshot problem or state field. The detector's state is unchanged."
 );
 
 /// Converts a core error: bad configuration becomes `ConfigError`, everything else `InputError`.

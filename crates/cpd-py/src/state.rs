@@ -1,17 +1,20 @@
-//! Snapshots: a detector's configuration and state as bytes (the core's versioned CBOR
-//! envelope, `cpd_core::snapshot`), used by `snapshot()`/`restore()`, pickle and copy.
+//! Snapshots: a detector's configuration and state as bytes (the core's versioned,
+//! checksummed snapshot format, `cpd_core::snapshot`), used by `snapshot()`/`restore()`, pickle
+//! and copy.
 
 use cpd_core::snapshot::{self, Snapshot};
 use pyo3::PyResult;
 
 use crate::errors::core_err;
 
-/// The snapshot bytes of a core value (`cpd_core::snapshot`, the versioned CBOR envelope).
+/// The snapshot bytes of a core value (`cpd_core::snapshot`: format 2, CRC-32C at the end).
 pub(crate) fn encode<T: Snapshot>(state: &T) -> Vec<u8> {
     snapshot::to_bytes(state)
 }
 
-/// A core value from snapshot bytes; `InputError` when they cannot be restored.
+/// A core value from snapshot bytes (format 2, or format 1 written before the checksum);
+/// `InputError` when they cannot be restored: altered, truncated, extended, of an unknown
+/// version, of another kind or holding an invalid state.
 pub(crate) fn decode<T: Snapshot>(bytes: &[u8]) -> PyResult<T> {
     snapshot::from_bytes(bytes).map_err(core_err)
 }
@@ -24,14 +27,19 @@ macro_rules! pymethods_with_snapshots {
     ($py_type:ident, { $($extra:tt)* }) => {
         #[pymethods]
         impl $py_type {
-            /// The configuration and full state as bytes, for `restore()`.
+            /// The configuration and full state as bytes, for `restore()` (format 2: a
+            /// header with the version and length, a CBOR payload, a CRC-32C at the end).
             fn snapshot<'py>(&self, py: Python<'py>) -> Bound<'py, pyo3::types::PyBytes> {
                 pyo3::types::PyBytes::new(py, &$crate::state::encode(&self.inner))
             }
 
             /// An object in exactly the state captured by `snapshot()`.
             ///
-            /// The core re-validates the configuration and the state's shape while decoding.
+            /// Altered, truncated or extended bytes (a checksum or length mismatch), an unknown
+            /// format version, another kind or an invalid state raise `InputError` naming the
+            /// problem; the core checks the checksum before it decodes, then re-validates the
+            /// configuration and every state field. Format-1 snapshots (no checksum, written
+            /// before) are still restored.
             #[classmethod]
             fn restore(_cls: &Bound<'_, pyo3::types::PyType>, state: &[u8]) -> PyResult<Self> {
                 Ok(Self { inner: $crate::state::decode(state)? })

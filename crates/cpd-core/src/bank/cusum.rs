@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 
 use super::cusum_resident::{tile_resident, TILE as TILE_R};
 use super::cusum_tiles::{tile, Block, Chunk, TILE};
-use super::{check_channels, check_matrix, checked_step, Kernel};
+use super::{check_channels, check_matrix, check_readings, checked, drive, Kernel};
 use crate::alarm::ChannelAlarm;
 use crate::cusum::CusumConfig;
 use crate::cusum::CusumLane;
@@ -109,9 +109,54 @@ impl Kernel for CusumBank {
     fn width(&self) -> usize {
         self.channels
     }
+
+    /// Row 0 of a fresh bank alone (it only primes), then [`rows_per_chunk`] rows (a `step`'s
+    /// one row without the division).
     #[inline]
-    fn step_unchecked(&mut self, readings: &[f64], out: &mut Vec<ChannelAlarm>) {
-        self.advance_many(readings, out);
+    fn chunk_rows(&self, rows: usize) -> usize {
+        if self.steps == 0 || rows == 1 {
+            1
+        } else {
+            rows.min(rows_per_chunk(self.channels))
+        }
+    }
+
+    /// Several rows: the state in registers (`cusum_resident`); one row (a `step`): the state
+    /// stepped in memory, its start values blended in place; the channels past the last whole
+    /// tile one by one.
+    #[inline]
+    fn run_chunk(&mut self, rows: &[f64], len: usize, out: &mut Vec<ChannelAlarm>) {
+        let n = self.channels;
+        if self.steps == 0 {
+            self.prime(rows);
+            return;
+        }
+        let chunk = Chunk {
+            rows,
+            channels: n,
+            first: self.steps,
+            threshold: self.config.threshold(),
+            drift: self.config.drift(),
+        };
+        let one_row = len == 1;
+        let mut lanes = self.block(0, n);
+        let mut c = 0;
+        if one_row {
+            while c + TILE <= n {
+                tile::<TILE, true>(&mut lanes, c, chunk, out);
+                c += TILE;
+            }
+        } else {
+            while c + TILE_R <= n {
+                tile_resident(&mut lanes, c, &chunk, out);
+                c += TILE_R;
+            }
+        }
+        while c < n {
+            tile::<1, false>(&mut lanes, c, chunk, out);
+            c += 1;
+        }
+        self.steps += len as u64;
     }
 }
 
@@ -144,7 +189,7 @@ impl CusumBank {
     /// All readings are validated first ([`Error::ChannelCount`], [`Error::NonFiniteReading`]);
     /// on error the bank is unchanged.
     pub fn step(&mut self, readings: &[f64], out: &mut Vec<ChannelAlarm>) -> Result<(), Error> {
-        checked_step(self, readings, out)
+        checked(self, readings, out, check_readings)
     }
 
     /// Feeds a row-major `T x channels` matrix (one row per time step), appending the alarms
@@ -152,13 +197,17 @@ impl CusumBank {
     /// The whole matrix is validated first; on error the bank is unchanged. Faster than
     /// stepping row by row: each channel's state stays in registers over a chunk of rows.
     pub fn step_many(&mut self, matrix: &[f64], out: &mut Vec<ChannelAlarm>) -> Result<(), Error> {
-        check_matrix(matrix, self.channels)?;
-        self.advance_many(matrix, out);
-        Ok(())
+        checked(self, matrix, out, check_matrix)
+    }
+
+    /// Steps every row of a row-major matrix of samples already validated (the segmented
+    /// single-channel update, `crate::cusum::segments`).
+    pub(crate) fn advance_many(&mut self, matrix: &[f64], out: &mut Vec<ChannelAlarm>) {
+        drive(self, matrix, out);
     }
 
     /// The state of channels `b..e`.
-    pub(super) fn block(&mut self, b: usize, e: usize) -> Block<'_> {
+    fn block(&mut self, b: usize, e: usize) -> Block<'_> {
         Block {
             x_prev: &mut self.x_prev[b..e],
             gp: &mut self.gp[b..e],
@@ -173,7 +222,7 @@ impl CusumBank {
     }
 
     /// Sample 0 of every channel: only primes the previous and start values.
-    pub(super) fn prime(&mut self, readings: &[f64]) {
+    fn prime(&mut self, readings: &[f64]) {
         self.steps += 1;
         self.x_prev.copy_from_slice(readings);
         self.x_tap.copy_from_slice(readings);
@@ -223,11 +272,6 @@ impl CusumBank {
         self.steps
     }
 
-    /// Counts `k` steps run by a chunked kernel.
-    pub(super) fn add_steps(&mut self, k: u64) {
-        self.steps += k;
-    }
-
     /// The shared config.
     pub fn config(&self) -> &CusumConfig {
         &self.config
@@ -246,52 +290,4 @@ const CHUNK_READINGS: usize = 65_536;
 /// whatever the chunk (each tile reads its own columns of each row).
 fn rows_per_chunk(channels: usize) -> usize {
     (CHUNK_READINGS / channels).clamp(16, 512)
-}
-
-impl CusumBank {
-    /// Steps every row of a validated row-major matrix, a chunk of rows at a time, tile by tile.
-    pub(crate) fn advance_many(&mut self, matrix: &[f64], out: &mut Vec<ChannelAlarm>) {
-        let n = self.channels();
-        let mut rows = matrix;
-        if self.steps_seen() == 0 && !rows.is_empty() {
-            let (first, rest) = rows.split_at(n);
-            self.prime(first);
-            rows = rest;
-        }
-        let (threshold, drift) = (self.config().threshold(), self.config().drift());
-        for chunk_rows in rows.chunks(rows_per_chunk(n) * n) {
-            let chunk = Chunk {
-                rows: chunk_rows,
-                channels: n,
-                first: self.steps_seen(),
-                threshold,
-                drift,
-            };
-            let start = out.len();
-            let mut lanes = self.block(0, n);
-            let one_row = chunk_rows.len() == n;
-            let mut c = 0;
-            // Several rows: the state in registers (`cusum_resident`); one row (a `step`): the
-            // state stepped in memory, its start values blended in place.
-            if one_row {
-                while c + TILE <= n {
-                    tile::<TILE, true>(&mut lanes, c, chunk, out);
-                    c += TILE;
-                }
-            } else {
-                while c + TILE_R <= n {
-                    tile_resident(&mut lanes, c, &chunk, out);
-                    c += TILE_R;
-                }
-            }
-            while c < n {
-                tile::<1, false>(&mut lanes, c, chunk, out);
-                c += 1;
-            }
-            // Tiles ran one after another: put the chunk's alarms back in step, then channel,
-            // order (each pair is unique), as stepping row by row appends them.
-            out[start..].sort_unstable_by_key(|a| (a.alarm.index, a.channel));
-            self.add_steps((chunk_rows.len() / n) as u64);
-        }
-    }
 }

@@ -73,11 +73,8 @@ mod v {
     pub fn any_over(a: F, t: F) -> bool {
         cmp_op_mask_f64::<_CMP_GT_OQ>(a, t) != 0
     }
-    /// Asks for the cache line of `x` (a hint: no fault, no effect on results).
-    #[inline(always)]
-    pub fn prefetch(x: &f64) {
-        safe_arch::prefetch_t0(x);
-    }
+    // The bank's hint: asks for the cache lines of a slice (no fault, no effect on results).
+    pub(super) use super::super::prefetch;
 }
 
 /// See the AVX-512 version.
@@ -129,7 +126,7 @@ mod v {
     }
     /// No prefetch hint in this form.
     #[inline(always)]
-    pub fn prefetch(_: &f64) {}
+    pub fn prefetch(_: &[f64]) {}
 }
 use v::{add, pick, sub, F, N};
 
@@ -228,10 +225,8 @@ pub(super) fn tile_resident(
         // The readings of the tile after next, in this row: walking down the rows of a wide
         // matrix, the hardware prefetchers do not see them coming.
         if let Some(ahead) = row.get(c + AHEAD..c + AHEAD + TILE) {
-            for x in ahead.iter().step_by(8) {
-                v::prefetch(x);
-            }
-            v::prefetch(&ahead[TILE - 1]);
+            v::prefetch(ahead);
+            v::prefetch(&ahead[TILE - 1..]);
         }
         let (xa, xb) = (ld(xs, 0), ld(xs, N));
         let iu = v::splat(f64::from_bits(i));

@@ -49,23 +49,63 @@ fn check_readings(readings: &[f64], channels: usize) -> Result<(), Error> {
     }
 }
 
-/// The per-step kernel of a bank: the validated entry points below are shared by every kind.
+/// What a kind of bank supplies to the shared driver ([`drive`]): how many rows its next chunk
+/// takes and how it runs one. The validated entry points ([`checked`]) and the walk over a
+/// matrix are the same for every kind.
 trait Kernel {
     /// Number of channels.
     fn width(&self) -> usize;
-    /// Advances one step on readings already validated.
-    fn step_unchecked(&mut self, readings: &[f64], out: &mut Vec<ChannelAlarm>);
+    /// Rows in the next chunk, `rows >= 1` rows being left: from 1 to `rows`.
+    fn chunk_rows(&self, rows: usize) -> usize;
+    /// Steps every channel over a chunk of `len` validated rows and counts them; appends the
+    /// alarms tile after tile (each tile's in row order).
+    fn run_chunk(&mut self, rows: &[f64], len: usize, out: &mut Vec<ChannelAlarm>);
 }
 
-/// Validates one step's readings, then runs the kernel; on error the bank is unchanged.
-fn checked_step<K: Kernel>(
+/// Steps every row of a validated row-major matrix, a chunk of rows at a time. The tiles of a
+/// chunk run one after another, so its alarms are put back in step, then channel order (each
+/// pair is unique), as stepping row by row appends them.
+#[inline]
+fn drive<K: Kernel>(bank: &mut K, matrix: &[f64], out: &mut Vec<ChannelAlarm>) {
+    let n = bank.width();
+    // Rows counted once per call (a division: a `step` of few channels feels it).
+    let mut left = matrix.len() / n;
+    let mut rows = matrix;
+    while left > 0 {
+        let len = bank.chunk_rows(left);
+        let (now, rest) = rows.split_at(len * n);
+        let start = out.len();
+        bank.run_chunk(now, len, out);
+        out[start..].sort_unstable_by_key(|a| (a.alarm.index, a.channel));
+        (rows, left) = (rest, left - len);
+    }
+}
+
+/// Validates `rows` with `check` ([`check_readings`] for one step, [`check_matrix`] for a
+/// matrix), then runs the kernel over them; on error the bank is unchanged. `check` is a
+/// generic parameter, not a function pointer: the check is inlined (a `step` of 16 channels
+/// took 4 % more instructions with an indirect call).
+#[inline]
+fn checked<K: Kernel>(
     bank: &mut K,
-    readings: &[f64],
+    rows: &[f64],
     out: &mut Vec<ChannelAlarm>,
+    check: impl Fn(&[f64], usize) -> Result<(), Error>,
 ) -> Result<(), Error> {
-    check_readings(readings, bank.width())?;
-    bank.step_unchecked(readings, out);
+    check(rows, bank.width())?;
+    drive(bank, rows, out);
     Ok(())
+}
+
+/// Asks for the cache lines of `xs` (a hint: no fault, no effect on results).
+#[inline(always)]
+fn prefetch(xs: &[f64]) {
+    #[cfg(target_arch = "x86_64")]
+    for x in xs.iter().step_by(8) {
+        safe_arch::prefetch_t0(x);
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = xs;
 }
 
 /// Validates a row-major `T x channels` matrix.

@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 #[cfg(feature = "serde")]
 use super::shewhart_tiles::gather;
 use super::shewhart_tiles::{chunk, Chunk, Lanes};
-use super::{check_channels, check_matrix, checked_step, Kernel};
+use super::{check_channels, check_matrix, check_readings, checked, Kernel};
 use crate::alarm::ChannelAlarm;
 #[cfg(feature = "serde")]
 use crate::error::ensure;
@@ -107,13 +107,71 @@ fn rows_per_chunk(channels: usize) -> usize {
     (65_536 / channels).clamp(1, 512)
 }
 
+/// A chunk (see `shewhart_tiles`): the rows up to the next ring wrap, then the wrap's row alone
+/// (the step, the rebuild of the sums, then the screening, channel by channel, as row by row).
 impl Kernel for ShewhartBank {
     fn width(&self) -> usize {
         self.channels
     }
+
+    fn chunk_rows(&self, rows: usize) -> usize {
+        let (w, i, slot) = (self.config.window(), self.steps, self.pos);
+        // The row whose slot is the ring's last one wraps the ring.
+        if slot + 1 == w {
+            return 1;
+        }
+        // Up to the wrap, without it, and all filling or all full.
+        let filling = if i >= w as u64 {
+            w
+        } else {
+            (w as u64 - i) as usize
+        };
+        (w - 1 - slot)
+            .min(filling)
+            .min(rows_per_chunk(self.channels))
+            .min(rows)
+    }
+
     #[inline]
-    fn step_unchecked(&mut self, readings: &[f64], out: &mut Vec<ChannelAlarm>) {
-        self.advance_many(readings, out);
+    fn run_chunk(&mut self, rows: &[f64], len: usize, out: &mut Vec<ChannelAlarm>) {
+        let (w, n) = (self.config.window(), self.channels);
+        let (i, slot) = (self.steps, self.pos);
+        if i == 0 {
+            self.reference.copy_from_slice(&rows[..n]);
+        }
+        let full = i >= w as u64;
+        let wrap = slot + 1 == w;
+        // At a ring wrap, every channel is rebuilt periodically, and off-centre ones always.
+        let rebuild_all = wrap && self.since_rebuild + 1 >= REBUILD_MIN;
+        let k = Chunk {
+            rows,
+            channels: n,
+            first: i,
+            slot,
+            rebuild_all,
+            config: &self.config,
+        };
+        let mut lanes = Lanes {
+            reference: &mut self.reference,
+            s1: &mut self.s1,
+            c1: &mut self.c1,
+            s2: &mut self.s2,
+            c2: &mut self.c2,
+            ring: &mut self.ring,
+        };
+        match (full, wrap) {
+            (true, false) => chunk::<true, false>(&mut lanes, &k, out),
+            (true, true) => chunk::<true, true>(&mut lanes, &k, out),
+            (false, false) => chunk::<false, false>(&mut lanes, &k, out),
+            (false, true) => chunk::<false, true>(&mut lanes, &k, out),
+        }
+        self.steps = i + len as u64;
+        self.since_rebuild = if rebuild_all {
+            0
+        } else {
+            self.since_rebuild + len as u64
+        };
+        self.pos = if slot + len == w { 0 } else { slot + len };
     }
 }
 
@@ -160,7 +218,7 @@ impl ShewhartBank {
     /// All readings are validated first ([`Error::ChannelCount`], [`Error::NonFiniteReading`]);
     /// on error the bank is unchanged.
     pub fn step(&mut self, readings: &[f64], out: &mut Vec<ChannelAlarm>) -> Result<(), Error> {
-        checked_step(self, readings, out)
+        checked(self, readings, out, check_readings)
     }
 
     /// Feeds a row-major `T x channels` matrix (one row per time step), appending the alarms
@@ -168,74 +226,7 @@ impl ShewhartBank {
     /// would. The whole matrix is validated first; on error the bank is unchanged. Faster than
     /// stepping row by row: each channel's sums stay in registers over a chunk of rows.
     pub fn step_many(&mut self, matrix: &[f64], out: &mut Vec<ChannelAlarm>) -> Result<(), Error> {
-        check_matrix(matrix, self.channels)?;
-        self.advance_many(matrix, out);
-        Ok(())
-    }
-
-    /// Steps every row of a validated row-major matrix, a chunk of rows at a time (see
-    /// `shewhart_tiles`): the rows up to the next ring wrap, then the wrap's row alone (the
-    /// step, the rebuild of the sums, then the screening, channel by channel, as row by row).
-    fn advance_many(&mut self, matrix: &[f64], out: &mut Vec<ChannelAlarm>) {
-        let (w, n) = (self.config.window(), self.channels);
-        let mut rows = matrix;
-        while !rows.is_empty() {
-            let i = self.steps;
-            if i == 0 {
-                self.reference.copy_from_slice(&rows[..n]);
-            }
-            let slot = self.pos;
-            let full = i >= w as u64;
-            // The row whose slot is the ring's last one wraps the ring.
-            let wrap = slot + 1 == w;
-            let len = if wrap {
-                1
-            } else {
-                // Up to the wrap, without it, and all filling or all full.
-                let filling = if full { w } else { (w as u64 - i) as usize };
-                (w - 1 - slot)
-                    .min(filling)
-                    .min(rows_per_chunk(n))
-                    .min(rows.len() / n)
-            };
-            let (now, rest) = rows.split_at(len * n);
-            rows = rest;
-            let start = out.len();
-            // At a ring wrap, every channel is rebuilt periodically, and off-centre ones always.
-            let rebuild_all = wrap && self.since_rebuild + 1 >= REBUILD_MIN;
-            let k = Chunk {
-                rows: now,
-                channels: n,
-                first: i,
-                slot,
-                rebuild_all,
-                config: &self.config,
-            };
-            let mut lanes = Lanes {
-                reference: &mut self.reference,
-                s1: &mut self.s1,
-                c1: &mut self.c1,
-                s2: &mut self.s2,
-                c2: &mut self.c2,
-                ring: &mut self.ring,
-            };
-            match (full, wrap) {
-                (true, false) => chunk::<true, false>(&mut lanes, &k, out),
-                (true, true) => chunk::<true, true>(&mut lanes, &k, out),
-                (false, false) => chunk::<false, false>(&mut lanes, &k, out),
-                (false, true) => chunk::<false, true>(&mut lanes, &k, out),
-            }
-            // Tiles ran one after another: put the chunk's alarms back in step, then channel,
-            // order (each pair is unique), as stepping row by row appends them.
-            out[start..].sort_unstable_by_key(|a| (a.alarm.index, a.channel));
-            self.steps = i + len as u64;
-            self.since_rebuild = if rebuild_all {
-                0
-            } else {
-                self.since_rebuild + len as u64
-            };
-            self.pos = if slot + len == w { 0 } else { slot + len };
-        }
+        checked(self, matrix, out, check_matrix)
     }
 
     /// Back to the state of [`ShewhartBank::new`].

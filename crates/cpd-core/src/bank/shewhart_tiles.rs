@@ -18,6 +18,7 @@
 
 use alloc::vec::Vec;
 
+use super::prefetch;
 use crate::alarm::{Alarm, ChannelAlarm};
 use crate::shewhart::{exact_decision, Lane, ShewhartConfig, Sums};
 
@@ -90,18 +91,6 @@ wide_vector!(wide::f64x8, 8);
 type F = wide::f64x4;
 #[cfg(not(target_feature = "avx512f"))]
 wide_vector!(wide::f64x4, 4);
-
-/// Asks for the cache line of `x` (a hint: no fault, no effect on results).
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn prefetch(x: &f64) {
-    safe_arch::prefetch_t0(x);
-}
-
-/// No prefetch hint on this target.
-#[cfg(not(target_arch = "x86_64"))]
-#[inline(always)]
-fn prefetch(_: &f64) {}
 
 /// Vectors per tile: with AVX-512, two chains of sums in flight; otherwise one (with 16
 /// registers, the sums of two vectors would not stay in them).
@@ -318,13 +307,9 @@ fn tile<V: Vector, const GV: usize, const FULL: bool, const WRAP: bool>(
         // the rows of a wide matrix and of the ring, the hardware prefetchers do not see them
         // coming.
         if let Some(ahead) = row.get(c + AHEAD..c + AHEAD + TILE) {
-            for x in ahead.iter().step_by(8) {
-                prefetch(x);
-            }
+            prefetch(ahead);
             if FULL {
-                for x in l.ring[at + AHEAD..at + AHEAD + TILE].iter().step_by(8) {
-                    prefetch(x);
-                }
+                prefetch(&l.ring[at + AHEAD..at + AHEAD + TILE]);
             }
         }
         let ring = &mut l.ring[at..at + width];
@@ -369,6 +354,9 @@ pub(super) fn chunk<const FULL: bool, const WRAP: bool>(
     k: &Chunk<'_>,
     out: &mut Vec<ChannelAlarm>,
 ) {
+    // Two plain loops, not one over an iterator or a closure: `tile` is inlined here, and
+    // anything more live across it (an iterator's state, a closure's captured references)
+    // costs the kernel registers (measured: 8 % more instructions at 1 024 channels).
     let mut c = 0;
     while c + TILE <= k.channels {
         tile::<F, G, FULL, WRAP>(l, c, k, out);

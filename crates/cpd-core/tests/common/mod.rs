@@ -105,3 +105,23 @@ pub fn snapshots(seed: u64, n: usize) -> Vec<(&'static str, Vec<u8>)> {
         ("ShewhartBank", to_bytes(&sb)),
     ]
 }
+
+/// The CBOR payload of format-2 snapshot bytes: what lies between the 13-byte header (magic,
+/// version, length) and the 4-byte CRC-32C.
+pub fn payload(bytes: &[u8]) -> &[u8] {
+    assert_eq!(&bytes[..4], b"CPDS", "a format-2 snapshot");
+    &bytes[13..bytes.len() - 4]
+}
+
+/// A CBOR payload framed as a format-2 snapshot with its valid length and checksum, as
+/// `cpd_core::snapshot::to_bytes` frames it: for tests of what lies behind the checksum.
+pub fn seal(payload: &[u8]) -> Vec<u8> {
+    use cpd_core::snapshot::{crc32c, FORMAT, MAGIC};
+    let mut bytes = MAGIC.to_vec();
+    bytes.push(FORMAT);
+    bytes.extend_from_slice(&((13 + payload.len() + 4) as u64).to_le_bytes());
+    bytes.extend_from_slice(payload);
+    let crc = crc32c(&bytes);
+    bytes.extend_from_slice(&crc.to_le_bytes());
+    bytes
+}
