@@ -52,7 +52,6 @@ median).
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -65,7 +64,7 @@ from burstloc import _core
 from burstloc._validate import check_names, check_number
 from burstloc.constants import CAPTURE_INTERVALS, SIGNATURE_DECISION_DELAY, WAVE_SPEED
 from burstloc.exceptions import ConfigError, InputError
-from burstloc.inp import check_meters, network_hash
+from burstloc.inp import check_meters
 from burstloc.localize.config import (
     MAX_CAPTURE_INTERVAL,
     MAX_METERS,
@@ -74,6 +73,7 @@ from burstloc.localize.config import (
 )
 
 if TYPE_CHECKING:
+    from burstloc.network import NetworkSource
     from burstloc.sim.signatures.compute import SignatureMethod
 
 __all__ = [
@@ -278,7 +278,7 @@ def localization_interval(capture_interval: float, travel_spread: float) -> int:
 
 
 def calibrate(
-    network: str | os.PathLike[str],
+    network: NetworkSource,
     *,
     capture_intervals: Sequence[float] = CAPTURE_INTERVALS,
     noise_sigma: float | None = None,
@@ -301,7 +301,7 @@ def calibrate(
     its burst signatures by ``signatures`` (:data:`burstloc.sim.signatures.compute.SignatureMethod`;
     the hybrid method's EPANET runs over ``workers`` local processes, default one per CPU).
     """
-    from burstloc.network import junction_names, load_network
+    from burstloc.network import as_network
     from burstloc.sim.model.prepare import length_graph, prepare_model, travel_time_spread
     from burstloc.sim.signatures.compute import signature_method
 
@@ -319,8 +319,8 @@ def calibrate(
         raise ConfigError("at least one capture interval is needed")
     if baseline is not None and noise_sigma is not None:
         raise ConfigError("give either a recorded baseline or noise_sigma, not both")
-    wn = load_network(network)
-    junctions = junction_names(wn)
+    read = as_network(network)
+    wn, junctions = read.model, list(read.junctions)
     if baseline is not None:
         meter_list = list(baseline.meters)
         if meters is not None and tuple(meters) != baseline.meters:
@@ -329,7 +329,7 @@ def calibrate(
         meter_list = list(
             junctions if meters is None else check_names(meters, "meters", high=MAX_METERS)
         )
-    check_meters(meter_list, junctions, network, ConfigError)
+    check_meters(meter_list, junctions, read.path, ConfigError)
     if baseline is not None:
         sigmas = check_baseline(baseline)
         kind = "recorded"
@@ -376,20 +376,18 @@ def calibrate(
                 arrival_decision_delay=max(pipe_travel, 2 * dt),
             )
         )
-    digest = network_hash(network)
     return Calibration(
-        name=name or f"{Path(network).stem}-calibrated",
-        network=os.fspath(network),
-        network_hash=digest,
+        name=name or f"{Path(read.path).stem}-calibrated",
+        network=read.path,
+        network_hash=read.hash,
         meters=tuple(meter_list),
         noise_sigma={m: float(s) for m, s in zip(meter_list, sigmas, strict=True)},
         false_alarm_rate=float(false_alarm_rate),
         intervals=tuple(items),
         model=prepare_model(
-            network,
+            read,
             meter_list,
             wave_speed=wave_speed,
-            wn=wn,
             signatures=signatures,
             workers=workers,
         ),

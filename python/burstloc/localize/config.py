@@ -43,8 +43,9 @@ from burstloc._validate import (
     read_json_npz,
 )
 from burstloc.exceptions import ConfigError
-from burstloc.inp import check_meters, junction_names_in_file, network_hash
+from burstloc.inp import check_meters, junction_names_in_file
 from burstloc.localize.model import LocalizationModel
+from burstloc.network import Network, NetworkSource, identify
 
 __all__ = ["CALIBRATION_FORMAT", "Calibration", "IntervalCalibration", "calibrated_bank"]
 
@@ -250,17 +251,21 @@ class Calibration:
             f"capture interval (it has {have} s); run `burstloc calibrate` for it"
         )
 
-    def check(self, network: str | os.PathLike[str], meters: Sequence[str] | None = None) -> None:
+    def check(self, network: NetworkSource, meters: Sequence[str] | None = None) -> None:
         """Refuse (ConfigError) to be used with another network or another set of meters, or
-        with meters that are not junctions of ``network`` (a configuration edited by hand)."""
-        digest = network_hash(network)
+        with meters that are not junctions of ``network`` (a configuration edited by hand).
+        An INP file is hashed and its junctions read from its text (no model is built)."""
+        junctions = (  # an INP file's junctions first: the file is read once, then hashed
+            network.junctions if isinstance(network, Network) else junction_names_in_file(network)
+        )
+        path, digest = identify(network)
         if digest != self.network_hash:
             raise ConfigError(
                 f"configuration {self.name!r} was calibrated for network {self.network!r} "
-                f"({self.network_hash}), not for {os.fspath(network)!r} ({digest})"
+                f"({self.network_hash}), not for {path!r} ({digest})"
             )
-        where = f"{os.fspath(network)} (in configuration {self.name!r})"
-        check_meters(self.meters, junction_names_in_file(network), where, ConfigError)
+        where = f"{path} (in configuration {self.name!r})"
+        check_meters(self.meters, junctions, where, ConfigError)
         if meters is not None and tuple(meters) != self.meters:
             missing = sorted(set(self.meters) - set(meters))
             extra = sorted(set(meters) - set(self.meters))

@@ -244,7 +244,7 @@ def _simulate(scenario: EventScenario) -> ScenarioResult:
     started = time.perf_counter()
     source = os.path.abspath(scenario.network)
     with isolated_run() as tmp, capture_diagnostics() as diag:
-        wn = network.load_network(source)
+        wn = network.as_network(source, diagnostics=True).editable()  # the events change it
         nodes = _asset_nodes(wn, scenario)
         meters = network.junction_names(wn)
         prepared = prepare_for_tsnet(wn, keep=(scenario.asset,))

@@ -72,7 +72,7 @@ from burstloc._atomic import write_json
 from burstloc._validate import Fields, check_count, check_names, check_string, read_json
 from burstloc.constants import WAVE_SPEED
 from burstloc.exceptions import ConfigError
-from burstloc.inp import network_hash
+from burstloc.network import NetworkSource, as_network, identify
 from burstloc.sim.placement._checks import check_meter_count, meter_geometry
 from burstloc.sim.placement.arrival import ARRIVAL_POINTS, arrival_meters, arrival_separation
 from burstloc.sim.placement.region import ambiguous_length, region_meters
@@ -163,13 +163,13 @@ class MeterSet:
         object.__setattr__(self, "meters", check_names(self.meters, "meters", high=MAX_METERS))
         check_count(self.junctions, "junctions", high=MAX_JUNCTIONS)
 
-    def check(self, network: str | os.PathLike[str]) -> tuple[str, ...]:
+    def check(self, network: NetworkSource) -> tuple[str, ...]:
         """The meters, once the file is known to be for ``network`` (ConfigError otherwise)."""
-        found = network_hash(network)
+        where, found = identify(network)
         if found != self.network_hash:
             raise ConfigError(
                 f"the meter file was made for network {self.network} ({self.network_hash}), "
-                f"not for {os.fspath(network)} ({found}); run `burstloc place` for it"
+                f"not for {where} ({found}); run `burstloc place` for it"
             )
         return self.meters
 
@@ -209,7 +209,7 @@ class MeterSet:
 
 
 def place_meters(
-    network: str | os.PathLike[str],
+    network: NetworkSource,
     count: int,
     *,
     method: str = "arrival",
@@ -217,7 +217,7 @@ def place_meters(
     resolution: float = 0.2,
     scaling: Scaling = DEFAULT_SCALING,
 ) -> MeterSet:
-    """Place ``count`` meters on the junctions of the INP file ``network`` by ``method``
+    """Place ``count`` meters on the junctions of ``network`` (or its INP file) by ``method``
     (module docstring); ``resolution`` (s) is the ``arrival`` and ``region`` methods' capture
     interval. On a network of more junctions than ``scaling.above`` those two methods run on
     a reduced problem (:mod:`burstloc.sim.placement.scaled`).
@@ -226,17 +226,17 @@ def place_meters(
         NetworkError: missing or malformed network.
         ConfigError: unknown method, ``count`` out of range.
     """
-    from burstloc.network import load_network
     from burstloc.sim.model.prepare import arrival_geometry
     from burstloc.sim.signatures.compute import cached_signatures
 
     if method not in PLACEMENT_METHODS:
         raise ConfigError(f"unknown placement method {method!r}; use one of {PLACEMENT_METHODS}")
-    wn = load_network(network)
-    junctions = list(wn.junction_name_list)
+    read = as_network(network)
+    wn = read.model
+    junctions = list(read.junctions)
     check_meter_count(count, len(junctions))
     if method == "coverage":
-        meters = coverage_meters(cached_signatures(network, junctions), count)
+        meters = coverage_meters(cached_signatures(read, junctions), count)
     elif scaling.applies(len(junctions)):
         problem = reduced_problem(wn, count, scaling)
         if method == "arrival":
@@ -267,11 +267,11 @@ def place_meters(
         meters = place(
             pipes, junctions, distances, count, wave_speed=wave_speed, resolution=resolution
         )
-    return MeterSet(os.fspath(network), network_hash(network), method, meters, len(junctions))
+    return MeterSet(read.path, read.hash, method, meters, len(junctions))
 
 
 def meter_separation(
-    network: str | os.PathLike[str],
+    network: NetworkSource,
     meters: Sequence[str],
     *,
     wave_speed: float = WAVE_SPEED,
@@ -288,7 +288,7 @@ def meter_separation(
 
 
 def meter_scores(
-    network: str | os.PathLike[str],
+    network: NetworkSource,
     meters: Sequence[str],
     *,
     wave_speed: float = WAVE_SPEED,

@@ -39,7 +39,6 @@ precision).
 
 from __future__ import annotations
 
-import os
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
@@ -50,6 +49,7 @@ from burstloc.constants import WAVE_SPEED
 from burstloc.exceptions import ConfigError
 from burstloc.localize.arrival import ArrivalLocalizer, PipeGeometry
 from burstloc.localize.region import GRID_STEP, RegionGrid
+from burstloc.network import NetworkSource
 from burstloc.sim.placement._checks import check_meter_count, check_timing, meter_geometry
 
 __all__ = [
@@ -321,7 +321,7 @@ def ambiguous_length(
 
 
 def meter_ambiguity(
-    network: str | os.PathLike[str],
+    network: NetworkSource,
     meters: Sequence[str],
     *,
     wave_speed: float = WAVE_SPEED,
