@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 from burstloc.exceptions import ConfigError
 
 if TYPE_CHECKING:
+    from burstloc.network import NetworkSource
     from burstloc.sim.scenarios.cache import DiskCache
 
 __all__ = [
@@ -95,7 +96,7 @@ def add_solver_option(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def meters_of(args: argparse.Namespace, network: str) -> tuple[str, ...] | None:
+def meters_of(args: argparse.Namespace, network: NetworkSource) -> tuple[str, ...] | None:
     """The meters of ``--meters-file`` for ``network`` (ConfigError: another network or a bad
     file), or ``None`` without the option."""
     if args.meters_file is None:

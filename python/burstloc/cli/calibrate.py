@@ -87,14 +87,16 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> int:
     """Handle ``burstloc calibrate``."""
     from burstloc.experiments.calibrate import calibrate
+    from burstloc.network import read_network
 
     check_output(args.out)
+    network = read_network(args.network)
     config = calibrate(
-        args.network,
+        network,
         capture_intervals=args.capture_interval,
         noise_sigma=args.noise,
         false_alarm_rate=args.false_alarm_rate,
-        meters=args.meters if args.meters_file is None else meters_of(args, args.network),
+        meters=args.meters if args.meters_file is None else meters_of(args, network),
         name=args.name,
         signatures=args.signatures,
         workers=args.workers,

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 from dataclasses import replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from burstloc._atomic import check_output
 from burstloc.cli._options import (
@@ -22,6 +22,9 @@ from burstloc.cli._options import (
 from burstloc.constants import DETECTORS, LOCALIZERS, METER_MODELS
 from burstloc.exceptions import ConfigError
 from burstloc.experiments.evaluate import DEFAULT_LOCALIZER
+
+if TYPE_CHECKING:
+    from burstloc.network import Network
 
 __all__ = ["add_parser", "run"]
 
@@ -203,6 +206,7 @@ def run(args: argparse.Namespace) -> int:
     from burstloc.experiments import paper, report
     from burstloc.experiments.evaluate import evaluate
     from burstloc.experiments.runs import plan_runs
+    from burstloc.network import read_network
 
     for path in (args.json, args.csv, args.classifier_out):
         if path:
@@ -222,7 +226,8 @@ def run(args: argparse.Namespace) -> int:
         sigma=args.sigma,
         localization_interval=args.localization_interval,
     )
-    meters = meters_of(args, args.network)
+    network = read_network(args.network)
+    meters = meters_of(args, network)
     config = None
     if args.config:
         from burstloc.localize.config import Calibration
@@ -246,7 +251,7 @@ def run(args: argparse.Namespace) -> int:
     if args.noise_seed < 0:
         raise ConfigError(f"--noise-seed must be >= 0, got {args.noise_seed}")
     ev = evaluate(
-        args.network,
+        network,
         runs,
         pipes=args.pipes,
         phases=args.phases,
@@ -266,7 +271,7 @@ def run(args: argparse.Namespace) -> int:
     )
     print(report.format_tables(ev, True if args.paper_tables else None), end="")
     if args.events:
-        _events(args, ev, cache)
+        _events(args, network, ev, cache)
     if args.json:
         print(f"wrote {report.write_json(ev, args.json)}")
     if args.csv:
@@ -279,27 +284,29 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _events(args: argparse.Namespace, ev: Any, cache: Any) -> None:
+def _events(args: argparse.Namespace, network: Network, ev: Any, cache: Any) -> None:
     """Classify the evaluation's bursts and the default events; add the table to ``ev``."""
     from burstloc.experiments.specificity import evaluate_events
     from burstloc.localize.classify import ClassifierConfig
+    from burstloc.network import read_network
     from burstloc.sim.scenarios.scenario import burst_scenarios
     from burstloc.sim.transient.time_step import with_capture_time_step
     from burstloc.sim.transient.tsnet import simulate_many
 
     intervals = sorted({r.spec.capture_interval for r in ev.runs})
     duration = float(ev.scenario["duration"])
-    calibration = args.classifier_network or args.network
-    if calibration == args.network:
-        cal_bursts = dict(ev.results)
-    else:
+    calibration = network
+    if args.classifier_network and args.classifier_network != args.network:
+        calibration = read_network(args.classifier_network)
         scenarios = with_capture_time_step(
             burst_scenarios(calibration, None, **ev.scenario), min(intervals)
         )
         report = simulate_many(scenarios, cache=cache, workers=args.workers, progress=False)
         cal_bursts = {s.pipe: r for s, r in report.succeeded()}
+    else:
+        cal_bursts = dict(ev.results)
     spec, config = evaluate_events(
-        args.network,
+        network,
         dict(ev.results),
         intervals,
         calibration_network=calibration,

@@ -78,14 +78,16 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Handle ``burstloc place``: print the meters; write the file with ``--out``."""
+    from burstloc.network import read_network
     from burstloc.sim.placement.methods import meter_scores, place_meters
 
     if args.out:
         check_output(args.out)
     if args.compare:
         check_run_options(args)
+    network = read_network(args.network)
     placed = place_meters(
-        args.network,
+        network,
         args.meters,
         method=args.method,
         wave_speed=args.wave_speed,
@@ -96,7 +98,7 @@ def run(args: argparse.Namespace) -> int:
         + " ".join(placed.meters)
     )
     told, ambiguous = meter_scores(
-        args.network, placed.meters, wave_speed=args.wave_speed, resolution=args.capture_interval
+        network, placed.meters, wave_speed=args.wave_speed, resolution=args.capture_interval
     )
     print(
         f"arrival separation at {args.capture_interval:g} s: {100 * told:.0f} % of the candidate "
@@ -112,7 +114,7 @@ def run(args: argparse.Namespace) -> int:
         from burstloc.experiments.placements import compare_placements, format_comparison
 
         rows = compare_placements(
-            args.network,
+            network,
             args.meters,
             capture_interval=args.capture_interval,
             phases=args.phases,
