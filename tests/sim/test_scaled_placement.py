@@ -157,7 +157,7 @@ def test_ambiguous_length_in_blocks_of_bursts(
 ) -> None:
     """A large grid's objective is summed over blocks of bursts (bounded memory): the same
     value as all pairs at once."""
-    from burstloc.sim.placement.methods import region as region_placement
+    from burstloc.sim.placement import region as region_placement
     from burstloc.sim.placement.region import ambiguous_length
 
     meters = ["N4", "N7", "1", "8"]
