@@ -249,10 +249,22 @@ def load_network(network: NetworkSource) -> WaterNetworkModel:
     return as_network(network).editable()
 
 
+#: Where the warnings WNTR gives while reading a file are registered (as a module's own
+#: ``__warningregistry__``: a warning the filters show once is shown once).
+_WARNED: dict[Any, Any] = {}
+
+
 def _read(wntr: Any, read: Path, file: Path) -> WaterNetworkModel:
-    """WNTR's model of ``read`` (the text of ``file``); its errors name ``file`` and the line."""
+    """WNTR's model of ``read`` (the text of ``file``); its errors and warnings name ``file``
+    (and the line)."""
     try:
-        return wntr.network.WaterNetworkModel(str(read))
+        with warnings.catch_warnings(record=True) as said:
+            warnings.simplefilter("always")
+            wn = wntr.network.WaterNetworkModel(str(read))
+        for w in said:  # said again, naming the file read, not its temporary copy
+            text = str(w.message).replace(str(read), str(file))
+            warnings.warn_explicit(text, w.category, w.filename, w.lineno, registry=_WARNED)
+        return wn
     except Exception as exc:  # WNTR raises many types for bad input; name file and line
         detail = str(exc)
         line = None
