@@ -1,11 +1,13 @@
-"""Options several subcommands share: where simulations run and whether they are cached."""
+"""Options several subcommands share: the network, numbers, the burst and the sensor noise,
+where simulations run and whether they are cached."""
 
 from __future__ import annotations
 
 import argparse
 import math
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
+from burstloc.constants import WAVE_SPEED
 from burstloc.exceptions import ConfigError
 
 if TYPE_CHECKING:
@@ -14,14 +16,20 @@ if TYPE_CHECKING:
 
 __all__ = [
     "DefaultsFormatter",
+    "add_burst_options",
     "add_meters_file_option",
     "add_min_pipe_length_option",
+    "add_network_argument",
+    "add_noise_option",
+    "add_number",
     "add_run_options",
     "add_solver_option",
     "add_time_step_option",
+    "add_wave_speed_option",
     "cache_of",
     "check_run_options",
     "meters_of",
+    "run_of",
     "time_step_of",
 ]
 
@@ -43,6 +51,63 @@ class DefaultsFormatter(argparse.HelpFormatter):
         ):
             return action.help
         return f"{text} (default: %(default)s)" if text else "default: %(default)s"
+
+
+Options = argparse.ArgumentParser | argparse._ArgumentGroup
+"""Where options are added: a parser or one of its groups."""
+
+
+def add_network_argument(parser: argparse.ArgumentParser) -> None:
+    """The ``NETWORK.inp`` argument: the EPANET INP file (read once, at the command's edge)."""
+    parser.add_argument("network", metavar="NETWORK.inp", help="EPANET INP file")
+
+
+def add_number(
+    parser: Options,
+    flag: str,
+    default: Any,
+    metavar: str,
+    help: str | None = None,
+    *,
+    kind: type[float] | type[int] = float,
+    many: bool = False,
+) -> None:
+    """A number option ``flag`` of type ``kind`` (one or more of them with ``many``)."""
+    parser.add_argument(
+        flag, type=kind, nargs="+" if many else None, default=default, metavar=metavar, help=help
+    )
+
+
+def add_noise_option(parser: Options, default: float | None, help: str) -> None:
+    """``--noise SIGMA``: the meters' Gaussian noise, standard deviation in m (``help`` says
+    what it is for in the command)."""
+    add_number(parser, "--noise", default, "SIGMA", f"the meters' Gaussian noise, m: {help}")
+
+
+def add_wave_speed_option(parser: Options, help: str = "pressure wave speed, m/s") -> None:
+    """``--wave-speed A``: the pressure wave speed (:data:`burstloc.constants.WAVE_SPEED`)."""
+    add_number(parser, "--wave-speed", WAVE_SPEED, "A", help)
+
+
+def add_burst_options(parser: Options, position: float | None, burst_coeff: float | None) -> None:
+    """``--position F`` and ``--burst-coeff C``: where each burst opens and its size."""
+    add_number(
+        parser,
+        "--position",
+        position,
+        "F",
+        "where each burst opens, as a fraction of its pipe's length from the pipe's INP start "
+        "node, strictly between 0 and 1 (default 0.5, mid-pipe)",
+    )
+    add_number(
+        parser,
+        "--burst-coeff",
+        burst_coeff,
+        "C",
+        "the bursts' final emitter coefficient, m^3/s per m^0.5 of pressure head (default "
+        "0.02, the paper's scenario: the burst draws 0.02 x sqrt(pressure head) m^3/s, which "
+        "can be more than a small network's whole demand)",
+    )
 
 
 def add_run_options(parser: argparse.ArgumentParser, *, cache: bool = True) -> None:
@@ -106,6 +171,12 @@ def meters_of(args: argparse.Namespace, network: NetworkSource) -> tuple[str, ..
     return MeterSet.load(args.meters_file).check(network)
 
 
+def run_of(args: argparse.Namespace) -> dict[str, Any]:
+    """The keywords of a sweep the run options ask for: ``workers``, ``scheduler`` and
+    ``progress`` (not with ``--quiet``)."""
+    return {"workers": args.workers, "scheduler": args.scheduler, "progress": not args.quiet}
+
+
 def cache_of(args: argparse.Namespace) -> DiskCache | bool:
     """The simulation cache the options ask for (``False``: none)."""
     from burstloc.sim.scenarios.cache import DiskCache
@@ -122,16 +193,12 @@ def check_run_options(args: argparse.Namespace) -> None:
         check_scheduler(args.scheduler)
 
 
-def add_time_step_option(parser: argparse.ArgumentParser) -> None:
-    """``--time-step S``: TSNet's requested time step (default: the capture rule)."""
-    parser.add_argument(
-        "--time-step",
-        type=float,
-        default=None,
-        metavar="S",
-        help="TSNet's time step in seconds (default: TSNet's largest stable step, or half the "
-        "finest capture interval where TSNet's is coarser)",
-    )
+def add_time_step_option(parser: argparse.ArgumentParser, *, capture_rule: bool = True) -> None:
+    """``--time-step S``: TSNet's requested time step (default: TSNet's largest, or with
+    ``capture_rule`` half the finest capture interval where TSNet's is coarser)."""
+    rule = ", or half the finest capture interval where TSNet's is coarser" if capture_rule else ""
+    text = f"TSNet's time step in seconds (default: TSNet's largest stable step{rule})"
+    add_number(parser, "--time-step", None, "S", text)
 
 
 def time_step_of(args: argparse.Namespace) -> float | None:

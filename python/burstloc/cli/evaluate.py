@@ -17,6 +17,7 @@ from burstloc.cli._options import (
     cache_of,
     check_run_options,
     meters_of,
+    run_of,
     time_step_of,
 )
 from burstloc.constants import DETECTORS, LOCALIZERS, METER_MODELS
@@ -258,9 +259,7 @@ def run(args: argparse.Namespace) -> int:
         phase_span=args.phase_span,
         scenario=scenario,
         cache=cache,
-        workers=args.workers,
-        scheduler=args.scheduler,
-        progress=not args.quiet,
+        **run_of(args),
         config=config,
         meters=meters,
         time_step=time_step,

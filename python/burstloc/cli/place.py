@@ -6,7 +6,7 @@ import argparse
 from typing import Any
 
 from burstloc._atomic import check_output
-from burstloc.cli._options import add_run_options, check_run_options
+from burstloc.cli._options import add_run_options, check_run_options, run_of
 from burstloc.constants import WAVE_SPEED
 
 __all__ = ["add_parser", "run"]
@@ -119,9 +119,7 @@ def run(args: argparse.Namespace) -> int:
             capture_interval=args.capture_interval,
             phases=args.phases,
             position=args.position,
-            workers=args.workers,
-            scheduler=args.scheduler,
-            progress=not args.quiet,
+            **run_of(args),
         )
         print(format_comparison(rows), end="")
     return 0
