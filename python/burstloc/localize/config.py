@@ -35,6 +35,7 @@ from burstloc._atomic import write_json, write_json_npz
 from burstloc._validate import (
     FieldError,
     Fields,
+    attributes,
     check_count,
     check_names,
     check_number,
@@ -147,8 +148,7 @@ class IntervalCalibration:
     def to_json(self) -> dict[str, Any]:
         """JSON-ready dictionary."""
         return {
-            "capture_interval": self.capture_interval,
-            "localization_interval": self.localization_interval,
+            **attributes(self, "capture_interval", "localization_interval"),
             "cusum": {"threshold": dict(self.cusum_threshold), "drift": dict(self.cusum_drift)},
             "shewhart": {"threshold": dict(self.shewhart_threshold), "sigma": self.shewhart_sigma},
             "decision_delay_s": self.decision_delay,
@@ -163,17 +163,18 @@ class IntervalCalibration:
         and the field)."""
         fields = data if isinstance(data, Fields) else Fields(data, source)
         cusum, shewhart = fields.obj("cusum"), fields.obj("shewhart")
-        with fields.checking():
-            return cls(
-                capture_interval=fields.get("capture_interval"),
-                localization_interval=fields.get("localization_interval"),
-                cusum_threshold=cusum.get("threshold"),
-                cusum_drift=cusum.get("drift"),
-                shewhart_threshold=shewhart.get("threshold"),
-                shewhart_sigma=shewhart.get("sigma"),
-                decision_delay=fields.get("decision_delay_s"),
-                arrival_decision_delay=fields.get("arrival_decision_delay_s"),
-            )
+        return fields.build(
+            cls,
+            ("capture_interval", "localization_interval"),
+            {
+                "decision_delay": "decision_delay_s",
+                "arrival_decision_delay": "arrival_decision_delay_s",
+            },
+            cusum_threshold=cusum.get("threshold"),
+            cusum_drift=cusum.get("drift"),
+            shewhart_threshold=shewhart.get("threshold"),
+            shewhart_sigma=shewhart.get("sigma"),
+        )
 
 
 @dataclass(frozen=True)
@@ -278,9 +279,7 @@ class Calibration:
         """JSON-ready dictionary (see :data:`CALIBRATION_FORMAT`)."""
         return {
             "format": CALIBRATION_FORMAT,
-            "name": self.name,
-            "network": self.network,
-            "network_hash": self.network_hash,
+            **attributes(self, "name", "network", "network_hash"),
             "meters": list(self.meters),
             "noise_sigma": dict(self.noise_sigma),
             "false_alarm_rate_per_hour": self.false_alarm_rate,
@@ -316,18 +315,14 @@ class Calibration:
         model = fields.obj("model")
         with model.checking():
             stored_model = LocalizationModel.from_json(model.data)
-        with fields.checking():
-            return cls(
-                name=fields.get("name"),
-                network=fields.get("network"),
-                network_hash=fields.get("network_hash"),
-                meters=fields.get("meters"),
-                noise_sigma=fields.get("noise_sigma"),
-                false_alarm_rate=fields.get("false_alarm_rate_per_hour"),
-                intervals=tuple(intervals),
-                model=stored_model,
-                provenance=fields.optional_object("provenance"),
-            )
+        return fields.build(
+            cls,
+            ("name", "network", "network_hash", "meters", "noise_sigma"),
+            {"false_alarm_rate": "false_alarm_rate_per_hour"},
+            intervals=tuple(intervals),
+            model=stored_model,
+            provenance=fields.optional_object("provenance"),
+        )
 
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the configuration (atomically); returns the path. A path ending in ``.npz``

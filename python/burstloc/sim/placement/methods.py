@@ -69,7 +69,14 @@ from typing import Any
 import numpy as np
 
 from burstloc._atomic import write_json
-from burstloc._validate import Fields, check_count, check_names, check_string, read_json
+from burstloc._validate import (
+    Fields,
+    attributes,
+    check_count,
+    check_names,
+    check_string,
+    read_json,
+)
 from burstloc.constants import WAVE_SPEED
 from burstloc.exceptions import ConfigError
 from burstloc.network import NetworkSource, as_network, identify
@@ -177,9 +184,7 @@ class MeterSet:
         """The meter file's document."""
         return {
             "format": METERS_FORMAT,
-            "network": self.network,
-            "network_hash": self.network_hash,
-            "method": self.method,
+            **attributes(self, "network", "network_hash", "method"),
             "meters": list(self.meters),
             "junctions": self.junctions,
         }
@@ -198,14 +203,7 @@ class MeterSet:
                 f"{source}: not a burstloc meter file (format {fields.data.get('format')!r}, "
                 f"want {METERS_FORMAT!r}); write one with `burstloc place`"
             )
-        with fields.checking():
-            return cls(
-                network=fields.get("network"),
-                network_hash=fields.get("network_hash"),
-                method=fields.get("method"),
-                meters=fields.get("meters"),
-                junctions=fields.get("junctions"),
-            )
+        return fields.build(cls, ("network", "network_hash", "method", "meters", "junctions"))
 
 
 def place_meters(
@@ -270,21 +268,10 @@ def place_meters(
     return MeterSet(read.path, read.hash, method, meters, len(junctions))
 
 
-def meter_separation(
-    network: NetworkSource,
-    meters: Sequence[str],
-    *,
-    wave_speed: float = WAVE_SPEED,
-    resolution: float = 0.2,
-) -> float:
-    """:func:`arrival_separation` of ``meters`` on the INP file ``network``.
-
-    Raises:
-        NetworkError: missing or malformed network, or a meter that is not a junction.
-        ConfigError: no meter, a bad wave speed or resolution.
-    """
-    pipes, distances = meter_geometry(network, meters)
-    return arrival_separation(pipes, distances, wave_speed=wave_speed, resolution=resolution)
+def meter_separation(network: NetworkSource, meters: Sequence[str], **timing: float) -> float:
+    """:func:`arrival_separation` of ``meters`` on ``network`` (:func:`meter_scores`' first,
+    alone; ``timing``: ``wave_speed``, ``resolution``)."""
+    return meter_scores(network, meters, scores=("separation",), **timing)[0]
 
 
 def meter_scores(
@@ -293,18 +280,25 @@ def meter_scores(
     *,
     wave_speed: float = WAVE_SPEED,
     resolution: float = 0.2,
-) -> tuple[float, float]:
-    """:func:`meter_separation` and
-    :func:`~burstloc.sim.placement.region.meter_ambiguity` of ``meters`` at once, from one
-    arrival geometry (what ``burstloc place`` prints).
+    scores: Sequence[str] = ("separation", "ambiguity"),
+) -> tuple[float, ...]:
+    """The ``scores`` of ``meters`` on ``network`` from one arrival geometry (what ``burstloc
+    place`` prints): ``"separation"``, :func:`arrival_separation`; ``"ambiguity"``,
+    :func:`~burstloc.sim.placement.region.ambiguous_length` (m).
 
     Raises:
         NetworkError: missing or malformed network, or a meter that is not a junction.
-        ConfigError: no meter, a bad wave speed or resolution.
+        ConfigError: no meter, a bad wave speed or resolution, an unknown score.
     """
+    unknown = [s for s in scores if s not in ("separation", "ambiguity")]
+    if unknown:
+        raise ConfigError(f"unknown meter score(s) {unknown}: use 'separation', 'ambiguity'")
     pipes, distances = meter_geometry(network, meters)
-    told = arrival_separation(pipes, distances, wave_speed=wave_speed, resolution=resolution)
-    ambiguous = ambiguous_length(
-        pipes, tuple(meters), distances, wave_speed=wave_speed, resolution=resolution
+    return tuple(
+        arrival_separation(pipes, distances, wave_speed=wave_speed, resolution=resolution)
+        if score == "separation"
+        else ambiguous_length(
+            pipes, tuple(meters), distances, wave_speed=wave_speed, resolution=resolution
+        )
+        for score in scores
     )
-    return told, ambiguous

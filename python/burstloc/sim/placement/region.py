@@ -50,7 +50,7 @@ from burstloc.exceptions import ConfigError
 from burstloc.localize.arrival import ArrivalLocalizer, PipeGeometry
 from burstloc.localize.region import GRID_STEP, RegionGrid
 from burstloc.network import NetworkSource
-from burstloc.sim.placement._checks import check_meter_count, check_timing, meter_geometry
+from burstloc.sim.placement._checks import check_meter_count, check_timing
 
 __all__ = [
     "BURST_SAMPLES",
@@ -320,20 +320,10 @@ def ambiguous_length(
     return total
 
 
-def meter_ambiguity(
-    network: NetworkSource,
-    meters: Sequence[str],
-    *,
-    wave_speed: float = WAVE_SPEED,
-    resolution: float = 0.2,
-) -> float:
-    """:func:`ambiguous_length` of ``meters`` on the INP file ``network`` (m).
+def meter_ambiguity(network: NetworkSource, meters: Sequence[str], **timing: float) -> float:
+    """:func:`ambiguous_length` of ``meters`` on ``network`` (m;
+    :func:`burstloc.sim.placement.methods.meter_scores`' ambiguity alone; ``timing``:
+    ``wave_speed``, ``resolution``)."""
+    from burstloc.sim.placement.methods import meter_scores
 
-    Raises:
-        NetworkError: missing or malformed network, or a meter that is not a junction.
-        ConfigError: no meter, a bad wave speed or resolution.
-    """
-    pipes, distances = meter_geometry(network, meters)
-    return ambiguous_length(
-        pipes, tuple(meters), distances, wave_speed=wave_speed, resolution=resolution
-    )
+    return meter_scores(network, meters, scores=("ambiguity",), **timing)[0]
