@@ -54,6 +54,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -202,12 +203,16 @@ def _bisect_threshold(
     return hi
 
 
-def _threshold(
-    make: Any, sigma: float, dt: float, rate: float, seed: int, max_samples: int, floor: float
-) -> float:
-    """Threshold meeting ``rate`` alarms/hour for detectors built by ``make(threshold)``."""
+#: The lowest threshold calibrated (m): ten times the meters' resolution.
+_FLOOR = 10 * RESOLUTION
+
+
+def _threshold(make: Any, sigma: float, dt: float, rate: float, sampling: tuple[int, int]) -> float:
+    """Threshold meeting ``rate`` alarms/hour for detectors built by ``make(threshold)`` on
+    noise drawn with ``sampling`` (seed, most samples); at least :data:`_FLOOR`."""
+    seed, max_samples = sampling
     if sigma <= 0:
-        return floor
+        return _FLOOR
     samples = int(min(max_samples, max(10_000, math.ceil(50 * 3600.0 / (rate * dt)))))
     noise = np.random.default_rng(seed).normal(0.0, sigma, samples)
     hours = samples * dt / 3600.0
@@ -217,13 +222,13 @@ def _threshold(
 
     countable = 10.0 / hours  # the smallest rate with ten alarms in the stream
     if rate >= countable:
-        return max(floor, _bisect_threshold(rate_at, floor, 10 * sigma, rate))
+        return max(_FLOOR, _bisect_threshold(rate_at, _FLOOR, 10 * sigma, rate))
     # extrapolate the exponential tail from the thresholds giving 100 and 10 alarms
     r1, r2 = 100.0 / hours, countable
-    h1 = _bisect_threshold(rate_at, floor, 10 * sigma, r1)
-    h2 = _bisect_threshold(rate_at, floor, 10 * sigma, r2)
+    h1 = _bisect_threshold(rate_at, _FLOOR, 10 * sigma, r1)
+    h2 = _bisect_threshold(rate_at, _FLOOR, 10 * sigma, r2)
     slope = (h2 - h1) / math.log(r1 / r2) if h2 > h1 else sigma
-    return max(floor, h2 + slope * math.log(r2 / rate))
+    return max(_FLOOR, h2 + slope * math.log(r2 / rate))
 
 
 def cusum_threshold(
@@ -237,15 +242,8 @@ def cusum_threshold(
     """``(threshold, drift)`` of a CUSUM meeting ``false_alarm_rate`` (alarms per hour) on
     Gaussian noise of standard deviation ``sigma`` (m) read every ``capture_interval`` s."""
     drift = max(sigma, RESOLUTION)
-    threshold = _threshold(
-        lambda thr: _core.Cusum(thr, drift),
-        sigma,
-        capture_interval,
-        false_alarm_rate,
-        seed,
-        max_samples,
-        10 * RESOLUTION,
-    )
+    cusum = partial(_core.Cusum, drift=drift)
+    threshold = _threshold(cusum, sigma, capture_interval, false_alarm_rate, (seed, max_samples))
     return threshold, drift
 
 
@@ -260,15 +258,8 @@ def shewhart_threshold(
 ) -> float:
     """Absolute threshold of a Shewhart chart (multiplier 3, ``window`` readings) meeting the
     false-alarm rate on noise ``sigma``."""
-    return _threshold(
-        lambda thr: _core.Shewhart(window, thr, SHEWHART_SIGMA),
-        sigma,
-        capture_interval,
-        false_alarm_rate,
-        seed,
-        max_samples,
-        10 * RESOLUTION,
-    )
+    shewhart = partial(_core.Shewhart, window, sigma=SHEWHART_SIGMA)
+    return _threshold(shewhart, sigma, capture_interval, false_alarm_rate, (seed, max_samples))
 
 
 def localization_interval(capture_interval: float, travel_spread: float) -> int:
