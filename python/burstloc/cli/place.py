@@ -86,20 +86,13 @@ def run(args: argparse.Namespace) -> int:
     if args.compare:
         check_run_options(args)
     network = read_network(args.network)
-    placed = place_meters(
-        network,
-        args.meters,
-        method=args.method,
-        wave_speed=args.wave_speed,
-        resolution=args.capture_interval,
-    )
+    timing = {"wave_speed": args.wave_speed, "resolution": args.capture_interval}
+    placed = place_meters(network, args.meters, method=args.method, **timing)
     print(
         f"{len(placed.meters)} of {placed.junctions} junctions ({placed.method}): "
         + " ".join(placed.meters)
     )
-    told, ambiguous = meter_scores(
-        network, placed.meters, wave_speed=args.wave_speed, resolution=args.capture_interval
-    )
+    told, ambiguous = meter_scores(network, placed.meters, **timing)
     print(
         f"arrival separation at {args.capture_interval:g} s: {100 * told:.0f} % of the candidate "
         "burst points are at least one capture interval from every point of every other pipe"
