@@ -90,24 +90,22 @@ def add_wave_speed_option(parser: Options, help: str = "pressure wave speed, m/s
 
 
 def add_burst_options(parser: Options, position: float | None, burst_coeff: float | None) -> None:
-    """``--position F`` and ``--burst-coeff C``: where each burst opens and its size."""
-    add_number(
-        parser,
-        "--position",
-        position,
-        "F",
+    """``--position F`` and ``--burst-coeff C``: where each burst opens and its size (``None``:
+    the paper's scenario, said in the help)."""
+    where = (
         "where each burst opens, as a fraction of its pipe's length from the pipe's INP start "
-        "node, strictly between 0 and 1 (default 0.5, mid-pipe)",
+        "node, strictly between 0 and 1"
     )
-    add_number(
-        parser,
-        "--burst-coeff",
-        burst_coeff,
-        "C",
-        "the bursts' final emitter coefficient, m^3/s per m^0.5 of pressure head (default "
-        "0.02, the paper's scenario: the burst draws 0.02 x sqrt(pressure head) m^3/s, which "
-        "can be more than a small network's whole demand)",
-    )
+    if position is None:
+        where += " (default 0.5, mid-pipe)"
+    add_number(parser, "--position", position, "F", where)
+    size = "the bursts' final emitter coefficient, m^3/s/m^0.5"
+    if burst_coeff is None:
+        size += (
+            " (default 0.02, the paper's scenario: the burst draws 0.02 x sqrt(pressure head) "
+            "m^3/s, which can be more than a small network's whole demand)"
+        )
+    add_number(parser, "--burst-coeff", burst_coeff, "C", size)
 
 
 def add_run_options(parser: argparse.ArgumentParser, *, cache: bool = True) -> None:
