@@ -9,8 +9,10 @@ from typing import TYPE_CHECKING, Any
 
 from burstloc._atomic import check_output
 from burstloc.cli._options import (
+    add_burst_options,
     add_meters_file_option,
     add_min_pipe_length_option,
+    add_noise_option,
     add_run_options,
     add_solver_option,
     add_time_step_option,
@@ -107,33 +109,14 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "made for another network or other meters",
     )
     parser.add_argument("--pipes", nargs="+", default=None, metavar="ID", help="default: all")
-    parser.add_argument(
-        "--position",
-        type=float,
-        default=None,
-        metavar="F",
-        help="where each burst opens, as a fraction of its pipe's length from the pipe's INP "
-        "start node, strictly between 0 and 1 (default 0.5, mid-pipe); position errors are "
-        "measured against this point",
-    )
-    parser.add_argument(
-        "--burst-coeff",
-        type=float,
-        default=None,
-        metavar="C",
-        help="the bursts' final emitter coefficient, m^3/s per m^0.5 of pressure head (default "
-        "0.02, the paper's scenario: the burst draws 0.02 x sqrt(pressure head) m^3/s, which "
-        "can be more than a small network's whole demand)",
-    )
-    parser.add_argument(
-        "--noise",
-        type=float,
-        default=None,
-        metavar="SIGMA",
-        help="the meters' Gaussian noise, m (standard deviation), added to every reading of "
-        "every run; default: the noise the configuration was calibrated for (each meter's, "
-        "what the monitor expects) on the ranking localizers' readings and none on the "
-        "paper's rules (its experiment is noiseless); 0: noiseless readings",
+    add_burst_options(parser, None, None)
+    add_noise_option(
+        parser,
+        None,
+        "added to every reading of every run; default: the noise the configuration was "
+        "calibrated for (each meter's, what the monitor expects) on the ranking localizers' "
+        "readings and none on the paper's rules (its experiment is noiseless); 0: noiseless "
+        "readings",
     )
     parser.add_argument(
         "--noise-seed",

@@ -6,8 +6,12 @@ import argparse
 from typing import Any
 
 from burstloc._atomic import check_output
-from burstloc.cli._options import add_run_options, check_run_options, run_of
-from burstloc.constants import WAVE_SPEED
+from burstloc.cli._options import (
+    add_run_options,
+    add_wave_speed_option,
+    check_run_options,
+    run_of,
+)
 
 __all__ = ["add_parser", "run"]
 
@@ -50,9 +54,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="arrival, region: the capture interval the meters will report at (default 0.2 s); "
         "arrival times closer than that count as alike",
     )
-    parser.add_argument(
-        "--wave-speed", type=float, default=WAVE_SPEED, metavar="A", help="arrival, region: m/s"
-    )
+    add_wave_speed_option(parser, "arrival, region: the pressure wave speed, m/s")
     parser.add_argument("--out", default=None, metavar="FILE", help="write the meter file")
     parser.add_argument(
         "--compare",
