@@ -103,7 +103,7 @@ def test_an_event_that_cannot_be_simulated_is_left_out_and_said(
     """Anytown's pump start does not start steady (junction 20 moves 0.19 m before it): such an
     event is left out, said and listed; the evaluation goes on."""
     from burstloc.exceptions import UnsteadyStartError
-    from burstloc.sim.events.operations import operations as events
+    from burstloc.sim.events import operations as events
 
     first = default_events(tiny, 40.0)[0]
     real = events.simulate_event
