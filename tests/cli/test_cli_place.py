@@ -12,8 +12,7 @@ import pytest
 
 from burstloc.cli import main
 from burstloc.localize.config import Calibration
-from burstloc.sim.placement.methods import meter_separation
-from burstloc.sim.placement.region import meter_ambiguity
+from burstloc.sim.placement.methods import meter_ambiguity, meter_separation
 from conftest import write_tiny
 
 SCHEMA = json.loads((Path(__file__).parents[1] / "evaluate_schema.json").read_text())

@@ -93,6 +93,7 @@ __all__ = [
     "arrival_meters",
     "arrival_separation",
     "coverage_meters",
+    "meter_ambiguity",
     "meter_scores",
     "meter_separation",
     "place_meters",
@@ -272,6 +273,12 @@ def meter_separation(network: NetworkSource, meters: Sequence[str], **timing: fl
     """:func:`arrival_separation` of ``meters`` on ``network`` (:func:`meter_scores`' first,
     alone; ``timing``: ``wave_speed``, ``resolution``)."""
     return meter_scores(network, meters, scores=("separation",), **timing)[0]
+
+
+def meter_ambiguity(network: NetworkSource, meters: Sequence[str], **timing: float) -> float:
+    """:func:`~burstloc.sim.placement.region.ambiguous_length` of ``meters`` on ``network`` (m;
+    :func:`meter_scores`' second, alone; ``timing``: ``wave_speed``, ``resolution``)."""
+    return meter_scores(network, meters, scores=("ambiguity",), **timing)[0]
 
 
 def meter_scores(

@@ -49,7 +49,6 @@ from burstloc.constants import WAVE_SPEED
 from burstloc.exceptions import ConfigError
 from burstloc.localize.arrival import ArrivalLocalizer, PipeGeometry
 from burstloc.localize.region import GRID_STEP, RegionGrid
-from burstloc.network import NetworkSource
 from burstloc.sim.placement._checks import check_meter_count, check_timing
 
 __all__ = [
@@ -60,7 +59,6 @@ __all__ = [
     "AmbiguityGrid",
     "ambiguity_grid",
     "ambiguous_length",
-    "meter_ambiguity",
     "region_meters",
 ]
 
@@ -318,12 +316,3 @@ def ambiguous_length(
         block = replace(grid, bursts=grid.bursts[part], weight=grid.weight[part])
         total += _Pairs(block, range(len(meters)), resolution).ambiguous()
     return total
-
-
-def meter_ambiguity(network: NetworkSource, meters: Sequence[str], **timing: float) -> float:
-    """:func:`ambiguous_length` of ``meters`` on ``network`` (m;
-    :func:`burstloc.sim.placement.methods.meter_scores`' ambiguity alone; ``timing``:
-    ``wave_speed``, ``resolution``)."""
-    from burstloc.sim.placement.methods import meter_scores
-
-    return meter_scores(network, meters, scores=("ambiguity",), **timing)[0]
