@@ -16,7 +16,7 @@ arrival and region objectives (lower is better for ``alike`` and ``ambiguous``):
 share
   of candidate burst points at least one capture interval, 0.2 s, from every other pipe's;
   higher is better; 0 on L-TOWN, whose short pipes lie within 0.2 s of others);
-* ``ambiguous``: the expected ambiguous main (:func:`burstloc.sim.placement.region.
+* ``ambiguous``: the expected ambiguous main (:func:`burstloc.sim.placement.methods.
   meter_ambiguity`, m, on the whole network).
 
 On L-TOWN, below the threshold, ``place_meters`` is the exact greedy; it is set beside the
@@ -115,8 +115,7 @@ def stage_quality(
     the objective over every pipe or a sample of ``pipes``, the others on the whole network."""
     import warnings
 
-    from burstloc.sim.placement.methods import meter_separation
-    from burstloc.sim.placement.region import meter_ambiguity
+    from burstloc.sim.placement.methods import meter_ambiguity, meter_separation
 
     warnings.simplefilter("ignore")
     objective = arrival_objective(network, meters, pipes)

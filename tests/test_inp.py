@@ -20,7 +20,7 @@ def test_network_hash_is_the_files_sha256(tmp_path: Path) -> None:
     digest = inp.network_hash(path)
     assert digest == "sha256:" + hashlib.sha256(path.read_bytes()).hexdigest()
     assert inp.network_hash(write_tiny(tmp_path / "b.inp", head=61.0)) != digest
-    with pytest.raises(NetworkError, match="cannot read network file"):
+    with pytest.raises(NetworkError, match="network file not found"):
         inp.network_hash(tmp_path / "missing.inp")
 
 

@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
+import hashlib
 import importlib.util
+import os
+import pickle
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -429,3 +433,78 @@ def _island(folder: Path) -> Path:
     path = folder / "island_pda.inp"
     path.write_text(text, encoding="utf-8")
     return path
+
+
+def _written_an_hour_ago(path: Path) -> Path:
+    hour_ago = time.time() - 3600
+    os.utime(path, (hour_ago, hour_ago))
+    return path
+
+
+def test_read_network_reads_the_file_once_and_keeps_it(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    path = _written_an_hour_ago(write_tiny(tmp_path / "tiny.inp"))
+    reads: list[str] = []
+    real = inp.read_bytes
+    monkeypatch.setattr(inp, "read_bytes", lambda p: reads.append(str(p)) or real(p))
+    monkeypatch.setattr(network, "read_bytes", inp.read_bytes)
+    first = network.read_network(path)
+    assert reads == [str(path)]  # structure checked, hashed and read by WNTR: one read
+    assert first.hash == "sha256:" + hashlib.sha256(path.read_bytes()).hexdigest()
+    assert first.path == str(path) and first.model.name == str(path)
+    assert first.pipes == tuple(inp.pipe_names_in_file(path)) == ("A", "B", "C", "D", "E")
+    assert first.junctions == ("J1", "J2", "J3", "J4")
+    reads.clear()
+    assert network.read_network(path) is first  # kept: nothing read
+    assert inp.network_hash(path) == first.hash  # its fingerprint kept too
+    assert network.as_network(first) is first
+    assert reads == []
+    again = network.read_network(os.path.relpath(path))  # another name of the same file
+    assert again.model is first.model and again.path == os.path.relpath(path)
+    assert reads == []
+
+
+def test_a_file_written_again_is_read_again(tmp_path: Path) -> None:
+    path = _written_an_hour_ago(write_tiny(tmp_path / "tiny.inp"))
+    first = network.read_network(path)
+    write_tiny(path, head=70.0)  # the same size, written again
+    second = network.read_network(path)
+    assert second.hash != first.hash
+    assert second.model.get_node("R1").base_head == pytest.approx(70.0)
+    assert first.model.get_node("R1").base_head == pytest.approx(60.0)
+
+
+def test_a_file_written_just_before_it_was_read_is_hashed_again_not_parsed(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Written within the file system's timestamp granularity of the read, a file could be
+    written again without changing its times or size: its bytes are compared."""
+    path = write_tiny(tmp_path / "tiny.inp")
+    first = network.read_network(path)
+    reads: list[str] = []
+    real = inp.read_bytes
+    monkeypatch.setattr(inp, "read_bytes", lambda p: reads.append(str(p)) or real(p))
+    assert network.read_network(path) is first
+    assert reads == [str(path)]
+
+
+def test_the_model_is_shared_and_an_editable_copy_is_the_callers(tmp_path: Path) -> None:
+    path = _written_an_hour_ago(write_tiny(tmp_path / "tiny.inp"))
+    read = network.read_network(path)
+    mine = network.load_network(read)
+    assert mine is not read.model
+    mine.remove_link("E")
+    assert "E" in read.model.pipe_name_list
+    assert "E" in network.load_network(path).pipe_name_list
+
+
+def test_a_pickled_network_is_read_again_from_its_file(tmp_path: Path) -> None:
+    path = _written_an_hour_ago(write_tiny(tmp_path / "tiny.inp"))
+    read = network.read_network(path)
+    sent = pickle.dumps(read)
+    assert len(sent) < 1000  # the path and the hash, not the model
+    assert pickle.loads(sent) is read  # this process read it already
+    write_tiny(path, head=70.0)
+    with pytest.raises(NetworkError, match="changed"):
+        pickle.loads(sent)

@@ -21,18 +21,21 @@ import json
 import math
 import numbers
 import os
-from collections.abc import Iterator, Mapping, Sequence
-from typing import Any
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from typing import Any, TypeVar
 
 import numpy as np
 
 from burstloc.exceptions import ConfigError
+
+T = TypeVar("T")
 
 __all__ = [
     "LISTED",
     "MAX_JSON_BYTES",
     "FieldError",
     "Fields",
+    "attributes",
     "check_count",
     "check_names",
     "check_number",
@@ -316,6 +319,12 @@ def check_string(value: Any, field: str, *, max_length: int = 4096) -> str:
     return value
 
 
+def attributes(obj: Any, *names: str) -> dict[str, Any]:
+    """``{name: obj.name}`` for each of ``names``: the fields a document stores under the
+    attributes' own names (the inverse of :meth:`Fields.build`)."""
+    return {name: getattr(obj, name) for name in names}
+
+
 class Fields:
     """One JSON object of a file, read field by field; errors name the file and the field.
 
@@ -353,6 +362,21 @@ class Fields:
                 raise
             where = f"{self.path}: " if self.path else ""
             raise ConfigError(f"{self.source}: {where}{exc}") from None
+
+    def build(
+        self,
+        cls: Callable[..., T],
+        keys: Iterable[str] = (),
+        renamed: Mapping[str, str] | None = None,
+        **values: Any,
+    ) -> T:
+        """``cls(...)`` of the required fields ``keys`` (each passed as the keyword of its own
+        name), ``renamed`` (keyword -> field) and ``values``; an error it raises named as
+        :meth:`checking` names it."""
+        with self.checking():
+            fields = {key: self.get(key) for key in keys}
+            fields.update({kw: self.get(key) for kw, key in (renamed or {}).items()})
+            return cls(**fields, **values)
 
     def get(self, key: str) -> Any:
         """The raw value of a required field."""

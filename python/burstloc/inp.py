@@ -14,10 +14,11 @@
 
 from __future__ import annotations
 
-import functools
 import hashlib
 import math
 import os
+import time
+from collections import OrderedDict
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,11 +28,19 @@ from burstloc.exceptions import ConfigError, NetworkError
 
 __all__ = [
     "check_meters",
+    "check_text",
     "choose_pipes",
+    "decode",
+    "file_key",
+    "fingerprint",
     "junction_names_in_file",
+    "known_hash",
     "network_hash",
     "node_line",
     "pipe_names_in_file",
+    "read_bytes",
+    "remember_hash",
+    "settled",
 ]
 
 #: Section headers EPANET 2.2 accepts (as WNTR reads them), and ``[END]``.
@@ -76,22 +85,46 @@ def _section_name(header: str) -> str:
     return header
 
 
-def _rows(path: Path) -> Iterator[_Row]:
-    """Yield the data lines of an INP file with their section and 1-based line number."""
+def read_bytes(path: str | os.PathLike[str]) -> bytes:
+    """The bytes of a network file: the one place an INP file is opened.
+
+    Raises:
+        NetworkError: the file is missing or cannot be read.
+    """
     try:
-        data = path.read_bytes()
+        return Path(path).read_bytes()
     except FileNotFoundError:
-        raise NetworkError(f"network file not found: {path}") from None
+        raise NetworkError(f"network file not found: {os.fspath(path)}") from None
     except OSError as exc:
-        raise NetworkError(f"cannot read network file {path}: {exc.strerror}") from None
+        raise NetworkError(f"cannot read network file {os.fspath(path)}: {exc.strerror}") from None
+
+
+def decode(path: str | os.PathLike[str], data: bytes) -> str:
+    """The text of ``data`` (the bytes of the INP file ``path``).
+
+    Raises:
+        NetworkError: not UTF-8, naming the line.
+    """
     try:
-        text = data.decode("utf-8")
+        return data.decode("utf-8")
     except UnicodeDecodeError as exc:
         bad_line = data.count(b"\n", 0, exc.start) + 1
         raise NetworkError(
-            f"{path}:{bad_line}: not UTF-8 text (byte 0x{data[exc.start]:02x}); save the file "
-            "as UTF-8"
+            f"{os.fspath(path)}:{bad_line}: not UTF-8 text (byte 0x{data[exc.start]:02x}); save "
+            "the file as UTF-8"
         ) from None
+
+
+def fingerprint(data: bytes) -> str:
+    """``"sha256:<hex>"`` of a network file's bytes (:func:`network_hash`)."""
+    return f"sha256:{hashlib.sha256(data).hexdigest()}"
+
+
+def _rows(path: Path, text: str | None = None) -> Iterator[_Row]:
+    """Yield the data lines of an INP file (its ``text`` when given, else read) with their
+    section and 1-based line number."""
+    if text is None:
+        text = decode(path, read_bytes(path))
     yield from _section_rows(text.splitlines(), path)
 
 
@@ -121,14 +154,15 @@ def _section_rows(lines: Iterable[str], path: str | os.PathLike[str]) -> Iterato
         yield _Row(section, number, line.split())
 
 
-def _lint(path: Path) -> list[str]:
-    """Check the structure WNTR's reader does not report with a line number; return the pipes."""
+def _lint(path: Path, text: str | None = None) -> list[str]:
+    """Check the structure WNTR's reader does not report with a line number; return the pipes
+    (of ``text``, the file's, when given; else the file is read)."""
     nodes: dict[str, int] = {}
     pipes: list[str] = []
     links: dict[str, int] = {}
     refs: list[tuple[_Row, str]] = []
     sources = 0
-    for row in _rows(path):
+    for row in _rows(path, text):
         spec = _FIELDS.get(row.section)
         if spec is None:
             continue
@@ -186,6 +220,15 @@ def _check_pipe_size(row: _Row, where: str) -> None:
             )
 
 
+def check_text(path: str | os.PathLike[str], text: str) -> list[str]:
+    """:func:`pipe_names_in_file` of ``text``, the INP file ``path``'s text (not read again).
+
+    Raises:
+        NetworkError: the text is malformed (naming file and line).
+    """
+    return _lint(Path(path), text)
+
+
 def pipe_names_in_file(path: str | os.PathLike[str]) -> list[str]:
     """Return the pipe IDs of an INP file in file order, without building a network model.
 
@@ -208,24 +251,38 @@ def junction_names_in_file(path: str | os.PathLike[str]) -> list[str]:
     return list(_once(_junctions, Path(path)))
 
 
-def _junctions(file: Path) -> list[str]:
-    _lint(file)
-    return [row.fields[0] for row in _rows(file) if row.section == "[JUNCTIONS]"]
+def _junctions(file: Path, text: str) -> list[str]:
+    _lint(file, text)
+    return [row.fields[0] for row in _rows(file, text) if row.section == "[JUNCTIONS]"]
 
 
-def _once(read: Callable[[Path], list[str]], file: Path) -> tuple[str, ...]:
-    """``read(file)``, once per content of the file in this process (each monitor of an
-    evaluation checks its configuration's meters against the file: 57 ms on L-TOWN)."""
-    try:
-        digest = hashlib.sha256(file.read_bytes()).hexdigest()
-    except OSError:
-        return tuple(read(file))  # names the problem
-    return _read_once(read, str(file), digest)
+#: What :func:`_once` read, by reader, file and fingerprint (the most recent last).
+_NAMES: OrderedDict[tuple[str, str, str], tuple[str, ...]] = OrderedDict()
 
 
-@functools.lru_cache(maxsize=16)
-def _read_once(read: Callable[[Path], list[str]], file: str, digest: str) -> tuple[str, ...]:
-    return tuple(read(Path(file)))
+def _once(read: Callable[[Path, str], list[str]], file: Path) -> tuple[str, ...]:
+    """``read(file, text)``, once per content of the file in this process (each monitor of an
+    evaluation checks its configuration's meters against the file: 57 ms on L-TOWN). The file
+    is opened at most once, and not at all when its fingerprint and ``read``'s answer are
+    known (:func:`network_hash`)."""
+    key = file_key(file)
+    digest = known_hash(key)
+    text = None
+    if digest is None:
+        read_at = time.time_ns()
+        data = read_bytes(file)
+        digest = fingerprint(data)
+        remember_hash(key, digest, read_at)
+        text = decode(file, data)
+    slot = (read.__name__, str(file), digest)
+    if slot not in _NAMES:
+        if text is None:
+            text = decode(file, read_bytes(file))
+        _NAMES[slot] = tuple(read(file, text))
+        while len(_NAMES) > 16:
+            _NAMES.popitem(last=False)
+    _NAMES.move_to_end(slot)
+    return _NAMES[slot]
 
 
 def node_line(path: str | os.PathLike[str], node: str) -> int | None:
@@ -289,14 +346,68 @@ def choose_pipes(
     return chosen
 
 
+#: How long (ns) before a file was read its modification time must lie for what was read to
+#: be trusted while the file's times and size are unchanged: a file written again within its
+#: file system's timestamp granularity (up to 2 s, FAT) can keep them (git's "racy" files).
+SETTLED_NS = 2_000_000_000
+
+FileKey = tuple[str, int, int, int]
+"""A file's real path, modification and change times (ns) and size (:func:`file_key`)."""
+
+#: Fingerprints of files this process read, and when it read them, by :func:`file_key` (the
+#: most recent last).
+_HASHES: OrderedDict[FileKey, tuple[str, int]] = OrderedDict()
+
+
+def file_key(path: str | os.PathLike[str]) -> FileKey | None:
+    """The file's real path, modification and change times (ns) and size; ``None`` when it
+    cannot be read. A file written again has another key, unless it was written within the
+    timestamp granularity of its file system (:func:`settled`)."""
+    try:
+        stat = os.stat(path)
+    except OSError:
+        return None
+    return (os.path.realpath(path), stat.st_mtime_ns, stat.st_ctime_ns, stat.st_size)
+
+
+def settled(key: FileKey, read_at: int) -> bool:
+    """Whether what was read of the file of ``key`` at ``read_at`` (``time.time_ns()`` before
+    the read) is its content while its key is ``key``: it was last written
+    :data:`SETTLED_NS` before."""
+    return key[1] < read_at - SETTLED_NS
+
+
+def remember_hash(key: FileKey | None, digest: str, read_at: int) -> None:
+    """Keep ``digest`` as the fingerprint of the file of ``key`` (:func:`file_key`, taken
+    before the file was read at ``read_at``) for :func:`network_hash`."""
+    if key is not None:
+        _HASHES[key] = (digest, read_at)
+        _HASHES.move_to_end(key)
+        while len(_HASHES) > 64:
+            _HASHES.popitem(last=False)
+
+
+def known_hash(key: FileKey | None) -> str | None:
+    """The fingerprint of the file of ``key`` if this process read it and it is
+    :func:`settled`; else ``None``."""
+    entry = _HASHES.get(key) if key is not None else None
+    if entry is None or key is None or not settled(key, entry[1]):
+        return None
+    return entry[0]
+
+
 def network_hash(path: str | os.PathLike[str]) -> str:
-    """Fingerprint of a network file: ``"sha256:<hex>"`` of its bytes (no model is built).
+    """Fingerprint of a network file: ``"sha256:<hex>"`` of its bytes (no model is built),
+    read once per process while the file's times and size are unchanged (:func:`settled`; a
+    file read by :func:`burstloc.network.read_network` is not read again).
 
     Raises:
         NetworkError: the file cannot be read.
     """
-    try:
-        data = Path(path).read_bytes()
-    except OSError as exc:
-        raise NetworkError(f"cannot read network file {os.fspath(path)}: {exc.strerror}") from exc
-    return f"sha256:{hashlib.sha256(data).hexdigest()}"
+    key = file_key(path)
+    digest = known_hash(key)
+    if digest is None:
+        read_at = time.time_ns()
+        digest = fingerprint(read_bytes(path))
+        remember_hash(key, digest, read_at)
+    return digest

@@ -12,8 +12,7 @@ import pytest
 
 from burstloc.cli import main
 from burstloc.localize.config import Calibration
-from burstloc.sim.placement.methods import MeterSet, score_meters
-from burstloc.sim.placement.region import meter_ambiguity
+from burstloc.sim.placement.methods import MeterSet, meter_ambiguity, score_meters
 from conftest import write_tiny
 
 SCHEMA = json.loads((Path(__file__).parents[1] / "evaluate_schema.json").read_text())

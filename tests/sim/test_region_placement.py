@@ -12,12 +12,11 @@ from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.localize.arrival import PipeGeometry
 from burstloc.network import load_network
 from burstloc.sim.model.prepare import arrival_geometry
-from burstloc.sim.placement.methods import MeterSet, arrival_meters, place_meters
+from burstloc.sim.placement.methods import MeterSet, arrival_meters, meter_ambiguity, place_meters
 from burstloc.sim.placement.region import (
     BURST_SAMPLES,
     ambiguity_grid,
     ambiguous_length,
-    meter_ambiguity,
     region_meters,
 )
 

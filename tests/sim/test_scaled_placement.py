@@ -11,8 +11,8 @@ import pytest
 from burstloc.exceptions import ConfigError
 from burstloc.network import load_network
 from burstloc.sim.model.prepare import arrival_geometry
-from burstloc.sim.placement.methods import MeterSet, meter_separation, place_meters
-from burstloc.sim.placement.region import ambiguity_grid, meter_ambiguity
+from burstloc.sim.placement.methods import MeterSet, meter_ambiguity, meter_separation, place_meters
+from burstloc.sim.placement.region import ambiguity_grid
 from burstloc.sim.placement.scaled import (
     DEFAULT_SCALING,
     Scaling,

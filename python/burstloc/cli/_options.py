@@ -1,27 +1,36 @@
-"""Options several subcommands share: where simulations run and whether they are cached."""
+"""Options several subcommands share: the network, numbers, the burst and the sensor noise,
+where simulations run and whether they are cached."""
 
 from __future__ import annotations
 
 import argparse
 import math
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
+from burstloc.constants import WAVE_SPEED
 from burstloc.exceptions import ConfigError
 
 if TYPE_CHECKING:
+    from burstloc.network import NetworkSource
     from burstloc.sim.scenarios.cache import DiskCache
 
 __all__ = [
     "DefaultsFormatter",
+    "add_burst_options",
     "add_meters_file_option",
     "add_meters_option",
     "add_min_pipe_length_option",
+    "add_network_argument",
+    "add_noise_option",
+    "add_number",
     "add_run_options",
     "add_solver_option",
     "add_time_step_option",
+    "add_wave_speed_option",
     "cache_of",
     "check_run_options",
     "meters_of",
+    "run_of",
     "time_step_of",
 ]
 
@@ -43,6 +52,72 @@ class DefaultsFormatter(argparse.HelpFormatter):
         ):
             return action.help
         return f"{text} (default: %(default)s)" if text else "default: %(default)s"
+
+
+Options = argparse.ArgumentParser | argparse._ArgumentGroup
+"""Where options are added: a parser or one of its groups."""
+
+
+def add_network_argument(parser: argparse.ArgumentParser) -> None:
+    """The ``NETWORK.inp`` argument: the EPANET INP file (read once, at the command's edge)."""
+    parser.add_argument("network", metavar="NETWORK.inp", help="EPANET INP file")
+
+
+def add_number(
+    parser: Options,
+    flag: str,
+    default: Any,
+    metavar: str,
+    help: str | None = None,
+    *,
+    kind: type[float] | type[int] = float,
+    many: bool = False,
+) -> None:
+    """A number option ``flag`` of type ``kind`` (one or more of them with ``many``)."""
+    parser.add_argument(
+        flag, type=kind, nargs="+" if many else None, default=default, metavar=metavar, help=help
+    )
+
+
+def add_noise_option(parser: Options, default: float | None, help: str) -> None:
+    """``--noise SIGMA``: the meters' Gaussian noise, standard deviation in m (``help`` says
+    what it is for in the command)."""
+    add_number(parser, "--noise", default, "SIGMA", f"the meters' Gaussian noise, m: {help}")
+
+
+def add_wave_speed_option(parser: Options, help: str = "pressure wave speed, m/s") -> None:
+    """``--wave-speed A``: the pressure wave speed (:data:`burstloc.constants.WAVE_SPEED`)."""
+    add_number(parser, "--wave-speed", WAVE_SPEED, "A", help)
+
+
+def add_burst_options(parser: Options, position: float | None, burst_coeff: float | None) -> None:
+    """``--position F``, ``--burst-coeff C`` and ``--burst-flow L/S``: where each burst opens
+    and its size, as an emitter coefficient (``None``: the paper's scenario, said in the help)
+    or as a flow."""
+    where = (
+        "where each burst opens, as a fraction of its pipe's length from the pipe's INP start "
+        "node, strictly between 0 and 1"
+    )
+    if position is None:
+        where += " (default 0.5, mid-pipe)"
+    add_number(parser, "--position", position, "F", where)
+    size = "the bursts' final emitter coefficient, m^3/s/m^0.5"
+    if burst_coeff is None:
+        size += (
+            " (default 0.02, the paper's scenario: the burst draws 0.02 x sqrt(pressure head) "
+            "m^3/s, which can be more than a small network's whole demand)"
+        )
+    sizes = parser.add_mutually_exclusive_group()
+    add_number(sizes, "--burst-coeff", burst_coeff, "C", size)
+    sizes.add_argument(
+        "--burst-flow",
+        type=float,
+        default=None,
+        metavar="L/S",
+        help="size every burst by its flow instead of --burst-coeff: each pipe's emitter "
+        "coefficient draws this many L/s at its burst point's pressure before it opens (the "
+        "flow falls as the pressure does); printed and recorded either way",
+    )
 
 
 def add_run_options(parser: argparse.ArgumentParser, *, cache: bool = True) -> None:
@@ -96,7 +171,7 @@ def add_solver_option(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def add_meters_option(parser: argparse.ArgumentParser, help: str) -> None:
+def add_meters_option(parser: Options, help: str) -> None:
     """``--meters IDS|FILE``: the metered junctions, as IDs or a file
     (:func:`burstloc.sim.placement.methods.meter_list`); ``help`` says what the default is."""
     parser.add_argument(
@@ -109,7 +184,7 @@ def add_meters_option(parser: argparse.ArgumentParser, help: str) -> None:
     )
 
 
-def meters_of(args: argparse.Namespace, network: str) -> tuple[str, ...] | None:
+def meters_of(args: argparse.Namespace, network: NetworkSource) -> tuple[str, ...] | None:
     """The meters of ``--meters IDS|FILE`` or ``--meters-file`` for ``network`` (ConfigError:
     both given, another network, an unknown junction or a bad file), or ``None`` without
     either option."""
@@ -128,6 +203,12 @@ def meters_of(args: argparse.Namespace, network: str) -> tuple[str, ...] | None:
     return MeterSet.load(path).check(network)
 
 
+def run_of(args: argparse.Namespace) -> dict[str, Any]:
+    """The keywords of a sweep the run options ask for: ``workers``, ``scheduler`` and
+    ``progress`` (not with ``--quiet``)."""
+    return {"workers": args.workers, "scheduler": args.scheduler, "progress": not args.quiet}
+
+
 def cache_of(args: argparse.Namespace) -> DiskCache | bool:
     """The simulation cache the options ask for (``False``: none)."""
     from burstloc.sim.scenarios.cache import DiskCache
@@ -144,16 +225,12 @@ def check_run_options(args: argparse.Namespace) -> None:
         check_scheduler(args.scheduler)
 
 
-def add_time_step_option(parser: argparse.ArgumentParser) -> None:
-    """``--time-step S``: TSNet's requested time step (default: the capture rule)."""
-    parser.add_argument(
-        "--time-step",
-        type=float,
-        default=None,
-        metavar="S",
-        help="TSNet's time step in seconds (default: TSNet's largest stable step, or half the "
-        "finest capture interval where TSNet's is coarser)",
-    )
+def add_time_step_option(parser: argparse.ArgumentParser, *, capture_rule: bool = True) -> None:
+    """``--time-step S``: TSNet's requested time step (default: TSNet's largest, or with
+    ``capture_rule`` half the finest capture interval where TSNet's is coarser)."""
+    rule = ", or half the finest capture interval where TSNet's is coarser" if capture_rule else ""
+    text = f"TSNet's time step in seconds (default: TSNet's largest stable step{rule})"
+    add_number(parser, "--time-step", None, "S", text)
 
 
 def time_step_of(args: argparse.Namespace) -> float | None:

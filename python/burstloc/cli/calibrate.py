@@ -7,7 +7,14 @@ import time
 from typing import Any
 
 from burstloc._atomic import check_output
-from burstloc.cli._options import add_meters_file_option, add_meters_option, meters_of
+from burstloc.cli._options import (
+    add_meters_file_option,
+    add_meters_option,
+    add_network_argument,
+    add_noise_option,
+    add_number,
+    meters_of,
+)
 from burstloc.constants import (
     CAPTURE_INTERVALS,
     EXACT_SIGNATURES_UP_TO,
@@ -30,7 +37,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "signatures; computed here with WNTR/EPANET); written as a named configuration that "
         "`evaluate --config` and `monitor --config` accept.",
     )
-    parser.add_argument("network", help="EPANET INP file")
+    add_network_argument(parser)
     parser.add_argument(
         "--out",
         required=True,
@@ -38,26 +45,14 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "document with its large matrices as binary arrays (a third of the size on a "
         "900-pipe network; both load anywhere a configuration is read)",
     )
-    parser.add_argument(
-        "--capture-interval",
-        type=float,
-        nargs="+",
-        default=list(CAPTURE_INTERVALS),
-        metavar="S",
-    )
-    parser.add_argument(
-        "--noise",
-        type=float,
-        default=calibrate.DEFAULT_NOISE_SIGMA,
-        metavar="SIGMA",
-        help="sensor noise standard deviation, m",
-    )
-    parser.add_argument(
+    add_number(parser, "--capture-interval", list(CAPTURE_INTERVALS), "S", many=True)
+    add_noise_option(parser, calibrate.DEFAULT_NOISE_SIGMA, "what the thresholds are set for")
+    add_number(
+        parser,
         "--false-alarm-rate",
-        type=float,
-        default=calibrate.DEFAULT_FALSE_ALARM_RATE,
-        metavar="R",
-        help="target false alarms per meter per hour",
+        calibrate.DEFAULT_FALSE_ALARM_RATE,
+        "R",
+        "target false alarms per meter per hour",
     )
     meters = parser.add_mutually_exclusive_group()
     add_meters_option(meters, "default: every junction")  # type: ignore[arg-type]
@@ -74,12 +69,13 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         f"'auto' (default): epanet up to {EXACT_SIGNATURES_UP_TO} pipes, hybrid up to "
         f"{HYBRID_SIGNATURES_UP_TO}, linear above",
     )
-    parser.add_argument(
+    add_number(
+        parser,
         "--workers",
-        type=int,
-        default=None,
-        metavar="N",
-        help="local processes for the hybrid signatures' EPANET runs (default: one per CPU)",
+        None,
+        "N",
+        "local processes for the hybrid signatures' EPANET runs (default: one per CPU)",
+        kind=int,
     )
     parser.set_defaults(handler=run)
     return parser
@@ -88,15 +84,17 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> int:
     """Handle ``burstloc calibrate``."""
     from burstloc.experiments.calibrate import calibrate
+    from burstloc.network import read_network
 
     check_output(args.out)
     began = time.perf_counter()
+    network = read_network(args.network)
     config = calibrate(
-        args.network,
+        network,
         capture_intervals=args.capture_interval,
         noise_sigma=args.noise,
         false_alarm_rate=args.false_alarm_rate,
-        meters=meters_of(args, args.network),
+        meters=meters_of(args, network),
         name=args.name,
         signatures=args.signatures,
         workers=args.workers,

@@ -5,24 +5,30 @@ from __future__ import annotations
 import argparse
 import math
 from dataclasses import replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from burstloc._atomic import check_output
 from burstloc.cli._options import (
+    add_burst_options,
     add_meters_file_option,
     add_meters_option,
     add_min_pipe_length_option,
+    add_noise_option,
     add_run_options,
     add_solver_option,
     add_time_step_option,
     cache_of,
     check_run_options,
     meters_of,
+    run_of,
     time_step_of,
 )
 from burstloc.constants import DETECTORS, LOCALIZERS, METER_MODELS
 from burstloc.exceptions import ConfigError
 from burstloc.experiments.evaluate import DEFAULT_LOCALIZER
+
+if TYPE_CHECKING:
+    from burstloc.network import Network
 
 __all__ = ["add_parser", "run"]
 
@@ -104,41 +110,14 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "made for another network or other meters",
     )
     parser.add_argument("--pipes", nargs="+", default=None, metavar="ID", help="default: all")
-    parser.add_argument(
-        "--position",
-        type=float,
-        default=None,
-        metavar="F",
-        help="where each burst opens, as a fraction of its pipe's length from the pipe's INP "
-        "start node, strictly between 0 and 1 (default 0.5, mid-pipe); position errors are "
-        "measured against this point",
-    )
-    parser.add_argument(
-        "--burst-flow",
-        type=float,
-        default=None,
-        metavar="L/S",
-        help="size every burst by its flow instead of --burst-coeff: each pipe's emitter "
-        "coefficient draws this many L/s at its burst point's pressure before it opens",
-    )
-    parser.add_argument(
-        "--burst-coeff",
-        type=float,
-        default=None,
-        metavar="C",
-        help="the bursts' final emitter coefficient, m^3/s per m^0.5 of pressure head (default "
-        "0.02, the paper's scenario: the burst draws 0.02 x sqrt(pressure head) m^3/s, which "
-        "can be more than a small network's whole demand)",
-    )
-    parser.add_argument(
-        "--noise",
-        type=float,
-        default=None,
-        metavar="SIGMA",
-        help="the meters' Gaussian noise, m (standard deviation), added to every reading of "
-        "every run; default: the noise the configuration was calibrated for (each meter's, "
-        "what the monitor expects) on the ranking localizers' readings and none on the "
-        "paper's rules (its experiment is noiseless); 0: noiseless readings",
+    add_burst_options(parser, None, None)
+    add_noise_option(
+        parser,
+        None,
+        "added to every reading of every run; default: the noise the configuration was "
+        "calibrated for (each meter's, what the monitor expects) on the ranking localizers' "
+        "readings and none on the paper's rules (its experiment is noiseless); 0: noiseless "
+        "readings",
     )
     parser.add_argument(
         "--noise-seed",
@@ -217,6 +196,7 @@ def run(args: argparse.Namespace) -> int:
     from burstloc.experiments import paper, report
     from burstloc.experiments.evaluate import evaluate
     from burstloc.experiments.runs import plan_runs
+    from burstloc.network import read_network
 
     for path in (args.json, args.csv, args.classifier_out):
         if path:
@@ -236,7 +216,8 @@ def run(args: argparse.Namespace) -> int:
         sigma=args.sigma,
         localization_interval=args.localization_interval,
     )
-    meters = meters_of(args, args.network)
+    network = read_network(args.network)
+    meters = meters_of(args, network)
     config = None
     if args.config:
         from burstloc.localize.config import Calibration
@@ -271,16 +252,14 @@ def run(args: argparse.Namespace) -> int:
     if args.noise_seed < 0:
         raise ConfigError(f"--noise-seed must be >= 0, got {args.noise_seed}")
     ev = evaluate(
-        args.network,
+        network,
         runs,
         pipes=args.pipes,
         phases=args.phases,
         phase_span=args.phase_span,
         scenario=scenario,
         cache=cache,
-        workers=args.workers,
-        scheduler=args.scheduler,
-        progress=not args.quiet,
+        **run_of(args),
         config=config,
         meters=meters,
         time_step=time_step,
@@ -293,7 +272,7 @@ def run(args: argparse.Namespace) -> int:
     print(_flows_line(ev.scenario["burst_flows_lps"]))
     print(report.format_tables(ev, True if args.paper_tables else None), end="")
     if args.events:
-        _events(args, ev, cache)
+        _events(args, network, ev, cache)
     if args.json:
         print(f"wrote {report.write_json(ev, args.json)}")
     if args.csv:
@@ -315,27 +294,29 @@ def _flows_line(flows: dict[str, float]) -> str:
     )
 
 
-def _events(args: argparse.Namespace, ev: Any, cache: Any) -> None:
+def _events(args: argparse.Namespace, network: Network, ev: Any, cache: Any) -> None:
     """Classify the evaluation's bursts and the default events; add the table to ``ev``."""
     from burstloc.experiments.specificity import evaluate_events
     from burstloc.localize.classify import ClassifierConfig
+    from burstloc.network import read_network
     from burstloc.sim.scenarios.scenario import burst_scenarios
     from burstloc.sim.transient.time_step import with_capture_time_step
     from burstloc.sim.transient.tsnet import simulate_many
 
     intervals = sorted({r.spec.capture_interval for r in ev.runs})
     duration = float(ev.scenario["duration"])
-    calibration = args.classifier_network or args.network
-    if calibration == args.network:
-        cal_bursts = dict(ev.results)
-    else:
+    calibration = network
+    if args.classifier_network and args.classifier_network != args.network:
+        calibration = read_network(args.classifier_network)
         scenarios = with_capture_time_step(
             burst_scenarios(calibration, None, **ev.scenario), min(intervals)
         )
         report = simulate_many(scenarios, cache=cache, workers=args.workers, progress=False)
         cal_bursts = {s.pipe: r for s, r in report.succeeded()}
+    else:
+        cal_bursts = dict(ev.results)
     spec, config = evaluate_events(
-        args.network,
+        network,
         dict(ev.results),
         intervals,
         calibration_network=calibration,

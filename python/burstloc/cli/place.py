@@ -6,11 +6,17 @@ import argparse
 from typing import TYPE_CHECKING, Any
 
 from burstloc._atomic import check_output
-from burstloc.cli._options import add_run_options, check_run_options
-from burstloc.constants import SEARCHABLE, WAVE_SPEED
+from burstloc.cli._options import (
+    add_run_options,
+    add_wave_speed_option,
+    check_run_options,
+    run_of,
+)
+from burstloc.constants import SEARCHABLE
 from burstloc.exceptions import ConfigError
 
 if TYPE_CHECKING:
+    from burstloc.network import Network
     from burstloc.sim.placement.methods import MeterScores
 
 __all__ = ["add_parser", "run"]
@@ -82,9 +88,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="arrival, region: the capture interval the meters will report at (default 0.2 s); "
         "arrival times closer than that count as alike",
     )
-    parser.add_argument(
-        "--wave-speed", type=float, default=WAVE_SPEED, metavar="A", help="arrival, region: m/s"
-    )
+    add_wave_speed_option(parser, "arrival, region: the pressure wave speed, m/s")
     parser.add_argument("--out", default=None, metavar="FILE", help="write the meter file")
     parser.add_argument(
         "--compare",
@@ -110,6 +114,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Handle ``burstloc place``: print the meters; write the file with ``--out``."""
+    from burstloc.network import read_network
     from burstloc.sim.placement.methods import meter_list, place_meters, score_meters
 
     if args.score is not None:
@@ -118,7 +123,8 @@ def run(args: argparse.Namespace) -> int:
                 raise ConfigError(f"--score rates a given set: {option} does not apply")
         if args.out or args.compare:
             raise ConfigError("--score rates a given set: --out and --compare do not apply")
-        return _score(args, meter_list(args.score, args.network))
+        network = read_network(args.network)
+        return _score(args, network, meter_list(args.score, network))
     if args.meters is None:
         raise ConfigError("place needs --meters K (how many meters to place or add), or --score")
     if args.out:
@@ -127,10 +133,11 @@ def run(args: argparse.Namespace) -> int:
         if args.keep is not None:
             raise ConfigError("--compare places from scratch: it does not take --keep")
         check_run_options(args)
-    keep = () if args.keep is None else meter_list(args.keep, args.network)
+    network = read_network(args.network)
+    keep = () if args.keep is None else meter_list(args.keep, network)
     method = args.method or ("region" if keep else "arrival")
     placed = place_meters(
-        args.network,
+        network,
         args.meters,
         method=method,
         wave_speed=args.wave_speed,
@@ -144,8 +151,8 @@ def run(args: argparse.Namespace) -> int:
             f"{len(placed.meters)} of {placed.junctions} junctions ({placed.method}): the "
             f"{len(keep)} kept and {len(added)} added: " + " ".join(added)
         )
-        before = score_meters(args.network, keep, **timing)
-        after = score_meters(args.network, placed.meters, **timing)
+        before = score_meters(network, keep, **timing)
+        after = score_meters(network, placed.meters, **timing)
         print(_scores_line(f"the {len(keep)} kept", before))
         print(_scores_line(f"with the {len(added)} added", after))
         gain = before.ambiguous - after.ambiguous
@@ -159,21 +166,19 @@ def run(args: argparse.Namespace) -> int:
             f"{len(placed.meters)} of {placed.junctions} junctions ({placed.method}): "
             + " ".join(placed.meters)
         )
-        print(_scores_line("the meters", score_meters(args.network, placed.meters, **timing)))
+        print(_scores_line("the meters", score_meters(network, placed.meters, **timing)))
     if args.out:
         print(f"wrote {placed.save(args.out)}")
     if args.compare:
         from burstloc.experiments.placements import compare_placements, format_comparison
 
         rows = compare_placements(
-            args.network,
+            network,
             args.meters,
             capture_interval=args.capture_interval,
             phases=args.phases,
             position=args.position,
-            workers=args.workers,
-            scheduler=args.scheduler,
-            progress=not args.quiet,
+            **run_of(args),
         )
         print(format_comparison(rows), end="")
     return 0
@@ -189,12 +194,12 @@ def _scores_line(what: str, scores: MeterScores) -> str:
     )
 
 
-def _score(args: argparse.Namespace, meters: tuple[str, ...]) -> int:
+def _score(args: argparse.Namespace, network: Network, meters: tuple[str, ...]) -> int:
     """``place --score``: the set's scores and its meters ranked by what each adds."""
     from burstloc.sim.placement.methods import score_meters
 
     scores = score_meters(
-        args.network,
+        network,
         meters,
         wave_speed=args.wave_speed,
         resolution=args.capture_interval,

@@ -11,15 +11,22 @@ from typing import Any
 
 from burstloc._atomic import check_output
 from burstloc.cli._options import (
+    add_burst_options,
     add_meters_option,
     add_min_pipe_length_option,
+    add_network_argument,
+    add_noise_option,
+    add_number,
     add_run_options,
     add_solver_option,
+    add_time_step_option,
+    add_wave_speed_option,
     cache_of,
     check_run_options,
     meters_of,
+    run_of,
 )
-from burstloc.constants import SCENARIO_DURATION, WAVE_SPEED
+from burstloc.constants import SCENARIO_DURATION
 from burstloc.exceptions import ConfigError
 
 __all__ = ["add_parser", "run"]
@@ -50,7 +57,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
             "meter: the junction; value: pressure head, m (0.1 mm), with --noise."
         ),
     )
-    parser.add_argument("network", metavar="NETWORK.inp", help="EPANET INP file")
+    add_network_argument(parser)
     which = parser.add_mutually_exclusive_group(required=True)
     which.add_argument("--pipe", nargs="+", metavar="ID", help="pipe(s) to burst")
     which.add_argument("--all", action="store_true", help="burst every pipe, one at a time")
@@ -63,85 +70,37 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument(
         "--asset", default=None, metavar="ID", help="--event: the valve, pump or junction"
     )
-    parser.add_argument(
-        "--operation-time",
-        type=float,
-        default=1.0,
-        metavar="S",
-        help="--event: how long the operation or the demand ramp takes, s",
+    event = parser.add_argument_group("event (with --event)")
+    add_number(
+        event, "--operation-time", 1.0, "S", "how long the operation or demand ramp takes, s"
     )
-    parser.add_argument(
+    add_number(
+        event,
         "--setting",
-        type=float,
-        default=None,
-        metavar="F",
-        help="--event valve-*: final fraction open (default: 0 for a closure, 1 for an opening)",
+        None,
+        "F",
+        "valve-*: final fraction open (default: 0 for a closure, 1 for an opening)",
     )
-    parser.add_argument(
-        "--demand-change",
-        type=float,
-        default=None,
-        metavar="M3/S",
-        help="--event demand-step: the change of the junction's demand, m^3/s",
-    )
-    parser.add_argument("--position", type=float, default=0.5, help="fraction along the pipe")
-    parser.add_argument(
-        "--burst-start",
-        type=float,
-        default=SCENARIO.burst_start,
-        metavar="S",
-        help="when the burst (or --event) starts, s",
-    )
-    parser.add_argument(
-        "--duration", type=float, default=SCENARIO_DURATION, metavar="S", help="simulated, s"
-    )
-    size = parser.add_mutually_exclusive_group()
-    size.add_argument(
-        "--burst-coeff",
-        type=float,
-        default=SCENARIO.burst_coeff,
-        metavar="C",
-        help="final emitter coefficient, m^3/s/m^0.5",
-    )
-    size.add_argument(
-        "--burst-flow",
-        type=float,
-        default=None,
-        metavar="L/S",
-        help="size each burst by its flow instead: the emitter coefficient that draws this "
-        "many L/s at the burst point's pressure before it opens (the flow falls as the "
-        "pressure does); printed and recorded in the NPZ metadata either way",
-    )
-    parser.add_argument(
-        "--opening-time",
-        type=float,
-        default=SCENARIO.opening_time,
-        metavar="S",
-        help="how long the burst takes to open, s",
-    )
-    parser.add_argument(
-        "--wave-speed", type=float, default=WAVE_SPEED, metavar="M/S", help="pressure wave speed"
-    )
-    parser.add_argument(
-        "--time-step",
-        type=float,
-        default=None,
-        metavar="S",
-        help="default: TSNet's largest stable step, or half the --capture-interval where "
-        "TSNet's is coarser",
-    )
+    add_number(event, "--demand-change", None, "M3/S", "demand-step: the junction's demand change")
+    add_burst_options(parser, 0.5, SCENARIO.burst_coeff)
+    for flag, default, metavar, text in (
+        ("--burst-start", SCENARIO.burst_start, "S", "when the burst (or --event) starts, s"),
+        ("--duration", SCENARIO_DURATION, "S", "simulated, s"),
+        ("--opening-time", SCENARIO.opening_time, "S", "how long the burst takes to open, s"),
+    ):
+        add_number(parser, flag, default, metavar, text)
+    add_wave_speed_option(parser)
+    add_time_step_option(parser)
     add_min_pipe_length_option(parser)
     add_solver_option(parser)
-    parser.add_argument(
+    add_number(
+        parser,
         "--capture-interval",
-        type=float,
-        default=None,
-        metavar="S",
-        help="write the readings meters send every S seconds instead of TSNet's grid",
+        None,
+        "S",
+        "write the readings meters send every S seconds instead of TSNet's grid",
     )
-    parser.add_argument(
-        "--capture-phase", type=float, default=0.0, metavar="S", help="first capture tick, s"
-    )
+    add_number(parser, "--capture-phase", 0.0, "S", "first capture tick, s")
     parser.add_argument(
         "--out", default="out/simulations", metavar="DIR", help="directory of the NPZ files"
     )
@@ -152,16 +111,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         metavar="FILE",
         help="write the captured readings as a `burstloc monitor --readings` feed (CSV)",
     )
-    feed.add_argument(
-        "--noise",
-        type=float,
-        default=0.0,
-        metavar="SIGMA",
-        help="--feed: the meters' Gaussian noise, standard deviation in m",
-    )
-    feed.add_argument("--seed", type=int, default=0, metavar="N", help="--feed: the noise's seed")
+    add_noise_option(feed, 0.0, "--feed: added to the readings")
+    add_number(feed, "--seed", 0, "N", "--feed: the noise's seed", kind=int)
     add_meters_option(
-        feed,  # type: ignore[arg-type]
+        feed,
         "--feed writes these meters' readings only (default: the configuration's with "
         "--config, else every junction)",
     )
@@ -224,9 +177,7 @@ def run(args: argparse.Namespace) -> int:
     report = simulate_many(
         scenarios,
         cache=cache,
-        workers=args.workers,
-        scheduler=args.scheduler,
-        progress=not args.quiet,
+        **run_of(args),
     )
     written = 0
     said: set[str] = set()

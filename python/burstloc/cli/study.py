@@ -11,6 +11,7 @@ from burstloc.cli._options import (
     add_run_options,
     add_time_step_option,
     check_run_options,
+    run_of,
     time_step_of,
 )
 from burstloc.constants import CAPTURE_INTERVALS, DETECTORS, RANKING_LOCALIZERS, SCENARIO_DURATION
@@ -101,9 +102,7 @@ def run(args: argparse.Namespace) -> int:
         meter_sets=meter_sets,
     )
     points = study_grid(args.networks, {f: DEFAULT_LEVELS[f] for f in args.factors})
-    rows, problems = run_study(
-        points, settings, workers=args.workers, scheduler=args.scheduler, progress=not args.quiet
-    )
+    rows, problems = run_study(points, settings, **run_of(args))
     report = write_report(rows, settings, args.out, problems)
     print(report.read_text())
     print(f"wrote {report}")

@@ -52,9 +52,9 @@ median).
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -65,7 +65,7 @@ from burstloc import _core
 from burstloc._validate import check_names, check_number
 from burstloc.constants import CAPTURE_INTERVALS, SIGNATURE_DECISION_DELAY, WAVE_SPEED
 from burstloc.exceptions import ConfigError, InputError
-from burstloc.inp import check_meters, network_hash
+from burstloc.inp import check_meters
 from burstloc.localize.config import (
     MAX_CAPTURE_INTERVAL,
     MAX_METERS,
@@ -74,6 +74,7 @@ from burstloc.localize.config import (
 )
 
 if TYPE_CHECKING:
+    from burstloc.network import NetworkSource
     from burstloc.sim.signatures.compute import SignatureMethod
 
 __all__ = [
@@ -202,12 +203,16 @@ def _bisect_threshold(
     return hi
 
 
-def _threshold(
-    make: Any, sigma: float, dt: float, rate: float, seed: int, max_samples: int, floor: float
-) -> float:
-    """Threshold meeting ``rate`` alarms/hour for detectors built by ``make(threshold)``."""
+#: The lowest threshold calibrated (m): ten times the meters' resolution.
+_FLOOR = 10 * RESOLUTION
+
+
+def _threshold(make: Any, sigma: float, dt: float, rate: float, sampling: tuple[int, int]) -> float:
+    """Threshold meeting ``rate`` alarms/hour for detectors built by ``make(threshold)`` on
+    noise drawn with ``sampling`` (seed, most samples); at least :data:`_FLOOR`."""
+    seed, max_samples = sampling
     if sigma <= 0:
-        return floor
+        return _FLOOR
     samples = int(min(max_samples, max(10_000, math.ceil(50 * 3600.0 / (rate * dt)))))
     noise = np.random.default_rng(seed).normal(0.0, sigma, samples)
     hours = samples * dt / 3600.0
@@ -217,13 +222,13 @@ def _threshold(
 
     countable = 10.0 / hours  # the smallest rate with ten alarms in the stream
     if rate >= countable:
-        return max(floor, _bisect_threshold(rate_at, floor, 10 * sigma, rate))
+        return max(_FLOOR, _bisect_threshold(rate_at, _FLOOR, 10 * sigma, rate))
     # extrapolate the exponential tail from the thresholds giving 100 and 10 alarms
     r1, r2 = 100.0 / hours, countable
-    h1 = _bisect_threshold(rate_at, floor, 10 * sigma, r1)
-    h2 = _bisect_threshold(rate_at, floor, 10 * sigma, r2)
+    h1 = _bisect_threshold(rate_at, _FLOOR, 10 * sigma, r1)
+    h2 = _bisect_threshold(rate_at, _FLOOR, 10 * sigma, r2)
     slope = (h2 - h1) / math.log(r1 / r2) if h2 > h1 else sigma
-    return max(floor, h2 + slope * math.log(r2 / rate))
+    return max(_FLOOR, h2 + slope * math.log(r2 / rate))
 
 
 def cusum_threshold(
@@ -237,15 +242,8 @@ def cusum_threshold(
     """``(threshold, drift)`` of a CUSUM meeting ``false_alarm_rate`` (alarms per hour) on
     Gaussian noise of standard deviation ``sigma`` (m) read every ``capture_interval`` s."""
     drift = max(sigma, RESOLUTION)
-    threshold = _threshold(
-        lambda thr: _core.Cusum(thr, drift),
-        sigma,
-        capture_interval,
-        false_alarm_rate,
-        seed,
-        max_samples,
-        10 * RESOLUTION,
-    )
+    cusum = partial(_core.Cusum, drift=drift)
+    threshold = _threshold(cusum, sigma, capture_interval, false_alarm_rate, (seed, max_samples))
     return threshold, drift
 
 
@@ -260,15 +258,8 @@ def shewhart_threshold(
 ) -> float:
     """Absolute threshold of a Shewhart chart (multiplier 3, ``window`` readings) meeting the
     false-alarm rate on noise ``sigma``."""
-    return _threshold(
-        lambda thr: _core.Shewhart(window, thr, SHEWHART_SIGMA),
-        sigma,
-        capture_interval,
-        false_alarm_rate,
-        seed,
-        max_samples,
-        10 * RESOLUTION,
-    )
+    shewhart = partial(_core.Shewhart, window, sigma=SHEWHART_SIGMA)
+    return _threshold(shewhart, sigma, capture_interval, false_alarm_rate, (seed, max_samples))
 
 
 def localization_interval(capture_interval: float, travel_spread: float) -> int:
@@ -278,7 +269,7 @@ def localization_interval(capture_interval: float, travel_spread: float) -> int:
 
 
 def calibrate(
-    network: str | os.PathLike[str],
+    network: NetworkSource,
     *,
     capture_intervals: Sequence[float] = CAPTURE_INTERVALS,
     noise_sigma: float | None = None,
@@ -301,7 +292,7 @@ def calibrate(
     its burst signatures by ``signatures`` (:data:`burstloc.sim.signatures.compute.SignatureMethod`;
     the hybrid method's EPANET runs over ``workers`` local processes, default one per CPU).
     """
-    from burstloc.network import junction_names, load_network
+    from burstloc.network import as_network
     from burstloc.sim.model.prepare import length_graph, prepare_model, travel_time_spread
     from burstloc.sim.signatures.compute import signature_method
 
@@ -319,8 +310,8 @@ def calibrate(
         raise ConfigError("at least one capture interval is needed")
     if baseline is not None and noise_sigma is not None:
         raise ConfigError("give either a recorded baseline or noise_sigma, not both")
-    wn = load_network(network)
-    junctions = junction_names(wn)
+    read = as_network(network)
+    wn, junctions = read.model, list(read.junctions)
     if baseline is not None:
         meter_list = list(baseline.meters)
         if meters is not None and tuple(meters) != baseline.meters:
@@ -329,7 +320,7 @@ def calibrate(
         meter_list = list(
             junctions if meters is None else check_names(meters, "meters", high=MAX_METERS)
         )
-    check_meters(meter_list, junctions, network, ConfigError)
+    check_meters(meter_list, junctions, read.path, ConfigError)
     if baseline is not None:
         sigmas = check_baseline(baseline)
         kind = "recorded"
@@ -376,20 +367,18 @@ def calibrate(
                 arrival_decision_delay=max(pipe_travel, 2 * dt),
             )
         )
-    digest = network_hash(network)
     return Calibration(
-        name=name or f"{Path(network).stem}-calibrated",
-        network=os.fspath(network),
-        network_hash=digest,
+        name=name or f"{Path(read.path).stem}-calibrated",
+        network=read.path,
+        network_hash=read.hash,
         meters=tuple(meter_list),
         noise_sigma={m: float(s) for m, s in zip(meter_list, sigmas, strict=True)},
         false_alarm_rate=float(false_alarm_rate),
         intervals=tuple(items),
         model=prepare_model(
-            network,
+            read,
             meter_list,
             wave_speed=wave_speed,
-            wn=wn,
             signatures=signatures,
             workers=workers,
         ),

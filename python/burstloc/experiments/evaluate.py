@@ -41,13 +41,11 @@ paper's) or interval-averaged readings (:func:`burstloc.sim.scenarios.capture.ca
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Sequence
 from dataclasses import replace
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from burstloc.exceptions import ConfigError, NetworkError
+from burstloc.exceptions import ConfigError
 from burstloc.experiments import paper
 from burstloc.experiments.harness import (
     Attempt,
@@ -71,6 +69,7 @@ from burstloc.experiments.runs import (
 
 if TYPE_CHECKING:
     from burstloc.localize.config import Calibration
+    from burstloc.network import NetworkSource
     from burstloc.sim.scenarios.scenario import ScenarioResult
     from burstloc.sim.scenarios.sensors import SensorModel
 
@@ -90,7 +89,7 @@ KEPT_PIPES = 10
 
 
 def evaluate(
-    network: str | os.PathLike[str],
+    network: NetworkSource,
     runs: Sequence[RunSpec],
     *,
     pipes: Sequence[str] | None = None,
@@ -164,10 +163,8 @@ def evaluate(
         raise ConfigError("no runs to evaluate")
     for spec in runs:
         phase_offsets(spec, phases, phase_span)  # validates phases and span
-    path = os.fspath(network)
-    if not Path(path).is_file():
-        raise NetworkError(f"network file not found: {path}")
-    wn = netmod.load_network(path)
+    read = netmod.as_network(network)
+    path, wn = read.path, read.model
     graph = netmod.flow_direction_graph(wn)
     chosen = inp.choose_pipes(netmod.pipe_names(wn), pipes, path)
 
@@ -195,7 +192,7 @@ def evaluate(
         )
     params["time_step"] = time_step
     finest = min(spec.capture_interval for spec in runs)
-    scenarios = with_capture_time_step(burst_scenarios(path, chosen, **params), finest)
+    scenarios = with_capture_time_step(burst_scenarios(read, chosen, **params), finest)
     scenarios, sizes = sized_scenarios(scenarios, burst_flow)
     if burst_flow is not None:
         del params["burst_coeff"]
@@ -211,7 +208,7 @@ def evaluate(
             junctions = list(first.junctions)
             metered = inp.check_meters(meters, junctions, path) if meters else junctions
             intervals = sorted({spec.capture_interval for spec in ranked})
-            setup = RankingSetup.build(path, metered, intervals, config)
+            setup = RankingSetup.build(read, metered, intervals, config)
         scoring.update(setup=setup, sensors=_sensors(noise, noise_seed, setup))
 
     streamed: dict[str, dict[RunSpec, list[Attempt]]] = {}

@@ -9,8 +9,7 @@ expects an operation's wave to be heard first).
 
 from __future__ import annotations
 
-import os
-
+from burstloc.network import NetworkSource
 from burstloc.sim.events.operations import EventScenario
 
 __all__ = [
@@ -44,15 +43,15 @@ DEMAND_JUNCTIONS = 4
 
 
 def default_events(
-    network: str | os.PathLike[str], duration: float, solver: str = "vectorized"
+    network: NetworkSource, duration: float, solver: str = "vectorized"
 ) -> list[EventScenario]:
     """The events of the evaluation on ``network``: :data:`VALVE_EVENTS` on every valve,
     :data:`PUMP_EVENTS` on every pump, demand steps at :data:`DEMAND_JUNCTIONS` junctions
     (simulated by ``solver``)."""
     from burstloc import network as netmod
 
-    path = os.fspath(network)
-    wn = netmod.load_network(path)
+    read = netmod.as_network(network)
+    path, wn = read.path, read.model
     out: list[tuple[str, str, dict[str, float]]] = []
     for valve in wn.valve_name_list:
         out += [(kind, valve, kw) for kind, kw in VALVE_EVENTS]
@@ -71,11 +70,11 @@ def default_events(
     ]
 
 
-def asset_nodes(network: str | os.PathLike[str]) -> dict[str, str]:
+def asset_nodes(network: NetworkSource) -> dict[str, str]:
     """Junction -> the valve or pump it is an end of."""
     from burstloc import network as netmod
 
-    wn = netmod.load_network(os.fspath(network))
+    wn = netmod.as_network(network).model
     junctions = set(netmod.junction_names(wn))
     out: dict[str, str] = {}
     for name in list(wn.valve_name_list) + list(wn.pump_name_list):

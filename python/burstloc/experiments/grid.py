@@ -21,7 +21,7 @@ from burstloc.constants import (
     SCENARIO_DURATION,
 )
 from burstloc.exceptions import ConfigError
-from burstloc.inp import network_hash
+from burstloc.network import Network, NetworkSource, as_network, identify
 from burstloc.sim.placement.methods import PLACEMENT_METHODS, MeterSet
 
 if TYPE_CHECKING:
@@ -133,9 +133,9 @@ class StudySettings:
     placement: str = "coverage"
     meter_sets: tuple[MeterSet, ...] = ()
 
-    def meters_for(self, network: str | os.PathLike[str]) -> tuple[str, ...] | None:
+    def meters_for(self, network: NetworkSource) -> tuple[str, ...] | None:
         """The meters of ``network``'s meter file among :attr:`meter_sets`, or ``None``."""
-        fingerprint = network_hash(network)
+        fingerprint = identify(network)[1]
         for meter_set in self.meter_sets:
             if meter_set.network_hash == fingerprint:
                 return meter_set.meters
@@ -193,13 +193,16 @@ def study_grid(
     return points
 
 
-def point_scenarios(point: StudyPoint, settings: StudySettings) -> list[Any]:
+def point_scenarios(
+    point: StudyPoint, settings: StudySettings, network: Network | None = None
+) -> list[Any]:
     """The point's bursts, one per pipe, with the time step rule of :func:`study_time_step`;
-    the vectorized solver at steady friction, TSNet's for the other friction models."""
-    from burstloc.network import load_network, pipe_names
+    the vectorized solver at steady friction, TSNet's for the other friction models.
+    ``network``: the point's network, read already."""
     from burstloc.sim.scenarios.scenario import BurstScenario
 
-    pipes = settings.pipes or tuple(pipe_names(load_network(point.network)))
+    read = as_network(point.network) if network is None else network
+    pipes = settings.pipes or read.pipes
     f = point.factors
     scenarios = [
         BurstScenario(

@@ -29,7 +29,6 @@ Calibration (thresholds, localization interval, decision delays) comes from
 from __future__ import annotations
 
 import math
-import os
 import statistics
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field, replace
@@ -51,6 +50,7 @@ from burstloc.localize.decide import Decision, RankingLocalizers
 from burstloc.localize.detection import make_detector
 from burstloc.localize.evidence import Ranking
 from burstloc.localize.paper_rules import Localization
+from burstloc.network import Network, NetworkSource, as_network
 from burstloc.readings import Step
 from burstloc.sim.scenarios.capture import capture
 
@@ -300,18 +300,18 @@ def locate_burst(
 @dataclass
 class RankingSetup:
     """What the ranking localizers need: the meters (the columns of the readings), the
-    calibration of their detector bank, the localizers by name and the network file (the
-    monitor checks the calibration against it)."""
+    calibration of their detector bank, the localizers by name and the network (the monitor
+    checks the calibration against it)."""
 
     meters: list[str]
     config: Calibration
     localizers: RankingLocalizers
-    network: str
+    network: Network
 
     @classmethod
     def build(
         cls,
-        network: str | os.PathLike[str],
+        network: NetworkSource,
         meters: Sequence[str],
         capture_intervals: Sequence[float],
         config: Calibration | None = None,
@@ -326,15 +326,15 @@ class RankingSetup:
         (:meth:`burstloc.experiments.calibrate.Calibration.check`), as is one without an
         interval.
         """
-        path = os.fspath(network)
+        read = as_network(network)
         if config is None:
-            config = calibrate(path, capture_intervals=capture_intervals, meters=meters)
+            config = calibrate(read, capture_intervals=capture_intervals, meters=meters)
         else:
-            config.check(path, meters)
+            config.check(read, meters)
             for ci in capture_intervals:
                 config.for_interval(ci)
         # the configuration's own localization model, as the monitor reads it
-        return cls(list(meters), config, RankingLocalizers.from_model(config.model), path)
+        return cls(list(meters), config, RankingLocalizers.from_model(config.model), read)
 
 
 def rank_attempts(

@@ -7,18 +7,18 @@ its decisions and how many were reported as bursts (``burstloc evaluate --events
 
 from __future__ import annotations
 
-import os
 from typing import Any
 
 from burstloc.experiments.calibrate import DEFAULT_NOISE_SIGMA
 from burstloc.experiments.harness import RankingSetup
 from burstloc.localize.classify import ClassifierConfig
+from burstloc.network import NetworkSource
 
 __all__ = ["normal_operation"]
 
 
 def normal_operation(
-    network: str | os.PathLike[str],
+    network: NetworkSource,
     setup: RankingSetup,
     config: ClassifierConfig,
     capture_interval: float,

@@ -10,7 +10,6 @@ prints :func:`format_comparison` of its rows.
 
 from __future__ import annotations
 
-import os
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from typing import Any
@@ -18,13 +17,14 @@ from typing import Any
 from burstloc.experiments import paper
 from burstloc.experiments.evaluate import evaluate
 from burstloc.experiments.runs import plan_runs
+from burstloc.network import NetworkSource, as_network
 from burstloc.sim.placement.methods import PLACEMENT_METHODS, place_meters
 
 __all__ = ["compare_placements", "format_comparison"]
 
 
 def compare_placements(
-    network: str | os.PathLike[str],
+    network: NetworkSource,
     count: int,
     *,
     methods: Sequence[str] = PLACEMENT_METHODS,
@@ -51,11 +51,12 @@ def compare_placements(
         localizers=localizers, detectors=(detector,), capture_intervals=(capture_interval,)
     )
     scenario = replace(paper.SCENARIO, position=position)
+    read = as_network(network)
     rows: list[dict[str, Any]] = []
     for method in methods:
-        placed = place_meters(network, count, method=method, resolution=capture_interval)
+        placed = place_meters(read, count, method=method, resolution=capture_interval)
         ev = evaluate(
-            network,
+            read,
             runs,
             phases=phases,
             scenario=scenario,

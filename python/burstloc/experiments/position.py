@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any
 import networkx as nx
 import numpy as np
 
+from burstloc._validate import attributes
 from burstloc.exceptions import NetworkError
 from burstloc.sim.model.prepare import length_graph
 
@@ -181,15 +182,8 @@ class PositionErrors:
 
     def to_json(self) -> dict[str, Any]:
         """JSON-ready record (``tests/evaluate_schema.json``, ``position_error_m``)."""
-        return {
-            "attempts": self.attempts,
-            "count": self.count,
-            "mean": self.mean,
-            "p90": self.p90,
-            "mean_width": self.mean_width,
-            "on_pipe": self.on_pipe,
-            "interval_hits": self.interval_hits,
-        }
+        names = ("attempts", "count", "mean", "p90", "mean_width", "on_pipe", "interval_hits")
+        return attributes(self, *names)
 
 
 def score_position(

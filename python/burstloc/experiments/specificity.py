@@ -52,6 +52,7 @@ from burstloc.localize.config import calibrated_bank
 from burstloc.localize.corroborate import CORROBORATE, corroborated_at, corroboration_deadline
 from burstloc.localize.decide import decision_time, rank_alarms
 from burstloc.localize.signature import SignatureLocalizer
+from burstloc.network import NetworkSource, as_network
 from burstloc.sim.events.operations import EventScenario
 from burstloc.sim.scenarios.scenario import ScenarioResult
 
@@ -326,11 +327,11 @@ def with_operation(classifier: EventClassifier, event: EventScenario) -> EventCl
 
 
 def evaluate_events(
-    network: str | os.PathLike[str],
+    network: NetworkSource,
     bursts: dict[str, ScenarioResult],
     capture_intervals: Sequence[float],
     *,
-    calibration_network: str | os.PathLike[str],
+    calibration_network: NetworkSource,
     calibration_bursts: dict[str, ScenarioResult],
     duration: float,
     setup: RankingSetup | None = None,
@@ -352,22 +353,23 @@ def evaluate_events(
     from burstloc.experiments.normal_day import normal_operation
     from burstloc.sim.events.operations import simulate_event
 
+    read, cal_read = as_network(network), as_network(calibration_network)
     meters = list(next(iter(bursts.values())).junctions)
     if setup is None:
-        setup = RankingSetup.build(network, meters, capture_intervals)
+        setup = RankingSetup.build(read, meters, capture_intervals)
     cal_setup = setup
-    if os.path.abspath(calibration_network) != os.path.abspath(network):
+    if os.path.abspath(cal_read.path) != os.path.abspath(read.path):
         cal_meters = list(next(iter(calibration_bursts.values())).junctions)
-        cal_setup = RankingSetup.build(calibration_network, cal_meters, capture_intervals)
+        cal_setup = RankingSetup.build(cal_read, cal_meters, capture_intervals)
     config = calibrate_classifier(
-        list(calibration_bursts.values()), cal_setup, capture_intervals, asset_nodes(network)
+        list(calibration_bursts.values()), cal_setup, capture_intervals, asset_nodes(read)
     )
     signature = setup.localizers["signature"]
     assert isinstance(signature, SignatureLocalizer)
     classifier = EventClassifier(config, signature)
     events = []
     out = Specificity(classifier=config.to_json())
-    for scenario in default_events(network, duration, solver):
+    for scenario in default_events(read, duration, solver):
         if progress:
             print(f"simulating {scenario.label}", file=sys.stderr)
         try:
@@ -385,5 +387,5 @@ def evaluate_events(
             known = classify_result(result, setup, with_operation(classifier, scenario), ci)
             out.add(scenario.kind, ci, outcome, scenario.label, None, declared=known)
         if normal_hours > 0:
-            out.normal.append(normal_operation(network, setup, config, ci, hours=normal_hours))
+            out.normal.append(normal_operation(read, setup, config, ci, hours=normal_hours))
     return out, config

@@ -71,7 +71,7 @@ def score_point(task: tuple[StudyPoint, StudySettings]) -> list[dict[str, Any]]:
     from burstloc.localize.decide import RankingLocalizers
     from burstloc.localize.fused import FusedLocalizer
     from burstloc.localize.signature import SignatureLocalizer
-    from burstloc.network import load_network
+    from burstloc.network import read_network
     from burstloc.sim.model.prepare import arrival_localizer
     from burstloc.sim.placement.methods import place_meters
     from burstloc.sim.scenarios.sensors import SensorModel
@@ -80,18 +80,19 @@ def score_point(task: tuple[StudyPoint, StudySettings]) -> list[dict[str, Any]]:
 
     point, settings = task
     f = point.factors
-    results = [simulate_burst(s) for s in point_scenarios(point, settings)]
+    network = read_network(point.network)  # once per worker process
+    results = [simulate_burst(s) for s in point_scenarios(point, settings, network)]
     junctions = list(results[0].junctions)
-    signature_sets = cached_signature_sets(point.network, junctions)
+    signature_sets = cached_signature_sets(network, junctions)
     count = max(1, round(f.meter_fraction * len(junctions)))
     if count < len(junctions):
-        meters = list(place_meters(point.network, count, method=settings.placement).meters)
+        meters = list(place_meters(network, count, method=settings.placement).meters)
     else:
-        meters = list(settings.meters_for(point.network) or junctions)
-    arrival = arrival_localizer(load_network(point.network), meters)
+        meters = list(settings.meters_for(network) or junctions)
+    arrival = arrival_localizer(network, meters)
     signature = SignatureLocalizer([s.for_meters(meters) for s in signature_sets])
     config = calibrate(
-        point.network,
+        network,
         capture_intervals=settings.capture_intervals,
         meters=meters,
         noise_sigma=f.noise_sigma if f.noise_sigma > 0 else DEFAULT_NOISE_SIGMA,
@@ -99,7 +100,7 @@ def score_point(task: tuple[StudyPoint, StudySettings]) -> list[dict[str, Any]]:
         seed=settings.seed,
     )
     localizers = RankingLocalizers(arrival, signature, FusedLocalizer(arrival, signature))
-    setup = RankingSetup(meters, config, localizers, point.network)
+    setup = RankingSetup(meters, config, localizers, network)
     sensor = SensorModel(noise_sigma=f.noise_sigma, seed=settings.seed)
     rows: list[dict[str, Any]] = []
     for dt in settings.capture_intervals:

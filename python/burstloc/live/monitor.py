@@ -49,7 +49,6 @@ Nothing here runs a hydraulic model: this module imports neither WNTR, EPANET, T
 from __future__ import annotations
 
 import math
-import os
 from collections import deque
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import replace
@@ -75,6 +74,7 @@ from burstloc.localize.decide import (
     rank_alarms,
 )
 from burstloc.localize.evidence import IndexedAlarm, Localizer
+from burstloc.network import NetworkSource
 from burstloc.readings import Step
 
 _Part = tuple[np.ndarray, np.ndarray, list[IndexedAlarm], tuple[str, ...], Mapping[str, Localizer]]
@@ -97,7 +97,8 @@ class BurstMonitor:
     Parameters
     ----------
     network:
-        The EPANET INP file the configuration was calibrated for (checked by its SHA-256).
+        The EPANET INP file the configuration was calibrated for (checked by its SHA-256), or
+        the :class:`~burstloc.network.Network` read from it.
     config:
         The configuration (``Calibration.load(path)``); its meters are the step's columns and
         its localization model makes the localizers.
@@ -137,7 +138,7 @@ class BurstMonitor:
 
     def __init__(
         self,
-        network: str | os.PathLike[str],
+        network: NetworkSource,
         config: Calibration,
         *,
         capture_interval: float,

@@ -45,7 +45,7 @@ from typing import Any, Literal
 import numpy as np
 
 from burstloc._atomic import write_json
-from burstloc._validate import Fields, check_number, check_string, read_json
+from burstloc._validate import Fields, attributes, check_number, check_string, read_json
 from burstloc.constants import MeterModel
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.localize.evidence import BurstEvidence, evidence_at
@@ -178,9 +178,7 @@ class ClassifierConfig:
         """The JSON document (format :data:`CLASSIFIER_FORMAT`)."""
         return {
             "format": CLASSIFIER_FORMAT,
-            "max_residual": self.max_residual,
-            "min_scale": self.min_scale,
-            "rise_tolerance": self.rise_tolerance,
+            **attributes(self, "max_residual", "min_scale", "rise_tolerance"),
             "asset_nodes": dict(self.asset_nodes),
             "operation_window": self.operation_window,
             "intervals": {ci: dict(v) for ci, v in self.intervals.items()},
@@ -202,15 +200,14 @@ class ClassifierConfig:
         with doc.checking():
             if doc.get("format") != CLASSIFIER_FORMAT:
                 raise ConfigError(f"format must be {CLASSIFIER_FORMAT!r}")
-            return cls(
-                max_residual=doc.get("max_residual"),
-                min_scale=doc.get("min_scale"),
-                rise_tolerance=doc.get("rise_tolerance"),
-                asset_nodes=doc.optional_object("asset_nodes"),
-                operation_window=doc.data.get("operation_window", OPERATION_WINDOW),
-                provenance=doc.optional_object("provenance"),
-                intervals=doc.optional_object("intervals"),
-            )
+        return doc.build(
+            cls,
+            ("max_residual", "min_scale", "rise_tolerance"),
+            asset_nodes=doc.optional_object("asset_nodes"),
+            operation_window=doc.data.get("operation_window", OPERATION_WINDOW),
+            provenance=doc.optional_object("provenance"),
+            intervals=doc.optional_object("intervals"),
+        )
 
 
 def _check_thresholds(max_residual: Any, min_scale: Any, rise_tolerance: Any, where: str) -> None:

@@ -35,6 +35,7 @@ from burstloc._atomic import write_json, write_json_npz
 from burstloc._validate import (
     FieldError,
     Fields,
+    attributes,
     check_count,
     check_names,
     check_number,
@@ -44,8 +45,9 @@ from burstloc._validate import (
     some_names,
 )
 from burstloc.exceptions import ConfigError
-from burstloc.inp import check_meters, junction_names_in_file, network_hash
+from burstloc.inp import check_meters, junction_names_in_file
 from burstloc.localize.model import LocalizationModel
+from burstloc.network import Network, NetworkSource, identify
 
 __all__ = ["CALIBRATION_FORMAT", "Calibration", "IntervalCalibration", "calibrated_bank"]
 
@@ -147,8 +149,7 @@ class IntervalCalibration:
     def to_json(self) -> dict[str, Any]:
         """JSON-ready dictionary."""
         return {
-            "capture_interval": self.capture_interval,
-            "localization_interval": self.localization_interval,
+            **attributes(self, "capture_interval", "localization_interval"),
             "cusum": {"threshold": dict(self.cusum_threshold), "drift": dict(self.cusum_drift)},
             "shewhart": {"threshold": dict(self.shewhart_threshold), "sigma": self.shewhart_sigma},
             "decision_delay_s": self.decision_delay,
@@ -163,17 +164,18 @@ class IntervalCalibration:
         and the field)."""
         fields = data if isinstance(data, Fields) else Fields(data, source)
         cusum, shewhart = fields.obj("cusum"), fields.obj("shewhart")
-        with fields.checking():
-            return cls(
-                capture_interval=fields.get("capture_interval"),
-                localization_interval=fields.get("localization_interval"),
-                cusum_threshold=cusum.get("threshold"),
-                cusum_drift=cusum.get("drift"),
-                shewhart_threshold=shewhart.get("threshold"),
-                shewhart_sigma=shewhart.get("sigma"),
-                decision_delay=fields.get("decision_delay_s"),
-                arrival_decision_delay=fields.get("arrival_decision_delay_s"),
-            )
+        return fields.build(
+            cls,
+            ("capture_interval", "localization_interval"),
+            {
+                "decision_delay": "decision_delay_s",
+                "arrival_decision_delay": "arrival_decision_delay_s",
+            },
+            cusum_threshold=cusum.get("threshold"),
+            cusum_drift=cusum.get("drift"),
+            shewhart_threshold=shewhart.get("threshold"),
+            shewhart_sigma=shewhart.get("sigma"),
+        )
 
 
 @dataclass(frozen=True)
@@ -251,17 +253,21 @@ class Calibration:
             f"capture interval (it has {have} s); run `burstloc calibrate` for it"
         )
 
-    def check(self, network: str | os.PathLike[str], meters: Sequence[str] | None = None) -> None:
+    def check(self, network: NetworkSource, meters: Sequence[str] | None = None) -> None:
         """Refuse (ConfigError) to be used with another network or another set of meters, or
-        with meters that are not junctions of ``network`` (a configuration edited by hand)."""
-        digest = network_hash(network)
+        with meters that are not junctions of ``network`` (a configuration edited by hand).
+        An INP file is hashed and its junctions read from its text (no model is built)."""
+        junctions = (  # an INP file's junctions first: the file is read once, then hashed
+            network.junctions if isinstance(network, Network) else junction_names_in_file(network)
+        )
+        path, digest = identify(network)
         if digest != self.network_hash:
             raise ConfigError(
                 f"configuration {self.name!r} was calibrated for network {self.network!r} "
-                f"({self.network_hash}), not for {os.fspath(network)!r} ({digest})"
+                f"({self.network_hash}), not for {path!r} ({digest})"
             )
-        where = f"{os.fspath(network)} (in configuration {self.name!r})"
-        check_meters(self.meters, junction_names_in_file(network), where, ConfigError)
+        where = f"{path} (in configuration {self.name!r})"
+        check_meters(self.meters, junctions, where, ConfigError)
         if meters is not None and tuple(meters) != self.meters:
             missing = sorted(set(self.meters) - set(meters))
             extra = sorted(set(meters) - set(self.meters))
@@ -313,9 +319,7 @@ class Calibration:
         """JSON-ready dictionary (see :data:`CALIBRATION_FORMAT`)."""
         return {
             "format": CALIBRATION_FORMAT,
-            "name": self.name,
-            "network": self.network,
-            "network_hash": self.network_hash,
+            **attributes(self, "name", "network", "network_hash"),
             "meters": list(self.meters),
             "noise_sigma": dict(self.noise_sigma),
             "false_alarm_rate_per_hour": self.false_alarm_rate,
@@ -351,18 +355,14 @@ class Calibration:
         model = fields.obj("model")
         with model.checking():
             stored_model = LocalizationModel.from_json(model.data)
-        with fields.checking():
-            return cls(
-                name=fields.get("name"),
-                network=fields.get("network"),
-                network_hash=fields.get("network_hash"),
-                meters=fields.get("meters"),
-                noise_sigma=fields.get("noise_sigma"),
-                false_alarm_rate=fields.get("false_alarm_rate_per_hour"),
-                intervals=tuple(intervals),
-                model=stored_model,
-                provenance=fields.optional_object("provenance"),
-            )
+        return fields.build(
+            cls,
+            ("name", "network", "network_hash", "meters", "noise_sigma"),
+            {"false_alarm_rate": "false_alarm_rate_per_hour"},
+            intervals=tuple(intervals),
+            model=stored_model,
+            provenance=fields.optional_object("provenance"),
+        )
 
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the configuration (atomically); returns the path. A path ending in ``.npz``

@@ -48,6 +48,7 @@ from typing import Any, Protocol
 
 import networkx as nx
 
+from burstloc._validate import attributes
 from burstloc.exceptions import NetworkError
 from burstloc.localize.evidence import Change
 from burstloc.readings import Window
@@ -93,10 +94,7 @@ class Localization:
     def as_dict(self) -> dict[str, Any]:
         """A JSON-ready summary."""
         return {
-            "pipe": self.pipe,
-            "start_node": self.start_node,
-            "end_node": self.end_node,
-            "trigger_node": self.trigger_node,
+            **attributes(self, "pipe", "start_node", "end_node", "trigger_node"),
             "rule": self.rule.value,
             "decision_time": self.decision_time,
             "evidence": {

@@ -42,7 +42,7 @@ HYDRAULIC_STEP = 300
 
 
 def normal_day(
-    network_path: str | os.PathLike[str],
+    network_path: network.NetworkSource,
     *,
     capture_interval: float,
     noise_sigma: float = 0.01,
@@ -69,9 +69,10 @@ def normal_day(
         raise ConfigError("the demand pattern must be finite multipliers >= 0")
     import wntr
 
-    wn = network.load_network(os.fspath(network_path))
+    read = network.as_network(network_path)
+    wn = read.editable()  # its demands and times are changed for the run
     junctions = network.junction_names(wn)
-    names = check_meters(junctions if meters is None else meters, junctions, network_path)
+    names = check_meters(junctions if meters is None else meters, junctions, read.path)
     wn.add_pattern("burstloc_diurnal", multipliers)
     for name in network.junction_names(wn):
         for demand in wn.get_node(name).demand_timeseries_list:

@@ -39,20 +39,19 @@ from burstloc import network
 from burstloc._diagnostics import capture_diagnostics
 from burstloc.constants import SCENARIO_DURATION, WAVE_SPEED
 from burstloc.exceptions import ConfigError, NetworkError
-from burstloc.sim.scenarios.cache import DiskCache, file_sha256, network_cache_key
+from burstloc.sim.scenarios.cache import DiskCache, network_cache_key
 from burstloc.sim.scenarios.scenario import (
     DEFAULT_BURST_START,
     FRICTION_MODELS,
     ScenarioResult,
     check_solver,
 )
-from burstloc.sim.transient.steady import check_steady_start
 from burstloc.sim.transient.tsnet import (
     TransientSettings,
     cached,
     isolated_run,
-    run_metadata,
     run_transient,
+    scenario_result,
 )
 from burstloc.sim.transient.tsnet_ready import prepare_for_tsnet
 
@@ -244,11 +243,11 @@ def _simulate(scenario: EventScenario) -> ScenarioResult:
     started = time.perf_counter()
     source = os.path.abspath(scenario.network)
     with isolated_run() as tmp, capture_diagnostics() as diag:
-        wn = network.load_network(source)
+        wn = network.as_network(source, diagnostics=True).editable()  # the events change it
         nodes = _asset_nodes(wn, scenario)
         meters = network.junction_names(wn)
         prepared = prepare_for_tsnet(wn, keep=(scenario.asset,))
-        steps, heads, dt = run_transient(
+        transient = run_transient(
             wn,
             meters,
             os.path.join(tmp, "event.inp"),
@@ -256,22 +255,9 @@ def _simulate(scenario: EventScenario) -> ScenarioResult:
             _operate(scenario, wn),
             where=f"{scenario.label} of {scenario.network}",
         )
-    steady = check_steady_start(steps, heads, meters, scenario.start, scenario.network)
-    elapsed = time.perf_counter() - started
-    meta: dict[str, Any] = {
-        "network": scenario.network,
-        "network_sha256": file_sha256(scenario.network),
-        **scenario.parameters(),
-        "solver": scenario.solver,
-        "event": scenario.kind,
-        "asset_nodes": nodes,
-        "label": scenario.label,
-        "steady_start": steady.as_metadata(),
-        **prepared.as_metadata(),
-        **run_metadata(dt, steps.size, diag, elapsed),
-        "schema": SCHEMA,
-    }
-    return ScenarioResult(steps, heads, meters, dt, meta)
+    specific = {"event": scenario.kind, "asset_nodes": nodes, "label": scenario.label}
+    run = (prepared, started, diag, SCHEMA)
+    return scenario_result(scenario, scenario.start, (*transient, meters), run, specific)
 
 
 _UNSAFE = re.compile(r"[^A-Za-z0-9._-]")

@@ -23,11 +23,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from burstloc.constants import CANDIDATE_POSITIONS, WAVE_SPEED
-from burstloc.inp import check_meters, network_hash
+from burstloc.inp import check_meters
 from burstloc.localize.arrival import ArrivalLocalizer, PipeGeometry
 from burstloc.localize.decide import RankingLocalizers
 from burstloc.localize.model import LocalizationModel
-from burstloc.network import flow_direction_graph, load_network
+from burstloc.network import Network, NetworkSource, as_network, flow_direction_graph
 from burstloc.sim.signatures.compute import SignatureMethod, cached_signature_sets
 
 if TYPE_CHECKING:
@@ -80,8 +80,11 @@ def travel_time_spread(
     return best / wave_speed
 
 
-def _model_of(network: str | os.PathLike[str] | WaterNetworkModel) -> WaterNetworkModel:
-    return load_network(network) if isinstance(network, (str, os.PathLike)) else network
+def _model_of(network: NetworkSource | WaterNetworkModel) -> WaterNetworkModel:
+    """The WNTR model (read only) of a network, an INP file or a WNTR model."""
+    if isinstance(network, (Network, str, os.PathLike)):
+        return as_network(network).model
+    return network
 
 
 def _meters_of(wn: WaterNetworkModel, meters: Sequence[str] | None) -> list[str]:
@@ -104,7 +107,7 @@ def pipe_geometry(wn: WaterNetworkModel) -> list[PipeGeometry]:
 
 
 def arrival_geometry(
-    network: str | os.PathLike[str] | WaterNetworkModel, meters: Sequence[str] | None = None
+    network: NetworkSource | WaterNetworkModel, meters: Sequence[str] | None = None
 ) -> tuple[list[PipeGeometry], dict[str, NDArray[np.float64]]]:
     """Every pipe's flow-direction end nodes and length, and the shortest path lengths (m) from
     those end nodes to each of ``meters`` (default: every junction; ``inf`` without a path).
@@ -203,7 +206,7 @@ def wave_fronts(
 
 
 def arrival_localizer(
-    network: str | os.PathLike[str] | WaterNetworkModel,
+    network: NetworkSource | WaterNetworkModel,
     meters: Sequence[str] | None = None,
     *,
     wave_speed: float = WAVE_SPEED,
@@ -228,35 +231,35 @@ def arrival_localizer(
 
 
 def prepare_model(
-    network: str | os.PathLike[str],
+    network: NetworkSource,
     meters: Sequence[str] | None = None,
     *,
     wave_speed: float = WAVE_SPEED,
     positions: Sequence[float] = CANDIDATE_POSITIONS,
     cache_dir: str | os.PathLike[str] | None = None,
-    wn: WaterNetworkModel | None = None,
     signatures: SignatureMethod = "auto",
     workers: int | None = None,
 ) -> LocalizationModel:
     """The :class:`~burstloc.localize.model.LocalizationModel` of ``meters`` (default: every
-    junction) on the INP file ``network`` (module docstring). ``wn``: the file's WNTR model, if
-    the caller has it loaded already; ``cache_dir``: where the signatures are cached;
+    junction) on ``network`` (a :class:`~burstloc.network.Network` or its INP file; module
+    docstring). ``cache_dir``: where the signatures are cached;
     ``signatures``: how they are computed (:data:`burstloc.sim.signatures.compute.SignatureMethod`;
     ``workers``: the local processes of the hybrid method's EPANET runs).
 
     Raises:
         NetworkError: missing or malformed network, or a meter that is not a junction.
     """
-    model = load_network(network) if wn is None else wn
+    read = as_network(network)
+    model = read.model
     meter_list = _meters_of(model, meters)
     pipes, node_distances = arrival_geometry(model, meter_list)
     return LocalizationModel(
-        network_hash=network_hash(network),
+        network_hash=read.hash,
         meters=tuple(meter_list),
         pipes=tuple(pipes),
         node_distances=node_distances,
         signature_sets=cached_signature_sets(
-            network,
+            read,
             meter_list,
             positions=positions,
             cache_dir=cache_dir,
@@ -268,7 +271,7 @@ def prepare_model(
     )
 
 
-def ranking_localizers(network: str | os.PathLike[str], meters: Sequence[str]) -> RankingLocalizers:
+def ranking_localizers(network: NetworkSource, meters: Sequence[str]) -> RankingLocalizers:
     """The ranking localizers of ``meters`` on ``network`` (``arrival``, ``signature``,
     ``fused``), built from :func:`prepare_model` (the signatures cached on disk).
 

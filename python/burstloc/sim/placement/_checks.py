@@ -5,7 +5,6 @@ interval; the geometry of a meter set on a network file."""
 from __future__ import annotations
 
 import math
-import os
 from collections import Counter
 from collections.abc import Sequence
 from typing import Any
@@ -15,6 +14,7 @@ from numpy.typing import NDArray
 
 from burstloc.exceptions import ConfigError
 from burstloc.localize.arrival import PipeGeometry
+from burstloc.network import NetworkSource
 
 __all__ = ["check_meter_count", "check_timing", "kept_indices", "meter_geometry"]
 
@@ -50,7 +50,7 @@ def check_timing(wave_speed: float, resolution: float) -> None:
 
 
 def meter_geometry(
-    network: str | os.PathLike[str], meters: Sequence[str]
+    network: NetworkSource, meters: Sequence[str]
 ) -> tuple[list[PipeGeometry], dict[str, NDArray[np.float64]]]:
     """:func:`burstloc.sim.model.prepare.arrival_geometry` of ``meters`` (ConfigError for none)."""
     from burstloc.sim.model.prepare import arrival_geometry

@@ -96,6 +96,7 @@ import numpy as np
 from burstloc._atomic import write_json
 from burstloc._validate import (
     Fields,
+    attributes,
     check_count,
     check_names,
     check_string,
@@ -104,7 +105,7 @@ from burstloc._validate import (
 )
 from burstloc.constants import SEARCHABLE, WAVE_SPEED
 from burstloc.exceptions import ConfigError
-from burstloc.inp import network_hash
+from burstloc.network import NetworkSource, as_network, identify
 from burstloc.sim.placement._checks import check_meter_count, kept_indices, meter_geometry
 from burstloc.sim.placement.arrival import ARRIVAL_POINTS, arrival_meters, arrival_separation
 from burstloc.sim.placement.region import (
@@ -124,6 +125,7 @@ __all__ = [
     "arrival_meters",
     "arrival_separation",
     "coverage_meters",
+    "meter_ambiguity",
     "meter_list",
     "meter_scores",
     "meter_separation",
@@ -204,13 +206,13 @@ class MeterSet:
         object.__setattr__(self, "meters", check_names(self.meters, "meters", high=MAX_METERS))
         check_count(self.junctions, "junctions", high=MAX_JUNCTIONS)
 
-    def check(self, network: str | os.PathLike[str]) -> tuple[str, ...]:
+    def check(self, network: NetworkSource) -> tuple[str, ...]:
         """The meters, once the file is known to be for ``network`` (ConfigError otherwise)."""
-        found = network_hash(network)
+        where, found = identify(network)
         if found != self.network_hash:
             raise ConfigError(
                 f"the meter file was made for network {self.network} ({self.network_hash}), "
-                f"not for {os.fspath(network)} ({found}); run `burstloc place` for it"
+                f"not for {where} ({found}); run `burstloc place` for it"
             )
         return self.meters
 
@@ -218,9 +220,7 @@ class MeterSet:
         """The meter file's document."""
         return {
             "format": METERS_FORMAT,
-            "network": self.network,
-            "network_hash": self.network_hash,
-            "method": self.method,
+            **attributes(self, "network", "network_hash", "method"),
             "meters": list(self.meters),
             "junctions": self.junctions,
         }
@@ -239,18 +239,11 @@ class MeterSet:
                 f"{source}: not a burstloc meter file (format {fields.data.get('format')!r}, "
                 f"want {METERS_FORMAT!r}); write one with `burstloc place`"
             )
-        with fields.checking():
-            return cls(
-                network=fields.get("network"),
-                network_hash=fields.get("network_hash"),
-                method=fields.get("method"),
-                meters=fields.get("meters"),
-                junctions=fields.get("junctions"),
-            )
+        return fields.build(cls, ("network", "network_hash", "method", "meters", "junctions"))
 
 
 def place_meters(
-    network: str | os.PathLike[str],
+    network: NetworkSource,
     count: int,
     *,
     method: str = "arrival",
@@ -259,7 +252,7 @@ def place_meters(
     scaling: Scaling = DEFAULT_SCALING,
     keep: Sequence[str] = (),
 ) -> MeterSet:
-    """Place ``count`` meters on the junctions of the INP file ``network`` by ``method``
+    """Place ``count`` meters on the junctions of ``network`` (or its INP file) by ``method``
     (module docstring); ``resolution`` (s) is the ``arrival`` and ``region`` methods' capture
     interval. On a network of more junctions than ``scaling.above`` those two methods run on
     a reduced problem (:mod:`burstloc.sim.placement.scaled`; the kept meters among its
@@ -271,19 +264,19 @@ def place_meters(
         ConfigError: unknown method, ``count`` out of range, a kept meter that is not a
             junction.
     """
-    from burstloc.network import load_network
     from burstloc.sim.model.prepare import arrival_geometry
     from burstloc.sim.signatures.compute import cached_signatures
 
     if method not in PLACEMENT_METHODS:
         raise ConfigError(f"unknown placement method {method!r}; use one of {PLACEMENT_METHODS}")
-    wn = load_network(network)
-    junctions = list(wn.junction_name_list)
+    read = as_network(network)
+    wn = read.model
+    junctions = list(read.junctions)
     keep = tuple(keep)
     kept_indices(keep, junctions)
     check_meter_count(count, len(junctions) - len(keep))
     if method == "coverage":
-        meters = coverage_meters(cached_signatures(network, junctions), count, keep)
+        meters = coverage_meters(cached_signatures(read, junctions), count, keep)
     elif scaling.applies(len(junctions)):
         problem = reduced_problem(wn, count, scaling, keep)
         if method == "arrival":
@@ -324,47 +317,49 @@ def place_meters(
         )
     order = {name: i for i, name in enumerate(junctions)}
     meters = tuple(sorted(meters, key=order.__getitem__))  # the network's order
-    return MeterSet(os.fspath(network), network_hash(network), method, meters, len(junctions))
+    return MeterSet(read.path, read.hash, method, meters, len(junctions))
 
 
-def meter_separation(
-    network: str | os.PathLike[str],
-    meters: Sequence[str],
-    *,
-    wave_speed: float = WAVE_SPEED,
-    resolution: float = 0.2,
-) -> float:
-    """:func:`arrival_separation` of ``meters`` on the INP file ``network``.
+def meter_separation(network: NetworkSource, meters: Sequence[str], **timing: float) -> float:
+    """:func:`arrival_separation` of ``meters`` on ``network`` (:func:`meter_scores`' first,
+    alone; ``timing``: ``wave_speed``, ``resolution``)."""
+    return meter_scores(network, meters, scores=("separation",), **timing)[0]
 
-    Raises:
-        NetworkError: missing or malformed network, or a meter that is not a junction.
-        ConfigError: no meter, a bad wave speed or resolution.
-    """
-    pipes, distances = meter_geometry(network, meters)
-    return arrival_separation(pipes, distances, wave_speed=wave_speed, resolution=resolution)
+
+def meter_ambiguity(network: NetworkSource, meters: Sequence[str], **timing: float) -> float:
+    """:func:`~burstloc.sim.placement.region.ambiguous_length` of ``meters`` on ``network`` (m;
+    :func:`meter_scores`' second, alone; ``timing``: ``wave_speed``, ``resolution``)."""
+    return meter_scores(network, meters, scores=("ambiguity",), **timing)[0]
 
 
 def meter_scores(
-    network: str | os.PathLike[str],
+    network: NetworkSource,
     meters: Sequence[str],
     *,
     wave_speed: float = WAVE_SPEED,
     resolution: float = 0.2,
-) -> tuple[float, float]:
-    """:func:`meter_separation` and
-    :func:`~burstloc.sim.placement.region.meter_ambiguity` of ``meters`` at once, from one
-    arrival geometry (what ``burstloc place`` prints).
+    scores: Sequence[str] = ("separation", "ambiguity"),
+) -> tuple[float, ...]:
+    """The ``scores`` of ``meters`` on ``network`` from one arrival geometry (what ``burstloc
+    place`` prints): ``"separation"``, :func:`arrival_separation`; ``"ambiguity"``,
+    :func:`~burstloc.sim.placement.region.ambiguous_length` (m).
 
     Raises:
         NetworkError: missing or malformed network, or a meter that is not a junction.
-        ConfigError: no meter, a bad wave speed or resolution.
+        ConfigError: no meter, a bad wave speed or resolution, an unknown score.
     """
+    unknown = [s for s in scores if s not in ("separation", "ambiguity")]
+    if unknown:
+        raise ConfigError(f"unknown meter score(s) {unknown}: use 'separation', 'ambiguity'")
     pipes, distances = meter_geometry(network, meters)
-    told = arrival_separation(pipes, distances, wave_speed=wave_speed, resolution=resolution)
-    ambiguous = ambiguous_length(
-        pipes, tuple(meters), distances, wave_speed=wave_speed, resolution=resolution
+    return tuple(
+        arrival_separation(pipes, distances, wave_speed=wave_speed, resolution=resolution)
+        if score == "separation"
+        else ambiguous_length(
+            pipes, tuple(meters), distances, wave_speed=wave_speed, resolution=resolution
+        )
+        for score in scores
     )
-    return told, ambiguous
 
 
 @dataclass(frozen=True)
@@ -405,14 +400,14 @@ class MeterScores:
 
 
 def score_meters(
-    network: str | os.PathLike[str],
+    network: NetworkSource,
     meters: Sequence[str],
     *,
     wave_speed: float = WAVE_SPEED,
     resolution: float = 0.2,
     each: bool = False,
 ) -> MeterScores:
-    """:class:`MeterScores` of ``meters`` on the INP file ``network``; with ``each`` also
+    """:class:`MeterScores` of ``meters`` on ``network``; with ``each`` also
     every meter's contribution (the set scored without it).
 
     Raises:
@@ -431,8 +426,8 @@ def score_meters(
     return MeterScores(tuple(meters), resolution, whole, tuple(p.mean for p in without))
 
 
-def meter_list(values: Sequence[str], network: str | os.PathLike[str]) -> tuple[str, ...]:
-    """The meters ``values`` name on the INP file ``network``, in the order given.
+def meter_list(values: Sequence[str], network: NetworkSource) -> tuple[str, ...]:
+    """The meters ``values`` name on ``network``, in the order given.
 
     ``values`` are junction IDs (each may hold several, separated by commas), or one file: a
     meter file (:data:`METERS_FORMAT`, refused if made for another network) or a text file of
@@ -445,24 +440,25 @@ def meter_list(values: Sequence[str], network: str | os.PathLike[str]) -> tuple[
             unreadable or malformed file.
         NetworkError: missing or malformed network.
     """
-    from burstloc.inp import check_meters, junction_names_in_file
+    from burstloc.inp import check_meters
 
+    read = as_network(network)
     if len(values) == 1 and os.path.isfile(values[0]):
-        names = _meters_in_file(values[0], network)
+        names = _meters_in_file(values[0], read)
         source = f"meter list {values[0]}"
     else:
         names = [n for value in values for n in value.split(",") if n]
         source = "the meter list"
     if not names:
         raise ConfigError(f"{source} names no meter")
-    check_meters(names, junction_names_in_file(network), network, ConfigError)
+    check_meters(names, read.junctions, read.path, ConfigError)
     twice = sorted(n for n, c in Counter(names).items() if c > 1)
     if twice:
         raise ConfigError(f"{source} lists {some_names(twice)} more than once")
     return tuple(names)
 
 
-def _meters_in_file(path: str, network: str | os.PathLike[str]) -> list[str]:
+def _meters_in_file(path: str, network: NetworkSource) -> list[str]:
     """The junction IDs of a meter file or of a text file of IDs (:func:`meter_list`)."""
     try:
         text = Path(path).read_text(encoding="utf-8")

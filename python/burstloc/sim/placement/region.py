@@ -39,7 +39,6 @@ precision).
 
 from __future__ import annotations
 
-import os
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
@@ -54,7 +53,6 @@ from burstloc.sim.placement._checks import (
     check_meter_count,
     check_timing,
     kept_indices,
-    meter_geometry,
 )
 
 __all__ = [
@@ -67,7 +65,6 @@ __all__ = [
     "ambiguity_grid",
     "ambiguity_profile",
     "ambiguous_length",
-    "meter_ambiguity",
     "region_meters",
 ]
 
@@ -409,22 +406,3 @@ def ambiguity_profile(
         for i in every
     )
     return whole, without
-
-
-def meter_ambiguity(
-    network: str | os.PathLike[str],
-    meters: Sequence[str],
-    *,
-    wave_speed: float = WAVE_SPEED,
-    resolution: float = 0.2,
-) -> float:
-    """:func:`ambiguous_length` of ``meters`` on the INP file ``network`` (m).
-
-    Raises:
-        NetworkError: missing or malformed network, or a meter that is not a junction.
-        ConfigError: no meter, a bad wave speed or resolution.
-    """
-    pipes, distances = meter_geometry(network, meters)
-    return ambiguous_length(
-        pipes, tuple(meters), distances, wave_speed=wave_speed, resolution=resolution
-    )

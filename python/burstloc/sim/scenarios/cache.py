@@ -33,7 +33,8 @@ import numpy as np
 import platformdirs
 
 from burstloc._atomic import write_npz
-from burstloc.exceptions import NetworkError
+from burstloc.inp import network_hash
+from burstloc.network import Network
 
 __all__ = [
     "ENV_VAR",
@@ -71,38 +72,36 @@ def package_versions() -> dict[str, str]:
     return versions
 
 
-@functools.lru_cache(maxsize=64)
-def _sha256_cached(path: str, mtime_ns: int, size: int) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as f:
-        for chunk in iter(lambda: f.read(1 << 20), b""):
-            digest.update(chunk)
-    return digest.hexdigest()
-
-
 def file_sha256(path: str | os.PathLike[str]) -> str:
-    """Return the SHA-256 of a file's bytes (memoised while its size and mtime are unchanged)."""
-    resolved = Path(path).resolve()
-    stat = resolved.stat()
-    return _sha256_cached(str(resolved), stat.st_mtime_ns, stat.st_size)
+    """Return the hex SHA-256 of a file's bytes (:func:`burstloc.inp.network_hash`: read once
+    per process while the file's size and times are unchanged).
+
+    Raises:
+        NetworkError: the file is missing or cannot be read.
+    """
+    return network_hash(path).removeprefix("sha256:")
 
 
 def cache_key(
     namespace: str,
     parameters: Mapping[str, Any],
-    files: Iterable[str | os.PathLike[str]] = (),
+    files: Iterable[str | os.PathLike[str] | Network] = (),
 ) -> str:
     """Return the hex SHA-256 key of an entry.
 
     Args:
         namespace: what kind of entry (with a schema version), e.g. ``"burst-scenario/1"``.
         parameters: every parameter that changes the entry; JSON-serialisable.
-        files: input files, hashed by content (not by name).
+        files: input files, hashed by content (not by name); a network read already gives its
+            fingerprint (:attr:`burstloc.network.Network.hash`).
     """
     document = {
         "namespace": namespace,
         "parameters": dict(parameters),
-        "files": [file_sha256(f) for f in files],
+        "files": [
+            f.hash.removeprefix("sha256:") if isinstance(f, Network) else file_sha256(f)
+            for f in files
+        ],
         "versions": package_versions(),
     }
     text = json.dumps(document, sort_keys=True, separators=(",", ":"), allow_nan=False)
@@ -115,10 +114,7 @@ def network_cache_key(namespace: str, parameters: Mapping[str, Any], network: st
     Raises:
         NetworkError: the network file does not exist.
     """
-    try:
-        return cache_key(namespace, parameters, [network])
-    except FileNotFoundError:
-        raise NetworkError(f"network file not found: {network}") from None
+    return cache_key(namespace, parameters, [network])
 
 
 def arrays_sha256(arrays: Mapping[str, np.ndarray]) -> str:

@@ -42,6 +42,7 @@ from burstloc import inp
 from burstloc._atomic import write_npz
 from burstloc.constants import SCENARIO_DURATION, WAVE_SPEED
 from burstloc.exceptions import ConfigError
+from burstloc.network import Network, NetworkSource
 from burstloc.sim.scenarios import capture
 from burstloc.sim.scenarios.cache import network_cache_key
 
@@ -322,9 +323,10 @@ class ScenarioResult:
 
 
 def burst_scenarios(
-    network_path: str | os.PathLike[str], pipes: Sequence[str] | None = None, **parameters: Any
+    network: NetworkSource, pipes: Sequence[str] | None = None, **parameters: Any
 ) -> list[BurstScenario]:
-    """Return one scenario per pipe (all pipes of the file when ``pipes`` is ``None``).
+    """Return one scenario per pipe (all pipes of the network when ``pipes`` is ``None``); a
+    scenario names the network's file.
 
     ``parameters`` are :class:`BurstScenario` fields (``position``, ``duration``, ...).
 
@@ -332,8 +334,12 @@ def burst_scenarios(
         NetworkError: missing or malformed file, or a pipe the file does not have.
         ConfigError: a bad parameter.
     """
-    chosen = inp.choose_pipes(inp.pipe_names_in_file(network_path), pipes, network_path)
-    return [BurstScenario(os.fspath(network_path), pipe, **parameters) for pipe in chosen]
+    if isinstance(network, Network):
+        path, known = network.path, list(network.pipes)
+    else:
+        path, known = os.fspath(network), inp.pipe_names_in_file(network)
+    chosen = inp.choose_pipes(known, pipes, path)
+    return [BurstScenario(path, pipe, **parameters) for pipe in chosen]
 
 
 _UNSAFE = re.compile(r"[^A-Za-z0-9._-]")

@@ -34,9 +34,9 @@ from burstloc.constants import (
     HYBRID_SIGNATURES_UP_TO,
 )
 from burstloc.exceptions import ConfigError, InputError, SimulationError
-from burstloc.inp import check_meters, network_hash, pipe_names_in_file
+from burstloc.inp import check_meters
 from burstloc.localize.signature import SIGNATURE_FORMAT, SignatureSet
-from burstloc.network import SteadyState, load_network, steady_state
+from burstloc.network import Network, NetworkSource, SteadyState, as_network, steady_state
 from burstloc.sim.scenarios.cache import cache_key, default_cache_dir, drop_corrupt
 from burstloc.sim.signatures.epanet_inplace import InPlaceSplitter
 
@@ -75,7 +75,7 @@ SIGNATURE_METHODS = ("auto", "epanet", "hybrid", "linear")
 
 
 def compute_signatures(
-    network: str | os.PathLike[str],
+    network: NetworkSource,
     meters: Sequence[str] | None = None,
     *,
     burst_coeff: float = DEFAULT_BURST_COEFF,
@@ -98,15 +98,14 @@ def compute_signatures(
         InputError: no meter.
     """
     _check_params(burst_coeff, [position], demand_model)
-    wn, state, meter_list = _base_state(network, meters, demand_model)
+    read = as_network(network)
+    wn, state, meter_list = _base_state(read, meters, demand_model)
     matrix = _split_matrix(wn, meter_list, position, burst_coeff)
-    return _signature_set(
-        network, wn, state, meter_list, matrix, burst_coeff, position, demand_model
-    )
+    return _signature_set(read, wn, state, meter_list, matrix, burst_coeff, position, demand_model)
 
 
 def linear_signature_sets(
-    network: str | os.PathLike[str],
+    network: NetworkSource,
     meters: Sequence[str] | None = None,
     *,
     positions: Sequence[float] = CANDIDATE_POSITIONS,
@@ -138,7 +137,8 @@ def linear_signature_sets(
     _check_params(burst_coeff, positions, demand_model)
     if method not in ("linear", "hybrid"):
         raise ConfigError(f"unknown linearized signature method {method!r}")
-    wn, state, meter_list = _base_state(network, meters, demand_model)
+    read = as_network(network)
+    wn, state, meter_list = _base_state(read, meters, demand_model)
     pipes = list(wn.pipe_name_list)
     with capture_diagnostics():  # e.g. SciPy's fit of a pump curve, kept off the terminal
         response = linear_response(wn, state, meter_list)
@@ -147,13 +147,13 @@ def linear_signature_sets(
         ]
         if method == "hybrid":
             exact = _split_matrix_parallel(
-                network, pipes, meter_list, burst_coeff, demand_model, workers
+                read.path, pipes, meter_list, burst_coeff, demand_model, workers
             )
             middle = burst_signatures(wn, state, response, pipes, 0.5, burst_coeff)
             matrices = [anchored(exact, middle, m) for m in matrices]
     return tuple(
         _signature_set(
-            network,
+            read,
             wn,
             state,
             meter_list,
@@ -217,22 +217,22 @@ def _check_params(burst_coeff: float, positions: Sequence[float], demand_model: 
 
 
 def _base_state(
-    network: str | os.PathLike[str], meters: Sequence[str] | None, demand_model: str
+    network: Network, meters: Sequence[str] | None, demand_model: str
 ) -> tuple[Any, SteadyState, list[str]]:
     """The network's WNTR model (:func:`_model`), its steady state, and the checked meters
     (default: every junction)."""
     wn = _model(network, demand_model)
     junctions = list(wn.junction_name_list)
-    meter_list = check_meters(junctions if meters is None else meters, junctions, network)
+    meter_list = check_meters(junctions if meters is None else meters, junctions, network.path)
     if not meter_list:
         raise InputError("at least one meter is needed")
     return wn, steady_state(wn), list(meter_list)
 
 
-def _model(network: str | os.PathLike[str], demand_model: str) -> Any:
-    """The network's WNTR model, its demands turned into emitters for ``"emitter"`` (each fitted
-    at the base state)."""
-    wn = load_network(network)
+def _model(network: NetworkSource, demand_model: str) -> Any:
+    """A copy of the network's WNTR model (the splitter edits it), its demands turned into
+    emitters for ``"emitter"`` (each fitted at the base state)."""
+    wn = as_network(network).editable()
     if demand_model == "emitter":
         base = steady_state(wn).heads
         for name in wn.junction_name_list:
@@ -247,7 +247,7 @@ def _model(network: str | os.PathLike[str], demand_model: str) -> Any:
 
 
 def _split_matrix_parallel(
-    network: str | os.PathLike[str],
+    network: str,
     pipes: list[str],
     meters: list[str],
     burst_coeff: float,
@@ -261,7 +261,7 @@ def _split_matrix_parallel(
 
     count = max(1, min(workers or os.cpu_count() or 1, len(pipes)))
     chunks = [list(c) for c in np.array_split(np.array(pipes, dtype=object), 2 * count) if len(c)]
-    task = partial(_split_chunk, os.fspath(network), tuple(meters), burst_coeff, demand_model)
+    task = partial(_split_chunk, network, tuple(meters), burst_coeff, demand_model)
     report = sweep(task, chunks, workers=count, progress=False, label=lambda c: f"pipes {c[0]}..")
     if report.failures:
         raise SimulationError("; ".join(report.failure_lines()))
@@ -276,7 +276,7 @@ def _split_chunk(
 
 
 def _signature_set(
-    network: str | os.PathLike[str],
+    network: Network,
     wn: Any,
     state: SteadyState,
     meters: list[str],
@@ -301,7 +301,7 @@ def _signature_set(
     if method is not None:
         params["method"] = method
     return SignatureSet(
-        network_hash=network_hash(network),
+        network_hash=network.hash,
         meters=tuple(meters),
         pipes=tuple(wn.pipe_name_list),
         endpoints=endpoints,
@@ -312,7 +312,7 @@ def _signature_set(
 
 
 def cached_signatures(
-    network: str | os.PathLike[str],
+    network: NetworkSource,
     meters: Sequence[str] | None = None,
     *,
     cache_dir: str | os.PathLike[str] | None = None,
@@ -327,13 +327,14 @@ def cached_signatures(
     default
     folder is ``signatures/`` in burstloc's cache directory (``$BURSTLOC_CACHE_DIR``).
     """
+    read = as_network(network)
     key = cache_key(
         SIGNATURE_FORMAT,
         {"burst_coeff": burst_coeff, "position": position, "demand_model": demand_model},
-        files=[network],
+        files=[read],
     )
     folder = Path(cache_dir) if cache_dir is not None else default_cache_dir() / "signatures"
-    path = folder / f"{Path(network).stem}-{key[:24]}.npz"
+    path = folder / f"{Path(read.path).stem}-{key[:24]}.npz"
     full: SignatureSet | None = None
     if path.exists():
         try:
@@ -343,14 +344,14 @@ def cached_signatures(
             full = None
     if full is None:
         full = compute_signatures(
-            network, burst_coeff=burst_coeff, position=position, demand_model=demand_model
+            read, burst_coeff=burst_coeff, position=position, demand_model=demand_model
         )
         full.save(path)
     return full if meters is None else full.for_meters(meters)
 
 
 def cached_signature_sets(
-    network: str | os.PathLike[str],
+    network: NetworkSource,
     meters: Sequence[str] | None = None,
     *,
     positions: Sequence[float] = CANDIDATE_POSITIONS,
@@ -370,10 +371,11 @@ def cached_signature_sets(
     """
     if not positions:
         raise ConfigError("at least one signature position is needed")
-    chosen = signature_method(method, len(pipe_names_in_file(network)))
+    read = as_network(network)
+    chosen = signature_method(method, len(read.pipes))
     if chosen != "epanet":
         return linear_signature_sets(
-            network,
+            read,
             meters,
             positions=positions,
             burst_coeff=burst_coeff,
@@ -383,7 +385,7 @@ def cached_signature_sets(
         )
     return tuple(
         cached_signatures(
-            network,
+            read,
             meters,
             cache_dir=cache_dir,
             burst_coeff=burst_coeff,

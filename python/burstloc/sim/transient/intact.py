@@ -1,21 +1,22 @@
 """What a burst's simulation needs of its network before the burst pipe matters, once per process.
 
-Every burst of a sweep loads the same INP file, solves its steady state (the flow directions)
-and builds its transient-ready model (:func:`~burstloc.sim.transient.tsnet_ready.transient_model`);
-none
-of it depends on the burst pipe. :func:`intact` makes each once per process and keeps it, keyed
-by the file's path and the SHA-256 of its bytes (an edited file is read afresh), for the last
-:data:`NETWORKS` files; :class:`IntactNetwork` keeps its steady state per engine and its
-transient-ready model per shortest pipe length. A burst's simulation copies the transient-ready
-model when it splits the pipe (:func:`burstloc.network.split_pipe` copies): nothing kept is
-ever changed, and the heads are bit for bit those of a fresh process.
+Every burst of a sweep needs the same network (read once per process,
+:func:`burstloc.network.read_network`; a :class:`~burstloc.network.Network` passed in is not
+read at all), its steady state (the flow directions) and its transient-ready model
+(:func:`~burstloc.sim.transient.tsnet_ready.transient_model`); none of it depends on the burst
+pipe. :func:`intact` makes each once per process and keeps it, keyed by the file's path and
+the SHA-256 of its bytes (an edited file is read afresh), for the last :data:`NETWORKS` files;
+:class:`IntactNetwork` keeps its steady state per engine and its transient-ready model per
+shortest pipe length. A burst's simulation copies the transient-ready model when it splits the
+pipe (:func:`burstloc.network.split_pipe` copies): nothing kept is ever changed, and the heads
+are bit for bit those of a fresh process.
 
-What WNTR, EPANET and TSNet printed, logged and warned while a step was made is recorded with it
-and replayed into the caller's :func:`~burstloc._diagnostics.capture_diagnostics` block each time
-the step is used again (:func:`burstloc._diagnostics.recording`): a scenario's metadata does not
-depend on what the process simulated before. A step that
-fails (a missing file, a steady state EPANET cannot solve) is not kept: it fails again, naming
-the problem, for each burst.
+What WNTR, EPANET and TSNet printed, logged and warned while the file was read or a step was
+made is recorded with it and replayed into the caller's
+:func:`~burstloc._diagnostics.capture_diagnostics` block each time it is used again
+(:func:`burstloc._diagnostics.recording`): a scenario's metadata does not depend on what the
+process read or simulated before. A step that fails (a missing file, a steady state EPANET
+cannot solve) is not kept: it fails again, naming the problem, for each burst.
 """
 
 from __future__ import annotations
@@ -28,8 +29,6 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 from burstloc import network, skeleton
 from burstloc._diagnostics import Recording, recording
-from burstloc.exceptions import NetworkError
-from burstloc.inp import network_hash
 
 if TYPE_CHECKING:
     import networkx as nx
@@ -66,7 +65,6 @@ class IntactNetwork:
     """An INP file's WNTR model (``wn``: never to be changed) and the steps made from it."""
 
     wn: WaterNetworkModel
-    recorded: Recording
     _steps: dict[tuple[Any, ...], tuple[Any, Recording]] = field(default_factory=dict)
 
     def step(self, key: tuple[Any, ...], make: Callable[[], T]) -> T:
@@ -141,25 +139,20 @@ def clear() -> None:
     _KEPT.clear()
 
 
-def intact(path: str | os.PathLike[str]) -> IntactNetwork:
-    """The INP file's network, loaded once per process (:func:`burstloc.network.load_network`)
-    while the file's bytes are unchanged.
+def intact(source: network.NetworkSource) -> IntactNetwork:
+    """The network's steps, made once per process (:func:`burstloc.network.read_network` reads
+    a file once per process) while the file's bytes are unchanged.
 
     Raises:
         NetworkError: the file is missing or malformed.
     """
-    try:
-        key = (os.fspath(path), os.path.abspath(path), network_hash(path))
-    except NetworkError:
-        network.load_network(path)  # names the problem as every reader does
-        raise
+    read = network.as_network(source, diagnostics=True)
+    key = (read.path, os.path.abspath(read.path), read.hash)
     kept = _KEPT.get(key)
     if kept is not None:
         _KEPT.move_to_end(key)
-        kept.recorded.replay()
         return kept
-    wn, recorded = _made(lambda: network.load_network(path))
-    kept = _KEPT[key] = IntactNetwork(wn, recorded)
+    kept = _KEPT[key] = IntactNetwork(read.model)
     while len(_KEPT) > NETWORKS:
         _KEPT.popitem(last=False)
     return kept

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from burstloc._validate import attributes
 from burstloc.exceptions import UnsteadyStartError
 
 __all__ = ["STEADY_TOLERANCE", "SteadyStart", "check_steady_start", "steady_start"]
@@ -42,9 +43,7 @@ class SteadyStart:
         """The record stored in a simulation's metadata (``steady_start``)."""
         return {
             "max_movement_m": self.movement,
-            "junction": self.junction,
-            "time": self.time,
-            "onset": self.onset,
+            **attributes(self, "junction", "time", "onset"),
             "tolerance_m": STEADY_TOLERANCE,
         }
 

@@ -29,6 +29,7 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from burstloc import network
 from burstloc._diagnostics import capture_diagnostics
@@ -50,8 +51,8 @@ __all__ = [
     "from_cache",
     "isolated_run",
     "resolve_cache",
-    "run_metadata",
     "run_transient",
+    "scenario_result",
     "simulate_burst",
     "simulate_many",
     "transient_model",
@@ -164,7 +165,7 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
                 split.burst_node, scenario.burst_start, scenario.opening_time, scenario.burst_coeff
             )
 
-        steps, heads, dt = run_transient(
+        transient = run_transient(
             split.network,
             meters,
             os.path.join(tmp, "scenario.inp"),
@@ -172,42 +173,64 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
             burst,
             where=f"{where} split at {scenario.position:g}",
         )
-    start = check_steady_start(steps, heads, meters, scenario.burst_start, scenario.network)
-    elapsed = time.perf_counter() - started
-    meta: dict[str, Any] = {
-        "network": scenario.network,
-        "network_sha256": file_sha256(scenario.network),
-        **scenario.parameters(),
-        "solver": scenario.solver,
+    specific = {
         "true_start": true_start,
         "true_end": true_end,
         "steady_flow_m3s": abs(flows[scenario.pipe]),
         "burst_node": split.burst_node,
         "split_pipes": [split.pipe, split.second_pipe],
+        **({} if shortened is None else {"transient_model": shortened.summary()}),
+    }
+    run = (prepared, started, diag, SCHEMA)
+    return scenario_result(scenario, scenario.burst_start, (*transient, meters), run, specific)
+
+
+def scenario_result(
+    scenario: Any,
+    onset: float,
+    transient: tuple[NDArray[np.float64], NDArray[np.float64], float, list[str]],
+    run: tuple[Any, float, Any, str],
+    specific: dict[str, Any],
+) -> ScenarioResult:
+    """A simulation's result, its start checked steady up to ``onset``
+    (:func:`~burstloc.sim.transient.steady.check_steady_start`), and the metadata every
+    simulation records: the scenario's network (and its fingerprint), parameters and solver,
+    what is ``specific`` to its kind, the steady start, how the model was made ready for TSNet,
+    the time step, samples and seconds, TSNet's captured output, versions and the schema.
+
+    Args:
+        transient: the times, heads, time step and meters of the run.
+        run: how the model was made ready for TSNet, when the simulation started
+            (``time.perf_counter()``), TSNet's captured output and the schema.
+
+    Raises:
+        UnsteadyStartError: the heads moved before ``onset``.
+    """
+    steps, heads, dt, meters = transient
+    prepared, started, diag, schema = run
+    start = check_steady_start(steps, heads, meters, onset, scenario.network)
+    meta = {
+        "network": scenario.network,
+        "network_sha256": file_sha256(scenario.network),
+        **scenario.parameters(),
+        "solver": scenario.solver,
+        **specific,
         "steady_start": start.as_metadata(),
         **prepared.as_metadata(),
-        **({} if shortened is None else {"transient_model": shortened.summary()}),
-        **run_metadata(dt, steps.size, diag, elapsed),
-        "schema": SCHEMA,
-    }
-    return ScenarioResult(steps, heads, meters, dt, meta)
-
-
-def run_metadata(dt: float, samples: int, diag: Any, elapsed: float) -> dict[str, Any]:
-    """The metadata every simulation records: time step, TSNet's captured output, versions."""
-    return {
         "time_step": dt,
-        "samples": int(samples),
+        "samples": int(steps.size),
         "head": "pressure head, m (hydraulic head - elevation)",
         "warnings": diag.warnings,
         "negative_pressure_nodes": diag.negative_pressure_nodes(),
         "tsnet_messages": diag.messages,
         "versions": package_versions(),
-        "simulation_seconds": round(elapsed, 3),
+        "simulation_seconds": round(time.perf_counter() - started, 3),
         "capture_interval": None,
         "capture_phase": None,
         "cache": "miss",
+        "schema": schema,
     }
+    return ScenarioResult(steps, heads, meters, dt, meta)
 
 
 @dataclass(frozen=True)
