@@ -60,3 +60,28 @@ def test_calibrate_ends_with_a_summary_an_engineer_checks(
         "expected false alarms: 0.05 per meter per hour, 3.6 a day over the 3 meters"
     )
     assert lines[4].startswith("calibrated in ") and lines[4].endswith(f" s; wrote {out}")
+
+
+def test_the_timing_tolerances_are_stored_and_checked_before_any_work(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from burstloc.cli import main
+    from burstloc.constants import CLOCK_TOLERANCE, WAVE_SPEED_TOLERANCE
+    from burstloc.localize.config import Calibration
+
+    network = write_tiny(tmp_path / "tiny.inp")
+    out = tmp_path / "cal.json"
+    argv = ["calibrate", str(network), "--out", str(out), "--capture-interval", "0.2"]
+    assert main(argv) == 0
+    model = Calibration.load(out).model
+    assert (model.wave_speed_tolerance, model.clock_tolerance) == (
+        WAVE_SPEED_TOLERANCE,
+        CLOCK_TOLERANCE,
+    )
+    assert main([*argv, "--wave-speed-tolerance", "0.12", "--clock-tolerance", "0.005"]) == 0
+    model = Calibration.load(out).model
+    assert (model.wave_speed_tolerance, model.clock_tolerance) == (0.12, 0.005)
+    capsys.readouterr()
+    out.unlink()
+    assert main([*argv, "--wave-speed-tolerance", "1.5"]) == 2
+    assert "wave_speed_tolerance" in capsys.readouterr().err and not out.exists()

@@ -17,8 +17,10 @@ from burstloc.cli._options import (
 )
 from burstloc.constants import (
     CAPTURE_INTERVALS,
+    CLOCK_TOLERANCE,
     EXACT_SIGNATURES_UP_TO,
     HYBRID_SIGNATURES_UP_TO,
+    WAVE_SPEED_TOLERANCE,
 )
 
 __all__ = ["add_parser", "run"]
@@ -57,6 +59,21 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     meters = parser.add_mutually_exclusive_group()
     add_meters_option(meters, "default: every junction")  # type: ignore[arg-type]
     add_meters_file_option(meters)  # type: ignore[arg-type]
+    add_number(
+        parser,
+        "--wave-speed-tolerance",
+        WAVE_SPEED_TOLERANCE,
+        "U",
+        "how well the wave's travel times are known, as a share of each (the search regions "
+        "widen with the path: U x path / wave speed)",
+    )
+    add_number(
+        parser,
+        "--clock-tolerance",
+        CLOCK_TOLERANCE,
+        "S",
+        "how well each meter's clock is known, s (GPS loggers: 0.001, NTP: a few ms)",
+    )
     parser.add_argument("--name", default=None, help="the configuration's name")
     parser.add_argument(
         "--signatures",
@@ -98,6 +115,8 @@ def run(args: argparse.Namespace) -> int:
         name=args.name,
         signatures=args.signatures,
         workers=args.workers,
+        wave_speed_tolerance=args.wave_speed_tolerance,
+        clock_tolerance=args.clock_tolerance,
     )
     seconds = time.perf_counter() - began
     for line in config.summary():

@@ -53,7 +53,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -63,7 +63,13 @@ from numpy.typing import NDArray
 
 from burstloc import _core
 from burstloc._validate import check_names, check_number
-from burstloc.constants import CAPTURE_INTERVALS, SIGNATURE_DECISION_DELAY, WAVE_SPEED
+from burstloc.constants import (
+    CAPTURE_INTERVALS,
+    CLOCK_TOLERANCE,
+    SIGNATURE_DECISION_DELAY,
+    WAVE_SPEED,
+    WAVE_SPEED_TOLERANCE,
+)
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.inp import check_meters
 from burstloc.localize.config import (
@@ -282,8 +288,14 @@ def calibrate(
     max_samples: int = _MAX_SAMPLES,
     signatures: SignatureMethod = "auto",
     workers: int | None = None,
+    wave_speed_tolerance: float = WAVE_SPEED_TOLERANCE,
+    clock_tolerance: float = CLOCK_TOLERANCE,
 ) -> Calibration:
     """Calibrate every capture interval for ``network`` (see the module docstring).
+
+    ``wave_speed_tolerance`` (a share of each travel time) and ``clock_tolerance`` (s): how well
+    the wave speed and the meters' clocks are known, stored in the localization model for its
+    search regions (:func:`burstloc.localize.region.timing_scale`).
 
     The noise comes from ``baseline`` (recorded burst-free readings, checked by
     :func:`check_baseline`; their meters are the meters) or from ``noise_sigma`` (default
@@ -302,6 +314,8 @@ def calibrate(
 
     if not (math.isfinite(false_alarm_rate) and false_alarm_rate > 0):
         raise ConfigError(f"false_alarm_rate must be > 0 per hour, got {false_alarm_rate}")
+    check_number(wave_speed_tolerance, "wave_speed_tolerance", low=0, high=1)
+    check_number(clock_tolerance, "clock_tolerance", low=0, high=60)
     intervals = [
         check_number(c, "capture interval", low=0, low_open=True, high=MAX_CAPTURE_INTERVAL)
         for c in capture_intervals
@@ -375,12 +389,12 @@ def calibrate(
         noise_sigma={m: float(s) for m, s in zip(meter_list, sigmas, strict=True)},
         false_alarm_rate=float(false_alarm_rate),
         intervals=tuple(items),
-        model=prepare_model(
-            read,
-            meter_list,
-            wave_speed=wave_speed,
-            signatures=signatures,
-            workers=workers,
+        model=replace(
+            prepare_model(
+                read, meter_list, wave_speed=wave_speed, signatures=signatures, workers=workers
+            ),
+            wave_speed_tolerance=wave_speed_tolerance,
+            clock_tolerance=clock_tolerance,
         ),
         provenance={
             "baseline": kind,
