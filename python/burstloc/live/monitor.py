@@ -394,17 +394,24 @@ class BurstMonitor:
 
     def _early_answer(self) -> LiveDecision | None:
         """The fused localizer's early answer, as a transient record, once enough meters have
-        corroborated the alarms (``None`` before, or when the arrivals place it nowhere)."""
+        corroborated the alarms (``None`` before; while its looks at the arrivals wait for
+        more readings, when the next is due; or when the arrivals place the burst nowhere)."""
         times, readings, alarms, meters, localizers = self._taking_part()
         needed = min(self.corroborate, len(self.meters) - len(self.excluded))
         if not alarms or corroborated_at(alarms, times, needed, float(times[-1])) is None:
             return None
         fused = fused_of(localizers)
         if fused is None:
+            self._early = None
+            return None
+        cal = self.calibration
+        decision = early_answer(
+            fused, meters, times, readings, alarms, cal, self.meter_model, resume=self._early
+        )
+        if decision is not None and decision.look_again is not None:
+            self._early = decision.look_again  # not decisive yet: the next look is due then
             return None
         self._early = None
-        cal = self.calibration
-        decision = early_answer(fused, meters, times, readings, alarms, cal, self.meter_model)
         if decision is None:
             return None
         self._announced = True

@@ -21,10 +21,10 @@ live caller holding the readings so far):
   horizon (a burst near a junction fits several of the junction's pipes almost equally well in
   time) it waits for the signature's decision time and answers with both, the arrivals as of
   the horizon. At coarse intervals it answers at the signature's time, and gives an *early
-  answer* (:func:`early_answer`) at the arrival horizon (:func:`early_time`): the search
-  region from the arrivals and its centre as the named point
-  (:func:`burstloc.localize.center.posterior_center`), seconds after the burst, whatever the
-  pipe lengths.
+  answer* (:func:`early_answer`, from :func:`early_time`) as the arrival localizer answers: the
+  search region of its first decisive look at the arrivals (or of the horizon's) and the
+  region's centre as the named point (:func:`burstloc.localize.center.posterior_center`),
+  seconds after the burst, whatever the pipe lengths.
 
 Every answer of the arrival and fused localizers carries the burst's position on the named pipe
 (metres from its flow-direction start node, with an interval) from the arrival fit at the last
@@ -52,7 +52,6 @@ from burstloc.localize.center import posterior_center
 from burstloc.localize.evidence import (
     BurstEvidence,
     Localizer,
-    RankedPipe,
     Ranking,
     evidence_at,
 )
@@ -252,11 +251,12 @@ def early_time(
     calibration: IntervalCalibration,
     fused: FusedLocalizer | None = None,
 ) -> float | None:
-    """When the fused localizer gives its early answer (:func:`early_answer`) where it does not
-    look at the arrivals first (a capture interval too coarse to time the wave along its
-    pipes): the first alarm's reading time plus the arrival horizon (:func:`arrival_horizon`).
-    ``None`` for the other localizers and where the fused localizer looks at the arrivals
-    first (its looks give the early record then).
+    """When the fused localizer first looks at the arrivals for its early answer
+    (:func:`early_answer`) where it does not look at them first (a capture interval too coarse
+    for them to time the wave along its pipes): the first alarm's reading time plus
+    ``arrival_decision_delay``, as the arrival localizer does. ``None`` for the other
+    localizers and where the fused localizer looks at the arrivals first (its looks give the
+    early record then).
 
     Raises:
         InputError: no alarm.
@@ -266,7 +266,7 @@ def early_time(
     if not alarms:
         raise InputError("no alarm: nothing to decide")
     first, _ = _first_and_onset(alarms, times)
-    return first + arrival_horizon(fused.arrival, calibration)
+    return first + calibration.arrival_decision_delay
 
 
 def early_answer(
@@ -277,14 +277,16 @@ def early_answer(
     alarms: Sequence[Any],
     calibration: IntervalCalibration,
     meter_model: MeterModel,
+    *,
+    resume: float | None = None,
 ) -> Decision | None:
-    """The arrivals' answer before the lasting drop has settled: the search region from every
-    alarm up to the arrival horizon (capped at the last reading), and its centre as the named
-    point (:func:`burstloc.localize.center.posterior_center`: the point of least expected
-    distance to the burst, inside the region). The ranking holds the region's pipes by the
-    probability that the burst is on them (the score), the centre's pipe first. ``waited`` is
-    set: the answer is refined when the lasting change has settled. ``None`` when the arrivals
-    place the burst nowhere.
+    """The arrivals' answer before the lasting drop has settled, as the arrival localizer gives
+    it: looks from :func:`early_time` (or ``resume``, an earlier call's ``look_again``) at every
+    reading until one is decisive or the arrival horizon is reached; the search region of that
+    look and its named point (:func:`_named`: the region's centre, inside it). ``waited`` is
+    set: the fused localizer answers when the lasting change has settled. While the readings
+    end before that look, the decision's ``look_again`` says when to call again. ``None`` when
+    the arrivals place the burst nowhere.
 
     Raises:
         InputError: no alarm.
@@ -292,27 +294,26 @@ def early_answer(
     if not alarms:
         raise InputError("no alarm: nothing to decide")
     first, _ = _first_and_onset(alarms, times)
-    at = min(first + arrival_horizon(fused.arrival, calibration), float(times[-1]))
-    window = max(calibration.arrival_decision_delay, at - first)
-    seen = evidence_at(
-        at, meters, times, readings, alarms, calibration, meter_model, alarm_window=window
-    )
-    posterior = region_posterior(fused.arrival, seen, None)
+    last = float(times[-1])
+
+    def arrivals(decided: float) -> BurstEvidence:  # every alarm up to a later look counts
+        window = max(calibration.arrival_decision_delay, decided - first)
+        return evidence_at(
+            decided, meters, times, readings, alarms, calibration, meter_model, alarm_window=window
+        )
+
+    start = first + calibration.arrival_decision_delay
+    if resume is not None:
+        start = max(start, resume)
+    look = _look(fused.arrival, fused.margin, arrivals, start, first, last, calibration)
+    if look.again is not None:
+        return Decision(look.ranking, look.time, first, waited=True, look_again=look.again)
+    posterior = region_posterior(fused.arrival, look.evidence, None)
     if posterior is None:
         return None
-    region = posterior.region(REGION_CONFIDENCE)
-    center = posterior_center(posterior, region)
-    on_pipe = dict(region.pipes)
-    named = center.position.pipe
-    ranking = Ranking(
-        (
-            RankedPipe(p.pipe, p.start, p.end, on_pipe.get(p.pipe, 0.0))
-            for p in fused.arrival.pipes
-            if p.pipe in on_pipe or p.pipe == named
-        ),
-        first=named,
-    )
-    return Decision(ranking, at, first, waited=True, position=center.position, posterior=posterior)
+    fitted = _position(fused.arrival, look.evidence, look.ranking)
+    ranking, at = _named(look.ranking, fitted, posterior)
+    return Decision(ranking, look.time, first, waited=True, position=at, posterior=posterior)
 
 
 def rank_alarms(
