@@ -150,7 +150,9 @@ def test_fused_reuses_the_signature_ranking_of_the_same_readings(
         RankedPipe(p.pipe, p.start, p.end, score=-p.score) for p in signature.ranking
     )
     swapped = decide("fused", signature_ranking=reversed_ranking)
-    assert swapped.ranking.best != alone.ranking.best
+    assert [(p.pipe, p.score) for p in swapped.ranking] != [
+        (p.pipe, p.score) for p in alone.ranking
+    ]
 
 
 def test_ranking_localizers_read_by_name() -> None:

@@ -107,7 +107,9 @@ def add_burst_options(parser: Options, position: float | None, burst_coeff: floa
             " (default 0.02, the paper's scenario: the burst draws 0.02 x sqrt(pressure head) "
             "m^3/s, which can be more than a small network's whole demand)"
         )
-    sizes = parser.add_mutually_exclusive_group()
+    # with a default coefficient the two options exclude each other here; without one the
+    # command says "not both" itself (an error naming both, exit 2)
+    sizes = parser.add_mutually_exclusive_group() if burst_coeff is not None else parser
     add_number(sizes, "--burst-coeff", burst_coeff, "C", size)
     sizes.add_argument(
         "--burst-flow",
