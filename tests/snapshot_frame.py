@@ -34,3 +34,11 @@ def seal(cbor: bytes) -> bytes:
     """A CBOR payload framed as a format-2 snapshot with its valid length and checksum."""
     head = MAGIC + bytes([VERSION]) + struct.pack("<Q", HEADER + len(cbor) + 4)
     return head + cbor + struct.pack("<I", crc32c(head + cbor))
+
+
+def format1_of(snapshot: bytes) -> bytes:
+    """The format-1 snapshot of a format-2 one, as the package wrote it before format 2: the
+    payload ``{kind, state}`` (a CBOR map of two entries) with ``format: 1`` put first."""
+    body = payload(snapshot)
+    assert body[0] == 0xA2, "a CBOR map of two entries"
+    return b"\xa3\x66format\x01" + body[1:]

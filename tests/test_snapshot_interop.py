@@ -3,8 +3,9 @@ still restore, and altered ones are refused.
 
 The fixtures live in ``crates/cpd-core/tests/data/snapshots`` (see ``gen_snapshots.py``
 there): ``rust_*.cbor`` are written by the Rust test ``tests/snapshot_interop.rs`` (which also
-decodes the Python-written ``py_*.cbor``); ``format1_*.cbor`` are format-1 snapshots (no
-checksum), written before format 2 at the point of ``py_*.cbor``. Each restored detector must
+decodes the Python-written ``py_*.cbor``); format-1 snapshots (no checksum, what the package
+wrote before format 2) are made from the ``py_*.cbor`` payloads (``snapshot_frame.format1_of``).
+Each restored detector must
 equal one fed the same samples here, and raise the same alarms afterwards.
 
 Through the binding, every byte offset of a snapshot of each kind is altered in turn (the
@@ -25,7 +26,7 @@ import numpy as np
 import pytest
 
 from burstloc import Cusum, DetectorBank, InputError, Shewhart
-from snapshot_frame import crc32c
+from snapshot_frame import crc32c, format1_of
 
 DATA = Path(__file__).resolve().parents[1] / "crates" / "cpd-core" / "tests" / "data" / "snapshots"
 TRACE = json.loads((DATA / "trace.json").read_text())
@@ -58,7 +59,11 @@ def test_snapshot_fixture_restores_and_continues(name: str, writer: str, cut: st
     k = TRACE[cut]
     never_stopped = fresh(name)
     feed(never_stopped, ROWS[:k])
-    restored = type(never_stopped).restore((DATA / f"{writer}_{name}.cbor").read_bytes())
+    if writer == "format1":  # before format 2: made from the package's format-2 fixture
+        stored = format1_of((DATA / f"py_{name}.cbor").read_bytes())
+    else:
+        stored = (DATA / f"{writer}_{name}.cbor").read_bytes()
+    restored = type(never_stopped).restore(stored)
     assert restored.snapshot() == never_stopped.snapshot()
     expected = feed(never_stopped, ROWS[k:])
     assert expected, "the trace's tail holds changes, so alarms are compared"
@@ -77,7 +82,7 @@ def test_snapshots_end_with_the_crc32c_of_their_bytes() -> None:
         assert struct.unpack("<Q", snap[5:13])[0] == len(snap)
         assert struct.unpack("<I", snap[-4:])[0] == crc32c(snap[:-4])
         # A format-1 fixture restores, and is written back in format 2.
-        old = (DATA / f"format1_{name}.cbor").read_bytes()
+        old = format1_of((DATA / f"py_{name}.cbor").read_bytes())
         assert old.startswith(b"\xa3\x66format\x01")
         assert type(det).restore(old).snapshot() == (DATA / f"py_{name}.cbor").read_bytes()
 

@@ -6,9 +6,10 @@
 //! - the `rust_*.cbor` files are what this test writes (`CPD_WRITE_SNAPSHOTS=1`); without the
 //!   variable it checks that the committed files are still exactly what Rust writes. Python's
 //!   `tests/test_snapshot_interop.py` restores them;
-//! - the `format1_*.cbor` files are format-1 snapshots (no header, no checksum), written by the
-//!   Python package before format 2 at the same point of the trace as `py_*.cbor`: they still
-//!   restore into the same detectors, which write format 2 from then on.
+//! - format-1 snapshots (no header, no checksum: the bare CBOR map `{format: 1, kind, state}`,
+//!   what the Python package wrote before format 2) are made here from the `py_*.cbor` payloads
+//!   (`format1_of`, byte for byte what that package wrote): they still restore into the same
+//!   detectors, which write format 2 from then on.
 
 use std::path::PathBuf;
 
@@ -104,6 +105,23 @@ struct Fed {
     bank_shewhart: Vec<ChannelAlarm>,
 }
 
+/// The format-1 snapshot of a format-2 one: its payload `{kind, state}` (a CBOR map of two
+/// entries) with `format: 1` put first, as the Python package wrote it before format 2.
+fn format1_of(format2: &[u8]) -> Vec<u8> {
+    let payload = &format2[13..format2.len() - 4];
+    assert_eq!(payload[0], 0xa2, "a CBOR map of two entries");
+    let mut old = b"\xa3\x66format\x01".to_vec();
+    old.extend_from_slice(&payload[1..]);
+    old
+}
+
+/// A format-1 snapshot made from the format-2 fixture `py_NAME.cbor`, and what it restores to.
+fn read_format1<T: Snapshot>(name: &str) -> (Vec<u8>, T) {
+    let bytes = format1_of(&std::fs::read(dir().join(format!("py_{name}.cbor"))).unwrap());
+    let value = snapshot::from_bytes(&bytes).unwrap();
+    (bytes, value)
+}
+
 fn read<T: Snapshot>(name: &str) -> (Vec<u8>, T) {
     let bytes = std::fs::read(dir().join(name)).unwrap();
     let value = snapshot::from_bytes(&bytes).unwrap();
@@ -155,10 +173,10 @@ fn format1_snapshots_still_restore_and_are_written_back_as_format_2() {
     let t = trace();
     let mut fed = Fresh::new(&t);
     fed.feed(&t, 0..t.py_cut);
-    let (b_c, cusum) = read::<Cusum>("format1_cusum.cbor");
-    let (b_s, shewhart) = read::<Shewhart>("format1_shewhart.cbor");
-    let (b_bc, bank_cusum) = read::<Bank>("format1_bank_cusum.cbor");
-    let (b_bs, bank_shewhart) = read::<Bank>("format1_bank_shewhart.cbor");
+    let (b_c, cusum) = read_format1::<Cusum>("cusum");
+    let (b_s, shewhart) = read_format1::<Shewhart>("shewhart");
+    let (b_bc, bank_cusum) = read_format1::<Bank>("bank_cusum");
+    let (b_bs, bank_shewhart) = read_format1::<Bank>("bank_shewhart");
     for old in [&b_c, &b_s, &b_bc, &b_bs] {
         // The format-1 envelope `{format: 1, kind, state}`, not the format-2 frame.
         assert_eq!(old[..9], *b"\xa3\x66format\x01");

@@ -12,9 +12,9 @@ It writes, next to this file:
   trace up to ``py_cut``: ``Cusum`` and ``Shewhart`` on channel 1, a CUSUM and a Shewhart
   ``DetectorBank`` on all three channels.
 
-The ``format1_*.cbor`` files are the ``py_*.cbor`` files as the Python package wrote them before
-snapshot format 2 (format 1: the bare CBOR map ``{format: 1, kind, state}``, no checksum); they
-are kept, not regenerated, to test that old snapshots still restore.
+Format-1 snapshots (the bare CBOR map ``{format: 1, kind, state}``, no checksum: what the Python
+package wrote before snapshot format 2) are not stored: the tests make them from the ``py_*.cbor``
+payloads, byte for byte what that package wrote (checked against its files when format 2 came).
 
 The ``rust_*.cbor`` files are written by the Rust test ``tests/snapshot_interop.rs`` with
 ``CPD_WRITE_SNAPSHOTS=1 cargo test -p cpd-core --features snapshot --test snapshot_interop``
