@@ -15,7 +15,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from burstloc import inp, network
+from burstloc import inp, network, network_file
 from burstloc.exceptions import ConfigError, NetworkError
 from conftest import PAPER15, REPO, TINY_INP, TNET1, write_tiny
 
@@ -448,7 +448,7 @@ def test_read_network_reads_the_file_once_and_keeps_it(
     reads: list[str] = []
     real = inp.read_bytes
     monkeypatch.setattr(inp, "read_bytes", lambda p: reads.append(str(p)) or real(p))
-    monkeypatch.setattr(network, "read_bytes", inp.read_bytes)
+    monkeypatch.setattr(network_file, "read_bytes", inp.read_bytes)
     first = network.read_network(path)
     assert reads == [str(path)]  # structure checked, hashed and read by WNTR: one read
     assert first.hash == "sha256:" + hashlib.sha256(path.read_bytes()).hexdigest()

@@ -18,16 +18,17 @@ middle, within the region's stretch that holds it). Numpy and NetworkX only: on 
 from __future__ import annotations
 
 import weakref
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import networkx as nx
 import numpy as np
 from numpy.typing import NDArray
 
 from burstloc.localize.arrival import ArrivalLocalizer, PipePosition
+from burstloc.localize.evidence import Ranking
 from burstloc.localize.region import REGION_CONFIDENCE, Posterior, SearchRegion
 
-__all__ = ["CANDIDATES", "Center", "posterior_center"]
+__all__ = ["CANDIDATES", "CENTRE_SHARE", "Center", "named_point", "posterior_center"]
 
 CANDIDATES = 24
 """Grid points tried as the centre: the densest ones of the posterior."""
@@ -118,3 +119,42 @@ def posterior_center(
                 low, high = a, b
                 break
     return Center(PipePosition(p.pipe, p.start, p.end, p.length, x, low, high), best_cost)
+
+
+CENTRE_SHARE = 0.25
+"""Largest share of the network's main a 95 % search region may cover for its centre to be the
+named point (:func:`named_point`): a wider region is mostly the prior, and the ranking's best pipe
+(the lasting drop's, at coarse capture intervals) names the burst better."""
+
+
+def named_point(
+    ranking: Ranking, fitted: PipePosition | None, posterior: Posterior | None
+) -> tuple[Ranking, PipePosition | None]:
+    """The answer's named point and its ranking.
+
+    Where the 95 % search region is narrow (at most :data:`CENTRE_SHARE` of the network's
+    main), or the arrival fit's point on the ranking's best pipe (``fitted``) lies outside it,
+    the named point is the posterior's centre (:func:`posterior_center`:
+    the point of least expected distance to the burst, inside the region) and its pipe is
+    placed first in the ranking; where ``fitted`` lies in the centre's stretch, it is the
+    point (to a metre; the centre is known to one grid segment). Otherwise, and without a
+    posterior, ``ranking`` and ``fitted`` as they are."""
+    if posterior is None:
+        return ranking, fitted
+    region = posterior.region(REGION_CONFIDENCE)
+    inside = fitted is not None and region.contains(
+        fitted.pipe, fitted.start, fitted.metres, fitted.length
+    )
+    if inside and region.length > CENTRE_SHARE * float(posterior.grid.length.sum()):
+        return ranking, fitted
+    center = posterior_center(posterior, region).position
+    if ranking.rank_of(center.pipe) is None:
+        return ranking, fitted
+    at = center
+    if (
+        fitted is not None
+        and fitted.pipe == center.pipe
+        and center.low - 1e-6 <= fitted.metres <= center.high + 1e-6
+    ):
+        at = replace(fitted, low=center.low, high=center.high)
+    return Ranking(ranking, first=center.pipe), at

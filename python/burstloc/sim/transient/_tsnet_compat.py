@@ -81,7 +81,7 @@ import numpy as np
 
 from burstloc.constants import PRESSURE_NOISE
 from burstloc.exceptions import SimulatorMissingError
-from burstloc.network import _wntr
+from burstloc.network_file import import_wntr
 
 __all__ = ["applied", "load"]
 
@@ -118,7 +118,7 @@ def load() -> ModuleType:
     Raises:
         SimulatorMissingError: TSNet is not installed (it comes with the ``sim`` extra).
     """
-    _wntr()  # TSNet imports WNTR: imported first, without its import-time noise
+    import_wntr()  # TSNet imports WNTR: imported first, without its import-time noise
     try:
         import tsnet
         from tsnet.network import discretize, model
