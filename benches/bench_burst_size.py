@@ -1,15 +1,15 @@
 """Burst sizes: the flow of the default burst, and the pressures a burst leaves, per network.
 
 Usage: ``.venv/bin/python benches/bench_burst_size.py [NETWORK.inp ...] [--flows 5 10 20]
-[--transient N] [--ltown]``. Default networks: the committed paper15, paper15_assets, awumah11
-and EPANET's Net1, Net2, Anytown, Net3 (``networks/public/``); ``--ltown`` adds L-TOWN
-(extracted from the pinned epyt wheel into a temporary directory). Every pipe bursts at
-mid-pipe, sized by the default emitter coefficient (the paper's, 0.02 m³/s/m^½) and by each of
-``--flows`` (L/s, the coefficient that draws it at the burst point's pressure before it opens:
-``burstloc simulate --burst-flow``). Printed per network and size: the bursts' nominal flow
-(median and largest, L/s, and as a share of the network's demand), the lowest junction pressure
-of EPANET's pressure-driven steady state once the burst has opened (over every pipe), and the
-bursts that take a junction below zero there.
+[--coefficients 0.02 ...] [--transient N] [--ltown]``. Default networks: the committed paper15,
+paper15_assets, awumah11 and EPANET's Net1, Net2, Anytown, Net3 (``networks/public/``); ``--ltown``
+adds L-TOWN (extracted from the pinned epyt wheel into a temporary directory). Every pipe bursts at
+mid-pipe, sized by each of ``--coefficients`` (default: the paper's, 0.02 m³/s/m^½; none with
+``--coefficients`` alone) and by each of ``--flows`` (L/s, the coefficient that draws it at the
+burst point's pressure before it opens: ``burstloc simulate --burst-flow``). Printed per network
+and size: the bursts' nominal flow (median and largest, L/s, and as a share of the network's
+demand), the lowest junction pressure of EPANET's pressure-driven steady state once the burst has
+opened (over every pipe), and the bursts that take a junction below zero there.
 
 The steady state cannot show what the opening does: an emitter draws less as its pressure
 falls, so the steady state holds the pressures near zero, while the downsurge of a burst that
@@ -75,6 +75,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("networks", nargs="*", type=Path)
     parser.add_argument("--flows", type=float, nargs="+", default=[5.0, 10.0, 20.0, 50.0])
+    parser.add_argument(
+        "--coefficients", type=float, nargs="*", default=[DEFAULT_COEFF], metavar="C"
+    )
     parser.add_argument("--transient", type=int, default=0, metavar="N")
     parser.add_argument("--ltown", action="store_true")
     args = parser.parse_args()
@@ -96,7 +99,7 @@ def main() -> None:
             )
             sample = sorted(random.Random(0).sample(pipes, min(args.transient, len(pipes))))
             sizes: list[tuple[str, float | None, float | None]] = [
-                (f"coefficient {DEFAULT_COEFF:g}", DEFAULT_COEFF, None)
+                (f"coefficient {c:g}", c, None) for c in args.coefficients
             ]
             sizes += [(f"{q:g} L/s", None, q / 1000.0) for q in args.flows]
             for label, coeff, flow in sizes:

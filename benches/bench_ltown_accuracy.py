@@ -1,13 +1,14 @@
 """L-TOWN with BattLeDIM's 33 pressure sensors: how soon and how close the answer comes.
 
 Usage: ``.venv/bin/python benches/bench_ltown_accuracy.py [--pipes N] [--seed S] [--phases K]
-[--intervals S ...] [--workers W] [--min-pipe-length M] [--config PATH]``. L-TOWN is extracted
-from the pinned epyt wheel that ``make networks`` keeps in ``networks/public/`` into a
+[--intervals S ...] [--workers W] [--min-pipe-length M] [--config PATH] [--burst-flow Q]``. L-TOWN
+is extracted from the pinned epyt wheel that ``make networks`` keeps in ``networks/public/`` into a
 temporary directory; BattLeDIM's 33 sensors are the meters. ``N`` pipes drawn with ``--seed``
-(default 20 pipes, seed 11: not the seed the constants were looked at with), ``K`` clock
-phases each, noise of 0.01 m (standard deviation), the CUSUM bank calibrated for those sensors
-(``--config`` reuses a calibration made for them), the paper's burst (coefficient 0.02),
-transient-ready pipes of at least ``M`` m (default 30).
+(default 20 pipes, seed 11: not the seed the constants were looked at with), ``K`` clock phases
+each, noise of 0.01 m (standard deviation), the CUSUM bank calibrated for those sensors
+(``--config`` reuses a calibration made for them), the paper's burst (coefficient 0.02; with
+``--burst-flow Q`` a burst of Q L/s, ``burstloc evaluate``'s default being 10), transient-ready
+pipes of at least ``M`` m (default 30).
 
 Every burst goes through ``burstloc evaluate`` once, with the fused localizer (the default) and
 the arrival localizer beside it (the alternative measured in the same run, on the same
@@ -40,6 +41,11 @@ from bench_ltown import meter_file, pipe_names
 from bench_scale import ltown
 
 REPO = Path(__file__).resolve().parents[1]
+
+
+def burst_size(flow: float | None) -> tuple[str, str]:
+    """The evaluation's burst: ``flow`` L/s, or the paper's coefficient."""
+    return ("--burst-coeff", "0.02") if flow is None else ("--burst-flow", f"{flow:g}")
 
 
 def burstloc(args: list[str]) -> None:
@@ -98,6 +104,9 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=2, help="evaluate's workers (default 2)")
     parser.add_argument("--min-pipe-length", type=float, default=30.0)
     parser.add_argument("--config", help="a calibration of L-TOWN for the 33 sensors")
+    parser.add_argument(
+        "--burst-flow", type=float, default=None, help="L/s (default: the paper's burst, 0.02)"
+    )
     args = parser.parse_args()
     with tempfile.TemporaryDirectory(prefix="bench-ltown-accuracy-") as tmp:
         directory = Path(tmp)
@@ -127,12 +136,13 @@ def main() -> None:
                 *("--min-pipe-length", f"{args.min_pipe_length:g}"),
                 *("--workers", str(args.workers), "--quiet", "--json", str(out)),
                 *("--pipes", *chosen),
+                *burst_size(args.burst_flow),
             ]
         )
         table = rows(json.loads(out.read_text()))
     print(
         f"\nL-TOWN, BattLeDIM's 33 sensors: {len(chosen)} pipes (seed {args.seed}) x "
-        f"{args.phases} phases, CUSUM, sigma 0.01 m"
+        f"{args.phases} phases, CUSUM, sigma 0.01 m, burst {' '.join(burst_size(args.burst_flow))}"
     )
     print(
         "capture  localizer  | first: time  95% held  <=100m  <=300m   mean "

@@ -3,6 +3,7 @@
 * :data:`CAPTURE_INTERVALS`: the meters' reporting periods the paper evaluates (s).
 * :data:`WAVE_SPEED`: the pressure-wave speed TSNet and the paper use (m/s).
 * :data:`SCENARIO_DURATION`: how long a burst scenario is simulated (s).
+* :data:`BURST_FLOW`: the size of the commands' default burst (m³/s).
 * :data:`DETECTORS`, :data:`RANKING_LOCALIZERS`, :data:`LOCALIZERS`: names accepted everywhere.
 * :data:`METER_MODELS` / :data:`MeterModel`: what a meter's reading is.
 * :data:`CANDIDATE_POSITIONS`: burst positions along a pipe that the localizers try.
@@ -17,6 +18,7 @@ from __future__ import annotations
 from typing import Literal
 
 __all__ = [
+    "BURST_FLOW",
     "CANDIDATE_POSITIONS",
     "CAPTURE_INTERVALS",
     "CLOCK_TOLERANCE",
@@ -44,6 +46,15 @@ CAPTURE_INTERVALS: tuple[float, ...] = (0.2, 2.0, 5.0, 10.0)
 #: ``MAX_SAMPLE``; ``tests/test_detectors.py`` checks the two agree.
 MAX_SAMPLE = 1e100
 """Capture intervals (s) of the paper's experiment, and the defaults of every command."""
+
+BURST_FLOW = 0.010
+"""The default burst of ``burstloc simulate`` and ``evaluate``: 10 L/s (m³/s here), the flow its
+emitter draws at the burst point's pressure before it opens. A burst a utility sees and a
+network can feed: on every committed network, EPANET's Net1, Net2 and Anytown and L-TOWN it
+leaves every junction above zero pressure through the transient, where the paper's coefficient
+(0.02 m³/s/m^½: 127-276 L/s, up to 5 times a network's demand) takes junctions below zero on
+awumah11, Net2 and L-TOWN (``benches/bench_burst_size.py``). The paper's experiment
+(``--localizer paper``) keeps the paper's coefficient."""
 
 WAVE_SPEED = 1200.0
 """Pressure-wave speed (m/s): TSNet's default, the paper's setting."""

@@ -235,9 +235,14 @@ def test_the_burst_size_reaches_the_simulation_and_the_record(tmp_path: Path) ->
     doc = json.loads((tmp_path / "r.json").read_text())
     jsonschema.validate(doc, SCHEMA)
     assert doc["scenario"]["burst_coeff"] == 0.002  # the parameters the bursts were built with
+    # the paper's experiment keeps the paper's burst; any other run's default is 10 L/s
     assert _evaluate_long_pipes(tmp_path) == 0
     default = json.loads((tmp_path / "r.json").read_text())["scenario"]["burst_coeff"]
     assert default == paper.SCENARIO.burst_coeff == 0.02
+    assert _evaluate_long_pipes(tmp_path, "--localizer", "arrival") == 0
+    scenario = json.loads((tmp_path / "r.json").read_text())["scenario"]
+    assert scenario["burst_flow_lps"] == 10.0 and "burst_coeff" not in scenario
+    assert scenario["burst_flows_lps"] == {"B": pytest.approx(10.0)}
 
 
 def test_evaluate_takes_the_configurations_meters_or_the_ones_given(
@@ -284,7 +289,9 @@ def test_bursts_sized_by_flow_and_every_bursts_flow_recorded(
     drawn = 0.002 * size.pressure**0.5 * 1000
     assert scenario["burst_flows_lps"] == {"B": pytest.approx(drawn, abs=1e-3)}
     assert f"the bursts drew {drawn:.3g}-{drawn:.3g} L/s" in capsys.readouterr().out
-    assert _evaluate_long_pipes(tmp_path, "--burst-coeff", "0.002", "--burst-flow", "5") == 2
-    assert "--burst-flow or --burst-coeff, not both" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exit_:
+        _evaluate_long_pipes(tmp_path, "--burst-coeff", "0.002", "--burst-flow", "5")
+    assert exit_.value.code == 2
+    assert "--burst-flow: not allowed with argument --burst-coeff" in capsys.readouterr().err
     assert _evaluate_long_pipes(tmp_path, "--burst-flow", "0") == 2
     assert "--burst-flow must be a positive number of L/s" in capsys.readouterr().err

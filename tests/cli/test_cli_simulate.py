@@ -86,13 +86,20 @@ def test_min_pipe_length_simulates_the_transient_ready_model(tmp_path: Path) -> 
         ),
         (["--pipe", "B", "--position", "0"], "got 0.0"),
         (["--pipe", "B", "--burst-start", "2", "--duration", "2"], "duration (2.0 s)"),
-        (["--pipe", "B", "--burst-coeff", "-1"], "burst_coeff must be > 0, got -1.0"),
+        (
+            ["--pipe", "B", "--burst-coeff", "-1"],
+            "--burst-coeff must be a positive number, got -1.0",
+        ),
         (["--pipe", "B", "--wave-speed", "0"], "wave_speed must be > 0 m/s, got 0.0"),
         (["--pipe", "B", "--workers", "0"], "workers must be a positive integer, got 0"),
         (["--pipe", "B", "--min-pipe-length", "0"], "min_pipe_length must be > 0 m, got 0.0"),
         (
             ["--event", "demand-step", "--asset", "J1", "--min-pipe-length", "5"],
             "--min-pipe-length applies to bursts only",
+        ),
+        (
+            ["--event", "demand-step", "--asset", "J1", "--burst-flow", "5"],
+            "--burst-flow applies to bursts only",
         ),
     ],
 )
@@ -354,3 +361,10 @@ def test_a_burst_sized_by_its_flow(
     assert "--burst-flow must be a positive number of L/s" in capsys.readouterr().err
     with pytest.raises(SystemExit):
         _run(*args, "--burst-flow", "5", "--burst-coeff", "0.01")
+    capsys.readouterr()
+    # neither: the default burst, 10 L/s, said and recorded like a chosen one
+    assert _run(*args) == 0
+    assert capsys.readouterr().out.startswith("burst on P7: 10 L/s at the burst point's")
+    meta = ScenarioResult.load(path).metadata
+    assert meta["burst_flow_lps"] == pytest.approx(10.0)
+    assert meta["burst_coeff"] == pytest.approx(0.010 / np.sqrt(pressure))

@@ -7,7 +7,7 @@ import argparse
 import math
 from typing import TYPE_CHECKING, Any
 
-from burstloc.constants import WAVE_SPEED
+from burstloc.constants import BURST_FLOW, WAVE_SPEED
 from burstloc.exceptions import ConfigError
 
 if TYPE_CHECKING:
@@ -27,6 +27,7 @@ __all__ = [
     "add_solver_option",
     "add_time_step_option",
     "add_wave_speed_option",
+    "burst_size_of",
     "cache_of",
     "check_run_options",
     "meters_of",
@@ -90,10 +91,10 @@ def add_wave_speed_option(parser: Options, help: str = "pressure wave speed, m/s
     add_number(parser, "--wave-speed", WAVE_SPEED, "A", help)
 
 
-def add_burst_options(parser: Options, position: float | None, burst_coeff: float | None) -> None:
+def add_burst_options(parser: Options, position: float | None) -> None:
     """``--position F``, ``--burst-coeff C`` and ``--burst-flow L/S``: where each burst opens
-    and its size, as an emitter coefficient (``None``: the paper's scenario, said in the help)
-    or as a flow."""
+    and its size, as a flow (default :data:`~burstloc.constants.BURST_FLOW`) or as an emitter
+    coefficient (:func:`burst_size_of` reads them)."""
     where = (
         "where each burst opens, as a fraction of its pipe's length from the pipe's INP start "
         "node, strictly between 0 and 1"
@@ -101,25 +102,50 @@ def add_burst_options(parser: Options, position: float | None, burst_coeff: floa
     if position is None:
         where += " (default 0.5, mid-pipe)"
     add_number(parser, "--position", position, "F", where)
-    size = "the bursts' final emitter coefficient, m^3/s/m^0.5"
-    if burst_coeff is None:
-        size += (
-            " (default 0.02, the paper's scenario: the burst draws 0.02 x sqrt(pressure head) "
-            "m^3/s, which can be more than a small network's whole demand)"
-        )
-    # with a default coefficient the two options exclude each other here; without one the
-    # command says "not both" itself (an error naming both, exit 2)
-    sizes = parser.add_mutually_exclusive_group() if burst_coeff is not None else parser
-    add_number(sizes, "--burst-coeff", burst_coeff, "C", size)
+    sizes = parser.add_mutually_exclusive_group()
     sizes.add_argument(
         "--burst-flow",
         type=float,
         default=None,
         metavar="L/S",
-        help="size every burst by its flow instead of --burst-coeff: each pipe's emitter "
+        help=f"size every burst by its flow (default {1000 * BURST_FLOW:g} L/s, a burst every "
+        "committed network feeds with its pressures above zero; the paper's experiment, "
+        "--localizer paper, keeps the paper's coefficient 0.02): each pipe's emitter "
         "coefficient draws this many L/s at its burst point's pressure before it opens (the "
         "flow falls as the pressure does); printed and recorded either way",
     )
+    sizes.add_argument(
+        "--burst-coeff",
+        type=float,
+        default=None,
+        metavar="C",
+        help="size every burst by its final emitter coefficient instead, m^3/s/m^0.5 (the "
+        "paper's: 0.02, which draws 0.02 x sqrt(pressure head) m^3/s: more than some "
+        "networks' whole demand)",
+    )
+
+
+def burst_size_of(
+    args: argparse.Namespace, *, paper: bool = False
+) -> tuple[float | None, float | None]:
+    """The bursts' size from ``--burst-coeff``/``--burst-flow``: ``(coefficient, flow)``, one of
+    them ``None``; the flow in m³/s. Neither given: :data:`~burstloc.constants.BURST_FLOW`, or
+    with ``paper`` (the paper's experiment) ``(None, None)``: the scenario's own coefficient.
+
+    Raises:
+        ConfigError: a size that is not a positive finite number.
+    """
+    if args.burst_coeff is not None:
+        if not (math.isfinite(args.burst_coeff) and args.burst_coeff > 0):
+            raise ConfigError(f"--burst-coeff must be a positive number, got {args.burst_coeff}")
+        return args.burst_coeff, None
+    if args.burst_flow is not None:
+        if not (math.isfinite(args.burst_flow) and args.burst_flow > 0):
+            raise ConfigError(
+                f"--burst-flow must be a positive number of L/s, got {args.burst_flow}"
+            )
+        return None, args.burst_flow / 1000.0
+    return (None, None) if paper else (None, BURST_FLOW)
 
 
 def add_run_options(parser: argparse.ArgumentParser, *, cache: bool = True) -> None:

@@ -17,6 +17,7 @@ from burstloc.cli._options import (
     add_run_options,
     add_solver_option,
     add_time_step_option,
+    burst_size_of,
     cache_of,
     check_run_options,
     meters_of,
@@ -41,9 +42,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         description=(
             "Burst each pipe (simulated once, cached), stream the meters' readings at each "
             "capture interval through the detectors and a localizer, and report accuracy. With "
-            "no options: the fused localizer, both detectors x capture intervals 0.2, 2, 5, "
-            "10 s. With --localizer paper: the paper's experiment (Tables I/II parameters), "
-            "printed beside the paper's Tables III-V; `--localizer paper fused` shows both."
+            "no options: a 10 L/s burst mid-pipe, the fused localizer, both detectors x capture "
+            "intervals 0.2, 2, 5, 10 s. With --localizer paper: the paper's experiment (its "
+            "burst, coefficient 0.02, and Tables I/II parameters), printed beside the paper's "
+            "Tables III-V; `--localizer paper fused` shows both on the paper's burst."
         ),
     )
     parser.add_argument("network", metavar="NETWORK.inp", help="EPANET INP file")
@@ -110,7 +112,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "made for another network or other meters",
     )
     parser.add_argument("--pipes", nargs="+", default=None, metavar="ID", help="default: all")
-    add_burst_options(parser, None, None)
+    add_burst_options(parser, None)
     add_noise_option(
         parser,
         None,
@@ -234,19 +236,10 @@ def run(args: argparse.Namespace) -> int:
     if args.min_pipe_length is not None:
         scenario = replace(scenario, min_pipe_length=args.min_pipe_length)
     scenario = replace(scenario, solver=args.solver)
-    if args.burst_coeff is not None:
-        if not (math.isfinite(args.burst_coeff) and args.burst_coeff > 0):
-            raise ConfigError(f"--burst-coeff must be a positive number, got {args.burst_coeff}")
-        scenario = replace(scenario, burst_coeff=args.burst_coeff)
-    flow = None
-    if args.burst_flow is not None:
-        if args.burst_coeff is not None:
-            raise ConfigError("size the bursts once: --burst-flow or --burst-coeff, not both")
-        if not (math.isfinite(args.burst_flow) and args.burst_flow > 0):
-            raise ConfigError(
-                f"--burst-flow must be a positive number of L/s, got {args.burst_flow}"
-            )
-        flow = args.burst_flow / 1000.0
+    # the paper's experiment keeps the paper's burst; every other run a utility's (10 L/s)
+    coeff, flow = burst_size_of(args, paper="paper" in args.localizer)
+    if coeff is not None:
+        scenario = replace(scenario, burst_coeff=coeff)
     if args.noise is not None and not (math.isfinite(args.noise) and args.noise >= 0):
         raise ConfigError(f"--noise must be a number of metres >= 0, got {args.noise}")
     if args.noise_seed < 0:

@@ -21,6 +21,7 @@ from burstloc.cli._options import (
     add_solver_option,
     add_time_step_option,
     add_wave_speed_option,
+    burst_size_of,
     cache_of,
     check_run_options,
     meters_of,
@@ -48,8 +49,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
             "Simulate a burst on each chosen pipe (split at --position) and write the pressure "
             "head of every junction over time, one NPZ file per pipe: arrays time (T,), heads "
             "(T, M), junctions (M,) and metadata (a JSON string). Results are cached. The burst "
-            "is the one `burstloc evaluate` simulates (the paper's: coefficient 0.02, opened in "
-            "0.3 s, at 10 s). With --feed FILE (one pipe or --event, and --capture-interval): "
+            "is the one `burstloc evaluate` simulates (10 L/s, opened in 0.3 s, at 10 s; "
+            "--burst-coeff 0.02 is the paper's). With --feed FILE (one pipe or --event, and "
+            "--capture-interval): "
             "also the readings the meters would send, in the CSV form `burstloc monitor "
             "--readings` reads: a header line 'timestamp,meter,value', then one line per "
             "reading, every meter's reading of a capture tick before the next tick's; "
@@ -82,7 +84,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "valve-*: final fraction open (default: 0 for a closure, 1 for an opening)",
     )
     add_number(event, "--demand-change", None, "M3/S", "demand-step: the junction's demand change")
-    add_burst_options(parser, 0.5, SCENARIO.burst_coeff)
+    add_burst_options(parser, 0.5)
     for flag, default, metavar, text in (
         ("--burst-start", SCENARIO.burst_start, "S", "when the burst (or --event) starts, s"),
         ("--duration", SCENARIO_DURATION, "S", "simulated, s"),
@@ -140,6 +142,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Handle ``burstloc simulate``."""
+    from burstloc.experiments.paper import SCENARIO
     from burstloc.sim.scenarios import scenario
     from burstloc.sim.transient.time_step import with_capture_time_step
     from burstloc.sim.transient.tsnet import simulate_many
@@ -150,13 +153,14 @@ def run(args: argparse.Namespace) -> int:
     args.feed_meters = _feed_meters(args)
     if args.event is not None:
         return _event(args, start)
+    coeff, flow = burst_size_of(args)
     scenarios = scenario.burst_scenarios(
         args.network,
         None if args.all else args.pipe,
         position=args.position,
         burst_start=args.burst_start,
         opening_time=args.opening_time,
-        burst_coeff=args.burst_coeff,
+        burst_coeff=SCENARIO.burst_coeff if coeff is None else coeff,
         wave_speed=args.wave_speed,
         duration=args.duration,
         time_step=args.time_step,
@@ -167,9 +171,6 @@ def run(args: argparse.Namespace) -> int:
         scenarios = with_capture_time_step(scenarios, args.capture_interval)
     from burstloc.sim.signatures.burst_size import describe_sizes, sized_scenarios, with_size
 
-    flow = None if args.burst_flow is None else args.burst_flow / 1000.0
-    if flow is not None and not (math.isfinite(flow) and flow > 0):
-        raise ConfigError(f"--burst-flow must be a positive number of L/s, got {args.burst_flow}")
     scenarios, sizes = sized_scenarios(scenarios, flow)
     print(describe_sizes(sizes))
     size_of = {s.pipe: size for s, size in zip(scenarios, sizes, strict=True)}
@@ -263,8 +264,13 @@ def _event(args: argparse.Namespace, start: datetime | None) -> int:
 
     if args.asset is None:
         raise ConfigError(f"--event {args.event} needs --asset (the valve, pump or junction)")
-    if args.min_pipe_length is not None:
-        raise ConfigError("--min-pipe-length applies to bursts only, not to --event")
+    for option, value in (
+        ("--min-pipe-length", args.min_pipe_length),
+        ("--burst-flow", args.burst_flow),
+        ("--burst-coeff", args.burst_coeff),
+    ):
+        if value is not None:
+            raise ConfigError(f"{option} applies to bursts only, not to --event")
     setting = args.setting
     if setting is None:
         setting = 1.0 if args.event == "valve-opening" else 0.0
