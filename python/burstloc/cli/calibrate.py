@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 import time
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from burstloc._atomic import check_output
 from burstloc.cli._options import (
@@ -13,6 +13,7 @@ from burstloc.cli._options import (
     add_network_argument,
     add_noise_option,
     add_number,
+    add_wave_speed_option,
     meters_of,
 )
 from burstloc.constants import (
@@ -22,6 +23,10 @@ from burstloc.constants import (
     HYBRID_SIGNATURES_UP_TO,
     WAVE_SPEED_TOLERANCE,
 )
+
+if TYPE_CHECKING:
+    from burstloc.localize.config import Calibration
+    from burstloc.network import Network
 
 __all__ = ["add_parser", "run"]
 
@@ -74,6 +79,17 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "S",
         "how well each meter's clock is known, s (GPS loggers: 0.001, NTP: a few ms)",
     )
+    add_wave_speed_option(
+        parser, "the pressure wave speed the localizers assume, m/s (--known-events fits it)"
+    )
+    parser.add_argument(
+        "--known-events",
+        default=None,
+        metavar="FILE",
+        help="learn the wave speed, each meter's clock offset and the travel times' tolerance "
+        "from transients whose place and time are known (a JSON file listing each event's "
+        "readings feed, time and junction or pipe and position; see docs/results.md)",
+    )
     parser.add_argument("--name", default=None, help="the configuration's name")
     parser.add_argument(
         "--signatures",
@@ -117,9 +133,46 @@ def run(args: argparse.Namespace) -> int:
         workers=args.workers,
         wave_speed_tolerance=args.wave_speed_tolerance,
         clock_tolerance=args.clock_tolerance,
+        wave_speed=args.wave_speed,
     )
+    if args.known_events:
+        config = _learn(args, network, config)
     seconds = time.perf_counter() - began
     for line in config.summary():
         print(line)
     print(f"calibrated in {seconds:.1f} s; wrote {config.save(args.out)}")
     return 0
+
+
+def _learn(args: argparse.Namespace, network: Network, config: Calibration) -> Calibration:
+    """``config`` with the travel times the known events show (wave speed, clock offsets,
+    tolerance); what was fitted printed."""
+    from dataclasses import replace
+
+    from burstloc.experiments.known_events import event_arrivals, read_known_events
+    from burstloc.localize.travel_fit import fit_travel_times
+
+    events = read_known_events(args.known_events, network)
+    arrivals = event_arrivals(events, network, config)
+    model = config.model
+    fit = fit_travel_times(
+        arrivals,
+        config.meters,
+        wave_speed=model.wave_speed,
+        wave_speed_tolerance=model.wave_speed_tolerance,
+        clock_tolerance=model.clock_tolerance,
+    )
+    offsets = sorted(fit.clock_offsets.values())
+    print(
+        f"known events: {len(events)}, {fit.arrivals} arrivals ({fit.dropped} dropped as "
+        f"outliers); wave speed {model.wave_speed:.0f} -> {fit.wave_speed:.0f} m/s, "
+        f"travel-time tolerance {model.wave_speed_tolerance:.1%} -> "
+        f"{fit.wave_speed_tolerance:.1%}, residual RMS {1000 * fit.rms:.1f} ms"
+        + (
+            f"; clock offsets {1000 * offsets[0]:+.1f} to {1000 * offsets[-1]:+.1f} ms"
+            if offsets and model.clock_tolerance > 0
+            else ""
+        )
+    )
+    provenance = {**config.provenance, "known_events": len(events), "wave_speed": fit.wave_speed}
+    return replace(config, model=fit.apply(model), provenance=provenance)

@@ -89,8 +89,7 @@ class NetworkDistance:
     """Shortest path lengths (m) along the pipes between points on pipes of one network.
 
     Valves and pumps count as length 0 (:func:`burstloc.sim.model.prepare.length_graph`). Path
-    lengths
-    from a node are computed once and kept.
+    lengths from a node are computed once and kept.
     """
 
     def __init__(self, wn: WaterNetworkModel) -> None:
@@ -117,6 +116,10 @@ class NetworkDistance:
             raise NetworkError(f"node {point.node!r} is not an end of pipe {point.pipe!r}")
         other = end if point.node == start else start
         return [(point.node, point.metres), (other, float(length) - point.metres)]
+
+    def between_nodes(self, a: str, b: str) -> float:
+        """Network distance (m) from node ``a`` to node ``b`` (``inf`` without a path)."""
+        return float(self._node(a).get(b, math.inf))
 
     def to_node(self, point: PipePoint, node: str) -> float:
         """Network distance (m) from ``point`` to the node ``node`` (``inf`` without a path)."""

@@ -38,6 +38,11 @@ def restricted_model(model: LocalizationModel, meters: Sequence[str]) -> Localiz
         wave_speed=model.wave_speed,
         wave_speed_tolerance=model.wave_speed_tolerance,
         clock_tolerance=model.clock_tolerance,
+        clock_offsets=(
+            None
+            if model.clock_offsets is None
+            else {m: model.clock_offsets[m] for m in meters if m in model.clock_offsets}
+        ),
         fronts=None if model.fronts is None else {p: r[cols] for p, r in model.fronts.items()},
     )
 

@@ -227,6 +227,7 @@ class ArrivalLocalizer:
         fronts: Mapping[str, NDArray[np.float64]] | None = None,
         wave_speed_tolerance: float = WAVE_SPEED_TOLERANCE,
         clock_tolerance: float = CLOCK_TOLERANCE,
+        clock_offsets: Mapping[str, float] | None = None,
     ) -> None:
         if not (math.isfinite(wave_speed) and wave_speed > 0):
             raise ConfigError(f"wave_speed must be > 0 m/s, got {wave_speed}")
@@ -247,6 +248,12 @@ class ArrivalLocalizer:
         if not pipes:
             raise ConfigError("no candidate pipes")
         self.meters = tuple(meters)
+        known = clock_offsets or {}
+        self.clock_offsets = np.array([float(known.get(m, 0.0)) for m in self.meters])
+        """How late (s) each meter hears a wave (known events' fit): taken off its alarm
+        start."""
+        if not np.all(np.isfinite(self.clock_offsets)):
+            raise ConfigError("clock offsets must be finite numbers of seconds")
         self.pipes = tuple(pipes)
         self.wave_speed = float(wave_speed)
         self.positions = pos
@@ -342,6 +349,7 @@ class ArrivalLocalizer:
             raise InputError("no meter of the arrival model has alarmed: nothing to localize")
         dt = evidence.capture_interval
         tau = np.array([evidence.alarms[self.meters[j]].start for j in alarmed])
+        tau = tau - self.clock_offsets[alarmed]
         lo_parts = [tau[None, None, :] - dist[:, :, alarmed] / self.wave_speed]
         hi_parts = [lo_parts[0] + dt]
         if silent:  # (empty with silence off)

@@ -109,6 +109,7 @@ class RankingLocalizers(Mapping[str, Localizer]):
             fronts=model.fronts,
             wave_speed_tolerance=model.wave_speed_tolerance,
             clock_tolerance=model.clock_tolerance,
+            clock_offsets=model.clock_offsets,
         )
         signature = SignatureLocalizer(model.signature_sets)
         return cls(arrival, signature, FusedLocalizer(arrival, signature))

@@ -64,6 +64,9 @@ class LocalizationModel:
     the others (:func:`burstloc.sim.model.prepare.wave_fronts`): which silent meters should have
     heard it (:class:`burstloc.localize.arrival.ArrivalLocalizer`). ``None`` (a model stored
     without them): every silent meter counts as not yet reached.
+    ``clock_offsets[meter]``: how late (s) each meter hears a wave, its clock and its sensor
+    together, as known events showed (:mod:`burstloc.localize.travel_fit`); ``None``: not known
+    (every meter on time).
 
     Raises:
         ConfigError: the parts do not fit together (a pipe end without distances, signatures of
@@ -79,6 +82,7 @@ class LocalizationModel:
     fronts: Mapping[str, NDArray[np.float64]] | None = None
     wave_speed_tolerance: float = WAVE_SPEED_TOLERANCE
     clock_tolerance: float = CLOCK_TOLERANCE
+    clock_offsets: Mapping[str, float] | None = None
 
     def __post_init__(self) -> None:
         meters = check_names(self.meters, "meters", high=MAX_METERS)
@@ -121,6 +125,18 @@ class LocalizationModel:
         object.__setattr__(self, "clock_tolerance", float(self.clock_tolerance))
         if self.fronts is not None:
             object.__setattr__(self, "fronts", self._checked_fronts(self.fronts))
+        if self.clock_offsets is not None:
+            offsets = {}
+            for meter, value in self.clock_offsets.items():
+                if meter not in meters:
+                    raise FieldError("clock_offsets_s", f"{meter!r} is not a meter of the model")
+                offsets[meter] = check_number(value, f"clock_offsets_s.{meter}", low=-60, high=60)
+            object.__setattr__(self, "clock_offsets", offsets)
+
+    def offsets(self) -> NDArray[np.float64]:
+        """Each meter's clock offset (s), in meter order (zeros when none is known)."""
+        known = self.clock_offsets or {}
+        return np.array([known.get(m, 0.0) for m in self.meters], dtype=np.float64)
 
     def _checked_fronts(
         self, fronts: Mapping[str, NDArray[np.float64]]
@@ -172,6 +188,7 @@ class LocalizationModel:
             "wave_speed": self.wave_speed,
             "wave_speed_tolerance": self.wave_speed_tolerance,
             "clock_tolerance_s": self.clock_tolerance,
+            **({} if self.clock_offsets is None else {"clock_offsets_s": dict(self.clock_offsets)}),
             "pipes": [
                 {"pipe": p.pipe, "start": p.start, "end": p.end, "length": p.length}
                 for p in self.pipes
@@ -206,6 +223,7 @@ class LocalizationModel:
                 # models stored before these were recorded: the defaults
                 wave_speed_tolerance=float(data.get("wave_speed_tolerance", WAVE_SPEED_TOLERANCE)),
                 clock_tolerance=float(data.get("clock_tolerance_s", CLOCK_TOLERANCE)),
+                clock_offsets=data.get("clock_offsets_s"),
                 pipes=tuple(
                     PipeGeometry(str(p["pipe"]), str(p["start"]), str(p["end"]), float(p["length"]))
                     for p in data["pipes"]

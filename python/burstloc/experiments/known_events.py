@@ -1,0 +1,229 @@
+"""Known events read for calibration: where and when each happened, and what the meters heard.
+
+A known-events file (JSON) lists transients whose place and time are known, each with the
+readings the meters sent around it (a feed in the form ``burstloc monitor --readings`` reads)::
+
+    {"events": [
+        {"name": "valve V12 closed", "readings": "v12.csv", "time": 10.0, "junction": "n54"},
+        {"name": "burst dug up", "readings": "b7.csv", "time": 10.0,
+         "pipe": "p233", "position": 0.5}
+    ]}
+
+``time`` is in the readings' own clock (seconds, or ISO 8601 like the readings); the place is a
+``junction`` or a ``pipe`` with the ``position`` along it (a fraction from its INP start node,
+default 0.5); a relative ``readings`` path is read from the file's directory.
+:func:`event_arrivals` runs the calibrated detector bank of the readings' capture interval over
+each feed, as the monitor does, and keeps each meter's first alarm after the event: its onset
+(the reading before the change) is that meter's arrival.
+:func:`~burstloc.localize.travel_fit.fit_travel_times` then fits the wave speed and the clocks.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from burstloc.exceptions import ConfigError, StreamError
+from burstloc.experiments.position import NetworkDistance, PipePoint
+from burstloc.live.feeds import StepFeed
+from burstloc.live.parse import BadReading, parse_lines
+from burstloc.localize.config import Calibration, calibrated_bank
+from burstloc.localize.travel_fit import EventArrivals
+from burstloc.network import Network
+from burstloc.readings import Reading, Step, timestamp_seconds
+
+__all__ = ["KnownEvent", "event_arrivals", "read_known_events"]
+
+
+@dataclass(frozen=True)
+class KnownEvent:
+    """One entry of a known-events file: its ``name``, ``readings`` feed, ``time`` (s) and
+    place: a ``junction``, or a ``pipe`` with ``position`` (fraction from its INP start)."""
+
+    name: str
+    readings: Path
+    time: float
+    junction: str | None = None
+    pipe: str | None = None
+    position: float = 0.5
+
+
+def _event(entry: Any, index: int, base: Path, network: Network) -> KnownEvent:
+    """One checked entry (``events[index]``)."""
+    where = f"events[{index}]"
+    if not isinstance(entry, dict):
+        raise ConfigError(f"{where} must be an object, got {type(entry).__name__}")
+    unknown = sorted(set(entry) - {"name", "readings", "time", "junction", "pipe", "position"})
+    if unknown:
+        raise ConfigError(f"{where}: unknown key(s) {unknown}")
+    name = str(entry.get("name", where))
+    if not isinstance(entry.get("readings"), str):
+        raise ConfigError(f"{where} ({name}): 'readings' must name the feed file")
+    readings = base / entry["readings"]
+    if not readings.is_file():
+        raise ConfigError(f"{where} ({name}): no readings file {str(readings)!r}")
+    raw = entry.get("time")
+    try:
+        t = timestamp_seconds(raw) if isinstance(raw, str) else float(raw)
+    except (TypeError, ValueError):
+        raise ConfigError(
+            f"{where} ({name}): 'time' must be seconds or ISO 8601, got {raw!r}"
+        ) from None
+    if not math.isfinite(t):
+        raise ConfigError(f"{where} ({name}): 'time' must be finite, got {raw!r}")
+    junction, pipe = entry.get("junction"), entry.get("pipe")
+    if (junction is None) == (pipe is None):
+        raise ConfigError(f"{where} ({name}): give the place as 'junction' or as 'pipe', once")
+    if junction is not None and junction not in network.model.node_name_list:
+        raise ConfigError(f"{where} ({name}): {junction!r} is not a node of the network")
+    if pipe is not None and pipe not in network.model.pipe_name_list:
+        raise ConfigError(f"{where} ({name}): {pipe!r} is not a pipe of the network")
+    position = entry.get("position", 0.5)
+    if isinstance(position, bool) or not isinstance(position, (int, float)):
+        raise ConfigError(f"{where} ({name}): 'position' must be a number, got {position!r}")
+    if not 0.0 <= position <= 1.0:
+        raise ConfigError(f"{where} ({name}): 'position' must be within 0..1, got {position}")
+    return KnownEvent(name, readings, t, junction, pipe, float(position))
+
+
+def read_known_events(path: str | Path, network: Network) -> list[KnownEvent]:
+    """The events of a known-events file (module docstring), checked against ``network``.
+
+    Raises:
+        ConfigError: an unreadable file, a malformed entry (named), a place not in the network
+            or a missing readings file.
+    """
+    path = Path(path)
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise ConfigError(f"cannot read known events {str(path)!r}: {exc.strerror}") from None
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ConfigError(f"known events {str(path)!r} is not JSON: {exc}") from None
+    entries = doc.get("events") if isinstance(doc, dict) else None
+    if not isinstance(entries, list) or not entries:
+        raise ConfigError(f"known events {str(path)!r}: want {{'events': [...]}} with one or more")
+    return [_event(e, i, path.parent, network) for i, e in enumerate(entries)]
+
+
+def _distances(event: KnownEvent, network: Network, meters: Sequence[str]) -> dict[str, float]:
+    """Shortest path (m) from the event's place to each meter."""
+    distance = NetworkDistance(network.model)  # (a cache of paths: one per event is enough)
+    if event.junction is not None:
+        return {m: distance.between_nodes(event.junction, m) for m in meters}
+    link = network.model.get_link(event.pipe)
+    point = PipePoint(str(event.pipe), link.start_node_name, event.position * float(link.length))
+    return {m: distance.to_node(point, m) for m in meters}
+
+
+def _readings(event: KnownEvent, meters: Sequence[str]) -> list[Reading]:
+    """The event's readings of ``meters`` (others are not part of the model).
+
+    Raises:
+        ConfigError: a bad reading (the first named, the rest counted).
+    """
+    wanted = set(meters)
+    found: list[Reading] = []
+    bad: list[BadReading] = []
+    with event.readings.open(encoding="utf-8", errors="replace") as lines:
+        for item in parse_lines(lines):
+            if isinstance(item, BadReading):
+                bad.append(item)
+            elif item.meter in wanted:
+                found.append(item)
+    if bad:
+        raise ConfigError(
+            f"known event {event.name!r}: {len(bad)} bad reading(s) in {str(event.readings)!r}, "
+            f"first {bad[0]}"
+        )
+    return found
+
+
+def _interval(event: KnownEvent, readings: Sequence[Reading], config: Calibration) -> float:
+    """The readings' capture interval: the calibrated one their timestamps' spacing matches.
+
+    Raises:
+        ConfigError: fewer than two timestamps, or a spacing no calibrated interval has.
+    """
+    stamps = np.unique([r.timestamp for r in readings])
+    if stamps.size < 2:
+        raise ConfigError(f"known event {event.name!r}: its readings hold fewer than two times")
+    spacing = float(np.median(np.diff(stamps)))
+    intervals = [c.capture_interval for c in config.intervals]
+    nearest = min(intervals, key=lambda c: abs(c - spacing))
+    if abs(nearest - spacing) > 0.01 * nearest:
+        raise ConfigError(
+            f"known event {event.name!r}: its readings come every {spacing:g} s, not at a "
+            f"calibrated capture interval ({', '.join(f'{c:g}' for c in intervals)} s)"
+        )
+    return nearest
+
+
+def _onsets(
+    event: KnownEvent, config: Calibration, detector: str
+) -> tuple[dict[str, float], float]:
+    """Each meter's first alarm onset (s) at or after the event, the calibrated bank run over
+    its readings as the monitor runs it, and the readings' capture interval."""
+    meters = list(config.meters)
+    readings = _readings(event, meters)
+    capture_interval = _interval(event, readings, config)
+    bank = calibrated_bank(detector, len(meters), config.for_interval(capture_interval))
+    feed = StepFeed(meters, period=capture_interval)
+    times: list[float] = []
+    onsets: dict[str, float] = {}
+
+    def run(steps: list[Step]) -> None:
+        for step in steps:
+            times.append(float(step.timestamp))
+            for alarm in bank.step(np.asarray(step.values, dtype=np.float64)):
+                meter = meters[int(alarm.channel or 0)]
+                onset = times[max(int(alarm.start), 0)]
+                if meter not in onsets and onset + capture_interval >= event.time:
+                    onsets[meter] = onset
+
+    try:
+        for reading in readings:
+            run(feed.push(reading))
+        run(feed.flush())
+    except StreamError as exc:
+        raise ConfigError(f"known event {event.name!r}: {exc}") from None
+    if not times or times[0] >= event.time:
+        raise ConfigError(
+            f"known event {event.name!r}: its readings must start before the event "
+            f"(at {event.time:g} s) so that the detectors know the level before it"
+        )
+    return onsets, capture_interval
+
+
+def event_arrivals(
+    events: Sequence[KnownEvent],
+    network: Network,
+    config: Calibration,
+    detector: str = "cusum",
+) -> list[EventArrivals]:
+    """What the meters heard of each event (module docstring); each feed's capture interval is
+    the calibrated one its readings' spacing matches.
+
+    Raises:
+        ConfigError: a readings file that cannot be read as a feed, readings at no calibrated
+            capture interval, or readings that start after the event.
+    """
+    found = []
+    for e in events:
+        onsets, interval = _onsets(e, config, detector)
+        found.append(
+            EventArrivals(
+                name=e.name,
+                time=e.time,
+                distances=_distances(e, network, config.meters),
+                onsets=onsets,
+                capture_interval=interval,
+            )
+        )
+    return found
