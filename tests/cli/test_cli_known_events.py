@@ -74,6 +74,8 @@ def test_a_wave_speed_15_percent_off_is_learnt_back(
         ({"readings": "P7.csv", "time": 10.0}, "as 'junction' or as 'pipe'"),
         ({"readings": "P7.csv", "time": -5.0, "pipe": "P7"}, "must start before the event"),
         ({"readings": "P7.csv", "time": "soon", "pipe": "P7"}, "'time' must be seconds"),
+        ({"readings": "P7.csv", "time": True, "pipe": "P7"}, "'time' must be seconds"),
+        ({"readings": "P7.csv", "time": 10.0, "pipe": "P7", "position": 2}, "within 0..1"),
         ({"readings": "P7.csv", "time": 10.0, "pipe": "P7", "when": 1}, "unknown key(s) ['when']"),
     ],
 )

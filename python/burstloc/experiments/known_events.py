@@ -69,6 +69,8 @@ def _event(entry: Any, index: int, base: Path, network: Network) -> KnownEvent:
     if not readings.is_file():
         raise ConfigError(f"{where} ({name}): no readings file {str(readings)!r}")
     raw = entry.get("time")
+    if isinstance(raw, bool):
+        raise ConfigError(f"{where} ({name}): 'time' must be seconds or ISO 8601, got {raw!r}")
     try:
         t = timestamp_seconds(raw) if isinstance(raw, str) else float(raw)
     except (TypeError, ValueError):
