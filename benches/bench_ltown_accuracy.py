@@ -7,7 +7,7 @@ temporary directory; BattLeDIM's 33 sensors are the meters. ``N`` pipes drawn wi
 (default 20 pipes, seed 11: not the seed the constants were looked at with), ``K`` clock phases
 each, noise of 0.01 m (standard deviation), the CUSUM bank calibrated for those sensors
 (``--config`` reuses a calibration made for them), the paper's burst (coefficient 0.02; with
-``--burst-flow Q`` a burst of Q L/s, ``burstloc evaluate``'s default being 10), transient-ready
+``--burst-flow Q`` a burst of Q L/s, ``burstloc evaluate``'s default being 5), transient-ready
 pipes of at least ``M`` m (default 30).
 
 Every burst goes through ``burstloc evaluate`` once, with the fused localizer (the default) and

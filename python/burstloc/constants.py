@@ -47,14 +47,15 @@ CAPTURE_INTERVALS: tuple[float, ...] = (0.2, 2.0, 5.0, 10.0)
 MAX_SAMPLE = 1e100
 """Capture intervals (s) of the paper's experiment, and the defaults of every command."""
 
-BURST_FLOW = 0.010
-"""The default burst of ``burstloc simulate`` and ``evaluate``: 10 L/s (m³/s here), the flow its
+BURST_FLOW = 0.005
+"""The default burst of ``burstloc simulate`` and ``evaluate``: 5 L/s (m³/s here), the flow its
 emitter draws at the burst point's pressure before it opens. A burst a utility sees and a
-network can feed: on every committed network, EPANET's Net1, Net2 and Anytown and L-TOWN it
-leaves every junction above zero pressure through the transient, where the paper's coefficient
-(0.02 m³/s/m^½: 127-276 L/s, up to 5 times a network's demand) takes junctions below zero on
-awumah11, Net2 and L-TOWN (``benches/bench_burst_size.py``). The paper's experiment
-(``--localizer paper``) keeps the paper's coefficient."""
+network can feed: opened in 0.3 s it leaves every junction above zero pressure through the
+transient on every committed network, EPANET's Net1, Net2 and Anytown and L-TOWN (lowest
+L-TOWN pressure 9 m on the pipes where 10 L/s dips just below zero), where the paper's
+coefficient (0.02 m³/s/m^½: 127-276 L/s, up to 5 times a network's demand) takes junctions
+below zero on awumah11, Net2 and every L-TOWN burst (``benches/bench_burst_size.py``). The
+paper's experiment (``--localizer paper``) keeps the paper's coefficient."""
 
 WAVE_SPEED = 1200.0
 """Pressure-wave speed (m/s): TSNet's default, the paper's setting."""

@@ -362,9 +362,22 @@ def test_a_burst_sized_by_its_flow(
     with pytest.raises(SystemExit):
         _run(*args, "--burst-flow", "5", "--burst-coeff", "0.01")
     capsys.readouterr()
-    # neither: the default burst, 10 L/s, said and recorded like a chosen one
+    # neither: the default burst, 5 L/s, said and recorded like a chosen one
     assert _run(*args) == 0
-    assert capsys.readouterr().out.startswith("burst on P7: 10 L/s at the burst point's")
+    assert capsys.readouterr().out.startswith("burst on P7: 5 L/s at the burst point's")
     meta = ScenarioResult.load(path).metadata
-    assert meta["burst_flow_lps"] == pytest.approx(10.0)
-    assert meta["burst_coeff"] == pytest.approx(0.010 / np.sqrt(pressure))
+    assert meta["burst_flow_lps"] == pytest.approx(5.0)
+    assert meta["burst_coeff"] == pytest.approx(0.005 / np.sqrt(pressure))
+
+
+def test_a_burst_the_network_cannot_feed_is_said(
+    tiny_network: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    args = ["simulate", tiny_network, "--pipe", "B", "--burst-start", "0.2", "--duration", "2"]
+    args += ["--opening-time", "0", "--solver", "tsnet", "--out", tmp_path / "o", "--quiet"]
+    assert _run(*args, "--burst-coeff", "0.02") == 0  # large and instant: below zero
+    err = capsys.readouterr().err
+    assert "burstloc: warning: burst on pipe B: negative pressure at " in err
+    assert "the burst point on pipe B" in err and "B_B" not in err
+    assert _run(*args, "--burst-flow", "1", "--no-cache") == 0  # 1 L/s: fed
+    assert "negative pressure" not in capsys.readouterr().err

@@ -42,7 +42,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         description=(
             "Burst each pipe (simulated once, cached), stream the meters' readings at each "
             "capture interval through the detectors and a localizer, and report accuracy. With "
-            "no options: a 10 L/s burst mid-pipe, the fused localizer, both detectors x capture "
+            "no options: a 5 L/s burst mid-pipe, the fused localizer, both detectors x capture "
             "intervals 0.2, 2, 5, 10 s. With --localizer paper: the paper's experiment (its "
             "burst, coefficient 0.02, and Tables I/II parameters), printed beside the paper's "
             "Tables III-V; `--localizer paper fused` shows both on the paper's burst."
@@ -236,7 +236,7 @@ def run(args: argparse.Namespace) -> int:
     if args.min_pipe_length is not None:
         scenario = replace(scenario, min_pipe_length=args.min_pipe_length)
     scenario = replace(scenario, solver=args.solver)
-    # the paper's experiment keeps the paper's burst; every other run a utility's (10 L/s)
+    # the paper's experiment keeps the paper's burst; every other run a utility's (5 L/s)
     coeff, flow = burst_size_of(args, paper="paper" in args.localizer)
     if coeff is not None:
         scenario = replace(scenario, burst_coeff=coeff)

@@ -49,7 +49,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
             "Simulate a burst on each chosen pipe (split at --position) and write the pressure "
             "head of every junction over time, one NPZ file per pipe: arrays time (T,), heads "
             "(T, M), junctions (M,) and metadata (a JSON string). Results are cached. The burst "
-            "is the one `burstloc evaluate` simulates (10 L/s, opened in 0.3 s, at 10 s; "
+            "is the one `burstloc evaluate` simulates (5 L/s, opened in 0.3 s, at 10 s; "
             "--burst-coeff 0.02 is the paper's). With --feed FILE (one pipe or --event, and "
             "--capture-interval): "
             "also the readings the meters would send, in the CSV form `burstloc monitor "
@@ -187,6 +187,15 @@ def run(args: argparse.Namespace) -> int:
             if text.startswith("DemandDrivenWarning: ") and text not in said:
                 said.add(text)
                 print(f"burstloc: warning: {text.split(': ', 1)[1]}", file=sys.stderr)
+        negative = result.metadata.get("negative_pressure_nodes") or []
+        if negative:  # the burst is larger than the network can feed there: say so
+            places = ", ".join(result.node_label(node) for node in negative[:5])
+            more = f" and {len(negative) - 5} more" if len(negative) > 5 else ""
+            print(
+                f"burstloc: warning: burst on pipe {result.pipe}: negative pressure at "
+                f"{places}{more}",
+                file=sys.stderr,
+            )
         result = with_size(result, size_of[result.pipe])
         if args.capture_interval is not None:
             result = result.resample(args.capture_interval, args.capture_phase)
