@@ -51,8 +51,9 @@ BURST_FLOW = 0.005
 """The default burst of ``burstloc simulate`` and ``evaluate``: 5 L/s (m³/s here), the flow its
 emitter draws at the burst point's pressure before it opens. A burst a utility sees and a
 network can feed: opened in 0.3 s it leaves every junction above zero pressure through the
-transient on every committed network, EPANET's Net1, Net2 and Anytown and L-TOWN (lowest
-L-TOWN pressure 9 m on the pipes where 10 L/s dips just below zero), where the paper's
+transient on every committed network and EPANET's Net1, Net2 and Anytown, and on L-TOWN all but
+one of 64 measured pipes (that one: -0.8 m at one junction; 10 L/s dips below zero on 4 of 30),
+where the paper's
 coefficient (0.02 m³/s/m^½: 127-276 L/s, up to 5 times a network's demand) takes junctions
 below zero on awumah11, Net2 and every L-TOWN burst (``benches/bench_burst_size.py``). The
 paper's experiment (``--localizer paper``) keeps the paper's coefficient."""
