@@ -105,9 +105,12 @@ class WebServer:
         host: str = "127.0.0.1",
         port: int = 0,
         token: str | None = None,
+        incidents: Any = None,
     ) -> None:
         check_access(host, token)
         self.hub, self.view = hub, view
+        #: The incident store the page lists and acts on (``None``: incidents are not kept).
+        self.incidents = incidents
         self.host, self.port, self.token = host, port, token or None
         self._network = json.dumps(network, separators=(",", ":")).encode()
         self._clients: set[asyncio.Queue[bytes | None]] = set()
