@@ -38,7 +38,8 @@ def start(args: argparse.Namespace, say: Callable[[str], None]) -> Any:
     """
     if args.db is None:
         return None
-    from burstloc.incidents.store import IncidentStore, beside_state
+    from burstloc.incidents.engine import beside_state
+    from burstloc.incidents.store import IncidentStore
 
     if args.db == "" and args.state is None:
         raise ConfigError("--db without a PATH or URL keeps the incidents beside --state: give one")

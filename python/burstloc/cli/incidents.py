@@ -79,7 +79,8 @@ def open_store(db: str | None, state: str | None) -> Any:
         ConfigError: none named, or both.
         IncidentStoreError: the store cannot be opened.
     """
-    from burstloc.incidents.store import IncidentStore, beside_state
+    from burstloc.incidents.engine import beside_state
+    from burstloc.incidents.store import IncidentStore
 
     if db is not None and state is not None:
         raise ConfigError("give the incident store by --db or by --state, not both")

@@ -6,6 +6,7 @@ outcome, operators' notes), kept in SQLite (the default) or PostgreSQL.
 * :mod:`~burstloc.incidents.intake`: the monitor's records as the store takes them;
 * :mod:`~burstloc.incidents.schema`, :mod:`~burstloc.incidents.migrate` (and ``migrations/``):
   the tables and their Alembic migrations;
+* :mod:`~burstloc.incidents.engine`: the address and the connection (SQLite set up for durability);
 * :mod:`~burstloc.incidents.store`: the store (SQLAlchemy Core; durable commits);
 * :mod:`~burstloc.incidents.recorder`: the monitor's observer, writing on a thread of its own;
 * :mod:`~burstloc.incidents.export`: CSV and JSON;
@@ -18,6 +19,7 @@ package imports without them; opening a store without them says how to install t
 
 from __future__ import annotations
 
+from burstloc.incidents.engine import store_url
 from burstloc.incidents.errors import (
     IncidentError,
     IncidentStateError,
@@ -25,7 +27,7 @@ from burstloc.incidents.errors import (
     UnknownIncidentError,
 )
 from burstloc.incidents.lifecycle import OPEN_STATES, STATES, Outcome
-from burstloc.incidents.store import IncidentStore, store_url
+from burstloc.incidents.store import IncidentStore
 
 __all__ = [
     "OPEN_STATES",

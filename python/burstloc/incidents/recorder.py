@@ -10,7 +10,9 @@ a fault; a silent meter that reports again, or :data:`IMPLAUSIBLE_CLEARS` second
 time without an implausible reading, clears it.
 
 The writer thread takes what is queued, up to :data:`BATCH` items, and stores it in one
-transaction (:meth:`burstloc.incidents.store.IncidentStore.take`). A store that cannot be
+transaction (:meth:`burstloc.incidents.store.IncidentStore.take`); a second without news after
+a commit not yet on disk (SQLite's ``synchronous=NORMAL``), and at the stop, it syncs the store
+(:meth:`~burstloc.incidents.store.IncidentStore.sync`). A store that cannot be
 written (a PostgreSQL server down) is retried with back-off, every failure said; nothing is
 dropped while the queue has room. When it has none, the item is dropped, counted in
 :attr:`Recorder.dropped` and said at once (at most one message a second, with the count).
@@ -28,7 +30,7 @@ from typing import Any
 
 from burstloc.incidents.errors import IncidentStoreError
 from burstloc.incidents.intake import Observed, from_record, meter_fault
-from burstloc.incidents.store import IncidentStore
+from burstloc.incidents.store import SYNC_EVERY, IncidentStore
 from burstloc.live.observe import LiveObserver
 
 __all__ = ["BATCH", "FAULT_EVERY", "IMPLAUSIBLE_CLEARS", "QUEUE", "Recorder"]
@@ -139,8 +141,16 @@ class Recorder(LiveObserver):
         batch: list[Observed] = []
         while True:
             if not batch:
-                item = self.queue.get()
+                try:  # records not on disk yet (SQLite): synced after a quiet second
+                    item = self.queue.get(timeout=SYNC_EVERY if self.store.unsynced else None)
+                except queue.Empty:
+                    try:
+                        self.store.sync()
+                    except IncidentStoreError as exc:
+                        self.say(f"incidents not synced to disk, tried again later: {exc}")
+                    continue
                 if item is _STOP:
+                    self._sync_last()
                     return
                 batch.append(item)
                 stop = False
@@ -176,7 +186,16 @@ class Recorder(LiveObserver):
                 self.committed(batch, changed)
             batch = []
             if stop:
+                self._sync_last()
                 return
+
+    def _sync_last(self) -> None:
+        """At the stop: what was committed, on disk."""
+        try:
+            if self.store.unsynced:
+                self.store.sync()
+        except IncidentStoreError as exc:
+            self.say(f"the last incidents may not be on disk: {exc}")
 
     def close(self, timeout: float = 60.0) -> None:
         """Store what is queued, stop the thread (waiting up to ``timeout`` s) and say what was

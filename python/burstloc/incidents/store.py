@@ -9,32 +9,42 @@ cycle of :mod:`burstloc.incidents.lifecycle`, illegal transitions refused by a t
 Every change is one transaction that appends its history rows (who, when, through what, what):
 once a call returns, what it wrote is committed.
 
-**Durability.** SQLite runs in WAL mode with ``synchronous=FULL``: a commit is on disk when it
-returns, so neither a ``kill -9`` of any process nor a power cut loses a committed record; every
-write transaction takes the write lock at its start (``BEGIN IMMEDIATE``), so the monitor, the
-page and ``burstloc incidents`` in another process never trip over each other (they wait, up to
-:data:`BUSY_TIMEOUT` s). PostgreSQL commits durably by default; an operator's action locks its
-incident's row. Readers never wait for writers.
+**Durability.** SQLite runs in WAL mode. An operator's action commits with
+``synchronous=FULL``: it is on disk when it returns, and neither a ``kill -9`` of any process
+nor a power cut loses it (nor any record committed before it: the log is written in order). The
+monitor's records commit with ``synchronous=NORMAL`` (:data:`MONITOR_SYNC`): in the log when
+the call returns, so a ``kill -9`` of any process at any moment loses none; a power cut may
+lose those of the last :data:`SYNC_EVERY` second: a commit that second after the last durable
+one is ``FULL`` again, and :meth:`IncidentStore.sync` (the recorder calls it when no record
+followed within that second) puts the log on disk. Every write transaction takes the write
+lock at its start (``BEGIN IMMEDIATE``), so the monitor, the page and ``burstloc incidents`` in
+another process never trip over each other (they wait, up to
+:data:`~burstloc.incidents.engine.BUSY_TIMEOUT` s).
+PostgreSQL commits durably by default; an operator's action locks its incident's row. Readers
+never wait for writers.
 """
 
 from __future__ import annotations
 
 import json
-import os
 import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any
 
 from burstloc.exceptions import InputError
+from burstloc.incidents.engine import make_engine, store_url
 from burstloc.incidents.errors import IncidentStoreError, UnknownIncidentError
 from burstloc.incidents.intake import Observed
 from burstloc.incidents.lifecycle import CLOSED, DETECTED, DONE, Outcome, next_state
 
-__all__ = ["BUSY_TIMEOUT", "MONITOR", "IncidentStore", "beside_state", "store_url"]
+__all__ = ["MONITOR", "MONITOR_SYNC", "SYNC_EVERY", "IncidentStore"]
 
-#: Seconds a writer waits for another's lock (SQLite) or a connection (PostgreSQL).
-BUSY_TIMEOUT = 30.0
+#: SQLite's ``synchronous`` for the monitor's records: ``NORMAL`` (WAL: durable against a
+#: crash of any process; on disk within :data:`SYNC_EVERY` s, module docstring).
+MONITOR_SYNC = "NORMAL"
+#: Seconds the monitor's records may stay off the disk (SQLite) before a durable commit.
+SYNC_EVERY = 1.0
 #: Who the monitor's own history rows are by.
 MONITOR = "monitor"
 #: Longest operator name and note.
@@ -57,59 +67,6 @@ _LISTED = (
     "found_y",
     "closed_at",
 )
-
-
-def store_url(target: str) -> str:
-    """The SQLAlchemy URL of ``target``: a file path (SQLite), ``sqlite:///PATH`` or
-    ``postgresql://...`` (driven by psycopg 3).
-
-    Raises:
-        IncidentStoreError: another kind of URL, or a file in a directory that does not exist.
-    """
-    if target.startswith(("postgresql://", "postgres://")):
-        return "postgresql+psycopg://" + target.split("://", 1)[1]
-    if target.startswith(("postgresql+psycopg://", "sqlite://")):
-        return target
-    if "://" in target:
-        raise IncidentStoreError(
-            f"--db takes a file path (SQLite) or a postgresql:// URL, got {target!r}"
-        )
-    path = os.path.abspath(os.path.expanduser(target))
-    folder = os.path.dirname(path)
-    if not os.path.isdir(folder):
-        raise IncidentStoreError(f"the incident store {target!r}: no directory {folder!r}")
-    return "sqlite:///" + path
-
-
-def _engine(url: str) -> Any:
-    """An engine for ``url``, SQLite configured for durability (module docstring)."""
-    from sqlalchemy import create_engine, event
-
-    if url.startswith("sqlite"):
-        engine = create_engine(
-            url, connect_args={"timeout": BUSY_TIMEOUT, "check_same_thread": False}
-        )
-
-        @event.listens_for(engine, "connect")
-        def _on_connect(dbapi: Any, record: Any) -> None:
-            dbapi.isolation_level = None  # transactions are begun below, not by the driver
-            for pragma in (
-                "journal_mode=WAL",
-                "synchronous=FULL",
-                "foreign_keys=ON",
-                f"busy_timeout={int(BUSY_TIMEOUT * 1000)}",
-            ):
-                dbapi.execute(f"PRAGMA {pragma}")
-
-        @event.listens_for(engine, "begin")
-        def _on_begin(connection: Any) -> None:
-            write = connection.get_execution_options().get("burstloc_write")
-            connection.exec_driver_sql("BEGIN IMMEDIATE" if write else "BEGIN")
-
-        return engine
-    return create_engine(
-        url, pool_pre_ping=True, connect_args={"connect_timeout": int(BUSY_TIMEOUT)}
-    )
 
 
 def _text(value: str | None, what: str, most: int, required: bool) -> str | None:
@@ -136,17 +93,27 @@ class IncidentStore:
     def __init__(self, url: str, *, clock: Callable[[], float] = time.time) -> None:
         """Use the database at SQLAlchemy ``url`` as it is (:meth:`open` also migrates it)."""
         try:
+            import alembic  # noqa: F401  (the migrations)
             from sqlalchemy.engine import make_url
-        except ImportError:
+
+            if url.startswith("postgresql"):
+                import psycopg  # noqa: F401
+        except ImportError as exc:
             raise IncidentStoreError(
-                "the incident store needs the incidents extra: pip install 'burstloc[incidents]' "
-                "(SQLAlchemy, Alembic, psycopg)"
+                f"the incident store needs the incidents extra ({exc}): pip install "
+                "'burstloc[incidents]' (SQLAlchemy, Alembic, psycopg)"
             ) from None
         self.url = url
         #: The address, as told to a person (no password).
         self.where = make_url(url).render_as_string(hide_password=True)
         self.clock = clock
-        self.engine = _engine(url)
+        #: SQLite's ``synchronous`` for the monitor's records (module docstring); the operators'
+        #: actions always commit with ``FULL``.
+        self.monitor_sync = MONITOR_SYNC
+        #: Whether records were committed since the last durable commit (:meth:`sync`).
+        self.unsynced = False
+        self._synced = time.monotonic()
+        self.engine = make_engine(url)
 
     @classmethod
     def open(cls, target: str, *, clock: Callable[[], float] = time.time) -> IncidentStore:
@@ -186,10 +153,11 @@ class IncidentStore:
             ) from exc
 
     @contextmanager
-    def _write(self, doing: str) -> Iterator[Any]:
-        """A connection in a write transaction, committed at the end (rolled back on error)."""
+    def _write(self, doing: str, sync: str = "FULL") -> Iterator[Any]:
+        """A connection in a write transaction, committed at the end (rolled back on error);
+        on SQLite with ``synchronous=sync``."""
         with self._errors(doing), self.engine.connect() as connection:
-            connection.execution_options(burstloc_write=True)
+            connection.execution_options(burstloc_write=True, burstloc_sync=sync)
             with connection.begin():
                 yield connection
 
@@ -207,8 +175,30 @@ class IncidentStore:
         Raises:
             IncidentStoreError: the database cannot be written.
         """
-        with self._write("write to") as connection:
-            return [self._take(connection, item) for item in news]
+        durable = time.monotonic() - self._synced >= SYNC_EVERY
+        sync = "FULL" if durable else self.monitor_sync
+        with self._write("write to", sync) as connection:
+            changed = [self._take(connection, item) for item in news]
+        self._durable(sync == "FULL")
+        return changed
+
+    def _durable(self, durable: bool) -> None:
+        if durable:
+            self._synced, self.unsynced = time.monotonic(), False
+        else:
+            self.unsynced = True
+
+    def sync(self) -> None:
+        """Put every committed record on disk (SQLite: a checkpoint, which syncs the log
+        first; PostgreSQL's commits are on disk already).
+
+        Raises:
+            IncidentStoreError: the database cannot be written.
+        """
+        if self.engine.dialect.name == "sqlite":
+            with self._errors("sync"), self.engine.connect() as connection:
+                connection.exec_driver_sql("PRAGMA wal_checkpoint(PASSIVE)")
+        self._durable(True)
 
     def _take(self, connection: Any, item: Observed) -> int:
         from sqlalchemy import select
@@ -368,6 +358,7 @@ class IncidentStore:
             self._history(
                 connection, incident, now, str(name), via, DONE[action], state, text, detail
             )
+        self._durable(True)
         return self.get(incident)
 
     def acknowledge(self, incident: int, by: str, via: str, note: str | None = None) -> Any:
@@ -456,9 +447,3 @@ class IncidentStore:
 
         with self._read() as connection:
             return int(connection.execute(select(func.max(h.c.id))).scalar() or 0)
-
-
-def beside_state(state: str) -> str:
-    """The SQLite file of the incidents of a monitor whose state file is ``state``: beside it,
-    ``monitor.json`` → ``monitor.incidents.sqlite``."""
-    return os.path.splitext(state)[0] + ".incidents.sqlite"
