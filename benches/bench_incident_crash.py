@@ -22,6 +22,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "incidents"))
+sys.path.insert(0, str(ROOT / "tests"))  # postgres: a throwaway server
 
 
 def main() -> int:

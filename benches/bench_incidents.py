@@ -43,6 +43,7 @@ from typing import Any
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "live"))
 sys.path.insert(0, str(ROOT / "tests" / "incidents"))
+sys.path.insert(0, str(ROOT / "tests"))  # postgres: a throwaway server
 
 PAPER15 = ROOT / "networks" / "paper15.inp"
 METERS = ("N3", "N5", "N8", "2", "4", "6", "8")

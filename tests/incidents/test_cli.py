@@ -18,6 +18,8 @@ import pytest
 from burstloc.localize.config import Calibration
 from burstloc.readings import Reading
 
+sys.path.insert(0, str(Path(__file__).parents[1] / "live"))  # live_feed: a real burst
+
 PIPE = "C"  # the burst pipe of the tiny_feed fixture
 
 

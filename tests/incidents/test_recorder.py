@@ -3,13 +3,13 @@ on SQLite and PostgreSQL; a full queue is said and counted, never a wait."""
 
 from __future__ import annotations
 
+import sys
 import threading
 import time
 from pathlib import Path
 from typing import Any
 
 import pytest
-from live_feed import Collected
 
 from burstloc.incidents import IncidentStore
 from burstloc.incidents.recorder import Recorder
@@ -17,12 +17,16 @@ from burstloc.live.monitor import BurstMonitor
 from burstloc.localize.config import Calibration
 from burstloc.readings import Reading
 
+sys.path.insert(0, str(Path(__file__).parents[1] / "live"))  # live_feed: a real burst
+
 PIPE = "C"  # the burst pipe of the tiny_feed fixture
 
 
 def test_a_burst_and_a_silent_meter_become_incidents(
     tiny: Path, tiny_config: Calibration, tiny_feed: list[Reading], target: str
 ) -> None:
+    from live_feed import Collected
+
     store = IncidentStore.open(target)
     said: list[str] = []
     recorder = Recorder(store, said.append)

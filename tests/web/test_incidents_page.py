@@ -5,29 +5,16 @@ shows the same incident and history."""
 
 from __future__ import annotations
 
-import sys
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
 from test_control_room import PAPER15, browser, config, feed  # noqa: F401 (fixtures)
-from web_browser import ROOT, Monitor, page_state, wait_for
+from web_browser import Monitor, page_state, wait_for
 
 from burstloc.localize.config import Calibration
 
-sys.path.insert(0, str(ROOT / "tests" / "incidents"))  # postgres: a throwaway server
-
 TOKEN = "operator-t0ken"
-
-
-@pytest.fixture(scope="module")
-def postgresql() -> Iterator[Any]:
-    """A real PostgreSQL server for this module's tests."""
-    from postgres import server
-
-    with server() as running:
-        yield running
 
 
 def _open(driver: Any, monitor: Monitor) -> dict[str, Any]:

@@ -1,8 +1,8 @@
-"""A real, throwaway PostgreSQL server for the tests: ``initdb`` into a temporary directory,
-``pg_ctl start`` on a free loopback port (its unix socket in that directory), stopped and
-removed after. Debian's binaries (``/usr/lib/postgresql/<version>/bin``; ``make services``
-installs them). PostgreSQL refuses to run as root: as root, the server runs as the ``postgres``
-user (which Debian's package creates)."""
+"""A real, throwaway PostgreSQL server for the tests and benchmarks: ``initdb`` into a
+temporary directory, ``pg_ctl start`` on a free loopback port (its unix socket in that
+directory), stopped and removed after. Debian's binaries (``/usr/lib/postgresql/<version>/bin``;
+``make services`` installs them). PostgreSQL refuses to run as root: as root, the server runs as
+the ``postgres`` user (which Debian's package creates)."""
 
 from __future__ import annotations
 
