@@ -37,7 +37,7 @@ WHEEL         = $(firstword $(wildcard $(WHEEL_DIR)/burstloc-*-abi3-*.whl))
 EXT          := python/burstloc/_core.abi3.so
 BUILD_INPUTS := pyproject.toml Cargo.toml $(wildcard Cargo.lock) README.md \
                 $(shell find crates -path '*/src/*.rs' -o -name Cargo.toml -o -name build.rs 2>/dev/null) \
-                $(shell find python -name '*.py' -o -name '*.pyi' -o -name py.typed \
+                $(shell find python -name '*.py' -o -name '*.pyi' -o -name '*.mako' -o -name py.typed \
                   -o -path '*/web/static/*' -type f 2>/dev/null)
 EXTRAS       := sim,dev,bench,river,web,incidents
 
