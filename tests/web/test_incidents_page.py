@@ -25,6 +25,12 @@ def _open(driver: Any, monitor: Monitor) -> dict[str, Any]:
     )
 
 
+def _click(driver: Any, button: str) -> None:
+    """Click ``button`` once the page has enabled it (the state it follows is shown)."""
+    wait_for(lambda: driver.find_element("id", button).is_enabled(), f"{button} enabled")
+    driver.find_element("id", button).click()
+
+
 def _state(driver: Any) -> dict[str, Any]:
     return page_state(driver)["incidents"]
 
@@ -62,13 +68,13 @@ def test_an_operator_acts_on_an_incident_and_the_page_remembers_it_after_a_resta
         assert "DETECTED" in row.text.upper() and f"pipe {pipe}" in row.text
         browser.find_element("id", "op-name").send_keys("ann")
         browser.find_element("id", "op-note").send_keys("seen on the map")
-        browser.find_element("id", "b-ack").click()
+        _click(browser, "b-ack")
         wait_for(lambda: _state(browser)["detail"]["state"] == "acknowledged", "acknowledged")
-        browser.find_element("id", "b-dispatch").click()
+        _click(browser, "b-dispatch")
         wait_for(lambda: _state(browser)["detail"]["state"] == "dispatched", "dispatched")
         # close: found at a point clicked on the map (on the named pipe's first node)
         browser.find_element("id", "op-note").send_keys("found under the road")
-        browser.find_element("id", "b-found").click()
+        _click(browser, "b-found")
         wait_for(lambda: _state(browser)["picking"], "the page waits for a click on the map")
         where = browser.execute_script(
             "const i = net.linkIndex[arguments[0]], n = net.links.from[i];"

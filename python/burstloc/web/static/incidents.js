@@ -94,6 +94,7 @@ async function act(action, extra) {
   }
   I.picking = false;
   dirty = true;
+  renderIncidents(); // the state shown and the buttons it allows, at once
   await refresh();
 }
 
