@@ -37,9 +37,9 @@ WHEEL         = $(firstword $(wildcard $(WHEEL_DIR)/burstloc-*-abi3-*.whl))
 EXT          := python/burstloc/_core.abi3.so
 BUILD_INPUTS := pyproject.toml Cargo.toml $(wildcard Cargo.lock) README.md \
                 $(shell find crates -path '*/src/*.rs' -o -name Cargo.toml -o -name build.rs 2>/dev/null) \
-                $(shell find python -name '*.py' -o -name '*.pyi' -o -name py.typed \
+                $(shell find python -name '*.py' -o -name '*.pyi' -o -name '*.mako' -o -name py.typed \
                   -o -path '*/web/static/*' -type f 2>/dev/null)
-EXTRAS       := sim,dev,bench,river,web
+EXTRAS       := sim,dev,bench,river,web,incidents
 
 # The extension is compiled for the CPU of the machine that runs `make setup` (it is built
 # where it runs): the vectorized bank and Shewhart loops run 2-5x faster than in a generic
@@ -50,12 +50,14 @@ EXT_RUSTFLAGS ?= -C target-cpu=native
 setup: $(VENV)/.installed networks/todini6.inp networks
 
 ## services: what the tests need beside Python (not the main job): Mosquitto, the MQTT broker the
-## monitor's integration tests start on a loopback port, and Debian's Chromium with its WebDriver,
-## the browser the control-room page's tests drive; installed where missing (as root with
-## apt-get), else named with the command that installs them
+## monitor's integration tests start on a loopback port, Debian's Chromium with its WebDriver,
+## the browser the control-room page's tests drive, and PostgreSQL, whose server the incident
+## store's tests start in a temporary directory; installed where missing (as root with apt-get),
+## else named with the command that installs them
 services:
 	scripts/install-mosquitto.sh
 	scripts/install-chromium.sh
+	scripts/install-postgresql.sh
 
 ## networks: EPANET's Net1, Net2, Net3 and Anytown in networks/public/ (not committed), from the
 ## pinned epyt wheel on PyPI, every file checked against its pinned SHA-256 (standard library

@@ -17,8 +17,9 @@ from typing import Any
 import pytest
 from hypothesis import HealthCheck, settings
 
-# Where the simulator (the sim extra) is missing, tests that need it are skipped, naming it.
-pytest_plugins = ("simulator_guard",)
+# Where the simulator (the sim extra) is missing, tests that need it are skipped, naming it;
+# the incident store's tests run on SQLite and on a real PostgreSQL server (store_targets).
+pytest_plugins = ("simulator_guard", "store_targets")
 
 settings.register_profile(
     "ci", max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow]

@@ -2,7 +2,8 @@
 
 Layers: the base (``exceptions``, ``constants``, ``network``, ``readings``, ``_atomic``, ...),
 ``localize`` (base only), ``live`` (base and localize: the live path never reaches the
-simulator), ``web`` (base and live: the control-room page shows the monitor's own records),
+simulator), ``incidents`` (base and live: the monitor's records kept), ``web`` (base, live and
+incidents: the control-room page shows the monitor's own records),
 ``sim`` (base and localize, whose model it prepares offline), ``experiments`` (all
 of those) and ``cli`` (anything; nothing imports it). Inside ``sim``, its rooms import one
 another in one order too (:data:`SIM_ROOMS`).
@@ -17,16 +18,18 @@ import networkx as nx
 import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "python" / "burstloc"
-LAYERS = ("localize", "live", "web", "sim", "experiments", "cli")
+LAYERS = ("localize", "live", "incidents", "web", "sim", "experiments", "cli")
 ALLOWED: dict[str, set[str]] = {
     "base": {"base"},
     "localize": {"base", "localize"},
     "live": {"base", "localize", "live"},
+    # the incident store keeps the monitor's own records: never the simulator
+    "incidents": {"base", "live", "incidents"},
     # the control-room page reads only the monitor's own records: never the simulator
-    "web": {"base", "live", "web"},
+    "web": {"base", "live", "incidents", "web"},
     "sim": {"base", "localize", "sim"},
     "experiments": {"base", "localize", "live", "sim", "experiments"},
-    "cli": {"base", "localize", "live", "web", "sim", "experiments", "cli"},
+    "cli": {"base", "localize", "live", "incidents", "web", "sim", "experiments", "cli"},
 }
 
 

@@ -1,8 +1,8 @@
 """The ``burstloc`` command line: one module per subcommand, wiring only.
 
 Each subcommand module (:mod:`~burstloc.cli.simulate`, :mod:`~burstloc.cli.evaluate`,
-:mod:`~burstloc.cli.calibrate`, :mod:`~burstloc.cli.monitor`, :mod:`~burstloc.cli.study`,
-:mod:`~burstloc.cli.place`) has an
+:mod:`~burstloc.cli.calibrate`, :mod:`~burstloc.cli.monitor`, :mod:`~burstloc.cli.incidents`,
+:mod:`~burstloc.cli.study`, :mod:`~burstloc.cli.place`) has an
 ``add_parser(subparsers)`` function (its arguments) and a ``run(args)`` handler that calls the
 library and prints; :func:`build_parser` registers them. A subcommand's module is imported only
 when its parser is built, and ``burstloc COMMAND ...`` builds only that command's parser, so
@@ -43,7 +43,7 @@ from burstloc.exceptions import (
 __all__ = ["build_parser", "main", "run"]
 
 #: The subcommands (modules of this package), in the order ``burstloc --help`` lists them.
-SUBCOMMANDS = ("simulate", "evaluate", "calibrate", "monitor", "study", "place")
+SUBCOMMANDS = ("simulate", "evaluate", "calibrate", "monitor", "incidents", "study", "place")
 
 
 def build_parser(only: str | None = None) -> argparse.ArgumentParser:

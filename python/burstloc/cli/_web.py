@@ -38,9 +38,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def start(args: argparse.Namespace, monitor: Any) -> Any:
+def start(args: argparse.Namespace, monitor: Any, incidents: Any = None) -> Any:
     """The started page server for ``monitor`` (``None`` without ``--web``); its address is
-    told on stderr.
+    told on stderr. With ``incidents`` (the monitor's incident store) the page lists them and
+    operators act on them.
 
     Raises:
         ConfigError: a bad ``--web``, a non-loopback address without a token, the web extra
@@ -71,6 +72,7 @@ def start(args: argparse.Namespace, monitor: Any) -> Any:
         port=port,
         token=token or None,
         meta={"detector": monitor.detector, "localizer": monitor.localizer},
+        incidents=incidents,
     )
     server.start()
     shown = server.url if server.token is None else server.url.split("?")[0] + "?token=…"

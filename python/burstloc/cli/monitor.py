@@ -12,7 +12,7 @@ import sys
 from collections.abc import Iterator
 from typing import Any
 
-from burstloc.cli import _web
+from burstloc.cli import _incidents, _web
 from burstloc.constants import DETECTORS, METER_MODELS, RANKING_LOCALIZERS
 from burstloc.exceptions import ConfigError, InputError
 
@@ -114,6 +114,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="believable readings, m (default: -10 m to twice the highest steady head)",
     )
     _web.add_arguments(parser)
+    _incidents.add_arguments(parser)
     parser.set_defaults(handler=run)
     return parser
 
@@ -123,6 +124,7 @@ def run(args: argparse.Namespace) -> int:
     from burstloc.live.health import Health, PlausibleRange
     from burstloc.live.loop import LiveLoop, Reporter
     from burstloc.live.monitor import BurstMonitor
+    from burstloc.live.observe import fan_out
     from burstloc.live.state import StateFile, identity
     from burstloc.localize.config import Calibration
 
@@ -158,7 +160,12 @@ def run(args: argparse.Namespace) -> int:
         silent_after=args.silent_after,
         clock_tolerance=args.clock_tolerance,
     )
-    web = _web.start(args, monitor)
+    recorder = _incidents.start(args, lambda text: write(text))
+    try:
+        web = _web.start(args, monitor, None if recorder is None else recorder.store)
+    except BaseException:
+        _incidents.stop(recorder)
+        raise
 
     def write(text: str) -> None:
         print(text, file=sys.stderr, flush=True)
@@ -205,7 +212,7 @@ def run(args: argparse.Namespace) -> int:
         health_every=args.health_every,
         state=state,
         save_every=args.save_every,
-        observer=None if web is None else web.hub,
+        observer=fan_out(None if web is None else web.hub, recorder),
     )
     saved = None if state is None else state.load()
     if saved is not None:
@@ -245,6 +252,7 @@ def run(args: argparse.Namespace) -> int:
             link.close()
         if web is not None:
             web.stop()
+        _incidents.stop(recorder)
     if flags["stop"]:
         saved_to = f"; state saved to {args.state}" if args.state else ""
         print(f"burstloc monitor: stopped by SIGTERM{saved_to}", file=sys.stderr)

@@ -33,9 +33,12 @@ def control_room(
     port: int = 0,
     token: str | None = None,
     meta: dict[str, Any] | None = None,
+    incidents: Any = None,
 ) -> WebServer:
     """A (not yet started) server of the page for a monitor of ``meters`` on ``network``; its
-    :attr:`WebServer.hub` is the observer to give the live loop.
+    :attr:`WebServer.hub` is the observer to give the live loop. With ``incidents`` (an
+    :class:`~burstloc.incidents.store.IncidentStore`) the page lists the incidents and
+    operators act on them (:mod:`burstloc.web.incidents`).
 
     Raises:
         ConfigError: a non-loopback ``host`` without a token.
@@ -45,4 +48,6 @@ def control_room(
     layout = read_layout(network)
     info = {"network": os.path.basename(os.fspath(network)), **(meta or {})}
     view = View(meters, capture_interval, info)
-    return WebServer(Hub(), view, layout.to_json(), host=host, port=port, token=token)
+    return WebServer(
+        Hub(), view, layout.to_json(), host=host, port=port, token=token, incidents=incidents
+    )

@@ -1,9 +1,11 @@
 """The control-room page's server: an ASGI app (Starlette) run by uvicorn on its own thread.
 
-Routes (GET only; any other method is refused with 405: nothing here changes the monitor):
+Routes (GET; any other method is refused with 405: nothing here changes the monitor):
 ``/`` the page, ``/static/...`` its script and style (from the package: no CDN),
 ``/network.json`` the drawing (:mod:`burstloc.layout`), ``/state.json`` the current state and
-``/events`` the Server-Sent Events stream (a ``snapshot`` first, then ``update`` batches).
+``/events`` the Server-Sent Events stream (a ``snapshot`` first, then ``update`` batches). The
+incidents (``/incidents.json``, and the operators' actions, POST ``/incidents/ID/ACTION``: the
+only writes, each with a token, refused from another site) are :mod:`burstloc.web.incidents`.
 
 **Access.** Bound to a loopback address by default. A token (``--web-token`` or
 ``BURSTLOC_WEB_TOKEN``) is required for any other address and, when given, checked on every
@@ -32,6 +34,7 @@ from typing import Any
 
 from burstloc.exceptions import ConfigError
 from burstloc.web.hub import Hub
+from burstloc.web.incidents import routes as incident_routes
 from burstloc.web.view import View
 
 __all__ = ["POLL", "WebServer", "check_access", "parse_bind"]
@@ -88,6 +91,7 @@ def _asset(name: str) -> bytes:
 
 _TYPES = {
     "app.js": "text/javascript; charset=utf-8",
+    "incidents.js": "text/javascript; charset=utf-8",
     "style.css": "text/css; charset=utf-8",
     "index.html": "text/html; charset=utf-8",
 }
@@ -105,9 +109,12 @@ class WebServer:
         host: str = "127.0.0.1",
         port: int = 0,
         token: str | None = None,
+        incidents: Any = None,
     ) -> None:
         check_access(host, token)
         self.hub, self.view = hub, view
+        #: The incident store the page lists and acts on (``None``: incidents are not kept).
+        self.incidents = incidents
         self.host, self.port, self.token = host, port, token or None
         self._network = json.dumps(network, separators=(",", ":")).encode()
         self._clients: set[asyncio.Queue[bytes | None]] = set()
@@ -163,7 +170,8 @@ class WebServer:
             )
 
         class Guard:
-            """401 without the token, 405 for anything but GET/HEAD: before any route."""
+            """401 without the token, 405 for anything but GET/HEAD (POST to the incidents'
+            actions excepted): before any route."""
 
             def __init__(self, app: Any) -> None:
                 self.app = app
@@ -176,7 +184,8 @@ class WebServer:
                     if not server._authorized(request):
                         reply: Any = PlainTextResponse("unauthorized", status_code=401)
                         return await reply(scope, receive, send)
-                    if request.method not in ("GET", "HEAD"):
+                    write = request.method == "POST" and request.url.path.startswith("/incidents/")
+                    if request.method not in ("GET", "HEAD") and not write:
                         reply = PlainTextResponse("read-only", status_code=405)
                         return await reply(scope, receive, send)
                 await self.app(scope, receive, send)
@@ -195,6 +204,7 @@ class WebServer:
             Route("/network.json", network),
             Route("/state.json", state),
             Route("/events", events),
+            *incident_routes(server),
         ]
         app = Starlette(routes=routes, lifespan=lifespan)
         return Guard(app)

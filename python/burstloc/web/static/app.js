@@ -287,6 +287,7 @@ function draw() {
     ctx.moveTo(x - 13, y); ctx.lineTo(x + 13, y); ctx.moveTo(x, y - 13); ctx.lineTo(x, y + 13);
     ctx.stroke();
   }
+  if (S.drawIncidents) S.drawIncidents(ctx); // incidents.js: the found point
   S.frames++;
   if (pendingRecord) {
     pendingRecord.drawn = Date.now();
@@ -532,6 +533,7 @@ function apply(n) {
     applyRecord(rec);
     pendingRecord = { pipe: S.highlighted, type: rec.type, received: Date.now(), time: rec.time };
     addLog(n.log);
+    if (S.incidentsChanged) S.incidentsChanged(); // incidents.js: the list, from the store
   } else if (n.kind === "message") {
     addLog(n.log);
   } else if (n.kind === "health") {

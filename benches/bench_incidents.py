@@ -1,0 +1,328 @@
+"""The incident store (``burstloc monitor --db``): what a write costs, what the page's list of
+10 000 incidents costs, and what keeping incidents costs the monitor.
+
+Usage: ``.venv/bin/python benches/bench_incidents.py [--writes N] [--incidents N] [--runs N]
+[--no-postgresql]`` (needs the incidents, web and sim extras; PostgreSQL's server binaries,
+``scripts/install-postgresql.sh``, for its columns). In one process:
+
+1. **Write latency**: one incident kept (one transaction: the incident and its history row,
+   :meth:`IncidentStore.take`) and one acknowledgement (:meth:`IncidentStore.act`), ``--writes``
+   of each, p50 / p99 / max, on SQLite as the store runs it (WAL; the monitor's records with
+   ``synchronous=NORMAL``, ``FULL`` once a second; the acknowledgements ``FULL``), beside SQLite
+   with every commit ``FULL`` (what the monitor's records would cost on disk at once), a JSON
+   line appended and fsync'ed (the least a durable write costs on this disk) and PostgreSQL (a
+   throwaway server on loopback). Target: p99 <= 5 ms on SQLite.
+2. **The page's list of 10 000 incidents**: ``GET /incidents.json`` over HTTP from the page's
+   server (every incident, open first), median and slowest of ``--runs``, beside the query alone
+   (:meth:`IncidentStore.incidents`) and the page's poll when nothing changed
+   (``?after=VERSION``). Target: <= 1 s.
+3. **The monitor with the store on and off**: a feed of ``--bursts`` simulated bursts on
+   paper15 (a real TSNet burst, repeated), one by one through a fresh live loop, ``--runs``
+   times each way, alternated: no observer; the recorder on SQLite; on PostgreSQL. Decisions
+   per second of wall time and readings/s (median), and the decision latency (wall time from the
+   reading that completes a decision to its record, median), each as a ratio to the loop
+   without the store. Target: within 5 %.
+"""
+
+from __future__ import annotations
+
+import argparse
+import gc
+import json
+import os
+import statistics
+import sys
+import tempfile
+import time
+import urllib.request
+from collections.abc import Callable
+from contextlib import ExitStack
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests" / "live"))
+sys.path.insert(0, str(ROOT / "tests" / "incidents"))
+sys.path.insert(0, str(ROOT / "tests"))  # postgres: a throwaway server
+
+PAPER15 = ROOT / "networks" / "paper15.inp"
+METERS = ("N3", "N5", "N8", "2", "4", "6", "8")
+
+
+def pct(values: list[float], q: float) -> float:
+    ordered = sorted(values)
+    return ordered[min(len(ordered) - 1, round(q * (len(ordered) - 1)))]
+
+
+def decision(k: int) -> dict[str, Any]:
+    """A decision record like the monitor's (a region, the health of 7 meters)."""
+    meters = {m: {"last": 100.0 + k, "silent": False, "clock_offset": 0.0, "readings": k}
+              for m in METERS}  # fmt: skip
+    return {
+        "type": "decision", "burst": True, "time": 10.0 * k + 3.2, "first_alarm": 10.0 * k,
+        "pipes": [{"pipe": "9", "start": "N5", "end": "N6", "score": 0.0},
+                  {"pipe": "8", "start": "N4", "end": "N5", "score": -1.3}],
+        "position": {"pipe": "9", "from": "N5", "metres": 310.0, "low": 250.0, "high": 400.0,
+                     "length": 600.0},
+        "region": {"length_m": 420.0, "confidence": 0.95,
+                   "stretches": [{"pipe": "9", "from": "N5", "low": 200.0, "high": 600.0}]},
+        "decision_delay_s": 3.2, "localizer": "fused", "meters": list(METERS), "excluded": [],
+        "alarmed": ["N5", "N8"], "health": {"type": "health", "meters": meters, "silent": []},
+    }  # fmt: skip
+
+
+def write_latency(store: Any, writes: int) -> tuple[list[float], list[float]]:
+    """ms per incident kept (one transaction) and per acknowledgement."""
+    from burstloc.incidents.intake import from_record
+
+    keep, ack = [], []
+    for k in range(1, writes + 1):
+        item = from_record(decision(k), time.time())
+        assert item is not None
+        t = time.perf_counter()
+        (incident,) = store.take([item])
+        keep.append(1000 * (time.perf_counter() - t))
+        t = time.perf_counter()
+        store.acknowledge(incident, "ann", "bench")
+        ack.append(1000 * (time.perf_counter() - t))
+    return keep, ack
+
+
+def jsonl_latency(folder: Path, writes: int) -> list[float]:
+    """ms per JSON line appended and fsync'ed (the floor of a durable write here)."""
+    out = []
+    with open(folder / "incidents.jsonl", "ab") as f:
+        for k in range(writes):
+            t = time.perf_counter()
+            f.write(json.dumps(decision(k)).encode() + b"\n")
+            f.flush()
+            os.fsync(f.fileno())
+            out.append(1000 * (time.perf_counter() - t))
+    return out
+
+
+def fill(store: Any, count: int) -> None:
+    """``count`` past incidents: every one answered, a third closed with an outcome."""
+    from burstloc.incidents import Outcome
+    from burstloc.incidents.intake import from_record
+
+    start = time.time() - 86_400 * 365
+    for first in range(0, count, 500):
+        items = [
+            from_record(decision(k), start + 3000 * k)
+            for k in range(first, min(first + 500, count))
+        ]
+        store.take(items)
+    for row in store.incidents()[: count // 3]:
+        store.acknowledge(row["id"], "ann", "bench")
+        store.close_incident(row["id"], "ann", "bench", Outcome.false_alarm())
+
+
+def page_listing(store: Any, runs: int) -> dict[str, list[float]]:
+    """s per GET /incidents.json (HTTP), per query alone, per unchanged poll."""
+    from burstloc.web import control_room
+
+    server = control_room(PAPER15, list(METERS), 0.2, token="bench", incidents=store)
+    server.start()
+    base = f"http://127.0.0.1:{server.port}/incidents.json"
+    headers = {"Authorization": "Bearer bench"}
+    out: dict[str, list[float]] = {"route": [], "query": [], "poll": []}
+    try:
+        for _ in range(runs):
+            t = time.perf_counter()
+            with urllib.request.urlopen(urllib.request.Request(base, headers=headers)) as r:
+                doc = json.loads(r.read())
+            out["route"].append(time.perf_counter() - t)
+            t = time.perf_counter()
+            store.incidents()
+            out["query"].append(time.perf_counter() - t)
+            t = time.perf_counter()
+            poll = urllib.request.Request(f"{base}?after={doc['version']}", headers=headers)
+            with urllib.request.urlopen(poll) as r:
+                assert json.loads(r.read())["unchanged"]
+            out["poll"].append(time.perf_counter() - t)
+        out["rows"] = [float(len(doc["incidents"]))]
+    finally:
+        server.stop()
+    return out
+
+
+Run = tuple[float, float, float, int, float]
+
+
+def monitor_run(config: Any, readings: list[Any], observer: Any) -> Run:
+    """Decisions/s and readings/s through a fresh live loop (wall clock), the median decision
+    latency (s), the decisions, readings/s of the loop thread's own CPU time."""
+    from burstloc.live.health import Health, PlausibleRange
+    from burstloc.live.loop import LiveLoop, Reporter
+    from burstloc.live.monitor import BurstMonitor
+
+    monitor = BurstMonitor(PAPER15, config, capture_interval=0.2)
+    health = Health(
+        monitor.meters,
+        PlausibleRange.default(monitor.meters, monitor.steady.tolist()),
+        capture_interval=0.2,
+    )
+    fed = [0.0]
+    latency: list[float] = []
+
+    def emit(record: dict[str, Any]) -> None:
+        if record["type"] == "decision":
+            latency.append(time.perf_counter() - fed[0])
+
+    loop = LiveLoop(monitor, health, emit, Reporter(lambda s: None), observer=observer)
+    start, cpu = time.perf_counter(), time.thread_time()
+    for r in readings:
+        fed[0] = time.perf_counter()
+        loop.feed_reading(r, "bench")
+    loop.finish()
+    elapsed, cpu = time.perf_counter() - start, time.thread_time() - cpu
+    rate = len(readings) / elapsed
+    return (
+        len(latency) / elapsed,
+        rate,
+        statistics.median(latency),
+        len(latency),
+        len(readings) / cpu,
+    )
+
+
+def burst_feed(config: Any, bursts: int) -> list[Any]:
+    """``bursts`` copies of a real burst on pipe 9, one after another (each from the steady
+    state again), as readings."""
+    from live_feed import burst_steps
+
+    from burstloc.readings import Reading
+
+    steps = burst_steps(PAPER15, config.meters, "9", sigma=0.003, after=400.0)
+    span = steps[-1].timestamp + 0.2
+    return [
+        Reading(round(b * span + s.timestamp, 6), m, float(v))
+        for b in range(bursts)
+        for s in steps
+        for m, v in zip(config.meters, s.values, strict=True)
+    ]
+
+
+def on_and_off(
+    config: Any, readings: list[Any], runs: int, stores: dict[str, Callable[[], Any]]
+) -> dict[str, list[Run]]:
+    from burstloc.incidents.recorder import Recorder
+
+    # "off, again": the same loop without the store a second time, alternated with the others:
+    # its ratio to "off" is what the machine's noise alone makes of a ratio
+    setups = ["off", "off, again", *stores]
+    results: dict[str, list[Run]] = {s: [] for s in setups}
+    for k in range(runs):
+        for setup in setups if k % 2 == 0 else setups[::-1]:
+            store = None if setup.startswith("off") else stores[setup]()
+            recorder = None if store is None else Recorder(store, print)
+            gc.collect()  # each run from the same start: opening a store leaves garbage
+            results[setup].append(monitor_run(config, readings, recorder))
+            if recorder is not None:
+                recorder.close()
+                assert recorder.dropped == 0
+                store.close()
+    return results
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--writes", type=int, default=2000)
+    parser.add_argument("--incidents", type=int, default=10_000)
+    parser.add_argument("--runs", type=int, default=7)
+    parser.add_argument("--bursts", type=int, default=6)
+    parser.add_argument("--no-postgresql", action="store_true")
+    parser.add_argument("--sections", default="123", help="which parts to run, e.g. 13")
+    args = parser.parse_args()
+    from burstloc.incidents import IncidentStore
+
+    with tempfile.TemporaryDirectory() as tmp, ExitStack() as stack:
+        folder = Path(tmp)
+        pg = None
+        if not args.no_postgresql:
+            from postgres import server
+
+            pg = stack.enter_context(server())
+        counter = iter(range(1_000_000))
+
+        def sqlite() -> Any:
+            return IncidentStore.open(str(folder / f"s{next(counter)}.sqlite"))
+
+        stores: dict[str, Callable[[], Any]] = {"SQLite": sqlite}
+        if pg is not None:
+            stores["PostgreSQL"] = lambda: IncidentStore.open(pg.database())
+        if "1" in args.sections:
+            print(f"1. write latency, ms ({args.writes} incidents kept, each then acknowledged)")
+            rows: list[tuple[str, list[float], list[float]]] = []
+            store = sqlite()  # as it runs: the monitor's records NORMAL (FULL once a second)
+            rows.append(("SQLite, as the store runs", *write_latency(store, args.writes)))
+            store.close()
+            full = sqlite()
+            full.monitor_sync = "FULL"
+            rows.append(("SQLite, every commit FULL", *write_latency(full, args.writes)))
+            full.close()
+            if pg is not None:
+                other = stores["PostgreSQL"]()
+                rows.append(("PostgreSQL (loopback)", *write_latency(other, args.writes)))
+                other.close()
+            line = jsonl_latency(folder, args.writes)
+            base = pct(rows[0][1], 0.99)
+            for name, keep, ack in rows:
+                print(
+                    f"   {name:32s} keep p50 {statistics.median(keep):6.2f} p99 "
+                    f"{pct(keep, 0.99):6.2f} max {max(keep):7.2f} | ack p50 "
+                    f"{statistics.median(ack):6.2f} p99 {pct(ack, 0.99):6.2f} max "
+                    f"{max(ack):7.2f} | keep p99 / the store's: x{pct(keep, 0.99) / base:.2f}"
+                )
+            print(
+                f"   {'JSON line + fsync':32s} p50 {statistics.median(line):6.2f} p99 "
+                f"{pct(line, 0.99):6.2f} max {max(line):7.2f} | p99 / the store's keep: "
+                f"x{pct(line, 0.99) / base:.2f}"
+            )
+        if "2" in args.sections:
+            print(f"2. the page's list of {args.incidents} incidents, s")
+            for name, make in stores.items():
+                store = make()
+                fill(store, args.incidents)
+                got = page_listing(store, args.runs)
+                store.close()
+                route, query = statistics.median(got["route"]), statistics.median(got["query"])
+                print(
+                    f"   {name:12s} GET /incidents.json median {route:.3f} slowest "
+                    f"{max(got['route']):.3f} ({int(got['rows'][0])} rows) | the query alone "
+                    f"{query:.3f} (x{query / route:.2f} of the route) | unchanged poll "
+                    f"{statistics.median(got['poll']) * 1000:.1f} ms"
+                )
+        if "3" not in args.sections:
+            return
+        from burstloc.experiments.calibrate import calibrate
+
+        config = calibrate(PAPER15, capture_intervals=(0.2,), noise_sigma=0.01, meters=METERS)
+        readings = burst_feed(config, args.bursts)
+        results = on_and_off(config, readings, args.runs, stores)
+        off = results["off"]
+        base_d = statistics.median(r[0] for r in off)
+        base_r = statistics.median(r[1] for r in off)
+        base_l = statistics.median(r[2] for r in off)
+        base_c = statistics.median(r[4] for r in off)
+        print(
+            f"3. the monitor, {len(readings)} readings, {off[0][3]} decisions, {args.runs} runs "
+            "each way (medians)"
+        )
+        for setup, got in results.items():
+            d = statistics.median(r[0] for r in got)
+            rate = statistics.median(r[1] for r in got)
+            lat = statistics.median(r[2] for r in got)
+            cpu = statistics.median(r[4] for r in got)
+            assert all(r[3] == off[0][3] for r in got), "the same decisions every way"
+            print(
+                f"   store {setup:10s} {d:7.2f} decisions/s (x{d / base_d:.3f}), "
+                f"{rate / 1000:6.1f} k readings/s (x{rate / base_r:.3f}; loop thread's CPU: "
+                f"x{cpu / base_c:.3f}), decision latency {lat * 1000:6.2f} ms "
+                f"(x{lat / base_l:.3f})"
+            )
+
+
+if __name__ == "__main__":
+    main()

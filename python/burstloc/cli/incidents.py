@@ -1,0 +1,187 @@
+"""``burstloc incidents``: list, show and export the incidents the monitor kept, and act on
+them (acknowledge, dispatch, close with an outcome, add a note) without the page."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from typing import Any
+
+from burstloc.exceptions import ConfigError
+
+__all__ = ["DB_VARIABLE", "add_parser", "age", "open_store", "run"]
+
+#: The environment variable naming the store when neither --db nor --state does.
+DB_VARIABLE = "BURSTLOC_DB"
+
+_ACTIONS = {"ack": "acknowledge", "dispatch": "dispatch", "close": "close", "note": "note"}
+
+
+def add_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Register ``burstloc incidents``."""
+    where = argparse.ArgumentParser(add_help=False)
+    group = where.add_argument_group("the store")
+    group.add_argument(
+        "--db",
+        metavar="PATH|URL",
+        help="the incident store: an SQLite file or a postgresql:// URL (default: the "
+        f"environment variable {DB_VARIABLE})",
+    )
+    group.add_argument(
+        "--state", metavar="FILE", help="or the monitor's state file: its store is beside it"
+    )
+    parser = subparsers.add_parser(
+        "incidents",
+        help="the monitor's incidents: list, show, export; acknowledge, dispatch, close",
+        description=(
+            "The incidents kept by `burstloc monitor --db` (every located burst, early alarm "
+            "record, event and meter fault, with its history). An incident is detected, then "
+            "acknowledged, possibly dispatched, and closed with an outcome: found at a point "
+            "(X,Y in the network's coordinates) or a false alarm. Each action is recorded with "
+            "who (--by) and when."
+        ),
+    )
+    actions = parser.add_subparsers(dest="action", required=True, metavar="ACTION")
+    listing = actions.add_parser("list", parents=[where], help="open incidents first, with age")
+    listing.add_argument("--open", action="store_true", help="only the open incidents")
+    listing.add_argument("--limit", type=int, metavar="N", help="at most N incidents")
+    show = actions.add_parser("show", parents=[where], help="one incident and its history")
+    show.add_argument("id", type=int, metavar="ID")
+    export = actions.add_parser("export", parents=[where], help="every incident, CSV or JSON")
+    export.add_argument("--format", choices=("csv", "json"), default="csv")
+    export.add_argument("--out", metavar="FILE", help="write here (default: stdout)")
+    for name, text in [
+        ("ack", "acknowledge an incident (it has been seen)"),
+        ("dispatch", "a crew is sent (after the acknowledgement)"),
+        ("close", "close with an outcome: --found X,Y or --false-alarm"),
+        ("note", "add a note (any state)"),
+    ]:
+        act = actions.add_parser(name, parents=[where], help=text)
+        act.add_argument("id", type=int, metavar="ID")
+        act.add_argument("--by", required=True, metavar="NAME", help="who acts (recorded)")
+        act.add_argument("--note", metavar="TEXT", required=name == "note", help="a note")
+        if name == "close":
+            outcome = act.add_mutually_exclusive_group(required=True)
+            outcome.add_argument(
+                "--found", metavar="X,Y", help="found at this point (network coordinates)"
+            )
+            outcome.add_argument("--false-alarm", action="store_true", help="a false alarm")
+    parser.set_defaults(handler=run)
+    return parser
+
+
+def open_store(db: str | None, state: str | None) -> Any:
+    """The store named by ``db`` (or the environment) or beside ``state``.
+
+    Raises:
+        ConfigError: none named, or both.
+        IncidentStoreError: the store cannot be opened.
+    """
+    from burstloc.incidents.engine import beside_state
+    from burstloc.incidents.store import IncidentStore
+
+    if db is not None and state is not None:
+        raise ConfigError("give the incident store by --db or by --state, not both")
+    target = db if db is not None else None if state is None else beside_state(state)
+    target = target or os.environ.get(DB_VARIABLE)
+    if not target:
+        raise ConfigError(
+            f"which incident store? --db PATH|URL, --state FILE (the monitor's state file) or "
+            f"the environment variable {DB_VARIABLE}"
+        )
+    if state is not None and not os.path.exists(target):
+        raise ConfigError(f"no incident store beside the state file {state!r} (no {target!r})")
+    return IncidentStore.open(target)
+
+
+def age(seconds: float) -> str:
+    """A duration as an operator reads it: ``45 s``, ``12 min``, ``3 h 05 min``, ``2 d 4 h``."""
+    s = max(int(seconds), 0)
+    if s < 60:
+        return f"{s} s"
+    if s < 3600:
+        return f"{s // 60} min"
+    if s < 86_400:
+        return f"{s // 3600} h {s % 3600 // 60:02d} min"
+    return f"{s // 86_400} d {s % 86_400 // 3600} h"
+
+
+def _stamp(seconds: float | None) -> str:
+    from burstloc.incidents.export import iso
+
+    return iso(seconds).replace("+00:00", "Z")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Handle ``burstloc incidents``."""
+    from burstloc.incidents.lifecycle import Outcome, parse_point
+
+    store = open_store(args.db, args.state)
+    try:
+        if args.action == "list":
+            _list(store, args.open, args.limit)
+        elif args.action == "show":
+            _show(store.get(args.id))
+        elif args.action == "export":
+            _export(store, args.format, args.out)
+        else:
+            outcome = None
+            if args.action == "close":
+                if args.false_alarm:
+                    outcome = Outcome.false_alarm()
+                else:
+                    outcome = Outcome.found(*parse_point(args.found))
+            doc = store.act(
+                args.id, _ACTIONS[args.action], by=args.by, via="cli", note=args.note,
+                outcome=outcome,
+            )  # fmt: skip
+            print(f"incident {doc['id']}: {doc['state']} ({doc['summary']})")
+    finally:
+        store.close()
+    return 0
+
+
+def _list(store: Any, open_only: bool, limit: int | None) -> None:
+    if limit is not None and limit < 1:
+        raise ConfigError(f"--limit must be >= 1, got {limit}")
+    rows = store.incidents(open_only=open_only, limit=limit)
+    if not rows:
+        print(f"no incidents in {store.where}", file=sys.stderr)
+        return
+    now = time.time()
+    print(f"{'ID':>6}  {'STATE':<12}  {'KIND':<6}  {'AGE':>12}  {'DETECTED':<20}  WHAT")
+    for r in rows:
+        print(
+            f"{r['id']:>6}  {r['state']:<12}  {r['kind']:<6}  {age(now - r['detected_at']):>12}  "
+            f"{_stamp(r['detected_at']):<20}  {r['summary']}"
+        )
+
+
+def _show(doc: dict[str, Any]) -> None:
+    print(f"incident {doc['id']}: {doc['kind']}, {doc['state']}")
+    print(f"  {doc['summary']}")
+    print(f"  detected {_stamp(doc['detected_at'])} (reading time {doc['reading_time']} s)")
+    if doc["outcome"] == "found":
+        print(f"  found at {doc['found_x']:g},{doc['found_y']:g}")
+    elif doc["outcome"]:
+        print(f"  outcome: {doc['outcome']}")
+    print("history:")
+    for h in doc["history"]:
+        note = f": {h['note']}" if h["note"] else ""
+        print(f"  {_stamp(h['at'])}  {h['action']:<12}  by {h['by']} ({h['via']}){note}")
+
+
+def _export(store: Any, form: str, out: str | None) -> None:
+    from burstloc._atomic import check_output, write_text
+    from burstloc.incidents.export import export
+
+    if out is not None:
+        check_output(out)
+    text = export(store, form)
+    if out is None:
+        sys.stdout.write(text)
+    else:
+        write_text(out, text)
+        print(f"wrote {out}", file=sys.stderr)

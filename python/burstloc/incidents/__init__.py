@@ -1,0 +1,42 @@
+"""Incidents that last: every located burst, early alarm record, event and meter fault the
+monitor reports, with its history (detected, answered, acknowledged, dispatched, closed with an
+outcome, operators' notes), kept in SQLite (the default) or PostgreSQL.
+
+* :mod:`~burstloc.incidents.lifecycle`: the states, the operators' actions, the outcomes;
+* :mod:`~burstloc.incidents.intake`: the monitor's records as the store takes them;
+* :mod:`~burstloc.incidents.schema`, :mod:`~burstloc.incidents.migrate` (and ``migrations/``):
+  the tables and their Alembic migrations;
+* :mod:`~burstloc.incidents.engine`: the address and the connection (SQLite set up for durability);
+* :mod:`~burstloc.incidents.store`: the store (SQLAlchemy Core; durable commits);
+* :mod:`~burstloc.incidents.recorder`: the monitor's observer, writing on a thread of its own;
+* :mod:`~burstloc.incidents.export`: CSV and JSON;
+* :mod:`~burstloc.incidents.errors`: the typed errors.
+
+This layer imports the base and :mod:`burstloc.live` (the observer protocol) only. SQLAlchemy,
+Alembic and psycopg (the ``incidents`` extra) are imported when a store is opened, so this
+package imports without them; opening a store without them says how to install them.
+"""
+
+from __future__ import annotations
+
+from burstloc.incidents.engine import store_url
+from burstloc.incidents.errors import (
+    IncidentError,
+    IncidentStateError,
+    IncidentStoreError,
+    UnknownIncidentError,
+)
+from burstloc.incidents.lifecycle import OPEN_STATES, STATES, Outcome
+from burstloc.incidents.store import IncidentStore
+
+__all__ = [
+    "OPEN_STATES",
+    "STATES",
+    "IncidentError",
+    "IncidentStateError",
+    "IncidentStore",
+    "IncidentStoreError",
+    "Outcome",
+    "UnknownIncidentError",
+    "store_url",
+]

@@ -1,0 +1,1 @@
+"""The incident store's schema migrations (Alembic): ``versions/`` holds one file per revision."""

@@ -1,0 +1,210 @@
+"""The monitor's side of the incident store: a :class:`~burstloc.live.observe.LiveObserver`
+that hands each incident to a writer thread and never makes the monitor wait.
+
+On the monitor's thread, :class:`Recorder` turns a decision, transient or event record into an
+:class:`~burstloc.incidents.intake.Observed` (the wall-clock time it was seen included) and puts
+it on a bounded queue (``put_nowait``: no wait). Meter faults are found in the health records
+the loop emits and, at most every :data:`FAULT_EVERY` seconds of wall-clock time, in the health
+the periodic check offers: a meter that turns silent, or whose implausible readings grow, opens
+a fault; a silent meter that reports again, or :data:`IMPLAUSIBLE_CLEARS` seconds of reading
+time without an implausible reading, clears it.
+
+The writer thread takes what is queued, up to :data:`BATCH` items, and stores it in one
+transaction (:meth:`burstloc.incidents.store.IncidentStore.take`); a second without news after
+a commit not yet on disk (SQLite's ``synchronous=NORMAL``), and at the stop, it syncs the store
+(:meth:`~burstloc.incidents.store.IncidentStore.sync`). A store that cannot be
+written (a PostgreSQL server down) is retried with back-off, every failure said; nothing is
+dropped while the queue has room. When it has none, the item is dropped, counted in
+:attr:`Recorder.dropped` and said at once (at most one message a second, with the count).
+:meth:`Recorder.close` stores what is queued and says what could not be stored.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import queue
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+from burstloc.incidents.errors import IncidentStoreError
+from burstloc.incidents.intake import Observed, from_record, meter_fault
+from burstloc.incidents.store import SYNC_EVERY, IncidentStore
+from burstloc.live.observe import LiveObserver
+
+__all__ = ["BATCH", "FAULT_EVERY", "IMPLAUSIBLE_CLEARS", "QUEUE", "Recorder"]
+
+#: Items the queue holds before new ones are dropped (and said).
+QUEUE = 10_000
+#: Items stored in one transaction at most.
+BATCH = 256
+#: Seconds (wall clock) between looks at the periodic check's health for meter faults.
+FAULT_EVERY = 1.0
+#: Seconds of reading time without a new implausible reading that clear that fault.
+IMPLAUSIBLE_CLEARS = 60.0
+#: Seconds between retries of a store that cannot be written, doubling up to the second.
+RETRY = (0.5, 30.0)
+
+_STOP = object()
+
+
+class Recorder(LiveObserver):
+    """Incidents from the monitor's records to ``store`` on a thread (module docstring).
+
+    ``say`` gets the messages for the operator (stderr); ``committed`` (tests, benchmarks) is
+    called on the writer thread with each stored batch and the incidents it changed.
+    """
+
+    def __init__(
+        self,
+        store: IncidentStore,
+        say: Callable[[str], None],
+        *,
+        size: int = QUEUE,
+        committed: Callable[[list[Observed], list[int]], None] | None = None,
+    ) -> None:
+        self.store = store
+        self.say = say
+        self.committed = committed
+        self.queue: queue.Queue[Any] = queue.Queue(maxsize=size)
+        #: Items dropped because the queue was full; items stored; failed writes (retried).
+        self.dropped = self.stored = self.failures = 0
+        self._said_drop = 0.0
+        self._faults: dict[tuple[str, str], bool] = {}  # (meter, fault) -> active
+        self._implausible: dict[str, tuple[int, float | None]] = {}  # count, reading time
+        self._next_look = 0.0
+        self._closing = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="burstloc-incidents", daemon=True)
+        self._thread.start()
+
+    # ------------------------------------------------------------------ the monitor's thread
+    def _put(self, item: Observed) -> None:
+        try:
+            self.queue.put_nowait(item)
+        except queue.Full:
+            self.dropped += 1
+            now = time.monotonic()
+            if now - self._said_drop >= 1.0:
+                self._said_drop = now
+                self.say(
+                    f"the incident store is behind ({self.store.where}): an incident record "
+                    f"was not stored ({self.dropped} so far)"
+                )
+
+    def record(self, record: dict[str, Any]) -> None:
+        """A decision, transient or event: queued; a health record: looked at for faults."""
+        if record.get("type") == "health":
+            self._look(record)
+            return
+        item = from_record(record, time.time())
+        if item is not None:
+            self._put(item)
+        health = record.get("health")
+        if isinstance(health, dict):
+            self._look(health)
+
+    def tick(self, health: Callable[[], dict[str, Any]]) -> None:
+        """Look at the health for meter faults every :data:`FAULT_EVERY` s (wall clock)."""
+        now = time.monotonic()
+        if now >= self._next_look:
+            self._next_look = now + FAULT_EVERY
+            self._look(health())
+
+    def _look(self, health: dict[str, Any]) -> None:
+        """Faults that began or cleared since the last look."""
+        t = health.get("time")
+        meters = health.get("meters") or {}
+        silent = set(health.get("silent") or ()) | set(health.get("excluded") or ())
+        for meter, doc in meters.items():
+            self._set(meter, "silent", meter in silent, t)
+            count = int(doc.get("implausible", 0) or 0)
+            before, since = self._implausible.get(meter, (0, None))
+            if count > before:
+                self._implausible[meter] = (count, t)
+                self._set(meter, "implausible", True, t)
+            elif since is not None and t is not None and t - since >= IMPLAUSIBLE_CLEARS:
+                self._implausible[meter] = (count, None)
+                self._set(meter, "implausible", False, t)
+            else:
+                self._implausible.setdefault(meter, (count, since))
+
+    def _set(self, meter: str, fault: str, active: bool, t: float | None) -> None:
+        if self._faults.get((meter, fault), False) == active:
+            return
+        self._faults[(meter, fault)] = active
+        self._put(meter_fault(meter, fault, active, time.time(), t))
+
+    # ------------------------------------------------------------------ the writer thread
+    def _run(self) -> None:
+        delay = RETRY[0]
+        batch: list[Observed] = []
+        while True:
+            if not batch:
+                try:  # records not on disk yet (SQLite): synced after a quiet second
+                    item = self.queue.get(timeout=SYNC_EVERY if self.store.unsynced else None)
+                except queue.Empty:
+                    try:
+                        self.store.sync()
+                    except IncidentStoreError as exc:
+                        self.say(f"incidents not synced to disk, tried again later: {exc}")
+                    continue
+                if item is _STOP:
+                    self._sync_last()
+                    return
+                batch.append(item)
+                stop = False
+                while len(batch) < BATCH:
+                    try:
+                        more = self.queue.get_nowait()
+                    except queue.Empty:
+                        break
+                    if more is _STOP:
+                        stop = True
+                        break
+                    batch.append(more)
+            else:
+                stop = False
+            try:
+                changed = self.store.take(batch)
+            except IncidentStoreError as exc:
+                self.failures += 1
+                self.say(f"incidents not stored yet, retried in {delay:g} s: {exc}")
+                if self._closing.wait(delay):
+                    self._closing.clear()  # closing: one more try now, then give up
+                    try:
+                        changed = self.store.take(batch)
+                    except IncidentStoreError:
+                        self.say(f"{len(batch) + self.queue.qsize()} incident records not stored")
+                        return
+                else:
+                    delay = min(2 * delay, RETRY[1])
+                    continue
+            delay = RETRY[0]
+            self.stored += len(batch)
+            if self.committed is not None:
+                self.committed(batch, changed)
+            batch = []
+            if stop:
+                self._sync_last()
+                return
+
+    def _sync_last(self) -> None:
+        """At the stop: what was committed, on disk."""
+        try:
+            if self.store.unsynced:
+                self.store.sync()
+        except IncidentStoreError as exc:
+            self.say(f"the last incidents may not be on disk: {exc}")
+
+    def close(self, timeout: float = 60.0) -> None:
+        """Store what is queued, stop the thread (waiting up to ``timeout`` s) and say what was
+        not stored."""
+        with contextlib.suppress(queue.Full):  # the writer is stuck: said below
+            self.queue.put(_STOP, timeout=timeout)
+        self._closing.set()
+        self._thread.join(timeout)
+        if self._thread.is_alive():
+            self.say(f"the incident store is still writing after {timeout:g} s; left behind")
+        if self.dropped:
+            self.say(f"{self.dropped} incident records were not stored (the queue was full)")

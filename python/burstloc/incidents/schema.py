@@ -1,0 +1,68 @@
+"""The incident store's tables (SQLAlchemy Core): one row per incident, one per history entry.
+
+The schema is created and changed only by the migrations in ``migrations/versions/``
+(:mod:`burstloc.incidents.migrate`); these tables describe the newest revision, for the
+queries. Times are seconds since the epoch (UTC, wall clock) as floats; ``reading_time`` is the
+feed's own time (the first alarm's reading time, or the meter's newest reading).
+"""
+
+from __future__ import annotations
+
+from sqlalchemy import (
+    Boolean,
+    Column,
+    Float,
+    ForeignKey,
+    Index,
+    Integer,
+    MetaData,
+    String,
+    Table,
+    Text,
+)
+
+__all__ = ["history", "incidents", "metadata"]
+
+metadata = MetaData()
+
+#: One row per incident: what it is, its state now, its latest answer and its outcome.
+incidents = Table(
+    "incidents",
+    metadata,
+    Column("id", Integer, primary_key=True, autoincrement=True),
+    # what identifies the incident across the monitor's records: "alarm:<first alarm>" (the
+    # early record and the answer of one alarm) or "meter:<meter>:<fault>"
+    Column("key", String(300), nullable=False),
+    Column("kind", String(16), nullable=False),  # burst, event, alarm, meter
+    Column("state", String(16), nullable=False),
+    Column("detected_at", Float, nullable=False),
+    Column("updated_at", Float, nullable=False),
+    Column("reading_time", Float),
+    Column("pipe", String(200)),
+    Column("meter", String(200)),
+    Column("summary", String(500), nullable=False),
+    Column("record", Text),  # the latest record (JSON), for alarms
+    Column("active", Boolean),  # a meter fault still present (None for alarms)
+    Column("outcome", String(16)),  # found, false-alarm
+    Column("found_x", Float),
+    Column("found_y", Float),
+    Column("closed_at", Float),
+    Index("ix_incidents_key", "key"),
+    Index("ix_incidents_state_detected", "state", "detected_at"),
+)
+
+#: One row per change: who did what when, and the state after it.
+history = Table(
+    "history",
+    metadata,
+    Column("id", Integer, primary_key=True, autoincrement=True),
+    Column("incident_id", Integer, ForeignKey("incidents.id"), nullable=False),
+    Column("at", Float, nullable=False),
+    Column("by", String(200), nullable=False),
+    Column("via", String(100), nullable=False),  # monitor, cli, page <address>
+    Column("action", String(16), nullable=False),
+    Column("state", String(16), nullable=False),
+    Column("note", Text),
+    Column("detail", Text),  # JSON: the record (detected, answered), the outcome (closed)
+    Index("ix_history_incident", "incident_id", "id"),
+)

@@ -1,0 +1,449 @@
+"""The incident store: incidents and their history in SQLite (the default) or PostgreSQL.
+
+:meth:`IncidentStore.open` takes a file path (SQLite), ``sqlite:///PATH`` or
+``postgresql://USER@HOST:PORT/DB`` (psycopg 3), and brings the schema to the newest revision
+(:mod:`burstloc.incidents.migrate`). The monitor's news goes in by :meth:`IncidentStore.take`
+(:mod:`burstloc.incidents.intake`; normally from :class:`~burstloc.incidents.recorder.Recorder`'s
+thread, never the monitor's); the operators' actions by :meth:`IncidentStore.act` (the life
+cycle of :mod:`burstloc.incidents.lifecycle`, illegal transitions refused by a typed error).
+Every change is one transaction that appends its history rows (who, when, through what, what):
+once a call returns, what it wrote is committed.
+
+**Durability.** SQLite runs in WAL mode. An operator's action commits with
+``synchronous=FULL``: it is on disk when it returns, and neither a ``kill -9`` of any process
+nor a power cut loses it (nor any record committed before it: the log is written in order). The
+monitor's records commit with ``synchronous=NORMAL`` (:data:`MONITOR_SYNC`): in the log when
+the call returns, so a ``kill -9`` of any process at any moment loses none; a power cut may
+lose those of the last :data:`SYNC_EVERY` second: a commit that second after the last durable
+one is ``FULL`` again, and :meth:`IncidentStore.sync` (the recorder calls it when no record
+followed within that second) puts the log on disk. Every write transaction takes the write
+lock at its start (``BEGIN IMMEDIATE``), so the monitor, the page and ``burstloc incidents`` in
+another process never trip over each other (they wait, up to
+:data:`~burstloc.incidents.engine.BUSY_TIMEOUT` s).
+PostgreSQL commits durably by default; an operator's action locks its incident's row. Readers
+never wait for writers.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from typing import Any
+
+from burstloc.exceptions import InputError
+from burstloc.incidents.engine import make_engine, store_url
+from burstloc.incidents.errors import IncidentStoreError, UnknownIncidentError
+from burstloc.incidents.intake import Observed
+from burstloc.incidents.lifecycle import CLOSED, DETECTED, DONE, Outcome, next_state
+
+__all__ = ["MONITOR", "MONITOR_SYNC", "SYNC_EVERY", "IncidentStore"]
+
+#: SQLite's ``synchronous`` for the monitor's records: ``NORMAL`` (WAL: durable against a
+#: crash of any process; on disk within :data:`SYNC_EVERY` s, module docstring).
+MONITOR_SYNC = "NORMAL"
+#: Seconds the monitor's records may stay off the disk (SQLite) before a durable commit.
+SYNC_EVERY = 1.0
+#: Who the monitor's own history rows are by.
+MONITOR = "monitor"
+#: Longest operator name and note.
+NAME_CHARS, NOTE_CHARS = 200, 10_000
+
+#: The columns a listing shows (the record itself only with one incident).
+_LISTED = (
+    "id",
+    "kind",
+    "state",
+    "detected_at",
+    "updated_at",
+    "reading_time",
+    "pipe",
+    "meter",
+    "summary",
+    "active",
+    "outcome",
+    "found_x",
+    "found_y",
+    "closed_at",
+)
+
+
+def _text(value: str | None, what: str, most: int, required: bool) -> str | None:
+    if value is None or not value.strip():
+        if required:
+            raise InputError(f"{what} is required (who acts on an incident is recorded)")
+        return None
+    if len(value) > most:
+        raise InputError(f"{what} is longer than {most} characters")
+    return value.strip()
+
+
+def _history_row(r: Any) -> dict[str, Any]:
+    return {
+        "id": r.id, "at": r.at, "by": r.by, "via": r.via, "action": r.action, "state": r.state,
+        "note": r.note, "detail": None if r.detail is None else json.loads(r.detail),
+    }  # fmt: skip
+
+
+class IncidentStore:
+    """Incidents and their history in one database (module docstring). Thread-safe: each call
+    takes a connection of its own from the engine's pool."""
+
+    def __init__(self, url: str, *, clock: Callable[[], float] = time.time) -> None:
+        """Use the database at SQLAlchemy ``url`` as it is (:meth:`open` also migrates it)."""
+        try:
+            import alembic  # noqa: F401  (the migrations)
+            from sqlalchemy.engine import make_url
+
+            if url.startswith("postgresql"):
+                import psycopg  # noqa: F401
+        except ImportError as exc:
+            raise IncidentStoreError(
+                f"the incident store needs the incidents extra ({exc}): pip install "
+                "'burstloc[incidents]' (SQLAlchemy, Alembic, psycopg)"
+            ) from None
+        self.url = url
+        #: The address, as told to a person (no password).
+        self.where = make_url(url).render_as_string(hide_password=True)
+        self.clock = clock
+        #: SQLite's ``synchronous`` for the monitor's records (module docstring); the operators'
+        #: actions always commit with ``FULL``.
+        self.monitor_sync = MONITOR_SYNC
+        #: Whether records were committed since the last durable commit (:meth:`sync`).
+        self.unsynced = False
+        self._synced = time.monotonic()
+        self.engine = make_engine(url)
+
+    @classmethod
+    def open(cls, target: str, *, clock: Callable[[], float] = time.time) -> IncidentStore:
+        """The store at ``target`` (:func:`store_url`), its schema brought to the newest
+        revision (created in an empty database).
+
+        Raises:
+            IncidentStoreError: a bad ``target``, the extra missing, a database that cannot be
+                reached or opened, or one made by a newer burstloc.
+        """
+        from burstloc.incidents.migrate import upgrade
+
+        store = cls(store_url(target), clock=clock)
+        try:
+            with store._errors("open"):
+                upgrade(store.engine, store.where)
+        except BaseException:
+            store.close()
+            raise
+        return store
+
+    def close(self) -> None:
+        """Close the store's connections."""
+        self.engine.dispose()
+
+    # ------------------------------------------------------------------ transactions
+    @contextmanager
+    def _errors(self, doing: str) -> Iterator[None]:
+        from sqlalchemy.exc import SQLAlchemyError
+
+        try:
+            yield
+        except SQLAlchemyError as exc:
+            reason = str(getattr(exc, "orig", None) or exc).strip().splitlines()[0]
+            raise IncidentStoreError(
+                f"cannot {doing} the incident store {self.where}: {reason}"
+            ) from exc
+
+    @contextmanager
+    def _write(self, doing: str, sync: str = "FULL") -> Iterator[Any]:
+        """A connection in a write transaction, committed at the end (rolled back on error);
+        on SQLite with ``synchronous=sync``."""
+        with self._errors(doing), self.engine.connect() as connection:
+            connection.execution_options(burstloc_write=True, burstloc_sync=sync)
+            with connection.begin():
+                yield connection
+
+    @contextmanager
+    def _read(self) -> Iterator[Any]:
+        with self._errors("read"), self.engine.connect() as connection:
+            yield connection
+
+    # ------------------------------------------------------------------ the monitor's news
+    def take(self, news: Sequence[Observed]) -> list[int]:
+        """Record the monitor's ``news`` in one transaction; return the incidents each item
+        changed (``0`` where it changed nothing: a record already stored, a fault already
+        open). Idempotent: taking the same news again adds nothing.
+
+        Raises:
+            IncidentStoreError: the database cannot be written.
+        """
+        durable = time.monotonic() - self._synced >= SYNC_EVERY
+        sync = "FULL" if durable else self.monitor_sync
+        with self._write("write to", sync) as connection:
+            changed = [self._take(connection, item) for item in news]
+        self._durable(sync == "FULL")
+        return changed
+
+    def _durable(self, durable: bool) -> None:
+        if durable:
+            self._synced, self.unsynced = time.monotonic(), False
+        else:
+            self.unsynced = True
+
+    def sync(self) -> None:
+        """Put every committed record on disk (SQLite: a checkpoint, which syncs the log
+        first; PostgreSQL's commits are on disk already).
+
+        Raises:
+            IncidentStoreError: the database cannot be written.
+        """
+        if self.engine.dialect.name == "sqlite":
+            with self._errors("sync"), self.engine.connect() as connection:
+                connection.exec_driver_sql("PRAGMA wal_checkpoint(PASSIVE)")
+        self._durable(True)
+
+    def _take(self, connection: Any, item: Observed) -> int:
+        from sqlalchemy import select
+
+        from burstloc.incidents.schema import incidents as t
+
+        query = select(t.c.id, t.c.state, t.c.record, t.c.active).where(t.c.key == item.key)
+        if item.is_fault:
+            query = query.where(t.c.state != CLOSED)
+        row = connection.execute(query.order_by(t.c.id.desc()).limit(1)).first()
+        record = item.record_json()
+        if item.is_fault:
+            if row is None:
+                return self._insert(connection, item, record) if item.active else 0
+            if bool(row.active) == item.active:
+                return 0
+            action = "recurred" if item.active else "cleared"
+            self._update(connection, row.id, row.state, action, item, record, active=item.active)
+            return int(row.id)
+        if row is not None and row.record == record:
+            return 0  # already stored (a replay after a restart)
+        if row is None or row.state == CLOSED:
+            return self._insert(connection, item, record)
+        columns = {"kind": item.kind, "pipe": item.pipe, "summary": item.summary}
+        self._update(
+            connection, row.id, row.state, "answered", item, record, record=record, **columns
+        )
+        return int(row.id)
+
+    def _insert(self, connection: Any, item: Observed, record: str | None) -> int:
+        from burstloc.incidents.schema import incidents as t
+
+        result = connection.execute(
+            t.insert().values(
+                key=item.key,
+                kind=item.kind,
+                state=DETECTED,
+                detected_at=item.at,
+                updated_at=item.at,
+                reading_time=item.reading_time,
+                pipe=item.pipe,
+                meter=item.meter,
+                summary=item.summary,
+                record=record,
+                active=item.active,
+            )
+        )
+        incident = int(result.inserted_primary_key[0])
+        self._history(
+            connection,
+            incident,
+            item.at,
+            MONITOR,
+            MONITOR,
+            "detected",
+            DETECTED,
+            item.summary,
+            record,
+        )
+        return incident
+
+    def _update(
+        self,
+        connection: Any,
+        incident: int,
+        state: str,
+        action: str,
+        item: Observed,
+        detail: str | None,
+        **columns: Any,
+    ) -> None:
+        from burstloc.incidents.schema import incidents as t
+
+        connection.execute(
+            t.update().where(t.c.id == incident).values(updated_at=item.at, **columns)
+        )
+        self._history(
+            connection, incident, item.at, MONITOR, MONITOR, action, state, item.summary, detail
+        )
+
+    @staticmethod
+    def _history(
+        connection: Any,
+        incident: int,
+        at: float,
+        by: str,
+        via: str,
+        action: str,
+        state: str,
+        note: str | None,
+        detail: str | None,
+    ) -> None:
+        from burstloc.incidents.schema import history as h
+
+        connection.execute(
+            h.insert().values(
+                incident_id=incident,
+                at=at,
+                by=by,
+                via=via,
+                action=action,
+                state=state,
+                note=note,
+                detail=detail,
+            )
+        )
+
+    # ------------------------------------------------------------------ the operators
+    def act(
+        self,
+        incident: int,
+        action: str,
+        *,
+        by: str,
+        via: str,
+        note: str | None = None,
+        outcome: Outcome | None = None,
+    ) -> dict[str, Any]:
+        """``action`` (acknowledge, dispatch, close, note) on ``incident`` by the operator
+        ``by`` through ``via`` (``cli``, ``page 10.0.0.7``), with an optional ``note``; closing
+        needs an ``outcome``. Committed when it returns; returns the incident as it is now.
+
+        Raises:
+            UnknownIncidentError: no such incident.
+            IncidentStateError: the incident's state does not allow ``action``.
+            InputError: no operator name, an overlong name or note, a close without outcome
+                (or an outcome with another action), a note action without a note.
+            IncidentStoreError: the database cannot be written.
+        """
+        from sqlalchemy import select
+
+        from burstloc.incidents.schema import incidents as t
+
+        name = _text(by, "the operator's name", NAME_CHARS, True)
+        text = _text(note, "a note", NOTE_CHARS, action == "note")
+        if (action == "close") != (outcome is not None):
+            raise InputError(
+                "closing an incident needs an outcome (found at a point, or a false alarm)"
+                if action == "close"
+                else f"an outcome is given only when closing, not to {action}"
+            )
+        with self._write("write to") as connection:
+            query = select(t.c.state).where(t.c.id == incident).with_for_update()
+            row = connection.execute(query).first()
+            if row is None:
+                raise UnknownIncidentError(incident, self.where)
+            state = next_state(incident, row.state, action)
+            now = self.clock()
+            values: dict[str, Any] = {"state": state, "updated_at": now}
+            detail = None
+            if outcome is not None:
+                values.update(
+                    outcome=outcome.kind, found_x=outcome.x, found_y=outcome.y, closed_at=now
+                )
+                detail = json.dumps(outcome.to_json())
+            connection.execute(t.update().where(t.c.id == incident).values(**values))
+            self._history(
+                connection, incident, now, str(name), via, DONE[action], state, text, detail
+            )
+        self._durable(True)
+        return self.get(incident)
+
+    def acknowledge(self, incident: int, by: str, via: str, note: str | None = None) -> Any:
+        """:meth:`act` ``acknowledge``."""
+        return self.act(incident, "acknowledge", by=by, via=via, note=note)
+
+    def dispatch(self, incident: int, by: str, via: str, note: str | None = None) -> Any:
+        """:meth:`act` ``dispatch``."""
+        return self.act(incident, "dispatch", by=by, via=via, note=note)
+
+    def close_incident(
+        self, incident: int, by: str, via: str, outcome: Outcome, note: str | None = None
+    ) -> Any:
+        """:meth:`act` ``close`` with ``outcome``."""
+        return self.act(incident, "close", by=by, via=via, note=note, outcome=outcome)
+
+    # ------------------------------------------------------------------ reading
+    def incidents(self, *, open_only: bool = False, limit: int | None = None) -> list[dict]:
+        """The incidents, open ones first, newest first within each (without their records)."""
+        from sqlalchemy import case, select
+
+        from burstloc.incidents.schema import incidents as t
+
+        closed = case((t.c.state == CLOSED, 1), else_=0)
+        query = select(*(t.c[c] for c in _LISTED)).order_by(
+            closed, t.c.detected_at.desc(), t.c.id.desc()
+        )
+        if open_only:
+            query = query.where(t.c.state != CLOSED)
+        if limit is not None:
+            query = query.limit(limit)
+        with self._read() as connection:
+            return [dict(row._mapping) for row in connection.execute(query)]
+
+    def get(self, incident: int) -> dict[str, Any]:
+        """One incident with its latest record (parsed) and its history, oldest first.
+
+        Raises:
+            UnknownIncidentError: no such incident.
+        """
+        from sqlalchemy import select
+
+        from burstloc.incidents.schema import history as h
+        from burstloc.incidents.schema import incidents as t
+
+        with self._read() as connection:
+            row = connection.execute(select(t).where(t.c.id == incident)).first()
+            if row is None:
+                raise UnknownIncidentError(incident, self.where)
+            rows = connection.execute(
+                select(h).where(h.c.incident_id == incident).order_by(h.c.id)
+            ).all()
+        doc = {c: row._mapping[c] for c in _LISTED}
+        doc["record"] = None if row.record is None else json.loads(row.record)
+        doc["history"] = [_history_row(r) for r in rows]
+        return doc
+
+    def histories(self) -> dict[int, list[dict[str, Any]]]:
+        """Every incident's history rows, oldest first (one query: for exports)."""
+        from sqlalchemy import select
+
+        from burstloc.incidents.schema import history as h
+
+        out: dict[int, list[dict[str, Any]]] = {}
+        with self._read() as connection:
+            for r in connection.execute(select(h).order_by(h.c.id)):
+                out.setdefault(int(r.incident_id), []).append(_history_row(r))
+        return out
+
+    def records(self) -> dict[int, Any]:
+        """Every incident's latest record, parsed (incidents without one left out)."""
+        from sqlalchemy import select
+
+        from burstloc.incidents.schema import incidents as t
+
+        query = select(t.c.id, t.c.record).where(t.c.record.is_not(None))
+        with self._read() as connection:
+            return {int(r.id): json.loads(r.record) for r in connection.execute(query)}
+
+    def version(self) -> int:
+        """A number that grows with every change (the newest history row's id; 0 when empty):
+        a reader that saw this number has seen everything up to it."""
+        from sqlalchemy import func, select
+
+        from burstloc.incidents.schema import history as h
+
+        with self._read() as connection:
+            return int(connection.execute(select(func.max(h.c.id))).scalar() or 0)
