@@ -43,7 +43,7 @@ from burstloc.exceptions import (
 __all__ = ["build_parser", "main", "run"]
 
 #: The subcommands (modules of this package), in the order ``burstloc --help`` lists them.
-SUBCOMMANDS = ("simulate", "evaluate", "calibrate", "monitor", "study", "place")
+SUBCOMMANDS = ("simulate", "evaluate", "calibrate", "monitor", "study", "place", "geojson")
 
 
 def build_parser(only: str | None = None) -> argparse.ArgumentParser:
