@@ -113,6 +113,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         metavar="[METER=]LOW:HIGH",
         help="believable readings, m (default: -10 m to twice the highest steady head)",
     )
+    from burstloc.cli import _service
+
+    _service.add_arguments(parser)
     _web.add_arguments(parser)
     parser.set_defaults(handler=run)
     return parser
@@ -120,6 +123,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Handle ``burstloc monitor``."""
+    from burstloc.cli import _service
     from burstloc.live.health import Health, PlausibleRange
     from burstloc.live.loop import LiveLoop, Reporter
     from burstloc.live.monitor import BurstMonitor
@@ -207,6 +211,7 @@ def run(args: argparse.Namespace) -> int:
         save_every=args.save_every,
         observer=None if web is None else web.hub,
     )
+    metrics = _service.attach(args, web, loop, link)
     saved = None if state is None else state.load()
     if saved is not None:
         try:
@@ -234,6 +239,7 @@ def run(args: argparse.Namespace) -> int:
                 from burstloc.live.replay import paced
 
                 items = paced(items, args.replay_speed, lambda: flags["stop"])
+        items = _service.reloading(items, args, loop=loop, web=web, metrics=metrics, report=report)
         loop.run(items)
         if web is not None and link is None and args.readings != "-":
             _web.linger(web, lambda: flags["stop"])
