@@ -39,7 +39,7 @@ BUILD_INPUTS := pyproject.toml Cargo.toml $(wildcard Cargo.lock) README.md \
                 $(shell find crates -path '*/src/*.rs' -o -name Cargo.toml -o -name build.rs 2>/dev/null) \
                 $(shell find python -name '*.py' -o -name '*.pyi' -o -name '*.mako' -o -name py.typed \
                   -o -path '*/web/static/*' -type f 2>/dev/null)
-EXTRAS       := sim,dev,bench,river,web,incidents
+EXTRAS       := sim,dev,bench,river,web,incidents,gis
 
 # The extension is compiled for the CPU of the machine that runs `make setup` (it is built
 # where it runs): the vectorized bank and Shewhart loops run 2-5x faster than in a generic

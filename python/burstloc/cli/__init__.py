@@ -43,7 +43,16 @@ from burstloc.exceptions import (
 __all__ = ["build_parser", "main", "run"]
 
 #: The subcommands (modules of this package), in the order ``burstloc --help`` lists them.
-SUBCOMMANDS = ("simulate", "evaluate", "calibrate", "monitor", "incidents", "study", "place")
+SUBCOMMANDS = (
+    "simulate",
+    "evaluate",
+    "calibrate",
+    "monitor",
+    "incidents",
+    "study",
+    "place",
+    "geojson",
+)
 
 
 def build_parser(only: str | None = None) -> argparse.ArgumentParser:
@@ -56,8 +65,12 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
         "0 done, 1 simulations failed, 2 bad input or options, 130 interrupted.",
     )
     parser.add_argument("--version", action="version", version=f"burstloc {__version__}")
-    subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     from burstloc.cli._options import DefaultsFormatter
+    from burstloc.cli._settings import SettingsParser  # a command's --settings FILE
+
+    subparsers = parser.add_subparsers(
+        dest="command", required=True, metavar="COMMAND", parser_class=SettingsParser
+    )
 
     for name in SUBCOMMANDS:
         if only is None or name == only:

@@ -113,6 +113,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         metavar="[METER=]LOW:HIGH",
         help="believable readings, m (default: -10 m to twice the highest steady head)",
     )
+    from burstloc.cli import _service
+
+    _service.add_arguments(parser)
     _web.add_arguments(parser)
     _incidents.add_arguments(parser)
     parser.set_defaults(handler=run)
@@ -121,6 +124,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Handle ``burstloc monitor``."""
+    from burstloc.cli import _service
     from burstloc.live.health import Health, PlausibleRange
     from burstloc.live.loop import LiveLoop, Reporter
     from burstloc.live.monitor import BurstMonitor
@@ -214,6 +218,10 @@ def run(args: argparse.Namespace) -> int:
         save_every=args.save_every,
         observer=fan_out(None if web is None else web.hub, recorder),
     )
+    metrics = _service.attach(args, web, loop, link)
+    if metrics is not None and recorder is not None:  # the incident store's open incidents
+        store = recorder.store
+        metrics.incidents_open = lambda: len(store.incidents(open_only=True))
     saved = None if state is None else state.load()
     if saved is not None:
         try:
@@ -241,6 +249,7 @@ def run(args: argparse.Namespace) -> int:
                 from burstloc.live.replay import paced
 
                 items = paced(items, args.replay_speed, lambda: flags["stop"])
+        items = _service.reloading(items, args, loop=loop, web=web, metrics=metrics, report=report)
         loop.run(items)
         if web is not None and link is None and args.readings != "-":
             _web.linger(web, lambda: flags["stop"])

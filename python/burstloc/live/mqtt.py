@@ -78,6 +78,8 @@ class MqttLink:
         self.dropped = 0
         self.unsent = 0
         self.received = 0
+        #: The incoming queue's bound (messages).
+        self.capacity = queue_size
         self.connected = threading.Event()
         self._queue: queue.Queue[tuple[int, bytes]] = queue.Queue(maxsize=queue_size)
         self._client = mqtt.Client(
@@ -136,6 +138,11 @@ class MqttLink:
     def wait_connected(self, timeout: float) -> bool:
         """Wait up to ``timeout`` s for the first connection; whether it is up."""
         return self.connected.wait(timeout)
+
+    @property
+    def queued(self) -> int:
+        """Messages received and not yet taken by the loop (the incoming queue's depth)."""
+        return self._queue.qsize()
 
     def messages(self, idle: float = 0.5) -> Iterator[tuple[int, bytes] | None]:
         """Messages as (number, payload), or ``None`` after ``idle`` s without one (forever)."""

@@ -18,6 +18,9 @@ transient or event record, a message) and at least every :data:`POLL` seconds (t
 applies it to the :class:`~burstloc.web.view.View` and puts the news on each browser's bounded
 queue; a browser whose queue is full is dropped (its page reconnects and starts again from a
 snapshot).
+
+**For other systems** (:mod:`burstloc.web.exports`): ``/metrics`` in Prometheus' text format
+and ``/region.geojson``, the current record for GIS, under the same access rules.
 """
 
 from __future__ import annotations
@@ -33,6 +36,7 @@ from importlib import resources
 from typing import Any
 
 from burstloc.exceptions import ConfigError
+from burstloc.web.exports import routes as export_routes
 from burstloc.web.hub import Hub
 from burstloc.web.incidents import routes as incident_routes
 from burstloc.web.view import View
@@ -117,6 +121,10 @@ class WebServer:
         self.incidents = incidents
         self.host, self.port, self.token = host, port, token or None
         self._network = json.dumps(network, separators=(",", ":")).encode()
+        #: ``/metrics``' :class:`~burstloc.web.metrics.MonitorMetrics` and ``/region.geojson``'s
+        #: :class:`~burstloc.web.exports.RegionExport` (``None``: not served).
+        self.metrics: Any = None
+        self.region: Any = None
         self._clients: set[asyncio.Queue[bytes | None]] = set()
         self._wake: asyncio.Event | None = None
         self._loop: asyncio.AbstractEventLoop | None = None
@@ -199,6 +207,7 @@ class WebServer:
                 task.cancel()
 
         routes = [
+            *export_routes(server),
             Route("/", page),
             Route("/static/{name}", static),
             Route("/network.json", network),

@@ -437,6 +437,7 @@ const esc = (s) => String(s).replace(/[&<>"]/g, (c) => ({ "&": "&amp;", "<": "&l
 function renderIncident() {
   const rec = currentRecord();
   const box = $("answer");
+  $("geojson").hidden = !(rec && (rec.region || rec.position)); // /region.geojson: this record
   if (!rec) {
     box.className = "quiet";
     box.innerHTML = S.alarms.length ? "Alarms: locating…" : "No alarm.";
