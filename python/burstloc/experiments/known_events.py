@@ -68,7 +68,7 @@ def _event(entry: Any, index: int, base: Path, network: Network) -> KnownEvent:
     readings = base / entry["readings"]
     if not readings.is_file():
         raise ConfigError(f"{where} ({name}): no readings file {str(readings)!r}")
-    raw = entry.get("time")
+    raw: Any = entry.get("time")
     if isinstance(raw, bool):
         raise ConfigError(f"{where} ({name}): 'time' must be seconds or ISO 8601, got {raw!r}")
     try:
