@@ -187,15 +187,9 @@ def run(args: argparse.Namespace) -> int:
             if text.startswith("DemandDrivenWarning: ") and text not in said:
                 said.add(text)
                 print(f"burstloc: warning: {text.split(': ', 1)[1]}", file=sys.stderr)
-        negative = result.metadata.get("negative_pressure_nodes") or []
-        if negative:  # the burst is larger than the network can feed there: say so
-            places = ", ".join(result.node_label(node) for node in negative[:5])
-            more = f" and {len(negative) - 5} more" if len(negative) > 5 else ""
-            print(
-                f"burstloc: warning: burst on pipe {result.pipe}: negative pressure at "
-                f"{places}{more}",
-                file=sys.stderr,
-            )
+        negative = result.negative_pressure(shown=5)  # more than the network can feed there
+        if negative is not None:
+            print(f"burstloc: warning: {negative}", file=sys.stderr)
         result = with_size(result, size_of[result.pipe])
         if args.capture_interval is not None:
             result = result.resample(args.capture_interval, args.capture_phase)

@@ -251,11 +251,7 @@ def evaluate(
     if keep_heads:
         _check_results(runs, list(results.values()), phases, phase_span)
 
-    for p, r in results.items():
-        negative = r.metadata.get("negative_pressure_nodes") or []
-        if negative:
-            places = ", ".join(r.node_label(node) for node in negative)
-            warnings.append(f"burst on pipe {p}: negative pressure at {places}")
+    warnings += [w for r in results.values() if (w := r.negative_pressure()) is not None]
     truth = {p: r.true_endpoints for p, r in results.items()}
     if not scoring:
         prepare(next(iter(results.values())))

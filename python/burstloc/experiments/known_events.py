@@ -114,9 +114,10 @@ def read_known_events(path: str | Path, network: Network) -> list[KnownEvent]:
     return [_event(e, i, path.parent, network) for i, e in enumerate(entries)]
 
 
-def _distances(event: KnownEvent, network: Network, meters: Sequence[str]) -> dict[str, float]:
-    """Shortest path (m) from the event's place to each meter."""
-    distance = NetworkDistance(network.model)  # (a cache of paths: one per event is enough)
+def _distances(
+    event: KnownEvent, network: Network, distance: NetworkDistance, meters: Sequence[str]
+) -> dict[str, float]:
+    """Shortest path (m) from the event's place to each meter, along ``network``'s pipes."""
     if event.junction is not None:
         return {m: distance.between_nodes(event.junction, m) for m in meters}
     link = network.model.get_link(event.pipe)
@@ -217,13 +218,14 @@ def event_arrivals(
             capture interval, or readings that start after the event.
     """
     found = []
+    distance = NetworkDistance(network.model)  # one graph and path cache for every event
     for e in events:
         onsets, interval = _onsets(e, config, detector)
         found.append(
             EventArrivals(
                 name=e.name,
                 time=e.time,
-                distances=_distances(e, network, config.meters),
+                distances=_distances(e, network, distance, config.meters),
                 onsets=onsets,
                 capture_interval=interval,
             )

@@ -133,11 +133,6 @@ class LocalizationModel:
                 offsets[meter] = check_number(value, f"clock_offsets_s.{meter}", low=-60, high=60)
             object.__setattr__(self, "clock_offsets", offsets)
 
-    def offsets(self) -> NDArray[np.float64]:
-        """Each meter's clock offset (s), in meter order (zeros when none is known)."""
-        known = self.clock_offsets or {}
-        return np.array([known.get(m, 0.0) for m in self.meters], dtype=np.float64)
-
     def _checked_fronts(
         self, fronts: Mapping[str, NDArray[np.float64]]
     ) -> dict[str, NDArray[np.float64]]:

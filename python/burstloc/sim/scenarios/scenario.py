@@ -277,6 +277,18 @@ class ScenarioResult:
                 )
         return node
 
+    def negative_pressure(self, shown: int | None = None) -> str | None:
+        """``"burst on pipe P: negative pressure at ..."`` naming the nodes the solver reported
+        below zero (:meth:`node_label`; with ``shown``, the first ``shown`` and a count of the
+        rest), or ``None`` when none was."""
+        negative = list(self.metadata.get("negative_pressure_nodes") or [])
+        if not negative:
+            return None
+        named = negative if shown is None else negative[:shown]
+        places = ", ".join(self.node_label(node) for node in named)
+        more = f" and {len(negative) - len(named)} more" if len(named) < len(negative) else ""
+        return f"burst on pipe {self.pipe}: negative pressure at {places}{more}"
+
     def resample(self, capture_interval: float, phase: float = 0.0) -> ScenarioResult:
         """Return the readings meters would transmit every ``capture_interval`` seconds.
 
