@@ -74,6 +74,9 @@ def feed_files(folder: Path) -> tuple[Path, Path, Path]:
 
 def decision_record(network: Path) -> dict[str, Any]:
     """The first decision of the live loop on :func:`burst`'s readings."""
+    import sys
+
+    sys.path.insert(0, str(REPO / "tests" / "live"))  # run alone, before burst() puts it there
     from live_feed import Collected, readings
 
     from burstloc.live.monitor import BurstMonitor
