@@ -83,6 +83,12 @@ def test_the_named_pipe_is_above_the_region_and_the_panel_counts_the_records_pip
         lambda: f"of main on {len(pipes)} pipe(s)" in browser.find_element("id", "answer").text,
         "the panel counts the record's pipes",
     )
+    wait_for(  # the frame that drew the record (the map is drawn on the next animation frame)
+        lambda: any(
+            h["pipe"] == pipe and h.get("drawn") for h in page_state(browser)["highlights"]
+        ),
+        "the record's frame drawn",
+    )
     # a point of the named pipe inside its stretch of the region, away from the position mark
     stretch = next(s for s in region["stretches"] if s["pipe"] == pipe)
     length = record["position"]["length"]
