@@ -157,6 +157,41 @@ def test_a_record_of_another_network_or_without_a_place_is_refused_by_name(
         record_geojson(layout, record, crs="EPSG:4326")
 
 
+def test_a_stretch_rounded_past_its_pipes_end_ends_there(
+    setting: tuple[Layout, dict[str, Any]], tmp_path: Path
+) -> None:
+    """Records write a stretch's ends to 0.1 m: on a pipe of 51.5963 m (L-TOWN has such) a
+    stretch to its end says 51.6. It is drawn to the pipe's end; beyond the rounding, refused."""
+    from burstloc.gis import ROUNDING
+
+    layout, record = setting
+    stretch = record["region"]["stretches"][0]
+    length = layout.lengths[stretch["pipe"]]
+    odd = tmp_path / "odd.inp"  # the same network with that pipe 0.04 m shorter
+    text = utm_copy(tmp_path).read_text().splitlines()
+    section = ""
+    for k, line in enumerate(text):
+        if line.strip().startswith("["):
+            section = line.strip().upper()
+        elif section == "[PIPES]" and line.split() and line.split()[0] == stretch["pipe"]:
+            fields = line.split()
+            fields[3] = f"{length - 0.04:.4f}"
+            text[k] = " " + "\t".join(fields)
+    odd.write_text("\n".join(text) + "\n")
+    short = read_layout(odd)
+    assert short.lengths[stretch["pipe"]] == pytest.approx(length - 0.04)
+    rounded = copy.deepcopy(record)
+    rounded["region"]["stretches"][0].update(low=0.0, high=length)  # 0.04 m past the end
+    (drawn, *_) = _by_role(record_geojson(short, rounded), "region")
+    assert drawn["properties"]["high_m"] == short.lengths[stretch["pipe"]]
+    assert shape(drawn["geometry"]).length == pytest.approx(
+        _pipe_line(short, stretch["pipe"], stretch["from"]).length
+    )
+    rounded["region"]["stretches"][0]["high"] = length - 0.04 + 2 * ROUNDING
+    with pytest.raises(ConfigError, match=r"stretches\[0\]\.high must be a finite number"):
+        record_geojson(short, rounded)
+
+
 def test_located_records_of_the_monitors_output() -> None:
     lines = '{"type": "health", "time": 1}\n\n{"type": "decision", "position": {"pipe": "9"}}\n'
     assert located_records(lines, "out.jsonl") == [

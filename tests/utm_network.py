@@ -1,5 +1,7 @@
-"""The shipped paper15 network drawn in real map coordinates (UTM zone 33N, EPSG:32633), and a
-real decision record on it: a TSNet burst replayed through the live loop."""
+"""The shipped paper15 network drawn in real map coordinates (UTM zone 33N, EPSG:32633; or the
+Swiss national grid, EPSG:2056), and a real decision record on it: a TSNet burst replayed
+through the live loop. A record names pipes and nodes, not coordinates: one record is good on
+every copy."""
 
 from __future__ import annotations
 
@@ -13,23 +15,29 @@ PAPER15 = REPO / "networks" / "paper15.inp"
 #: about 15 deg E, 45 deg N (a town in zone 33N's central strip).
 CRS = "EPSG:32633"
 SHIFT = (497_000.0, 4_978_000.0)
+#: A second projected system, with false eastings in the millions: the Swiss LV95 grid, the
+#: drawing shifted to its origin (Bern, about 7.44 deg E, 46.95 deg N).
+LV95 = "EPSG:2056"
+LV95_SHIFT = (2_600_000.0, 1_200_000.0)
 METERS = ("N3", "N5", "N8", "2", "4", "6", "8")
 BURST_PIPE = "9"
 
 
-def utm_copy(folder: Path) -> Path:
-    """paper15.inp with every coordinate and vertex shifted by :data:`SHIFT` (the hydraulics
-    unchanged), written in ``folder``."""
+def utm_copy(
+    folder: Path, shift: tuple[float, float] = SHIFT, name: str = "paper15_utm.inp"
+) -> Path:
+    """paper15.inp with every coordinate and vertex shifted by ``shift`` (default
+    :data:`SHIFT`; the hydraulics unchanged), written in ``folder`` as ``name``."""
     lines, section = [], ""
     for line in PAPER15.read_text().splitlines():
         stripped = line.strip()
         if stripped.startswith("["):
             section = stripped.upper()
         elif section in ("[COORDINATES]", "[VERTICES]") and stripped and stripped[0] != ";":
-            name, x, y, *_ = stripped.split()
-            line = f" {name}\t{float(x) + SHIFT[0]:.3f}\t{float(y) + SHIFT[1]:.3f}"
+            node, x, y, *_ = stripped.split()
+            line = f" {node}\t{float(x) + shift[0]:.3f}\t{float(y) + shift[1]:.3f}"
         lines.append(line)
-    out = folder / "paper15_utm.inp"
+    out = folder / name
     out.write_text("\n".join(lines) + "\n")
     return out
 
@@ -66,6 +74,9 @@ def feed_files(folder: Path) -> tuple[Path, Path, Path]:
 
 def decision_record(network: Path) -> dict[str, Any]:
     """The first decision of the live loop on :func:`burst`'s readings."""
+    import sys
+
+    sys.path.insert(0, str(REPO / "tests" / "live"))  # run alone, before burst() puts it there
     from live_feed import Collected, readings
 
     from burstloc.live.monitor import BurstMonitor

@@ -34,7 +34,7 @@ from burstloc._validate import Fields, check_number, check_string
 from burstloc.exceptions import ConfigError
 from burstloc.layout import Layout
 
-__all__ = ["WGS84", "located_records", "record_geojson", "to_wgs84"]
+__all__ = ["ROUNDING", "WGS84", "located_records", "record_geojson", "to_wgs84"]
 
 #: The coordinate reference system of RFC 7946 GeoJSON: WGS 84, longitude then latitude.
 WGS84 = "EPSG:4326"
@@ -43,6 +43,11 @@ Point = tuple[float, float]
 
 #: The most stretches, pipes or meters a record is read with (far above any record's).
 _MOST = 1_000_000
+
+#: Metres a stretch's ends may pass its pipe's: records write them to 0.1 m
+#: (:meth:`burstloc.localize.region.Stretch.to_json`), so a stretch to the end of a 51.5963 m
+#: pipe says ``"high": 51.6``. Within this, an end is taken as the pipe's; beyond, refused.
+ROUNDING = 0.05
 
 
 def record_geojson(
@@ -199,8 +204,9 @@ def _region(layout: Layout, region: Fields) -> list[dict[str, Any]]:
         with stretch.checking():
             pipe, start, line = _pipe(layout, stretch)
             length = layout.lengths[pipe]
-            low = check_number(stretch.get("low"), "low", low=0, high=length)
-            high = check_number(stretch.get("high"), "high", low=low, high=length)
+            low = check_number(stretch.get("low"), "low", low=0, high=length + ROUNDING)
+            high = check_number(stretch.get("high"), "high", low=low, high=length + ROUNDING)
+            low, high = min(low, length), min(high, length)
             probability = check_number(stretch.get("probability"), "probability", low=0, high=1)
         features.append(
             _feature(

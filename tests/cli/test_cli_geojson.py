@@ -7,12 +7,13 @@ import json
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 from burstloc.gis import record_geojson
 from burstloc.layout import read_layout
-from utm_network import CRS, feed_files
+from utm_network import CRS, LV95, LV95_SHIFT, feed_files, utm_copy
 
 shapely = pytest.importorskip("shapely")
 pytest.importorskip("pyproj")
@@ -67,6 +68,64 @@ def test_the_monitors_decision_as_wgs84_geojson(
     assert json.loads(piped.stdout) == json.loads(
         json.dumps(record_geojson(read_layout(network), decisions[0]))
     )
+
+
+def test_at_a_stated_epsg_the_geojson_opens_in_a_gis_library_where_the_network_is(
+    monitored: tuple[Path, Path], tmp_path: Path
+) -> None:
+    """The same burst's record on a copy of the network drawn in the Swiss national grid
+    (EPSG:2056: eastings in the millions), written with ``--crs EPSG:2056``, read back with
+    shapely and pyproj: every coordinate returns to the network's within a metre, the place is
+    Bern, and the named point lies on the search region's geometry."""
+    import pyproj
+    from shapely.geometry import LineString, Point, shape
+    from shapely.ops import unary_union
+
+    _, out = monitored
+    network = utm_copy(tmp_path, LV95_SHIFT, "paper15_lv95.inp")
+    target = tmp_path / "lv95.geojson"
+    done = _burstloc(
+        "geojson", str(network), "--record", str(out), "--crs", LV95, "--out", str(target)
+    )
+    assert done.returncode == 0, done.stderr
+    written = json.loads(target.read_text())
+    assert written["burstloc"]["coordinates"] == f"EPSG:4326 from {LV95}"
+    back = pyproj.Transformer.from_crs("EPSG:4326", LV95, always_xy=True).transform
+
+    def grid(geometry: Any) -> list[tuple[float, float]]:
+        """The geometry's points back in the grid (pyproj), as read by shapely."""
+        return [back(*c) for c in _coords(geometry)]
+
+    layout = read_layout(network)
+    records = [json.loads(line) for line in out.read_text().splitlines()]
+    (record,) = [r for r in records if r["type"] == "decision"]
+    local = record_geojson(layout, record)  # the network's own coordinates
+    features = written["features"]
+    assert len(features) == len(local["features"])
+    worst = 0.0
+    for there, here in zip(features, local["features"], strict=True):
+        geometry = shape(there["geometry"])
+        lon, lat = geometry.centroid.x, geometry.centroid.y
+        assert 7.35 < lon < 7.55 and 46.9 < lat < 47.05  # Bern and its north (a 6 km drawing)
+        for a, b in zip(grid(geometry), _coords(shape(here["geometry"])), strict=True):
+            worst = max(worst, abs(a[0] - b[0]), abs(a[1] - b[1]))
+    assert worst < 1.0  # metres
+    meters = {f["properties"]["meter"]: f for f in features if f["properties"]["role"] == "meter"}
+    for name, feature in meters.items():
+        x, y = back(*feature["geometry"]["coordinates"])
+        assert abs(x - layout.nodes[name][1]) < 1.0 and abs(y - layout.nodes[name][2]) < 1.0
+    # the named point is on the region: within a metre of its stretches, in the grid's metres
+    region = unary_union(
+        [LineString(grid(shape(f["geometry"]))) for f in features
+         if f["properties"]["role"] == "region"]
+    )  # fmt: skip
+    (named,) = [f for f in features if f["properties"]["role"] == "named_point"]
+    point = Point(back(*named["geometry"]["coordinates"]))
+    assert region.distance(point) < 1.0
+
+
+def _coords(geometry: Any) -> list[tuple[float, float]]:
+    return [(float(c[0]), float(c[1])) for c in geometry.coords]
 
 
 def test_bad_input_is_one_line_naming_it(

@@ -455,3 +455,6 @@ def test_the_fused_localizer_answers_early_at_a_coarse_interval(
     doc = early.to_json()
     assert doc["type"] == "transient" and doc["answer_at"] == pytest.approx(final.time, abs=2.0)
     assert doc["region"]["length_m"] > 0 and doc["position"]["pipe"] == at.pipe
+    # the wait it carries: from the burst's onset (before the first alarm) to the answer
+    assert doc["wait_s"] == config.for_interval(2.0).decision_delay
+    assert doc["answer_at"] - doc["wait_s"] <= doc["first_alarm"]

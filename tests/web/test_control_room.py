@@ -240,7 +240,8 @@ def test_a_wrong_or_missing_token_gets_401_and_nothing_else(
     for method in ("POST", "PUT", "DELETE"):
         assert _get(f"{base}/state.json?token={secret}", method=method)[0] == 405
     browser.get(base + "/?token=wrong")
-    assert "unauthorized" in browser.page_source
+    # Chromium may hand the text view over before its text is in: waited for, not read at once
+    wait_for(lambda: "unauthorized" in browser.page_source, "the browser shows the 401's text")
     assert browser.execute_script("return typeof window.burstloc") == "undefined"
     browser.get(f"{base}/?token={secret}")
     _ready(browser)

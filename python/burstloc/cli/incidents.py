@@ -34,7 +34,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     parser = subparsers.add_parser(
         "incidents",
-        help="the monitor's incidents: list, show, export; acknowledge, dispatch, close",
+        help="the monitor's incidents: list, show, export, picture; acknowledge, dispatch, close",
         description=(
             "The incidents kept by `burstloc monitor --db` (every located burst, early alarm "
             "record, event and meter fault, with its history). An incident is detected, then "
@@ -52,6 +52,22 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     export = actions.add_parser("export", parents=[where], help="every incident, CSV or JSON")
     export.add_argument("--format", choices=("csv", "json"), default="csv")
     export.add_argument("--out", metavar="FILE", help="write here (default: stdout)")
+    png = actions.add_parser(
+        "png",
+        parents=[where],
+        help="a picture for the work order: the incident's map and panel as PNG",
+        description="Draw the incident as the control-room page shows it (the map around its "
+        "search region, the named pipe, the pipes' names; where, how sure, its state and "
+        "history) and write it as PNG, with headless Chromium (apt-get install chromium).",
+    )
+    png.add_argument("id", type=int, metavar="ID")
+    png.add_argument(
+        "--network", required=True, metavar="NETWORK.inp", help="the network the monitor watched"
+    )
+    png.add_argument("--out", required=True, metavar="FILE.png", help="write the picture here")
+    png.add_argument(
+        "--size", default="1400x900", metavar="WxH", help="in pixels (default: 1400x900)"
+    )
     for name, text in [
         ("ack", "acknowledge an incident (it has been seen)"),
         ("dispatch", "a crew is sent (after the acknowledgement)"),
@@ -126,6 +142,8 @@ def run(args: argparse.Namespace) -> int:
             _show(store.get(args.id))
         elif args.action == "export":
             _export(store, args.format, args.out)
+        elif args.action == "png":
+            _png(store, args)
         else:
             outcome = None
             if args.action == "close":
@@ -185,3 +203,13 @@ def _export(store: Any, form: str, out: str | None) -> None:
     else:
         write_text(out, text)
         print(f"wrote {out}", file=sys.stderr)
+
+
+def _png(store: Any, args: argparse.Namespace) -> None:
+    from burstloc._atomic import check_output
+    from burstloc.web.picture import incident_png, parse_size
+
+    size = parse_size(args.size)
+    check_output(args.out)
+    incident_png(store, args.id, args.network, args.out, size=size)
+    print(f"wrote {args.out}: incident {args.id}, {size[0]}x{size[1]}", file=sys.stderr)

@@ -22,7 +22,8 @@ class LiveDecision:
 
     The answer comes in two records when it waits for the lasting change: a *transient*
     located as soon as the arrival localizer can, with its search region (``answer_at`` is then
-    the reading time at which the lasting change will have settled), then the decision or event
+    the reading time at which the lasting change will have settled: the burst's onset plus
+    ``wait``, the signature's decision delay), then the decision or event
     at that time, with the region narrowed by the lasting drop. That is so with a classifier
     (``classifying``: the alarm is classified then) and when the fused localizer's arrivals were
     not decisive. A transient is neither a burst report nor an event."""
@@ -35,6 +36,7 @@ class LiveDecision:
     waited: bool
     answer_at: float | None = None
     classifying: bool = False
+    wait: float | None = None
 
     @property
     def transient(self) -> bool:
@@ -77,7 +79,8 @@ class LiveDecision:
         ``"event"`` for an alarm classified as another event or unsure (its ``classification``
         says which and why), ``"transient"`` for the early record of an alarm still to be
         answered (``"burst": null`` and ``answer_at``, the reading time of its answer; also as
-        ``classify_at`` when that answer is a classification)."""
+        ``classify_at`` when that answer is a classification; ``wait_s``, the seconds from the
+        burst's onset to ``answer_at``, when known)."""
         if self.transient:
             kind, burst = "transient", None
         else:
@@ -87,6 +90,8 @@ class LiveDecision:
             doc["answer_at"] = json_time(self.answer_at)
             if self.classifying:
                 doc["classify_at"] = json_time(self.answer_at)
+            if self.wait is not None:
+                doc["wait_s"] = json_time(self.wait)
         doc.update(
             waited=self.waited,
             decision_delay_s=json_time(self.delay),

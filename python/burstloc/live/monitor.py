@@ -432,9 +432,11 @@ class BurstMonitor:
         excluded = tuple(m for m in self.meters if m in self.excluded)
         if answer_at is not None:
             classifying = self.classifier is not None
+            # answer_at is decision_time("signature", ...): the onset plus the decision delay
+            wait = self.calibration.decision_delay
             return LiveDecision(
                 decision, self.localizer, tuple(meters), excluded, alarmed, False, answer_at,
-                classifying=classifying,
+                classifying=classifying, wait=wait,
             )  # fmt: skip
         looked = horizon_of(localizers, self.calibration)
         waited = decision.waited or (

@@ -94,6 +94,8 @@ def _asset(name: str) -> bytes:
 
 
 _TYPES = {
+    "map.js": "text/javascript; charset=utf-8",
+    "chart.js": "text/javascript; charset=utf-8",
     "app.js": "text/javascript; charset=utf-8",
     "incidents.js": "text/javascript; charset=utf-8",
     "style.css": "text/css; charset=utf-8",

@@ -54,9 +54,10 @@ def _describe(record: dict[str, Any]) -> str:
     if position.get("metres") is not None:
         where += f", {position['metres']:.0f} m from node {position.get('from')}"
     if record["type"] == "transient":
-        if "classify_at" in record:
-            return f"alarm located on {where}; classified at t = {record['classify_at']:g} s"
-        return f"alarm located on {where}; answered at t = {record.get('answer_at', 0):g} s"
+        what = "classified" if "classify_at" in record else "answered"
+        wait = record.get("wait_s")
+        since = "" if wait is None else f" (the burst's onset + {wait:g} s)"
+        return f"alarm located on {where}; {what} at t = {record.get('answer_at', 0):g} s{since}"
     if record["type"] == "event":
         kind = record.get("classification") or {}
         return f"not a burst ({kind.get('class')}): {kind.get('reason', '')}; nearest {where}"

@@ -173,6 +173,12 @@ S.drawIncidents = (c) => {
   c.stroke();
 };
 S.incidentsChanged = () => refresh();
+// ?snapshot=ID (app.js): this incident alone, its state and history, no actions
+S.showIncident = (doc) => {
+  Object.assign(I, { enabled: true, writable: false, why: null, list: [doc], selected: doc.id, detail: doc });
+  renderIncidents();
+  $("incops").hidden = true;
+};
 
 let down = null;
 map.addEventListener("mousedown", (e) => { down = [e.clientX, e.clientY]; });
@@ -201,4 +207,4 @@ async function poll() {
   await refresh();
   polling = setTimeout(poll, POLL_MS);
 }
-poll();
+if (!SNAPSHOT) poll();
