@@ -1,7 +1,8 @@
 """Burst sizes: the flow of the default burst, and the pressures a burst leaves, per network.
 
 Usage: ``.venv/bin/python benches/bench_burst_size.py [NETWORK.inp ...] [--flows 5 10 20]
-[--coefficients 0.02 ...] [--transient N] [--ltown]``. Default networks: the committed paper15,
+[--coefficients 0.02 ...] [--transient N|all] [--duration S] [--workers W] [--ltown]``. Default
+networks: the committed paper15,
 paper15_assets, awumah11 and EPANET's Net1, Net2, Anytown, Net3 (``networks/public/``); ``--ltown``
 adds L-TOWN (extracted from the pinned epyt wheel into a temporary directory). Every pipe bursts at
 mid-pipe, sized by each of ``--coefficients`` (default: the paper's, 0.02 m³/s/m^½; none with
@@ -13,10 +14,12 @@ opened (over every pipe), and the bursts that take a junction below zero there.
 
 The steady state cannot show what the opening does: an emitter draws less as its pressure
 falls, so the steady state holds the pressures near zero, while the downsurge of a burst that
-opens in 0.3 s takes junctions far below it. ``--transient N`` also simulates N seeded pipes per
-network and size (``burstloc simulate``'s model, 30 s, the transient-ready model with 30 m pipes
-on Net3 and L-TOWN, cached) and prints the lowest junction pressure over the whole transient and
-the junctions the solver reports below zero.
+opens in 0.3 s takes junctions far below it. ``--transient N`` (or ``all``) also simulates N seeded
+pipes per
+network and size (``burstloc simulate``'s model, ``--duration`` 30 s by default, the transient-ready
+model with 30 m pipes
+on Net3 and L-TOWN, not cached) and prints the lowest junction pressure over the whole transient and
+the three pipes whose bursts go lowest and the junctions the solver reports below zero.
 """
 
 from __future__ import annotations
@@ -42,9 +45,17 @@ TRANSIENT_READY = {"Net3.inp": 30.0, "L-TOWN.inp": 30.0}
 DEFAULT_COEFF = 0.02
 
 
-def _transient(network: Path, pipes: list[str], coeff: float | None, flow: float | None) -> str:
+def _transient(
+    network: Path,
+    pipes: list[str],
+    coeff: float | None,
+    flow: float | None,
+    duration: float,
+    workers: int,
+) -> str:
     """The lowest junction pressure head over the transients of ``pipes`` once their bursts
-    start, and the most junctions a burst takes below zero (the solver's report)."""
+    start, the pipes whose burst takes the network lowest, and the most junctions a burst takes
+    below zero (the solver's report)."""
     from burstloc.sim.scenarios.scenario import burst_scenarios
     from burstloc.sim.signatures.burst_size import sized_scenarios
     from burstloc.sim.transient.tsnet import simulate_many
@@ -52,19 +63,29 @@ def _transient(network: Path, pipes: list[str], coeff: float | None, flow: float
     scenarios = burst_scenarios(
         network,
         pipes,
-        duration=30.0,
+        duration=duration,
         burst_coeff=coeff or DEFAULT_COEFF,
         opening_time=0.3,
         min_pipe_length=TRANSIENT_READY.get(network.name),
     )
     scenarios, _ = sized_scenarios(scenarios, flow)
-    report = simulate_many(scenarios, progress=False, workers=1)
-    lowest, below = np.inf, []
-    for _, result in report.succeeded():  # pressure heads, after the burst starts
-        after = result.time >= result.metadata["burst_start"]
-        lowest = min(lowest, float(result.heads[after].min()))
-        below.append(len(result.metadata.get("negative_pressure_nodes") or []))
-    return f"transient lowest {lowest:.1f} m, below zero at up to {max(below)} junctions"
+    lows: dict[str, float] = {}
+    below = [0]
+    for first in range(0, len(scenarios), 16):  # a few at a time: only their lowest kept
+        chunk = scenarios[first : first + 16]
+        report = simulate_many(chunk, cache=False, progress=False, workers=workers)
+        for _, result in report.succeeded():  # pressure heads, after the burst starts
+            after = result.time >= result.metadata["burst_start"]
+            lows[result.pipe] = float(result.heads[after].min())
+            below.append(len(result.metadata.get("negative_pressure_nodes") or []))
+    worst = sorted(lows, key=lows.__getitem__)[:3]
+    failed = len(pipes) - len(lows)
+    return (
+        f"{len(lows)} transients ({duration:g} s{f', {failed} failed' if failed else ''}): "
+        f"lowest {lows[worst[0]]:.1f} m ("
+        + ", ".join(f"{p} {lows[p]:.1f} m" for p in worst)
+        + f"), below zero at up to {max(below)} junctions"
+    )
 
 
 def main() -> None:
@@ -78,7 +99,11 @@ def main() -> None:
     parser.add_argument(
         "--coefficients", type=float, nargs="*", default=[DEFAULT_COEFF], metavar="C"
     )
-    parser.add_argument("--transient", type=int, default=0, metavar="N")
+    parser.add_argument(
+        "--transient", default="0", metavar="N|all", help="pipes simulated per network and size"
+    )
+    parser.add_argument("--duration", type=float, default=30.0, help="each transient, s")
+    parser.add_argument("--workers", type=int, default=1, help="simulations at once")
     parser.add_argument("--ltown", action="store_true")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory(prefix="bench-burst-size-") as tmp:
@@ -97,7 +122,8 @@ def main() -> None:
                 f"{network.name}: {len(pipes)} pipes, {wn.num_junctions} junctions, demand "
                 f"{1000 * demand:.1f} L/s, lowest pressure {pressure:.1f} m before any burst"
             )
-            sample = sorted(random.Random(0).sample(pipes, min(args.transient, len(pipes))))
+            count = len(pipes) if args.transient == "all" else int(args.transient)
+            sample = sorted(random.Random(0).sample(pipes, min(count, len(pipes))))
             sizes: list[tuple[str, float | None, float | None]] = [
                 (f"coefficient {c:g}", c, None) for c in args.coefficients
             ]
@@ -115,7 +141,9 @@ def main() -> None:
                     f"({time.perf_counter() - began:.0f} s)"
                 )
                 if sample:
-                    line += "; " + _transient(network, sample, coeff, flow)
+                    line += "; " + _transient(
+                        network, sample, coeff, flow, args.duration, args.workers
+                    )
                 print(line, flush=True)
 
 

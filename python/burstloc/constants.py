@@ -3,7 +3,8 @@
 * :data:`CAPTURE_INTERVALS`: the meters' reporting periods the paper evaluates (s).
 * :data:`WAVE_SPEED`: the pressure-wave speed TSNet and the paper use (m/s).
 * :data:`SCENARIO_DURATION`: how long a burst scenario is simulated (s).
-* :data:`BURST_FLOW`: the size of the commands' default burst (m³/s).
+* :data:`BURST_SHARE`, :data:`BURST_FLOW`: the size of the commands' default burst (a share of
+  the network's demand, at most a flow in m³/s).
 * :data:`DETECTORS`, :data:`RANKING_LOCALIZERS`, :data:`LOCALIZERS`: names accepted everywhere.
 * :data:`METER_MODELS` / :data:`MeterModel`: what a meter's reading is.
 * :data:`CANDIDATE_POSITIONS`: burst positions along a pipe that the localizers try.
@@ -19,6 +20,7 @@ from typing import Literal
 
 __all__ = [
     "BURST_FLOW",
+    "BURST_SHARE",
     "CANDIDATE_POSITIONS",
     "CAPTURE_INTERVALS",
     "CLOCK_TOLERANCE",
@@ -47,16 +49,24 @@ CAPTURE_INTERVALS: tuple[float, ...] = (0.2, 2.0, 5.0, 10.0)
 MAX_SAMPLE = 1e100
 """Capture intervals (s) of the paper's experiment, and the defaults of every command."""
 
-BURST_FLOW = 0.005
-"""The default burst of ``burstloc simulate`` and ``evaluate``: 5 L/s (m³/s here), the flow its
-emitter draws at the burst point's pressure before it opens. A burst a utility sees and a
-network can feed: opened in 0.3 s it leaves every junction above zero pressure through the
-transient on every committed network and EPANET's Net1, Net2 and Anytown, and on L-TOWN all but
-one of 64 measured pipes (that one: -0.8 m at one junction; 10 L/s dips below zero on 4 of 30),
-where the paper's
+BURST_SHARE = 0.05
+"""The default burst of ``burstloc simulate`` and ``evaluate`` draws this share of the network's
+demand (at the steady state it opens from), at most :data:`BURST_FLOW`: 2.0 L/s on L-TOWN
+(40.8 L/s of demand), 2.75 L/s on awumah11, 5 L/s on paper15 and the larger networks. A burst a
+utility sees and a network feeds: what a network carries is sized by its demand, so a share of
+it is a burst its mains can feed, where one flow for every network is a leak on a city's
+network and more than a district's pipes can take. Opened in 0.3 s it leaves every junction
+above zero pressure through the transient on every committed network, EPANET's Net1, Net2,
+Net3 and Anytown, and on every L-TOWN pipe (``benches/bench_burst_size.py``), where 5 L/s takes
+one L-TOWN junction to -0.8 m and 10 L/s dips below zero on 4 of 30 pipes; the paper's
 coefficient (0.02 m³/s/m^½: 127-276 L/s, up to 5 times a network's demand) takes junctions
-below zero on awumah11, Net2 and every L-TOWN burst (``benches/bench_burst_size.py``). The
-paper's experiment (``--localizer paper``) keeps the paper's coefficient."""
+below zero on awumah11, Net2 and every L-TOWN burst. The paper's experiment
+(``--localizer paper``) keeps the paper's coefficient."""
+
+BURST_FLOW = 0.005
+"""The largest default burst (m³/s): 5 L/s, the flow its emitter draws at the burst point's
+pressure before it opens (:data:`BURST_SHARE`)."""
+
 
 WAVE_SPEED = 1200.0
 """Pressure-wave speed (m/s): TSNet's default, the paper's setting."""

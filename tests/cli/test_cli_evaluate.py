@@ -235,14 +235,17 @@ def test_the_burst_size_reaches_the_simulation_and_the_record(tmp_path: Path) ->
     doc = json.loads((tmp_path / "r.json").read_text())
     jsonschema.validate(doc, SCHEMA)
     assert doc["scenario"]["burst_coeff"] == 0.002  # the parameters the bursts were built with
-    # the paper's experiment keeps the paper's burst; any other run's default is 5 L/s
+    # the paper's experiment keeps the paper's burst; any other run's default is 5 % of the
+    # demand (three junctions of 10 L/s), at most 5 L/s
     assert _evaluate_long_pipes(tmp_path) == 0
     default = json.loads((tmp_path / "r.json").read_text())["scenario"]["burst_coeff"]
     assert default == paper.SCENARIO.burst_coeff == 0.02
     assert _evaluate_long_pipes(tmp_path, "--localizer", "arrival") == 0
     scenario = json.loads((tmp_path / "r.json").read_text())["scenario"]
-    assert scenario["burst_flow_lps"] == 5.0 and "burst_coeff" not in scenario
-    assert scenario["burst_flows_lps"] == {"B": pytest.approx(5.0)}
+    assert scenario["burst_flow_lps"] == pytest.approx(1.5, rel=1e-4)
+    assert "burst_coeff" not in scenario
+    assert scenario["burst_flows_lps"] == {"B": pytest.approx(1.5, rel=1e-4)}
+    assert scenario["burst_sizing"] == "5 % of the network's demand, at most 5 L/s"
 
 
 def test_evaluate_takes_the_configurations_meters_or_the_ones_given(

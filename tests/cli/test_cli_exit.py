@@ -55,8 +55,10 @@ def test_simulate_help_shows_defaults_and_the_paper_burst(
     with pytest.raises(SystemExit):
         cli.main(["simulate", "--help"])
     text = " ".join(capsys.readouterr().out.split())
-    # the burst `evaluate` simulates: 5 L/s, opened in 0.3 s; the paper's coefficient named
-    assert "size every burst by its flow (default 5 L/s" in text
+    # the burst `evaluate` simulates: a share of the demand, opened in 0.3 s; the paper's
+    # coefficient named
+    assert "Default: 5 % of the network's demand, at most 5 L/s (2 L/s on L-TOWN)" in text
+    assert "--burst-share PCT size every burst as this percentage of the network's demand" in text
     assert "final emitter coefficient instead, m^3/s/m^0.5 (the paper's: 0.02" in text
     assert "how long the burst takes to open, s (default: 0.3)" in text
     assert "(default: None)" not in text

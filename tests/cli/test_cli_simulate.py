@@ -362,12 +362,23 @@ def test_a_burst_sized_by_its_flow(
     with pytest.raises(SystemExit):
         _run(*args, "--burst-flow", "5", "--burst-coeff", "0.01")
     capsys.readouterr()
-    # neither: the default burst, 5 L/s, said and recorded like a chosen one
+    # neither: the default burst, 5 % of the demand (248 L/s) capped at 5 L/s, said and
+    # recorded like a chosen one
     assert _run(*args) == 0
-    assert capsys.readouterr().out.startswith("burst on P7: 5 L/s at the burst point's")
+    default = "5 % of the network's demand, at most 5 L/s"
+    assert capsys.readouterr().out.startswith(f"burst on P7: 5 L/s ({default}) at the burst")
     meta = ScenarioResult.load(path).metadata
     assert meta["burst_flow_lps"] == pytest.approx(5.0)
     assert meta["burst_coeff"] == pytest.approx(0.005 / np.sqrt(pressure))
+    assert meta["burst_sizing"] == default
+    # a share of the demand, uncapped: 1 % of paper15's 248 L/s
+    assert _run(*args, "--burst-share", "1") == 0
+    assert capsys.readouterr().out.startswith(
+        "burst on P7: 2.48 L/s (1 % of the network's demand) at the burst"
+    )
+    assert ScenarioResult.load(path).metadata["burst_flow_lps"] == pytest.approx(2.48, abs=0.01)
+    assert _run(*args, "--burst-share", "120") == 2
+    assert "--burst-share must be a percentage in (0, 100], got 120" in capsys.readouterr().err
 
 
 def test_a_burst_the_network_cannot_feed_is_said(

@@ -14,6 +14,8 @@ from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.network import load_network, steady_state
 from burstloc.sim.scenarios.scenario import burst_scenarios
 from burstloc.sim.signatures.burst_size import (
+    DEFAULT_BURST,
+    BurstFlow,
     burst_point_pressure,
     burst_sizes,
     coeff_for_flow,
@@ -93,3 +95,29 @@ def test_scenarios_sized_by_flow_get_each_pipes_coefficient(paper15: Path) -> No
         assert scenario.burst_coeff == size.coeff == pytest.approx(0.012 / np.sqrt(size.pressure))
         assert scenario.position == size.position == 0.3
     assert sizes[0].coeff != sizes[1].coeff  # each pipe's own pressure
+
+
+def test_the_default_burst_is_a_share_of_the_demand_capped() -> None:
+    from burstloc.constants import BURST_FLOW, BURST_SHARE
+
+    # awumah11: 12 junctions of 5 L/s (55 L/s with its pressure-driven demand): 5 % is below
+    # the cap; paper15 (248 L/s): capped at 5 L/s
+    small = NETWORKS / "awumah11.inp"
+    demand = sum(q for q in steady_state(load_network(small)).demands.values() if q > 0)
+    assert 0.05 < demand < 0.1
+    (_, pipe) = load_network(small).pipe_name_list[:2]
+    _, (size,) = sized_scenarios(burst_scenarios(small, [pipe]), DEFAULT_BURST)
+    assert size.flow == pytest.approx(BURST_SHARE * demand) and size.flow < BURST_FLOW
+    _, (capped,) = sized_scenarios(burst_scenarios(NETWORKS / "paper15.inp", ["P7"]), DEFAULT_BURST)
+    assert capped.flow == pytest.approx(BURST_FLOW)
+    assert DEFAULT_BURST.describe() == "5 % of the network's demand, at most 5 L/s"
+    assert BurstFlow(share=0.01).of(0.248) == pytest.approx(0.00248)
+    assert BurstFlow(flow=0.002).of(10.0) == 0.002
+    with pytest.raises(ConfigError, match="draws no water"):
+        DEFAULT_BURST.of(0.0)
+    with pytest.raises(ConfigError, match="one of them"):
+        BurstFlow(flow=0.001, share=0.05)
+    with pytest.raises(ConfigError, match=r"share of the demand must be in \(0, 1\]"):
+        BurstFlow(share=1.5)
+    with pytest.raises(ConfigError, match="cap must be a positive number"):
+        BurstFlow(share=0.05, cap=-1.0)

@@ -7,12 +7,13 @@ import argparse
 import math
 from typing import TYPE_CHECKING, Any
 
-from burstloc.constants import BURST_FLOW, WAVE_SPEED
+from burstloc.constants import BURST_FLOW, BURST_SHARE, WAVE_SPEED
 from burstloc.exceptions import ConfigError
 
 if TYPE_CHECKING:
     from burstloc.network import NetworkSource
     from burstloc.sim.scenarios.cache import DiskCache
+    from burstloc.sim.signatures.burst_size import BurstFlow
 
 __all__ = [
     "DefaultsFormatter",
@@ -92,9 +93,11 @@ def add_wave_speed_option(parser: Options, help: str = "pressure wave speed, m/s
 
 
 def add_burst_options(parser: Options, position: float | None) -> None:
-    """``--position F``, ``--burst-coeff C`` and ``--burst-flow L/S``: where each burst opens
-    and its size, as a flow (default :data:`~burstloc.constants.BURST_FLOW`) or as an emitter
-    coefficient (:func:`burst_size_of` reads them)."""
+    """``--position F``, ``--burst-flow L/S``, ``--burst-share PCT`` and ``--burst-coeff C``:
+    where each burst opens and its size, as a flow, a share of the network's demand (the
+    default: :data:`~burstloc.constants.BURST_SHARE`, at most
+    :data:`~burstloc.constants.BURST_FLOW`) or an emitter coefficient (:func:`burst_size_of`
+    reads them)."""
     where = (
         "where each burst opens, as a fraction of its pipe's length from the pipe's INP start "
         "node, strictly between 0 and 1"
@@ -108,11 +111,20 @@ def add_burst_options(parser: Options, position: float | None) -> None:
         type=float,
         default=None,
         metavar="L/S",
-        help=f"size every burst by its flow (default {1000 * BURST_FLOW:g} L/s, a burst every "
-        "committed network feeds with its pressures above zero; the paper's experiment, "
-        "--localizer paper, keeps the paper's coefficient 0.02): each pipe's emitter "
-        "coefficient draws this many L/s at its burst point's pressure before it opens (the "
-        "flow falls as the pressure does); printed and recorded either way",
+        help="size every burst by its flow: each pipe's emitter coefficient draws this many L/s "
+        "at its burst point's pressure before it opens (the flow falls as the pressure does). "
+        f"Default: {100 * BURST_SHARE:g} %% of the network's demand, at most "
+        f"{1000 * BURST_FLOW:g} L/s (2 L/s on L-TOWN), a burst every committed network and "
+        "L-TOWN feed with their pressures above zero; the paper's experiment, --localizer "
+        "paper, keeps the paper's coefficient 0.02. Printed and recorded either way",
+    )
+    sizes.add_argument(
+        "--burst-share",
+        type=float,
+        default=None,
+        metavar="PCT",
+        help="size every burst as this percentage of the network's demand (at the steady "
+        "state it opens from) instead",
     )
     sizes.add_argument(
         "--burst-coeff",
@@ -127,14 +139,17 @@ def add_burst_options(parser: Options, position: float | None) -> None:
 
 def burst_size_of(
     args: argparse.Namespace, *, paper: bool = False
-) -> tuple[float | None, float | None]:
-    """The bursts' size from ``--burst-coeff``/``--burst-flow``: ``(coefficient, flow)``, one of
-    them ``None``; the flow in m³/s. Neither given: :data:`~burstloc.constants.BURST_FLOW`, or
-    with ``paper`` (the paper's experiment) ``(None, None)``: the scenario's own coefficient.
+) -> tuple[float | None, BurstFlow | None]:
+    """The bursts' size from ``--burst-coeff``/``--burst-flow``/``--burst-share``:
+    ``(coefficient, flow)``, one of them ``None``. Neither given: the default flow
+    (:data:`~burstloc.sim.signatures.burst_size.DEFAULT_BURST`), or with ``paper`` (the paper's
+    experiment) ``(None, None)``: the scenario's own coefficient.
 
     Raises:
-        ConfigError: a size that is not a positive finite number.
+        ConfigError: a size that is not a positive finite number, a share above 100 %.
     """
+    from burstloc.sim.signatures.burst_size import DEFAULT_BURST, BurstFlow
+
     if args.burst_coeff is not None:
         if not (math.isfinite(args.burst_coeff) and args.burst_coeff > 0):
             raise ConfigError(f"--burst-coeff must be a positive number, got {args.burst_coeff}")
@@ -144,8 +159,13 @@ def burst_size_of(
             raise ConfigError(
                 f"--burst-flow must be a positive number of L/s, got {args.burst_flow}"
             )
-        return None, args.burst_flow / 1000.0
-    return (None, None) if paper else (None, BURST_FLOW)
+        return None, BurstFlow(flow=args.burst_flow / 1000.0)
+    share = getattr(args, "burst_share", None)
+    if share is not None:
+        if not (math.isfinite(share) and 0 < share <= 100):
+            raise ConfigError(f"--burst-share must be a percentage in (0, 100], got {share}")
+        return None, BurstFlow(share=share / 100.0)
+    return (None, None) if paper else (None, DEFAULT_BURST)
 
 
 def add_run_options(parser: argparse.ArgumentParser, *, cache: bool = True) -> None:

@@ -42,7 +42,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         description=(
             "Burst each pipe (simulated once, cached), stream the meters' readings at each "
             "capture interval through the detectors and a localizer, and report accuracy. With "
-            "no options: a 5 L/s burst mid-pipe, the fused localizer, both detectors x capture "
+            "no options: a burst of 5 %% of the network's demand (at most 5 L/s) mid-pipe, the "
+            "fused localizer, both detectors x capture "
             "intervals 0.2, 2, 5, 10 s. With --localizer paper: the paper's experiment (its "
             "burst, coefficient 0.02, and Tables I/II parameters), printed beside the paper's "
             "Tables III-V; `--localizer paper fused` shows both on the paper's burst."
@@ -236,7 +237,8 @@ def run(args: argparse.Namespace) -> int:
     if args.min_pipe_length is not None:
         scenario = replace(scenario, min_pipe_length=args.min_pipe_length)
     scenario = replace(scenario, solver=args.solver)
-    # the paper's experiment keeps the paper's burst; every other run a utility's (5 L/s)
+    # the paper's experiment keeps the paper's burst; every other run a utility's (a share of
+    # the demand)
     coeff, flow = burst_size_of(args, paper="paper" in args.localizer)
     if coeff is not None:
         scenario = replace(scenario, burst_coeff=coeff)
@@ -262,7 +264,7 @@ def run(args: argparse.Namespace) -> int:
         keep_heads=bool(args.plot or args.events),
         burst_flow=flow,
     )
-    print(_flows_line(ev.scenario["burst_flows_lps"]))
+    print(_flows_line(ev.scenario))
     print(report.format_tables(ev, True if args.paper_tables else None), end="")
     if args.events:
         _events(args, network, ev, cache)
@@ -278,12 +280,15 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _flows_line(flows: dict[str, float]) -> str:
-    """The bursts' nominal flows (L/s) in one line."""
-    ordered = sorted(flows.values())
+def _flows_line(scenario: dict[str, Any]) -> str:
+    """The bursts' nominal flows (L/s) and how they were chosen, in one line."""
+    ordered = sorted(scenario["burst_flows_lps"].values())
+    sizing = scenario.get("burst_sizing")
+    chosen = f"; sized as {sizing}" if sizing and "%" in sizing else ""
     return (
         f"the bursts drew {ordered[0]:.3g}-{ordered[-1]:.3g} L/s (median "
-        f"{ordered[len(ordered) // 2]:.3g}) at their burst points' pressure before they opened"
+        f"{ordered[len(ordered) // 2]:.3g}) at their burst points' pressure before they "
+        f"opened{chosen}"
     )
 
 

@@ -49,7 +49,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
             "Simulate a burst on each chosen pipe (split at --position) and write the pressure "
             "head of every junction over time, one NPZ file per pipe: arrays time (T,), heads "
             "(T, M), junctions (M,) and metadata (a JSON string). Results are cached. The burst "
-            "is the one `burstloc evaluate` simulates (5 L/s, opened in 0.3 s, at 10 s; "
+            "is the one `burstloc evaluate` simulates (5 %% of the network's demand, at most "
+            "5 L/s, opened in 0.3 s, at 10 s; "
             "--burst-coeff 0.02 is the paper's). With --feed FILE (one pipe or --event, and "
             "--capture-interval): "
             "also the readings the meters would send, in the CSV form `burstloc monitor "
@@ -172,7 +173,7 @@ def run(args: argparse.Namespace) -> int:
     from burstloc.sim.signatures.burst_size import describe_sizes, sized_scenarios, with_size
 
     scenarios, sizes = sized_scenarios(scenarios, flow)
-    print(describe_sizes(sizes))
+    print(describe_sizes(sizes, flow))
     size_of = {s.pipe: size for s, size in zip(scenarios, sizes, strict=True)}
     cache = cache_of(args)
     report = simulate_many(
@@ -190,7 +191,7 @@ def run(args: argparse.Namespace) -> int:
         negative = result.negative_pressure(shown=5)  # more than the network can feed there
         if negative is not None:
             print(f"burstloc: warning: {negative}", file=sys.stderr)
-        result = with_size(result, size_of[result.pipe])
+        result = with_size(result, size_of[result.pipe], flow)
         if args.capture_interval is not None:
             result = result.resample(args.capture_interval, args.capture_phase)
         result.save(scenario.output_path(args.out, result))

@@ -72,6 +72,7 @@ if TYPE_CHECKING:
     from burstloc.network import NetworkSource
     from burstloc.sim.scenarios.scenario import ScenarioResult
     from burstloc.sim.scenarios.sensors import SensorModel
+    from burstloc.sim.signatures.burst_size import BurstFlow
 
 __all__ = [
     "DEFAULT_LOCALIZER",
@@ -106,7 +107,7 @@ def evaluate(
     noise: float | None = None,
     noise_seed: int = 0,
     keep_heads: bool = True,
-    burst_flow: float | None = None,
+    burst_flow: float | BurstFlow | None = None,
 ) -> Evaluation:
     """Run the experiment: simulate (cached), stream, localize and score every run.
 
@@ -139,11 +140,13 @@ def evaluate(
     a number adds that noise to every run's readings, ``0`` none. The JSON's ``scenario``
     records it.
 
-    ``burst_flow`` (m³/s) sizes every burst by its flow instead of the scenario's coefficient:
+    ``burst_flow`` (m³/s, or a :class:`~burstloc.sim.signatures.burst_size.BurstFlow`: a share of
+    the network's demand) sizes every burst by its flow instead of the scenario's coefficient:
     each pipe's coefficient draws it at its burst point's pressure before it opens
     (:mod:`burstloc.sim.signatures.burst_size`). The JSON's ``scenario`` records each burst's
     nominal flow either way (``burst_flows_lps``, per pipe) and, sized by flow,
-    ``burst_flow_lps`` and each pipe's coefficient (``burst_coeffs``) in place of
+    ``burst_flow_lps``, how it was chosen (``burst_sizing``, e.g. "5 % of the network's demand,
+    at most 5 L/s") and each pipe's coefficient (``burst_coeffs``) in place of
     ``burst_coeff``.
 
     Raises:
@@ -196,7 +199,12 @@ def evaluate(
     scenarios, sizes = sized_scenarios(scenarios, burst_flow)
     if burst_flow is not None:
         del params["burst_coeff"]
-        params["burst_flow_lps"] = 1000.0 * burst_flow
+        params["burst_flow_lps"] = round(sizes[0].flow_lps, 6)
+        params["burst_sizing"] = (
+            burst_flow.describe()
+            if not isinstance(burst_flow, (int, float))
+            else f"{1000 * burst_flow:g} L/s"
+        )
         params["burst_coeffs"] = {s.pipe: s.coeff for s in sizes}
     params["burst_flows_lps"] = {s.pipe: round(s.flow_lps, 3) for s in sizes}
     ranked = [spec for spec in runs if spec.localizer != "paper"]

@@ -26,10 +26,13 @@ from typing import Any
 
 import numpy as np
 
+from burstloc.constants import BURST_FLOW, BURST_SHARE
 from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.sim.scenarios.scenario import BurstScenario, ScenarioResult
 
 __all__ = [
+    "DEFAULT_BURST",
+    "BurstFlow",
     "BurstSize",
     "burst_point_pressure",
     "burst_sizes",
@@ -61,6 +64,61 @@ class BurstSize:
     def flow_lps(self) -> float:
         """The nominal flow in L/s."""
         return 1000.0 * self.flow
+
+
+@dataclass(frozen=True)
+class BurstFlow:
+    """Bursts sized by their flow: ``flow`` (m³/s) on every network, or ``share`` of the
+    network's demand (the junctions' demand at the steady state the burst opens from; 0.05 is
+    5 %), at most ``cap`` (m³/s) when given. Exactly one of ``flow`` and ``share``.
+
+    Raises:
+        ConfigError: neither or both of ``flow`` and ``share``, a flow or cap that is not a
+            positive number, a share not in (0, 1].
+    """
+
+    flow: float | None = None
+    share: float | None = None
+    cap: float | None = None
+
+    def __post_init__(self) -> None:
+        if (self.flow is None) == (self.share is None):
+            raise ConfigError("size the burst by a flow or by a share of the demand: one of them")
+        for name, value in (("flow", self.flow), ("cap", self.cap)):
+            if value is not None and not (math.isfinite(value) and value > 0):
+                raise ConfigError(f"the burst {name} must be a positive number, got {value}")
+        if self.share is not None and not (math.isfinite(self.share) and 0 < self.share <= 1):
+            raise ConfigError(
+                f"the burst's share of the demand must be in (0, 1], got {self.share}"
+            )
+
+    def of(self, demand: float) -> float:
+        """The flow (m³/s) on a network whose junctions draw ``demand`` (m³/s).
+
+        Raises:
+            ConfigError: sized by a share of a network that draws no water.
+        """
+        if self.flow is not None:
+            return self.flow
+        if not demand > 0:
+            raise ConfigError(
+                "the network draws no water at its steady state: size the burst by its flow "
+                "(--burst-flow) or its coefficient (--burst-coeff)"
+            )
+        flow = float(self.share) * demand  # type: ignore[arg-type]
+        return flow if self.cap is None else min(flow, self.cap)
+
+    def describe(self) -> str:
+        """How the flow is chosen, in words (printed and recorded)."""
+        if self.flow is not None:
+            return f"{1000 * self.flow:g} L/s"
+        cap = "" if self.cap is None else f", at most {1000 * self.cap:g} L/s"
+        return f"{100 * float(self.share):g} % of the network's demand{cap}"  # type: ignore[arg-type]
+
+
+DEFAULT_BURST = BurstFlow(share=BURST_SHARE, cap=BURST_FLOW)
+"""The commands' default burst: :data:`~burstloc.constants.BURST_SHARE` of the network's demand,
+at most :data:`~burstloc.constants.BURST_FLOW`."""
 
 
 def coeff_for_flow(flow: float, pressure: float) -> float:
@@ -153,33 +211,36 @@ def burst_sizes(
 
 
 def sized_scenarios(
-    scenarios: Sequence[BurstScenario], flow: float | None = None
+    scenarios: Sequence[BurstScenario], flow: float | BurstFlow | None = None
 ) -> tuple[list[BurstScenario], list[BurstSize]]:
-    """The bursts ``scenarios`` with their sizes: with ``flow`` (m³/s) each one's coefficient
-    set to draw that flow at its burst point's pressure before it opens; without, their own
-    coefficients and the flows those draw there. The network's steady state is solved once
-    per network file (its engine the first scenario's).
+    """The bursts ``scenarios`` with their sizes: with ``flow`` (m³/s, or a :class:`BurstFlow`:
+    a share of each network's demand) each one's coefficient set to draw that flow at its burst
+    point's pressure before it opens; without, their own coefficients and the flows those draw
+    there. The network's steady state is solved once per network file (its engine the first
+    scenario's).
 
     Raises:
-        ConfigError: a bad flow, a burst point without pressure to size by flow.
+        ConfigError: a bad flow, a burst point without pressure to size by flow, a share of a
+            network that draws no water.
         NetworkError: an unknown pipe; EPANET cannot solve the network.
     """
-    from burstloc.network import load_network
+    from burstloc.network import load_network, steady_state
 
+    sizing = BurstFlow(flow=flow) if isinstance(flow, (int, float)) else flow
     out: list[BurstScenario] = []
     sizes: list[BurstSize] = []
-    pressures: dict[tuple[str, str, float], dict[str, float]] = {}
+    solved: dict[tuple[str, str], tuple[Any, dict[str, float], float]] = {}
     for s in scenarios:
-        key = (s.network, s.engine, s.position)
-        if key not in pressures:
-            group = [x.pipe for x in scenarios if (x.network, x.engine, x.position) == key]
+        if (s.network, s.engine) not in solved:
             wn = load_network(s.network)
-            found = burst_sizes(wn, group, s.position, coeff=1.0, engine=s.engine)
-            pressures[key] = {b.pipe: b.pressure for b in found}
-        pressure = pressures[key][s.pipe]
-        coeff = s.burst_coeff if flow is None else coeff_for_flow(flow, pressure)
+            state = steady_state(wn, s.engine)
+            demand = sum(q for q in state.demands.values() if q > 0)
+            solved[(s.network, s.engine)] = (wn, state.heads, demand)
+        wn, heads, demand = solved[(s.network, s.engine)]
+        pressure = burst_point_pressure(wn, heads, s.pipe, s.position)
+        coeff = s.burst_coeff if sizing is None else coeff_for_flow(sizing.of(demand), pressure)
         sizes.append(_size(s.pipe, s.position, pressure, coeff))
-        out.append(s if flow is None else replace(s, burst_coeff=coeff))
+        out.append(s if sizing is None else replace(s, burst_coeff=coeff))
     return out, sizes
 
 
@@ -188,24 +249,31 @@ def _size(pipe: str, position: float, pressure: float, coeff: float) -> BurstSiz
     return BurstSize(pipe, position, pressure, coeff, coeff * math.sqrt(max(pressure, 0.0)))
 
 
-def with_size(result: ScenarioResult, size: BurstSize) -> ScenarioResult:
-    """``result`` with its burst's nominal flow (``burst_flow_lps``, L/s) and the burst point's
-    pressure before it opened (``burst_pressure_m``, m) in its metadata."""
+def with_size(
+    result: ScenarioResult, size: BurstSize, sizing: BurstFlow | None = None
+) -> ScenarioResult:
+    """``result`` with its burst's nominal flow (``burst_flow_lps``, L/s), the burst point's
+    pressure before it opened (``burst_pressure_m``, m) and, sized by a :class:`BurstFlow`, how
+    the flow was chosen (``burst_sizing``) in its metadata."""
     meta = {
         **result.metadata,
         "burst_flow_lps": round(size.flow_lps, 6),
         "burst_pressure_m": round(size.pressure, 6),
     }
+    if sizing is not None:
+        meta["burst_sizing"] = sizing.describe()
     return replace(result, metadata=meta)
 
 
-def describe_sizes(sizes: Sequence[BurstSize]) -> str:
+def describe_sizes(sizes: Sequence[BurstSize], sizing: BurstFlow | None = None) -> str:
     """What the bursts draw, in one line: one burst's flow, pressure and coefficient, or the
-    range of several (``burstloc simulate`` and ``evaluate`` print it)."""
+    range of several, and how the flow was chosen when ``sizing`` is given (``burstloc
+    simulate`` prints it)."""
+    chosen = "" if sizing is None or sizing.share is None else f" ({sizing.describe()})"
     if len(sizes) == 1:
         (size,) = sizes
         return (
-            f"burst on {size.pipe}: {size.flow_lps:.3g} L/s at the burst point's "
+            f"burst on {size.pipe}: {size.flow_lps:.3g} L/s{chosen} at the burst point's "
             f"{size.pressure:.1f} m of pressure head before it opens (emitter coefficient "
             f"{size.coeff:.3g} m^3/s/m^0.5)"
         )
@@ -213,6 +281,6 @@ def describe_sizes(sizes: Sequence[BurstSize]) -> str:
     coeffs = sorted(s.coeff for s in sizes)
     return (
         f"{len(sizes)} bursts: {flows[0]:.3g}-{flows[-1]:.3g} L/s (median "
-        f"{flows[len(flows) // 2]:.3g}) at their burst points' pressure before they open "
-        f"(emitter coefficients {coeffs[0]:.3g}-{coeffs[-1]:.3g} m^3/s/m^0.5)"
+        f"{flows[len(flows) // 2]:.3g}){chosen} at their burst points' pressure before they "
+        f"open (emitter coefficients {coeffs[0]:.3g}-{coeffs[-1]:.3g} m^3/s/m^0.5)"
     )
