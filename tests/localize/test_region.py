@@ -9,14 +9,8 @@ import pytest
 
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.localize.evidence import BurstEvidence, MeterAlarm, RankedPipe, Ranking
-from burstloc.localize.region import (
-    TAIL_DOF,
-    DropFit,
-    RegionGrid,
-    grid_of,
-    posterior,
-    timing_scale,
-)
+from burstloc.localize.region import DropFit, RegionGrid, grid_of, posterior
+from burstloc.localize.timing_error import TAIL_DOF, timing_scale
 from line_network import METERS, WAVE, line_arrival
 
 PIPE_OF = {0: "p01", 1: "p12", 2: "p23"}
@@ -170,8 +164,10 @@ def test_a_region_needs_evidence_that_places_the_burst() -> None:
 
 def test_a_wave_slower_than_the_model_s_stays_in_the_region_with_a_tolerance() -> None:
     """Every travel time 1/0.85 of the model's (the mains' wave speed 15 % below the model's):
-    100 m along the line, the region with no tolerance misses the burst; with the default
-    tolerance (5 % of each travel time) it holds it, and a wider tolerance widens it."""
+    100 m along the line, the region with no tolerance still holds the burst, because the
+    alarms' misfits at the best point widen the timing error (it is longer than the region of
+    arrivals as the model says); with the default tolerance (5 % of each travel time) it holds
+    it, and so does a wider one, neither shorter than the region of arrivals as the model says."""
     from burstloc.constants import WAVE_SPEED_TOLERANCE
     from burstloc.localize.arrival import ArrivalLocalizer
 
@@ -192,8 +188,33 @@ def test_a_wave_slower_than_the_model_s_stays_in_the_region_with_a_tolerance() -
     exact = posterior(arrival(0.0), evidence).region()
     tolerant = posterior(arrival(WAVE_SPEED_TOLERANCE), evidence).region()
     wide = posterior(arrival(0.15), evidence).region()
-    assert not exact.contains(*_truth(x))
+    as_said = posterior(arrival(0.0), _evidence(x, 0.01)).region()
+    assert exact.contains(*_truth(x)) and as_said.contains(*_truth(x))
+    assert as_said.length < exact.length
     assert tolerant.contains(*_truth(x)) and wide.contains(*_truth(x))
-    assert exact.length < tolerant.length < wide.length
+    assert as_said.length <= min(tolerant.length, wide.length)
     # with arrivals as the model says, the tolerance still holds the burst
     assert posterior(arrival(0.15), _evidence(x, 0.01)).region().contains(*_truth(x))
+
+
+def test_the_misfits_own_scale_trims_the_outliers_and_counts_the_fit() -> None:
+    from burstloc.localize.timing_error import (
+        FIT_PARAMETERS,
+        STATED_DOF,
+        misfit_scale,
+        widened_scale,
+    )
+
+    # 10 misfits: the largest (an outlier) left out, the RMS of the 9 others over 9 - 3 dof
+    gaps = np.array([0.0, 0.01, -0.02, 0.0, 0.03, 0.0, 0.01, -0.01, 0.0, 5.0])
+    kept = np.sort(np.abs(gaps))[:9]
+    assert FIT_PARAMETERS == 3
+    shown, dof = misfit_scale(gaps)
+    assert dof == 6 and shown == pytest.approx(np.sqrt(np.sum(kept**2) / 6))
+    assert misfit_scale(np.zeros(12)) == (0.0, 8)  # every alarm in its window (one trimmed)
+    assert misfit_scale(np.array([0.3, 0.4, 0.5])) == (0.0, 0)  # the fit leaves no freedom
+    # pooled with the stated scale: never below it, towards the misfits as they count more
+    assert widened_scale(0.03, 0.0, 9) == 0.03
+    few, many = widened_scale(0.03, 0.3, 1), widened_scale(0.03, 0.3, 40)
+    assert few == pytest.approx(np.sqrt((STATED_DOF * 0.03**2 + 0.3**2) / (STATED_DOF + 1)))
+    assert 0.03 < few < many < 0.3

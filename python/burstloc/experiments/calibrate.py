@@ -17,7 +17,8 @@ found by bisection on the number of false alarms per simulated hour. When the ta
 to be counted on a stream of ``max_samples`` readings, the tail is extrapolated: alarm rates
 fall exponentially with the threshold, so the thresholds that give 100 and 10 alarms per stream
 fix the slope. Floors keep a noise-free model usable: the CUSUM drift is ``max(sigma,
-resolution)`` and every threshold at least ``10 * resolution`` (``resolution`` = 1 mm, a
+resolution)`` per reading (per 0.2 s at finer capture intervals: :func:`cusum_threshold`) and
+every threshold at least ``10 * resolution`` (``resolution`` = 1 mm, a
 meter's display step). The Shewhart multiplier ``s`` is 3 (the classic control limits) and its
 reference window is ``2 * localization_interval`` readings, as in the streaming detector.
 
@@ -99,6 +100,10 @@ DEFAULT_NOISE_SIGMA = 0.01
 """Default sensor noise (m) when neither a sigma nor recorded readings are given."""
 RESOLUTION = 0.001
 """Display step of a meter (m): the floor of the CUSUM drift; thresholds are at least 10x it."""
+DRIFT_INTERVAL = 0.2
+"""The finest capture interval (s) whose CUSUM drift is one noise level per reading (the
+paper's rule, kept from its 0.2 s up): finer, the drift is that same rate of change per second,
+``sigma * dt / DRIFT_INTERVAL`` per reading (:func:`cusum_threshold`)."""
 SHEWHART_SIGMA = 3.0
 """Shewhart control-limit multiplier ``s``."""
 SIGNATURE_SETTLE = 20.0
@@ -246,8 +251,16 @@ def cusum_threshold(
     max_samples: int = _MAX_SAMPLES,
 ) -> tuple[float, float]:
     """``(threshold, drift)`` of a CUSUM meeting ``false_alarm_rate`` (alarms per hour) on
-    Gaussian noise of standard deviation ``sigma`` (m) read every ``capture_interval`` s."""
-    drift = max(sigma, RESOLUTION)
+    Gaussian noise of standard deviation ``sigma`` (m) read every ``capture_interval`` s.
+
+    The CUSUM sums successive differences less the drift, so a front that changes the head by
+    less than the drift per reading is never summed. The paper's drift, one noise level per
+    reading, is kept from :data:`DRIFT_INTERVAL` up; at finer intervals it would hide every
+    front slower than ``sigma / dt`` (2.5 m/s at 250 Hz and 1 cm of noise: a 1 m front over
+    the 0.3 s a burst takes to open is never seen), so there the drift is the same rate per
+    second, ``sigma * dt / DRIFT_INTERVAL`` per reading, and the threshold rises to keep the
+    false-alarm rate."""
+    drift = max(sigma, RESOLUTION) * min(1.0, capture_interval / DRIFT_INTERVAL)
     cusum = partial(_core.Cusum, drift=drift)
     threshold = _threshold(cusum, sigma, capture_interval, false_alarm_rate, (seed, max_samples))
     return threshold, drift
@@ -295,7 +308,7 @@ def calibrate(
 
     ``wave_speed_tolerance`` (a share of each travel time) and ``clock_tolerance`` (s): how well
     the wave speed and the meters' clocks are known, stored in the localization model for its
-    search regions (:func:`burstloc.localize.region.timing_scale`).
+    search regions (:func:`burstloc.localize.timing_error.timing_scale`).
 
     The noise comes from ``baseline`` (recorded burst-free readings, checked by
     :func:`check_baseline`; their meters are the meters) or from ``noise_sigma`` (default

@@ -237,7 +237,7 @@ class ArrivalLocalizer:
             raise ConfigError(f"clock_tolerance must be >= 0 s, got {clock_tolerance}")
         self.wave_speed_tolerance = float(wave_speed_tolerance)
         """Relative uncertainty of a travel time along a path (the search regions' timing
-        error grows with the path: :func:`burstloc.localize.region.timing_scale`)."""
+        error grows with the path: :func:`burstloc.localize.timing_error.timing_scale`)."""
         self.clock_tolerance = float(clock_tolerance)
         """Uncertainty (s) of each meter's clock."""
         pos = np.array(sorted(set(float(x) for x in positions)), dtype=np.float64)

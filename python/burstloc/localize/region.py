@@ -13,13 +13,13 @@ middle of each segment is a candidate point, with a prior proportional to the se
 * **arrivals**: each meter's timing misfit, the distance from the burst time ``t0`` to the
   window its alarm allows (:meth:`burstloc.localize.arrival.ArrivalLocalizer.windows`: an alarm
   start is known to one capture interval ``dt``; a silent meter says the wave has not come
-  yet). The misfit beyond the window is the detector's placement of the change and the model's
-  error: a Student-t error (:data:`TAIL_DOF` degrees of freedom) of scale ``sqrt((
-  TIMING_INTERVALS dt)^2 + TIMING_FLOOR^2 + clock^2 + (tolerance x travel)^2)`` (the meters'
-  clock uncertainty, and the wave speed known to a ``tolerance`` of it along the ``travel``
-  time from the point to the meter: :func:`timing_scale`), mixed with a chance :data:`OUTLIER`
-  that the meter's alarm says nothing of the first wave (a weak front heard late, on a later
-  reflection), uniform over the arrival horizon. A silence is weaker evidence: a meter the
+  yet), costed by the timing error of :mod:`burstloc.localize.timing_error` (a Student-t of
+  the stated scale mixed with an outlier chance). The stated scale is a floor, not a promise:
+  where the alarms' own misfits at the best-fitting point show a larger timing error (a model
+  whose wave speeds, lengths or clocks are further off than stated, fronts heard late), every
+  scale is widened towards what they show
+  (:func:`~burstloc.localize.timing_error.widened_scale`), so the region's probability stays
+  honest on networks whose errors nobody measured. A silence is weaker evidence: a meter the
   wave has reached may stay silent (:data:`SILENT_MISS`), so its misfit costs at most
   ``-log(SILENT_MISS)``. ``t0`` is the best of the least-squares fit and the window ends of the
   :data:`ANCHORS` earliest alarms;
@@ -53,6 +53,12 @@ from burstloc.localize.arrival import ArrivalLocalizer, fit_windows, window_misf
 from burstloc.localize.evidence import BurstEvidence, Ranking
 from burstloc.localize.fused import SIGNATURE_FLOOR, FusedLocalizer
 from burstloc.localize.signature import rank_drop
+from burstloc.localize.timing_error import (
+    misfit_scale,
+    timing_penalty,
+    timing_scale,
+    widened_scale,
+)
 
 __all__ = [
     "DROP_MODEL_ERROR",
@@ -68,8 +74,6 @@ __all__ = [
     "grid_of",
     "posterior",
     "region_posterior",
-    "timing_penalty",
-    "timing_scale",
 ]
 
 REGION_CONFIDENCE = 0.95
@@ -85,20 +89,6 @@ GRID_STEP = 25.0
 MAX_GRID_POINTS = 20_000
 """Most candidate points of a grid: beyond it the segments are made longer."""
 
-TIMING_INTERVALS = 0.5
-"""Timing error beyond the capture interval, in capture intervals: where in its interval the
-detector places a change it sees one reading late or early."""
-
-TIMING_FLOOR = 0.02
-"""Timing error (s) of the model itself: path lengths and wave speed (20 ms is 24 m of wave
-travel at 1200 m/s)."""
-
-TAIL_DOF = 3.0
-"""Degrees of freedom of the Student-t timing error."""
-
-OUTLIER = 0.05
-"""Chance that a meter's alarm start says nothing of the burst's first wave."""
-
 SILENT_MISS = 0.2
 """Chance that a meter the burst's wave has reached stays silent: a front near the detection
 threshold, weakened on its way (a silence is weaker evidence than an alarm: its misfit costs at
@@ -107,10 +97,6 @@ most ``-log(SILENT_MISS)``)."""
 ANCHORS = 8
 """The burst time is also tried at the window ends of this many alarmed meters (the earliest):
 a fit that takes one late meter as an outlier."""
-
-_T_PEAK = math.gamma(0.5 * (TAIL_DOF + 1)) / (
-    math.sqrt(TAIL_DOF * math.pi) * math.gamma(0.5 * TAIL_DOF)
-)
 
 DROP_MODEL_ERROR = 0.1
 """Error of the lasting drop's hydraulic model (EPANET's steady state against the settled
@@ -255,23 +241,6 @@ def grid_of(arrival: ArrivalLocalizer) -> RegionGrid:
     return grid
 
 
-def timing_scale(
-    capture_interval: float,
-    travel: NDArray[np.float64] | float = 0.0,
-    wave_speed_tolerance: float = 0.0,
-    clock_tolerance: float = 0.0,
-) -> NDArray[np.float64] | float:
-    """Scale (s) of the timing error beyond the capture interval (module docstring): the
-    detector's placement of the change, the model's floor, each meter's clock and the wave's
-    travel time ``travel`` (s, from the candidate point to the meter) known to
-    ``wave_speed_tolerance`` of itself, added in quadrature."""
-    base = math.hypot(TIMING_INTERVALS * capture_interval, TIMING_FLOOR, clock_tolerance)
-    if wave_speed_tolerance == 0:
-        return base
-    spread = wave_speed_tolerance * np.where(np.isfinite(travel), travel, 0.0)
-    return np.asarray(np.hypot(base, spread), dtype=np.float64)
-
-
 @dataclass(frozen=True)
 class Posterior:
     """Probabilities of the candidate points of ``grid`` (``probability``, summing to 1)."""
@@ -320,26 +289,12 @@ class Posterior:
         )
 
 
-def timing_penalty(
-    gap: NDArray[np.float64], scale: NDArray[np.float64] | float, horizon: float
-) -> NDArray[np.float64]:
-    """Minus the log-likelihood of timing misfits ``gap`` (s), 0 at no misfit: a Student-t
-    error of ``scale`` s (a number, or one per misfit) mixed with an :data:`OUTLIER` uniform
-    over ``horizon`` s."""
-    z = gap / scale
-    kernel = np.power(1.0 + z * z / TAIL_DOF, -0.5 * (TAIL_DOF + 1.0))
-    flat = OUTLIER * scale / (np.maximum(horizon, scale) * _T_PEAK)
-    return np.asarray(
-        np.log((1.0 - OUTLIER) + flat) - np.log((1.0 - OUTLIER) * kernel + flat),
-        dtype=np.float64,
-    )
-
-
 def _arrival_penalty(
     arrival: ArrivalLocalizer, grid: RegionGrid, evidence: BurstEvidence
 ) -> NDArray[np.float64]:
     """Each grid point's timing penalty (module docstring), ``inf`` where it explains no
-    alarm."""
+    alarm; the timing error widened to what the alarms' misfits at the best point show when
+    that is more than the stated one (:func:`misfit_scale`)."""
     lo, hi, _, count = arrival.windows(grid.dist[:, None, :], evidence, grid.rows)
     lo, hi = lo[:, 0, :], hi[:, 0, :]
     says = np.isfinite(lo)
@@ -354,18 +309,31 @@ def _arrival_penalty(
     gap, placed = fit_windows(lo, hi, count, evidence.capture_interval)
     cap = np.full(says.shape[1], np.inf)
     cap[count:] = -math.log(SILENT_MISS)
-
-    def total(miss: NDArray[np.float64]) -> NDArray[np.float64]:
-        pen = np.minimum(timing_penalty(miss, scale, horizon), cap)
-        return np.asarray(np.sum(np.where(says, pen, 0.0), axis=1), dtype=np.float64)
-
-    best = total(gap)
     starts = [evidence.alarms[m].start for m in arrival.meters if m in evidence.alarms]
-    for j in np.argsort(starts, kind="stable")[:ANCHORS].tolist():
-        for t0 in (lo[:, j], hi[:, j]):
-            miss = window_misfit(lo, hi, np.where(np.isfinite(t0), t0, 0.0)[:, None])
-            best = np.minimum(best, np.where(says[:, j], total(miss), np.inf))
-    return np.asarray(np.where(placed, best, np.inf), dtype=np.float64)
+    anchors = np.argsort(starts, kind="stable")[:ANCHORS].tolist()
+
+    def penalty(scale: NDArray[np.float64] | float) -> NDArray[np.float64]:
+        def total(miss: NDArray[np.float64]) -> NDArray[np.float64]:
+            pen = np.minimum(timing_penalty(miss, scale, horizon), cap)
+            return np.asarray(np.sum(np.where(says, pen, 0.0), axis=1), dtype=np.float64)
+
+        best = total(gap)
+        for j in anchors:
+            for t0 in (lo[:, j], hi[:, j]):
+                miss = window_misfit(lo, hi, np.where(np.isfinite(t0), t0, 0.0)[:, None])
+                best = np.minimum(best, np.where(says[:, j], total(miss), np.inf))
+        return np.asarray(np.where(placed, best, np.inf), dtype=np.float64)
+
+    first = penalty(scale)
+    if not np.isfinite(first).any():
+        return first
+    at = int(np.argmin(first))
+    shown, dof = misfit_scale(gap[at, :count][says[at, :count]])
+    stated = float(np.mean(np.broadcast_to(scale, gap.shape)[at, :count]))
+    widened = widened_scale(stated, shown, dof)
+    if widened <= stated:
+        return first
+    return penalty(np.asarray(scale, dtype=np.float64) * (widened / stated))
 
 
 def posterior(

@@ -17,7 +17,7 @@ its threshold, later the farther (the more junctions) it has travelled, so it is
 the pipes' acoustic speed, and it is the one the arrival localizer needs. What the fit leaves
 unexplained, as a share of each travel time (a robust spread: the regions' timing kernel has
 heavy tails for the rare large miss), becomes the model's ``wave_speed_tolerance`` (the
-search regions' timing error: :func:`burstloc.localize.region.timing_scale`), at least
+search regions' timing error: :func:`burstloc.localize.timing_error.timing_scale`), at least
 :data:`MIN_TOLERANCE`.
 """
 
