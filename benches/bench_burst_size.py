@@ -71,6 +71,7 @@ def _transient(
     scenarios, _ = sized_scenarios(scenarios, flow)
     lows: dict[str, float] = {}
     below = [0]
+    failures: list[str] = []
     for first in range(0, len(scenarios), 16):  # a few at a time: only their lowest kept
         chunk = scenarios[first : first + 16]
         report = simulate_many(chunk, cache=False, progress=False, workers=workers)
@@ -78,6 +79,7 @@ def _transient(
             after = result.time >= result.metadata["burst_start"]
             lows[result.pipe] = float(result.heads[after].min())
             below.append(len(result.metadata.get("negative_pressure_nodes") or []))
+        failures += report.failure_lines()
     worst = sorted(lows, key=lows.__getitem__)[:3]
     failed = len(pipes) - len(lows)
     return (
@@ -85,6 +87,7 @@ def _transient(
         f"lowest {lows[worst[0]]:.1f} m ("
         + ", ".join(f"{p} {lows[p]:.1f} m" for p in worst)
         + f"), below zero at up to {max(below)} junctions"
+        + "".join(f"\n    {line}" for line in failures)
     )
 
 
