@@ -34,6 +34,7 @@ from burstloc.experiments.position import NetworkDistance, PipePoint
 from burstloc.live.feeds import StepFeed
 from burstloc.live.parse import BadReading, parse_lines
 from burstloc.localize.config import Calibration, calibrated_bank
+from burstloc.localize.onset import change_start
 from burstloc.localize.travel_fit import EventArrivals
 from burstloc.network import Network
 from burstloc.readings import Reading, Step, timestamp_seconds
@@ -179,16 +180,18 @@ def _onsets(
     bank = calibrated_bank(detector, len(meters), config.for_interval(capture_interval))
     feed = StepFeed(meters, period=capture_interval)
     times: list[float] = []
-    onsets: dict[str, float] = {}
+    rows: list[np.ndarray] = []
+    first: dict[str, tuple[int, int, float]] = {}  # meter: the alarm's start, index, amplitude
 
     def run(steps: list[Step]) -> None:
         for step in steps:
             times.append(float(step.timestamp))
-            for alarm in bank.step(np.asarray(step.values, dtype=np.float64)):
+            rows.append(np.asarray(step.values, dtype=np.float64))
+            for alarm in bank.step(rows[-1]):
                 meter = meters[int(alarm.channel or 0)]
-                onset = times[max(int(alarm.start), 0)]
-                if meter not in onsets and onset + capture_interval >= event.time:
-                    onsets[meter] = onset
+                start = max(int(alarm.start), 0)
+                if meter not in first and times[start] + capture_interval >= event.time:
+                    first[meter] = (start, len(times) - 1, float(alarm.amplitude))
 
     try:
         for reading in readings:
@@ -201,6 +204,11 @@ def _onsets(
             f"known event {event.name!r}: its readings must start before the event "
             f"(at {event.time:g} s) so that the detectors know the level before it"
         )
+    t, values = np.asarray(times), np.asarray(rows)
+    onsets = {  # where each change starts, as the monitor's localizers read it
+        meter: change_start(t, values[:, meters.index(meter)], start, index, amp, capture_interval)
+        for meter, (start, index, amp) in first.items()
+    }
     return onsets, capture_interval
 
 

@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 
 from burstloc.constants import METER_MODELS, MeterModel
 from burstloc.exceptions import InputError
-from burstloc.localize.onset import FINEST_STEP_INTERVAL, hinge_onset
+from burstloc.localize.onset import change_start
 
 __all__ = [
     "BurstEvidence",
@@ -296,7 +296,7 @@ def evidence_from_alarms(
     the decision time); ``onset`` is the earliest start among them. Readings and alarms after
     ``decision_time`` are ignored (default: all readings). At capture intervals up to
     :data:`~burstloc.localize.onset.FINEST_STEP_INTERVAL` a start is the change point fitted
-    to the readings (:func:`~burstloc.localize.onset.hinge_onset`) less half an interval, so
+    to the readings less half an interval (:func:`~burstloc.localize.onset.change_start`), so
     that the interval an alarm's start allows is centred on it.
     """
     t = np.asarray(times, dtype=np.float64)
@@ -320,13 +320,10 @@ def evidence_from_alarms(
     first = t[usable[0][0]]
     limit = end if alarm_window is None else min(end, first + alarm_window)
     per_meter: dict[str, MeterAlarm] = {}
-    fitted = capture_interval <= FINEST_STEP_INTERVAL
     for index, start, channel, amplitude in usable:
         meter = meters[channel]
         if t[index] <= limit and meter not in per_meter:
-            at = hinge_onset(t, values[:, channel], start, index, amplitude) if fitted else None
-            # a fitted change point: its reading window centred on it
-            began = float(t[start]) if at is None else at - 0.5 * capture_interval
+            began = change_start(t, values[:, channel], start, index, amplitude, capture_interval)
             per_meter[meter] = MeterAlarm(meter, began, amplitude)
     onset = min(a.start for a in per_meter.values())
     keep = t <= end

@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["FINEST_STEP_INTERVAL", "LOOKBACK", "SUBSTEPS", "hinge_onset"]
+__all__ = ["FINEST_STEP_INTERVAL", "LOOKBACK", "SUBSTEPS", "change_start", "hinge_onset"]
 
 FINEST_STEP_INTERVAL = 0.02
 """Capture intervals (s) up to this one time a change by :func:`hinge_onset`: a burst's front,
@@ -67,3 +67,22 @@ def hinge_onset(
     if not np.isfinite(rss[best]):
         return None
     return float(cands[best])
+
+
+def change_start(
+    times: NDArray[np.float64],
+    values: NDArray[np.float64],
+    start: int,
+    index: int,
+    amplitude: float,
+    capture_interval: float,
+) -> float:
+    """Where one meter's change starts as the localizers read it: the time stamp of the reading
+    before it (an alarm's window is ``[start, start + capture_interval]``). The detector's own
+    start (reading ``start``; ``index`` raised the alarm, of ``amplitude``), or at capture
+    intervals up to :data:`FINEST_STEP_INTERVAL` the fitted change point (:func:`hinge_onset`)
+    less half an interval, so that the window is centred on it."""
+    at = None
+    if capture_interval <= FINEST_STEP_INTERVAL:
+        at = hinge_onset(times, values, start, index, amplitude)
+    return float(times[start]) if at is None else at - 0.5 * capture_interval
