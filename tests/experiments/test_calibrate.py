@@ -54,6 +54,7 @@ def test_a_high_rate_cusum_sums_a_burst_front_the_papers_drift_would_hide() -> N
     threshold, drift = cusum_threshold(sigma, dt, rate, seed=1, max_samples=FAST)
     assert drift == pytest.approx(sigma * dt / DRIFT_INTERVAL)
     assert cusum_threshold(sigma, 0.2, rate, max_samples=FAST)[1] == sigma  # the paper's
+    assert cusum_threshold(sigma, 0.05, rate, max_samples=FAST)[1] == sigma  # starts untimed
     rng = np.random.default_rng(5)
     ramp = np.concatenate([np.zeros(500), -np.linspace(0.0, 0.5, 76)[1:], np.full(500, -0.5)])
     heads = 50.0 + ramp + rng.normal(0.0, sigma, ramp.size)
