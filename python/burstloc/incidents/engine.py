@@ -63,7 +63,9 @@ def make_engine(url: str) -> Any:
             options = connection.get_execution_options()
             if options.get("burstloc_write"):
                 sync = options.get("burstloc_sync", "FULL")
-                connection.exec_driver_sql(f"PRAGMA synchronous={sync}")
+                if connection.info.get("burstloc_sync") != sync:  # kept per DBAPI connection
+                    connection.exec_driver_sql(f"PRAGMA synchronous={sync}")
+                    connection.info["burstloc_sync"] = sync
                 connection.exec_driver_sql("BEGIN IMMEDIATE")
             else:
                 connection.exec_driver_sql("BEGIN")
