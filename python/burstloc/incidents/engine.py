@@ -1,7 +1,8 @@
 """Where the incident store is and how it is connected: an address (a file path, an
 ``sqlite:///`` or a ``postgresql://`` URL) to a SQLAlchemy URL, and the engine, SQLite set up
 for durability (WAL; ``synchronous=FULL`` unless a write asks for less; write transactions
-``BEGIN IMMEDIATE``: :mod:`burstloc.incidents.store` says why)."""
+``BEGIN IMMEDIATE``; no checkpoint inside a commit: :mod:`burstloc.incidents.store` says
+why)."""
 
 from __future__ import annotations
 
@@ -53,6 +54,7 @@ def make_engine(url: str) -> Any:
             for pragma in (
                 "journal_mode=WAL",
                 "synchronous=FULL",
+                "wal_autocheckpoint=0",  # checkpoints by IncidentStore.sync, off the commits
                 "foreign_keys=ON",
                 f"busy_timeout={int(BUSY_TIMEOUT * 1000)}",
             ):

@@ -44,13 +44,16 @@ from burstloc.incidents.lifecycle import CLOSED, DONE, Outcome, next_state
 if TYPE_CHECKING:
     from burstloc.incidents.writing import OnNew
 
-__all__ = ["MONITOR", "MONITOR_SYNC", "SYNC_EVERY", "IncidentStore"]
+__all__ = ["CHECKPOINT_BYTES", "MONITOR", "MONITOR_SYNC", "SYNC_EVERY", "IncidentStore"]
 
 #: SQLite's ``synchronous`` for the monitor's records: ``NORMAL`` (WAL: durable against a
 #: crash of any process; on disk within :data:`SYNC_EVERY` s, module docstring).
 MONITOR_SYNC = "NORMAL"
 #: Seconds the monitor's records may stay off the disk (SQLite) before :meth:`IncidentStore.sync`.
 SYNC_EVERY = 1.0
+#: Bytes of SQLite's log past which :meth:`IncidentStore.sync` checkpoints it into the database
+#: (no commit checkpoints: a checkpoint, and the log's restart after it, each wait for the disk).
+CHECKPOINT_BYTES = 16 << 20
 #: Longest operator name and note.
 NAME_CHARS, NOTE_CHARS = 200, 10_000
 
@@ -83,14 +86,15 @@ def _text(value: str | None, what: str, most: int, required: bool) -> str | None
     return value.strip()
 
 
-def _fsync(path: str) -> None:
-    """``path`` on disk (nothing when it does not exist)."""
+def _fsync(path: str) -> int:
+    """``path`` on disk (nothing when it does not exist); its size in bytes."""
     try:
         fd = os.open(path, os.O_RDONLY)
     except FileNotFoundError:
-        return
+        return 0
     try:
         os.fsync(fd)
+        return os.fstat(fd).st_size
     finally:
         os.close(fd)
 
@@ -223,19 +227,19 @@ class IncidentStore:
         return changed
 
     def _durable(self, durable: bool) -> None:
-        if durable:
-            self._synced, self.unsynced = time.monotonic(), False
-        else:
-            self.unsynced = True
+        self.unsynced = not durable
 
     def sync_due(self) -> bool:
-        """Whether records committed more than :data:`SYNC_EVERY` s after the last
-        :meth:`sync` are waiting for one."""
-        return self.unsynced and time.monotonic() - self._synced >= SYNC_EVERY
+        """Whether :data:`SYNC_EVERY` s have passed since the last :meth:`sync` with records
+        committed since (or, on SQLite, a log that may want its checkpoint)."""
+        if time.monotonic() - self._synced < SYNC_EVERY:
+            return False
+        return self.unsynced or self.engine.dialect.name == "sqlite"
 
     def sync(self) -> None:
-        """Put every committed record on disk (SQLite: the log fsync'ed, then a passive
-        checkpoint, which keeps the log short; PostgreSQL's commits are on disk already).
+        """Put every committed record on disk (SQLite: the log fsync'ed, and checkpointed
+        into the database once longer than :data:`CHECKPOINT_BYTES`; PostgreSQL's commits are
+        on disk already).
 
         Raises:
             IncidentStoreError: the database cannot be written.
@@ -243,8 +247,9 @@ class IncidentStore:
         if self.engine.dialect.name == "sqlite":
             with self._errors("sync"), self.engine.connect() as connection:
                 database = connection.exec_driver_sql("PRAGMA database_list").first()[2]
-                _fsync(database + "-wal")
-                connection.exec_driver_sql("PRAGMA wal_checkpoint(PASSIVE)")
+                if _fsync(database + "-wal") >= CHECKPOINT_BYTES:
+                    connection.exec_driver_sql("PRAGMA wal_checkpoint(PASSIVE)")
+        self._synced = time.monotonic()
         self._durable(True)
 
     # ------------------------------------------------------------------ the operators
