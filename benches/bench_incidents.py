@@ -8,7 +8,8 @@ Usage: ``.venv/bin/python benches/bench_incidents.py [--writes N] [--incidents N
 1. **Write latency**: one incident kept (one transaction: the incident and its history row,
    :meth:`IncidentStore.take`) and one acknowledgement (:meth:`IncidentStore.act`), ``--writes``
    of each, p50 / p99 / max, on SQLite as the store runs it (WAL; the monitor's records with
-   ``synchronous=NORMAL``, ``FULL`` once a second; the acknowledgements ``FULL``), beside SQLite
+   ``synchronous=NORMAL``, put on disk by :meth:`IncidentStore.sync` once a second between
+   writes, as the recorder does, timed apart; the acknowledgements ``FULL``), beside SQLite
    with every commit ``FULL`` (what the monitor's records would cost on disk at once), a JSON
    line appended and fsync'ed (the least a durable write costs on this disk) and PostgreSQL (a
    throwaway server on loopback). Target: p99 <= 5 ms on SQLite.
@@ -71,21 +72,27 @@ def decision(k: int) -> dict[str, Any]:
     }  # fmt: skip
 
 
-def write_latency(store: Any, writes: int) -> tuple[list[float], list[float]]:
-    """ms per incident kept (one transaction) and per acknowledgement."""
+def write_latency(store: Any, writes: int) -> tuple[list[float], list[float], list[float]]:
+    """ms per incident kept (one transaction), per acknowledgement, and per sync of the
+    monitor's records to disk, called as the recorder calls it (once a second, between
+    writes, on the writer's thread)."""
     from burstloc.incidents.intake import from_record
 
-    keep, ack = [], []
+    keep, ack, sync = [], [], []
     for k in range(1, writes + 1):
         item = from_record(decision(k), time.time())
         assert item is not None
         t = time.perf_counter()
         (incident,) = store.take([item])
         keep.append(1000 * (time.perf_counter() - t))
+        if store.sync_due():
+            t = time.perf_counter()
+            store.sync()
+            sync.append(1000 * (time.perf_counter() - t))
         t = time.perf_counter()
         store.acknowledge(incident, "ann", "bench")
         ack.append(1000 * (time.perf_counter() - t))
-    return keep, ack
+    return keep, ack, sync
 
 
 def jsonl_latency(folder: Path, writes: int) -> list[float]:
@@ -254,8 +261,8 @@ def main() -> None:
             stores["PostgreSQL"] = lambda: IncidentStore.open(pg.database())
         if "1" in args.sections:
             print(f"1. write latency, ms ({args.writes} incidents kept, each then acknowledged)")
-            rows: list[tuple[str, list[float], list[float]]] = []
-            store = sqlite()  # as it runs: the monitor's records NORMAL (FULL once a second)
+            rows: list[tuple[str, list[float], list[float], list[float]]] = []
+            store = sqlite()  # as it runs: the monitor's records NORMAL (synced once a second)
             rows.append(("SQLite, as the store runs", *write_latency(store, args.writes)))
             store.close()
             full = sqlite()
@@ -268,12 +275,18 @@ def main() -> None:
                 other.close()
             line = jsonl_latency(folder, args.writes)
             base = pct(rows[0][1], 0.99)
-            for name, keep, ack in rows:
+            for name, keep, ack, sync in rows:
+                syncs = (
+                    f" | {len(sync)} syncs p50 {statistics.median(sync):6.2f} max {max(sync):7.2f}"
+                    if sync
+                    else ""
+                )
                 print(
                     f"   {name:32s} keep p50 {statistics.median(keep):6.2f} p99 "
                     f"{pct(keep, 0.99):6.2f} max {max(keep):7.2f} | ack p50 "
                     f"{statistics.median(ack):6.2f} p99 {pct(ack, 0.99):6.2f} max "
                     f"{max(ack):7.2f} | keep p99 / the store's: x{pct(keep, 0.99) / base:.2f}"
+                    + syncs
                 )
             print(
                 f"   {'JSON line + fsync':32s} p50 {statistics.median(line):6.2f} p99 "

@@ -46,6 +46,8 @@ FLAGS = [
     "2.5", "--health-every", "10", "--silent-after", "45", "--clock-tolerance", "2",
     "--plausible", "0:100", "--plausible", "N4=1:90", "--crs", "EPSG:32633", "--web",
     "0.0.0.0:8080", "--web-token", "s3cret", "--replay-speed", "3", "--db", "incidents.sqlite",
+    "--webhook", "https://alerts.example.org/a", "--webhook", "http://10.0.0.9:9000/hook",
+    "--webhook-escalate-minutes", "15", "--webhook-dead-letter", "dead.jsonl",
 ]  # fmt: skip
 
 SAME = """\
@@ -77,6 +79,9 @@ web = "0.0.0.0:8080"
 web-token = "s3cret"
 db = "incidents.sqlite"
 replay-speed = 3
+webhook = ["https://alerts.example.org/a", "http://10.0.0.9:9000/hook"]
+webhook-escalate-minutes = 15
+webhook-dead-letter = "dead.jsonl"
 """
 
 
@@ -129,6 +134,7 @@ def test_the_command_line_overrides_the_file(tmp_path: Path) -> None:
         ('detector = "cusum2"', "key 'detector': want one of 'cusum', 'shewhart', got 'cusum2'"),
         ('plausible = "0:10"', "key 'plausible': want an array, got a string"),
         ('plausible = ["N4=10"]', "key 'plausible': want [METER=]LOW:HIGH, got 'N4=10'"),
+        ('webhook = ["ftp://x/y"]', "key 'webhook': want an http:// or https:// URL"),
         ("config = 3", "key 'config': want a string, got an integer"),
         ('settings = "other.toml"', "unknown key 'settings'"),
         ('[mqtt]\nhost = "x"', "key 'mqtt': want a string, got a table"),

@@ -65,7 +65,7 @@ def test_the_schema_is_made_from_empty_and_opening_again_changes_nothing(target:
         with store.engine.connect() as connection:
             assert current_revision(connection) == HEAD
             tables = set(inspect(connection).get_table_names())
-        assert {"incidents", "history", "alembic_version"} <= tables
+        assert {"incidents", "history", "alerts", "alembic_version"} <= tables
         incident = _burst(store)
     finally:
         store.close()

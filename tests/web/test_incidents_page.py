@@ -127,3 +127,36 @@ def test_an_operator_acts_on_an_incident_and_the_page_remembers_it_after_a_resta
         }  # fmt: skip
     finally:
         second.stop()
+
+
+def test_a_link_to_an_incident_opens_that_incident(
+    browser: Any,  # noqa: F811
+    tmp_path: Path,
+) -> None:
+    """The link of a webhook alert (``#incident=ID``) selects that incident, not the newest."""
+    from burstloc.incidents import IncidentStore
+    from burstloc.incidents.intake import from_record
+    from burstloc.web import control_room
+
+    store = IncidentStore.open(str(tmp_path / "incidents.sqlite"))
+    for k in (1, 2):
+        record = {"type": "decision", "first_alarm": 10.0 * k, "time": 10.0 * k + 1,
+                  "pipes": [{"pipe": "9", "score": 0.0}]}  # fmt: skip
+        item = from_record(record, 1.8e9 + k)
+        assert item is not None
+        store.take([item])
+    server = control_room(PAPER15, ["N3"], 0.2, token=TOKEN, incidents=store)
+    server.start()
+    page = server.url.split("?")[0] + f"?token={TOKEN}"
+    try:
+        for link, shown in ((f"{page}#incident=1", 1), (page, 2)):  # by default: the newest
+            browser.get("about:blank")
+            browser.get(link)
+            got = wait_for(
+                lambda: (i := page_state(browser).get("incidents") or {}).get("detail") and i,
+                "the page shows an incident",
+            )
+            assert got["selected"] == shown and got["detail"]["id"] == shown
+    finally:
+        server.stop()
+        store.close()

@@ -1,15 +1,21 @@
-"""``burstloc monitor --db``: the incidents the monitor reports, kept in a store."""
+"""``burstloc monitor --db``: the incidents the monitor reports, kept in a store; ``--webhook``:
+alerts of them POSTed to receivers (:mod:`burstloc.incidents.alerts`)."""
 
 from __future__ import annotations
 
 import argparse
+import math
+import os
+import socket
 import sys
+import time
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 from burstloc.exceptions import ConfigError
 
-__all__ = ["add_arguments", "start", "stop"]
+__all__ = ["add_arguments", "start", "start_alerts", "stop"]
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -25,6 +31,65 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "or with --db alone in an SQLite file beside --state's file; the page then lists them "
         "and operators act on them (`burstloc incidents` too); needs burstloc[incidents]",
     )
+    group.add_argument(
+        "--webhook",
+        action="append",
+        type=_url,
+        metavar="URL",
+        help="POST a JSON alert to this http(s) URL for every new incident (and escalations); "
+        "repeatable; needs --db, whose database keeps the alerts until each is delivered, in "
+        "order, once (retried with back-off; given up to --webhook-dead-letter after 100 "
+        "attempts or 6 h)",
+    )
+    group.add_argument(
+        "--webhook-escalate-minutes",
+        type=float,
+        metavar="M",
+        help="alert again about an incident still unacknowledged M minutes after it was "
+        "detected (the monitor's clock: a replayed file's reading time)",
+    )
+    group.add_argument(
+        "--webhook-dead-letter",
+        metavar="FILE",
+        help="JSON lines of the alerts given up (default: beside the SQLite store, or beside "
+        "--state with PostgreSQL)",
+    )
+
+
+def _url(text: str) -> str:
+    from burstloc.incidents.alerts.config import check_url
+
+    try:
+        return check_url(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def _check_webhooks(args: argparse.Namespace) -> None:
+    """The webhook options, before anything starts.
+
+    Raises:
+        ConfigError: one that needs another, or a bad number (naming the option and its key).
+    """
+    if not args.webhook:
+        for option, value in [
+            ("--webhook-escalate-minutes", args.webhook_escalate_minutes),
+            ("--webhook-dead-letter", args.webhook_dead_letter),
+        ]:
+            if value is not None:
+                raise ConfigError(f"{option} needs --webhook")
+        return
+    if args.db is None:
+        raise ConfigError(
+            "--webhook needs --db: the alerts not yet delivered are kept in the incident "
+            "store's database"
+        )
+    minutes = args.webhook_escalate_minutes
+    if minutes is not None and not (math.isfinite(minutes) and minutes > 0):
+        raise ConfigError(
+            "--webhook-escalate-minutes (settings key webhook-escalate-minutes) must be a "
+            f"finite number of minutes > 0, got {minutes}"
+        )
 
 
 def start(args: argparse.Namespace, say: Callable[[str], None]) -> Any:
@@ -36,6 +101,7 @@ def start(args: argparse.Namespace, say: Callable[[str], None]) -> Any:
         ConfigError: ``--db`` alone without ``--state``; the incidents extra missing.
         IncidentStoreError: the store cannot be opened.
     """
+    _check_webhooks(args)
     if args.db is None:
         return None
     from burstloc.incidents.engine import beside_state
@@ -58,10 +124,92 @@ def start(args: argparse.Namespace, say: Callable[[str], None]) -> Any:
     return Recorder(store, lambda text: say(f"burstloc monitor: {text}"))
 
 
-def stop(recorder: Any) -> None:
-    """Store what the recorder has queued, then close its store (nothing without ``--db``)."""
+def _dead_letter(args: argparse.Namespace, store: Any) -> str:
+    """The dead-letter file: ``--webhook-dead-letter``, else beside the SQLite store, else
+    beside ``--state``.
+
+    Raises:
+        ConfigError: none of them, or a file in a directory that does not exist.
+    """
+    path = args.webhook_dead_letter
+    if path is None:
+        if store.engine.dialect.name == "sqlite" and store.engine.url.database:
+            path = os.path.splitext(store.engine.url.database)[0] + ".webhook-dead.jsonl"
+        elif args.state is not None:
+            path = os.path.splitext(args.state)[0] + ".webhook-dead.jsonl"
+        else:
+            raise ConfigError(
+                "--webhook with a PostgreSQL --db needs --webhook-dead-letter FILE (or --state, "
+                "to keep it beside the state file)"
+            )
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise ConfigError(f"--webhook-dead-letter {path!r}: no directory {folder!r}")
+    return path
+
+
+def start_alerts(
+    args: argparse.Namespace, recorder: Any, loop: Any, web: Any, say: Callable[[str], None]
+) -> Any:
+    """The started :class:`~burstloc.incidents.alerts.sender.WebhookSender` of ``--webhook``
+    (``None`` without it), its outbox attached to the recorder's store. Its clock is the
+    monitor's: the feed's reading time when a file is replayed (``--readings FILE``), else the
+    wall clock. ``web``: the page's server (the alerts link to it), or ``None``.
+
+    Raises:
+        ConfigError: no place for the dead-letter file.
+    """
+    if not args.webhook or recorder is None:
+        return None
+    from burstloc import __version__
+    from burstloc.incidents.alerts.config import WebhookSettings
+    from burstloc.incidents.alerts.outbox import Outbox
+    from burstloc.incidents.alerts.sender import WebhookSender
+
+    minutes = args.webhook_escalate_minutes
+    settings = WebhookSettings(
+        tuple(args.webhook),
+        dead_letter=Path(_dead_letter(args, recorder.store)),
+        escalate_after=None if minutes is None else 60.0 * minutes,
+    )
+    replay = args.mqtt is None and args.readings != "-"
+    clock = (lambda: loop.health.reference) if replay else time.time
+    base = None if web is None else _page(web)
+    outbox = Outbox(
+        recorder.store,
+        settings,
+        clock=clock,
+        link=lambda incident: None if base is None else f"{base}#incident={incident}",
+        source=f"burstloc {__version__}",
+    )
+    outbox.attach()
+    sender = WebhookSender(outbox, lambda text: say(f"burstloc monitor: {text}")).start()
+    recorder.committed = lambda batch, changed: sender.wake()
+    print(
+        f"burstloc monitor: webhook alerts to {len(settings.urls)} URL(s); given up to "
+        f"{settings.dead_letter}",
+        file=sys.stderr,
+        flush=True,
+    )
+    return sender
+
+
+def _page(web: Any) -> str:
+    """The page's address without its token; a wildcard host named by this machine's name."""
+    host = web.host
+    if host in ("0.0.0.0", "::", ""):
+        host = socket.getfqdn()
+    host = f"[{host}]" if ":" in host else host
+    return f"http://{host}:{web.port}/"
+
+
+def stop(recorder: Any, sender: Any = None) -> None:
+    """Store what the recorder has queued, deliver what is due, then close the store (nothing
+    without ``--db``)."""
     if recorder is not None:
         try:
             recorder.close()
+            if sender is not None:
+                sender.close()
         finally:
             recorder.store.close()

@@ -218,10 +218,20 @@ def run(args: argparse.Namespace) -> int:
         save_every=args.save_every,
         observer=fan_out(None if web is None else web.hub, recorder),
     )
+    try:
+        sender = _incidents.start_alerts(args, recorder, loop, web, write)
+    except BaseException:
+        if link is not None:
+            link.close()
+        if web is not None:
+            web.stop()
+        _incidents.stop(recorder)
+        raise
     metrics = _service.attach(args, web, loop, link)
     if metrics is not None and recorder is not None:  # the incident store's open incidents
         store = recorder.store
         metrics.incidents_open = lambda: len(store.incidents(open_only=True))
+        metrics.webhooks = sender
     saved = None if state is None else state.load()
     if saved is not None:
         try:
@@ -261,7 +271,7 @@ def run(args: argparse.Namespace) -> int:
             link.close()
         if web is not None:
             web.stop()
-        _incidents.stop(recorder)
+        _incidents.stop(recorder, sender)
     if flags["stop"]:
         saved_to = f"; state saved to {args.state}" if args.state else ""
         print(f"burstloc monitor: stopped by SIGTERM{saved_to}", file=sys.stderr)

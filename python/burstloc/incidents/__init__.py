@@ -8,9 +8,12 @@ outcome, operators' notes), kept in SQLite (the default) or PostgreSQL.
   the tables and their Alembic migrations;
 * :mod:`~burstloc.incidents.engine`: the address and the connection (SQLite set up for durability);
 * :mod:`~burstloc.incidents.store`: the store (SQLAlchemy Core; durable commits);
+* :mod:`~burstloc.incidents.writing`: the monitor's news as SQL, statements built once;
 * :mod:`~burstloc.incidents.recorder`: the monitor's observer, writing on a thread of its own;
 * :mod:`~burstloc.incidents.export`: CSV and JSON;
-* :mod:`~burstloc.incidents.errors`: the typed errors.
+* :mod:`~burstloc.incidents.errors`: the typed errors;
+* :mod:`burstloc.incidents.alerts`: webhook alerts of new and unacknowledged incidents, from a
+  durable outbox in the store's database.
 
 This layer imports the base and :mod:`burstloc.live` (the observer protocol) only. SQLAlchemy,
 Alembic and psycopg (the ``incidents`` extra) are imported when a store is opened, so this

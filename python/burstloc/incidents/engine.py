@@ -1,7 +1,8 @@
 """Where the incident store is and how it is connected: an address (a file path, an
 ``sqlite:///`` or a ``postgresql://`` URL) to a SQLAlchemy URL, and the engine, SQLite set up
 for durability (WAL; ``synchronous=FULL`` unless a write asks for less; write transactions
-``BEGIN IMMEDIATE``: :mod:`burstloc.incidents.store` says why)."""
+``BEGIN IMMEDIATE``; no checkpoint inside a commit: :mod:`burstloc.incidents.store` says
+why)."""
 
 from __future__ import annotations
 
@@ -53,6 +54,7 @@ def make_engine(url: str) -> Any:
             for pragma in (
                 "journal_mode=WAL",
                 "synchronous=FULL",
+                "wal_autocheckpoint=0",  # checkpoints by IncidentStore.sync, off the commits
                 "foreign_keys=ON",
                 f"busy_timeout={int(BUSY_TIMEOUT * 1000)}",
             ):
@@ -63,7 +65,9 @@ def make_engine(url: str) -> Any:
             options = connection.get_execution_options()
             if options.get("burstloc_write"):
                 sync = options.get("burstloc_sync", "FULL")
-                connection.exec_driver_sql(f"PRAGMA synchronous={sync}")
+                if connection.info.get("burstloc_sync") != sync:  # kept per DBAPI connection
+                    connection.exec_driver_sql(f"PRAGMA synchronous={sync}")
+                    connection.info["burstloc_sync"] = sync
                 connection.exec_driver_sql("BEGIN IMMEDIATE")
             else:
                 connection.exec_driver_sql("BEGIN")

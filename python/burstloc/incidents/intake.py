@@ -15,12 +15,23 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-__all__ = ["ALARM_RECORDS", "FAULTS", "Observed", "clean", "from_record", "meter_fault", "summary"]
+__all__ = [
+    "ALARM_RECORDS",
+    "FAULTS",
+    "MONITOR",
+    "Observed",
+    "clean",
+    "from_record",
+    "meter_fault",
+    "summary",
+]
 
 #: The monitor's record types that are incidents (health records are not).
 ALARM_RECORDS = ("decision", "transient", "event")
 #: The meter faults that are incidents.
 FAULTS = ("silent", "implausible")
+#: Who the monitor's own history rows are by.
+MONITOR = "monitor"
 
 
 @dataclass(frozen=True)
@@ -52,9 +63,12 @@ class Observed:
         """The record as strict, stable JSON (keys sorted; non-finite numbers as null)."""
         if self.record is None:
             return None
-        return json.dumps(
-            clean(self.record), sort_keys=True, separators=(",", ":"), allow_nan=False
-        )
+        try:  # most records hold no non-finite number: no copy
+            return json.dumps(self.record, sort_keys=True, separators=(",", ":"), allow_nan=False)
+        except (ValueError, TypeError):
+            return json.dumps(
+                clean(self.record), sort_keys=True, separators=(",", ":"), allow_nan=False
+            )
 
 
 def clean(value: Any) -> Any:

@@ -10,9 +10,11 @@ a fault; a silent meter that reports again, or :data:`IMPLAUSIBLE_CLEARS` second
 time without an implausible reading, clears it.
 
 The writer thread takes what is queued, up to :data:`BATCH` items, and stores it in one
-transaction (:meth:`burstloc.incidents.store.IncidentStore.take`); a second without news after
-a commit not yet on disk (SQLite's ``synchronous=NORMAL``), and at the stop, it syncs the store
-(:meth:`~burstloc.incidents.store.IncidentStore.sync`). A store that cannot be
+transaction (:meth:`burstloc.incidents.store.IncidentStore.take`, SQLite's
+``synchronous=NORMAL``: no wait for the disk). It syncs the store
+(:meth:`~burstloc.incidents.store.IncidentStore.sync`) after a batch when a second has passed
+since the last sync, after a second without news, and at the stop: the monitor's records are on
+disk within about a second. A store that cannot be
 written (a PostgreSQL server down) is retried with back-off, every failure said; nothing is
 dropped while the queue has room. When it has none, the item is dropped, counted in
 :attr:`Recorder.dropped` and said at once (at most one message a second, with the count).
@@ -144,10 +146,7 @@ class Recorder(LiveObserver):
                 try:  # records not on disk yet (SQLite): synced after a quiet second
                     item = self.queue.get(timeout=SYNC_EVERY if self.store.unsynced else None)
                 except queue.Empty:
-                    try:
-                        self.store.sync()
-                    except IncidentStoreError as exc:
-                        self.say(f"incidents not synced to disk, tried again later: {exc}")
+                    self._sync("incidents not synced to disk, tried again later")
                     continue
                 if item is _STOP:
                     self._sync_last()
@@ -185,17 +184,23 @@ class Recorder(LiveObserver):
             if self.committed is not None:
                 self.committed(batch, changed)
             batch = []
+            if self.store.sync_due():  # busy: on disk once a second all the same
+                self._sync("incidents not synced to disk, tried again later")
             if stop:
                 self._sync_last()
                 return
 
+    def _sync(self, failed: str) -> None:
+        """What was committed, on disk; a failure said (``failed``: what it means)."""
+        try:
+            self.store.sync()
+        except IncidentStoreError as exc:
+            self.say(f"{failed}: {exc}")
+
     def _sync_last(self) -> None:
         """At the stop: what was committed, on disk."""
-        try:
-            if self.store.unsynced:
-                self.store.sync()
-        except IncidentStoreError as exc:
-            self.say(f"the last incidents may not be on disk: {exc}")
+        if self.store.unsynced:
+            self._sync("the last incidents may not be on disk")
 
     def close(self, timeout: float = 60.0) -> None:
         """Store what is queued, stop the thread (waiting up to ``timeout`` s) and say what was

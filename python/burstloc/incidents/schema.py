@@ -1,4 +1,5 @@
-"""The incident store's tables (SQLAlchemy Core): one row per incident, one per history entry.
+"""The incident store's tables (SQLAlchemy Core): one row per incident, one per history entry,
+one per webhook alert and URL.
 
 The schema is created and changed only by the migrations in ``migrations/versions/``
 (:mod:`burstloc.incidents.migrate`); these tables describe the newest revision, for the
@@ -21,7 +22,7 @@ from sqlalchemy import (
     Text,
 )
 
-__all__ = ["history", "incidents", "metadata"]
+__all__ = ["alerts", "history", "incidents", "metadata"]
 
 metadata = MetaData()
 
@@ -65,4 +66,28 @@ history = Table(
     Column("note", Text),
     Column("detail", Text),  # JSON: the record (detected, answered), the outcome (closed)
     Index("ix_history_incident", "incident_id", "id"),
+)
+
+#: The webhook alerts' outbox (:mod:`burstloc.incidents.alerts`): one row per alert and URL, kept
+#: after delivery. ``status``: ``waiting`` (an escalation not yet due), ``pending``,
+#: ``delivered``, ``dead`` (given up: in the dead-letter file) or ``cancelled`` (an escalation
+#: of an incident acknowledged in time). ``due_at`` and ``next_at`` are on the alerts' clock
+#: (the monitor's); ``created_at`` and ``delivered_at`` wall-clock times.
+alerts = Table(
+    "alerts",
+    metadata,
+    Column("id", Integer, primary_key=True, autoincrement=True),
+    Column("key", String(64), nullable=False, unique=True),  # the Idempotency-Key header
+    Column("url", String(2000), nullable=False),
+    Column("incident_id", Integer, ForeignKey("incidents.id"), nullable=False),
+    Column("event", String(16), nullable=False),  # new, escalated
+    Column("status", String(16), nullable=False),
+    Column("due_at", Float, nullable=False),  # when it became (becomes) due: its order
+    Column("next_at", Float, nullable=False),  # the next attempt
+    Column("attempts", Integer, nullable=False),
+    Column("created_at", Float, nullable=False),
+    Column("delivered_at", Float),
+    Column("last_error", Text),
+    Column("payload", Text),  # JSON, as sent (an escalation's: made when it is due)
+    Index("ix_alerts_queue", "status", "url", "due_at", "id"),
 )

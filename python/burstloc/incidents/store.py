@@ -13,10 +13,12 @@ once a call returns, what it wrote is committed.
 ``synchronous=FULL``: it is on disk when it returns, and neither a ``kill -9`` of any process
 nor a power cut loses it (nor any record committed before it: the log is written in order). The
 monitor's records commit with ``synchronous=NORMAL`` (:data:`MONITOR_SYNC`): in the log when
-the call returns, so a ``kill -9`` of any process at any moment loses none; a power cut may
-lose those of the last :data:`SYNC_EVERY` second: a commit that second after the last durable
-one is ``FULL`` again, and :meth:`IncidentStore.sync` (the recorder calls it when no record
-followed within that second) puts the log on disk. Every write transaction takes the write
+the call returns, so a ``kill -9`` of any process at any moment loses none, and the commit never
+waits for the disk. :meth:`IncidentStore.sync` puts them on disk (the log fsync'ed); the recorder
+calls it once :data:`SYNC_EVERY` s have passed since the last one with records committed since
+(:meth:`IncidentStore.sync_due`, after each batch), after a quiet second and at its stop, so a
+power cut may lose the monitor's records of about the last second (until the next sync), never
+an operator's action. Every write transaction takes the write
 lock at its start (``BEGIN IMMEDIATE``), so the monitor, the page and ``burstloc incidents`` in
 another process never trip over each other (they wait, up to
 :data:`~burstloc.incidents.engine.BUSY_TIMEOUT` s).
@@ -27,26 +29,31 @@ never wait for writers.
 from __future__ import annotations
 
 import json
+import os
 import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from burstloc.exceptions import InputError
 from burstloc.incidents.engine import make_engine, store_url
 from burstloc.incidents.errors import IncidentStoreError, UnknownIncidentError
-from burstloc.incidents.intake import Observed
-from burstloc.incidents.lifecycle import CLOSED, DETECTED, DONE, Outcome, next_state
+from burstloc.incidents.intake import MONITOR, Observed
+from burstloc.incidents.lifecycle import CLOSED, DONE, Outcome, next_state
 
-__all__ = ["MONITOR", "MONITOR_SYNC", "SYNC_EVERY", "IncidentStore"]
+if TYPE_CHECKING:
+    from burstloc.incidents.writing import OnNew
+
+__all__ = ["CHECKPOINT_BYTES", "MONITOR", "MONITOR_SYNC", "SYNC_EVERY", "IncidentStore"]
 
 #: SQLite's ``synchronous`` for the monitor's records: ``NORMAL`` (WAL: durable against a
 #: crash of any process; on disk within :data:`SYNC_EVERY` s, module docstring).
 MONITOR_SYNC = "NORMAL"
-#: Seconds the monitor's records may stay off the disk (SQLite) before a durable commit.
+#: Seconds the monitor's records may stay off the disk (SQLite) before :meth:`IncidentStore.sync`.
 SYNC_EVERY = 1.0
-#: Who the monitor's own history rows are by.
-MONITOR = "monitor"
+#: Bytes of SQLite's log past which :meth:`IncidentStore.sync` checkpoints it into the database
+#: (no commit checkpoints: a checkpoint, and the log's restart after it, each wait for the disk).
+CHECKPOINT_BYTES = 16 << 20
 #: Longest operator name and note.
 NAME_CHARS, NOTE_CHARS = 200, 10_000
 
@@ -77,6 +84,19 @@ def _text(value: str | None, what: str, most: int, required: bool) -> str | None
     if len(value) > most:
         raise InputError(f"{what} is longer than {most} characters")
     return value.strip()
+
+
+def _fsync(path: str) -> int:
+    """``path`` on disk (nothing when it does not exist); its size in bytes."""
+    try:
+        fd = os.open(path, os.O_RDONLY)
+    except FileNotFoundError:
+        return 0
+    try:
+        os.fsync(fd)
+        return os.fstat(fd).st_size
+    finally:
+        os.close(fd)
 
 
 def _history_row(r: Any) -> dict[str, Any]:
@@ -113,6 +133,8 @@ class IncidentStore:
         #: Whether records were committed since the last durable commit (:meth:`sync`).
         self.unsynced = False
         self._synced = time.monotonic()
+        #: Told of each incident :meth:`take` opens, in its transaction (the alerts' outbox).
+        self.on_new: OnNew | None = None
         self.engine = make_engine(url)
 
     @classmethod
@@ -166,145 +188,69 @@ class IncidentStore:
         with self._errors("read"), self.engine.connect() as connection:
             yield connection
 
-    # ------------------------------------------------------------------ the monitor's news
-    def take(self, news: Sequence[Observed]) -> list[int]:
-        """Record the monitor's ``news`` in one transaction; return the incidents each item
-        changed (``0`` where it changed nothing: a record already stored, a fault already
-        open). Idempotent: taking the same news again adds nothing.
+    @contextmanager
+    def write(self, doing: str) -> Iterator[Any]:
+        """A write transaction for a layer beside the store (the alerts' outbox), committed as
+        the monitor's records are (:attr:`monitor_sync`: on disk by the next :meth:`sync`);
+        ``doing`` names it in an error (``"write to"``).
 
         Raises:
             IncidentStoreError: the database cannot be written.
         """
-        durable = time.monotonic() - self._synced >= SYNC_EVERY
-        sync = "FULL" if durable else self.monitor_sync
+        with self._write(doing, self.monitor_sync) as connection:
+            yield connection
+        self._durable(self.monitor_sync == "FULL")
+
+    def read(self) -> Any:
+        """A connection for reading (a context manager; errors as :class:`IncidentStoreError`)."""
+        return self._read()
+
+    # ------------------------------------------------------------------ the monitor's news
+    def take(self, news: Sequence[Observed]) -> list[int]:
+        """Record the monitor's ``news`` in one transaction; return the incidents each item
+        changed (``0`` where it changed nothing: a record already stored, a fault already
+        open). Idempotent: taking the same news again adds nothing. An incident it opens is
+        told to :attr:`on_new` in the same transaction.
+
+        On SQLite the commit is ``synchronous=NORMAL`` (:attr:`monitor_sync`): it never waits
+        for the disk; :meth:`sync` puts it there (module docstring).
+
+        Raises:
+            IncidentStoreError: the database cannot be written.
+        """
+        from burstloc.incidents.writing import take_one
+
+        sync = self.monitor_sync
         with self._write("write to", sync) as connection:
-            changed = [self._take(connection, item) for item in news]
+            changed = [take_one(connection, item, self.on_new) for item in news]
         self._durable(sync == "FULL")
         return changed
 
     def _durable(self, durable: bool) -> None:
-        if durable:
-            self._synced, self.unsynced = time.monotonic(), False
-        else:
-            self.unsynced = True
+        self.unsynced = not durable
+
+    def sync_due(self) -> bool:
+        """Whether :data:`SYNC_EVERY` s have passed since the last :meth:`sync` with records
+        committed since (or, on SQLite, a log that may want its checkpoint)."""
+        if time.monotonic() - self._synced < SYNC_EVERY:
+            return False
+        return self.unsynced or self.engine.dialect.name == "sqlite"
 
     def sync(self) -> None:
-        """Put every committed record on disk (SQLite: a checkpoint, which syncs the log
-        first; PostgreSQL's commits are on disk already).
+        """Put every committed record on disk (SQLite: the log fsync'ed, and checkpointed
+        into the database once longer than :data:`CHECKPOINT_BYTES`; PostgreSQL's commits are
+        on disk already).
 
         Raises:
             IncidentStoreError: the database cannot be written.
         """
         if self.engine.dialect.name == "sqlite":
             with self._errors("sync"), self.engine.connect() as connection:
-                connection.exec_driver_sql("PRAGMA wal_checkpoint(PASSIVE)")
+                database = connection.exec_driver_sql("PRAGMA database_list").first()[2]
+                if _fsync(database + "-wal") >= CHECKPOINT_BYTES:
+                    connection.exec_driver_sql("PRAGMA wal_checkpoint(PASSIVE)")
+        self._synced = time.monotonic()
         self._durable(True)
-
-    def _take(self, connection: Any, item: Observed) -> int:
-        from sqlalchemy import select
-
-        from burstloc.incidents.schema import incidents as t
-
-        query = select(t.c.id, t.c.state, t.c.record, t.c.active).where(t.c.key == item.key)
-        if item.is_fault:
-            query = query.where(t.c.state != CLOSED)
-        row = connection.execute(query.order_by(t.c.id.desc()).limit(1)).first()
-        record = item.record_json()
-        if item.is_fault:
-            if row is None:
-                return self._insert(connection, item, record) if item.active else 0
-            if bool(row.active) == item.active:
-                return 0
-            action = "recurred" if item.active else "cleared"
-            self._update(connection, row.id, row.state, action, item, record, active=item.active)
-            return int(row.id)
-        if row is not None and row.record == record:
-            return 0  # already stored (a replay after a restart)
-        if row is None or row.state == CLOSED:
-            return self._insert(connection, item, record)
-        columns = {"kind": item.kind, "pipe": item.pipe, "summary": item.summary}
-        self._update(
-            connection, row.id, row.state, "answered", item, record, record=record, **columns
-        )
-        return int(row.id)
-
-    def _insert(self, connection: Any, item: Observed, record: str | None) -> int:
-        from burstloc.incidents.schema import incidents as t
-
-        result = connection.execute(
-            t.insert().values(
-                key=item.key,
-                kind=item.kind,
-                state=DETECTED,
-                detected_at=item.at,
-                updated_at=item.at,
-                reading_time=item.reading_time,
-                pipe=item.pipe,
-                meter=item.meter,
-                summary=item.summary,
-                record=record,
-                active=item.active,
-            )
-        )
-        incident = int(result.inserted_primary_key[0])
-        self._history(
-            connection,
-            incident,
-            item.at,
-            MONITOR,
-            MONITOR,
-            "detected",
-            DETECTED,
-            item.summary,
-            record,
-        )
-        return incident
-
-    def _update(
-        self,
-        connection: Any,
-        incident: int,
-        state: str,
-        action: str,
-        item: Observed,
-        detail: str | None,
-        **columns: Any,
-    ) -> None:
-        from burstloc.incidents.schema import incidents as t
-
-        connection.execute(
-            t.update().where(t.c.id == incident).values(updated_at=item.at, **columns)
-        )
-        self._history(
-            connection, incident, item.at, MONITOR, MONITOR, action, state, item.summary, detail
-        )
-
-    @staticmethod
-    def _history(
-        connection: Any,
-        incident: int,
-        at: float,
-        by: str,
-        via: str,
-        action: str,
-        state: str,
-        note: str | None,
-        detail: str | None,
-    ) -> None:
-        from burstloc.incidents.schema import history as h
-
-        connection.execute(
-            h.insert().values(
-                incident_id=incident,
-                at=at,
-                by=by,
-                via=via,
-                action=action,
-                state=state,
-                note=note,
-                detail=detail,
-            )
-        )
 
     # ------------------------------------------------------------------ the operators
     def act(
@@ -340,6 +286,8 @@ class IncidentStore:
                 if action == "close"
                 else f"an outcome is given only when closing, not to {action}"
             )
+        from burstloc.incidents.writing import add_history
+
         with self._write("write to") as connection:
             query = select(t.c.state).where(t.c.id == incident).with_for_update()
             row = connection.execute(query).first()
@@ -355,7 +303,7 @@ class IncidentStore:
                 )
                 detail = json.dumps(outcome.to_json())
             connection.execute(t.update().where(t.c.id == incident).values(**values))
-            self._history(
+            add_history(
                 connection, incident, now, str(name), via, DONE[action], state, text, detail
             )
         self._durable(True)

@@ -50,7 +50,16 @@ name                                         type      what
                                                        ``outcome`` (``applied``, ``refused``)
 ``burstloc_incidents_open``                  gauge     open incidents (only with an incident
                                                        store: :attr:`MonitorMetrics.incidents_open`)
+``burstloc_webhook_pending``                 gauge     webhook alerts due and not yet delivered
+                                                       (only with ``--webhook``:
+                                                       :attr:`MonitorMetrics.webhooks`)
+``burstloc_webhook_waiting``                 gauge     escalations scheduled, not yet due
+``burstloc_webhook_delivered_total``         counter   alerts delivered (a 2xx answer)
+``burstloc_webhook_failed_attempts_total``   counter   attempts that failed (retried or not)
+``burstloc_webhook_dead_lettered_total``     counter   alerts given up (the dead-letter file)
 ============================================ ========= =====================================
+
+The webhook counters count since the monitor started; the gauges are read from the outbox.
 """
 
 from __future__ import annotations
@@ -84,6 +93,9 @@ class MonitorMetrics:
     info: dict[str, str] = field(default_factory=dict)
     #: How many incidents are open (set by an incident store; ``None``: the gauge is absent).
     incidents_open: Callable[[], int] | None = None
+    #: The webhook alerts' sender (:class:`~burstloc.incidents.alerts.sender.WebhookSender`;
+    #: ``None``: the ``burstloc_webhook_*`` metrics are absent).
+    webhooks: Any = None
     #: Settings re-read on SIGHUP, by outcome (``applied``, ``refused``).
     reloads: dict[str, int] = field(default_factory=lambda: {"applied": 0, "refused": 0})
     _registry: Any = field(default=None, init=False, repr=False)
@@ -193,6 +205,8 @@ class MonitorMetrics:
         yield reloads
         if self.incidents_open is not None:
             yield gauge("burstloc_incidents_open", "open incidents", self.incidents_open())
+        if self.webhooks is not None:
+            yield from _webhooks(self.webhooks)
 
     def _queues(self) -> Iterator[Any]:
         from prometheus_client.core import CounterMetricFamily, GaugeMetricFamily
@@ -214,6 +228,30 @@ class MonitorMetrics:
             yield CounterMetricFamily(
                 "burstloc_unsent_records", "records MQTT could not queue", value=self.link.unsent
             )
+
+
+def _webhooks(sender: Any) -> Iterator[Any]:
+    """The ``burstloc_webhook_*`` families of ``sender``."""
+    from prometheus_client.core import CounterMetricFamily, GaugeMetricFamily
+
+    counts = sender.outbox.counts()
+    yield GaugeMetricFamily(
+        "burstloc_webhook_pending", "webhook alerts due, not delivered", value=counts["pending"]
+    )
+    yield GaugeMetricFamily(
+        "burstloc_webhook_waiting", "escalations scheduled, not due", value=counts["waiting"]
+    )
+    yield CounterMetricFamily(
+        "burstloc_webhook_delivered", "webhook alerts delivered", value=sender.delivered
+    )
+    yield CounterMetricFamily(
+        "burstloc_webhook_failed_attempts",
+        "webhook attempts that failed",
+        value=sender.failed_attempts,
+    )
+    yield CounterMetricFamily(
+        "burstloc_webhook_dead_lettered", "webhook alerts given up", value=sender.dead_lettered
+    )
 
 
 def _histogram(snap: HistogramSnapshot) -> tuple[list[tuple[str, float]], float]:

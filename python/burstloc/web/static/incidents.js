@@ -22,6 +22,9 @@ const I = (S.incidents = {
 const SHOWN = 200; // rows drawn at most (the rest: `burstloc incidents list`)
 const POLL_MS = 2000;
 const OPEN = ["detected", "acknowledged", "dispatched"];
+// A link to one incident (a webhook alert's): #incident=ID selects it.
+const linked = /^#incident=(\d+)$/.exec(location.hash);
+if (linked) I.selected = Number(linked[1]);
 let fetchedAt = 0;
 let serverNow = 0;
 let polling = null;

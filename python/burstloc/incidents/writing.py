@@ -1,0 +1,120 @@
+"""The monitor's news as SQL: one :class:`~burstloc.incidents.intake.Observed` taken in an open
+write transaction (:func:`take_one`), with statements built once.
+
+Every statement here is a module constant executed with a dictionary of parameters, so
+SQLAlchemy compiles each once and finds it in its cache by a key computed once per statement
+object; a statement rebuilt per call (``insert().values(...)``) costs its coercion and cache key
+on every write, most of the time of a write on SQLite (``benches/bench_incidents.py``). Imported
+only once a store is opened (it imports SQLAlchemy).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from sqlalchemy import bindparam, select
+
+from burstloc.incidents.intake import MONITOR, Observed
+from burstloc.incidents.lifecycle import CLOSED, DETECTED
+from burstloc.incidents.schema import history as h
+from burstloc.incidents.schema import incidents as t
+
+__all__ = ["OnNew", "add_history", "take_one"]
+
+#: Called in the transaction that opened an incident: ``(connection, incident, item)``.
+OnNew = Callable[[Any, int, Observed], None]
+
+_COLUMNS = (t.c.id, t.c.state, t.c.record, t.c.active)
+#: The newest incident of an alarm's key.
+_LATEST = select(*_COLUMNS).where(t.c.key == bindparam("k")).order_by(t.c.id.desc()).limit(1)
+#: The open incident of a meter fault's key.
+_OPEN = (
+    select(*_COLUMNS)
+    .where(t.c.key == bindparam("k"), t.c.state != CLOSED)
+    .order_by(t.c.id.desc())
+    .limit(1)
+)
+_INSERT = t.insert()
+_HISTORY = h.insert()
+#: An incident's columns changed by the monitor (the SET clause: the parameters' other keys).
+_UPDATE = t.update().where(t.c.id == bindparam("incident"))
+
+
+def add_history(
+    connection: Any,
+    incident: int,
+    at: float,
+    by: str,
+    via: str,
+    action: str,
+    state: str,
+    note: str | None,
+    detail: str | None,
+) -> None:
+    """Append one history row to ``incident``."""
+    connection.execute(
+        _HISTORY,
+        {
+            "incident_id": incident, "at": at, "by": by, "via": via, "action": action,
+            "state": state, "note": note, "detail": detail,
+        },
+    )  # fmt: skip
+
+
+def take_one(connection: Any, item: Observed, on_new: OnNew | None = None) -> int:
+    """Record ``item`` (:meth:`IncidentStore.take <burstloc.incidents.store.IncidentStore.take>`);
+    the incident it changed, ``0`` when it changed nothing. ``on_new`` is told of an incident
+    this opened, in the same transaction."""
+    query = _OPEN if item.is_fault else _LATEST
+    row = connection.execute(query, {"k": item.key}).first()
+    record = item.record_json()
+    if item.is_fault:
+        if row is None:
+            return _insert(connection, item, record, on_new) if item.active else 0
+        if bool(row.active) == item.active:
+            return 0
+        action = "recurred" if item.active else "cleared"
+        _update(connection, row.id, row.state, action, item, record, {"active": item.active})
+        return int(row.id)
+    if row is not None and row.record == record:
+        return 0  # already stored (a replay after a restart)
+    if row is None or row.state == CLOSED:
+        return _insert(connection, item, record, on_new)
+    columns = {"kind": item.kind, "pipe": item.pipe, "summary": item.summary, "record": record}
+    _update(connection, row.id, row.state, "answered", item, record, columns)
+    return int(row.id)
+
+
+def _insert(connection: Any, item: Observed, record: str | None, on_new: OnNew | None) -> int:
+    result = connection.execute(
+        _INSERT,
+        {
+            "key": item.key, "kind": item.kind, "state": DETECTED, "detected_at": item.at,
+            "updated_at": item.at, "reading_time": item.reading_time, "pipe": item.pipe,
+            "meter": item.meter, "summary": item.summary, "record": record,
+            "active": item.active,
+        },
+    )  # fmt: skip
+    incident = int(result.inserted_primary_key[0])
+    add_history(
+        connection, incident, item.at, MONITOR, MONITOR, "detected", DETECTED, item.summary, record
+    )
+    if on_new is not None:
+        on_new(connection, incident, item)
+    return incident
+
+
+def _update(
+    connection: Any,
+    incident: int,
+    state: str,
+    action: str,
+    item: Observed,
+    detail: str | None,
+    columns: dict[str, Any],
+) -> None:
+    connection.execute(_UPDATE, {"incident": incident, "updated_at": item.at, **columns})
+    add_history(
+        connection, incident, item.at, MONITOR, MONITOR, action, state, item.summary, detail
+    )
