@@ -119,7 +119,12 @@ def tiny_config(tiny: Path) -> Any:
 def tiny_feed(tiny: Path, tiny_config: Any) -> Any:
     """A real TSNet burst on pipe ``C`` of the tiny network with noise sigma = 0.002 m, as
     per-meter readings (tests/live/live_feed.py)."""
-    from live_feed import burst_steps, readings  # tests/live, on the path of its tests
+    import sys
+
+    live = str(Path(__file__).resolve().parent / "live")
+    if live not in sys.path:  # on the path of tests/live's own tests; not of the others'
+        sys.path.append(live)
+    from live_feed import burst_steps, readings
 
     return readings(burst_steps(tiny, tiny_config.meters, "C", sigma=0.002), tiny_config.meters)
 

@@ -213,15 +213,22 @@ def test_while_the_answer_waits_the_early_region_and_its_due_time_are_shown(
         onset = early["answer_at"] - early["wait_s"]
         assert onset <= early["first_alarm"] < early["answer_at"]
         due = f"DUE AT T = {early['answer_at']:.1f} S"
+        # counted down in reading time: once the page has every reading fed (they stream in,
+        # later on a loaded machine), the last one is half the wait in
+        last = float(feed[(ONSET_STEPS + half) * len(METERS) - 1].split(",")[0])
+        left = early["answer_at"] - last
+        assert left > 0
+        count = f"IN {math.floor(left + 0.5)} S"
         text = wait_for(
-            lambda: (t := browser.find_element("id", "answer").text.upper()) and due in t and t,
-            "the panel says when the answer is due",
+            lambda: (
+                (t := browser.find_element("id", "answer").text.upper())
+                and due in t
+                and count in t
+                and t
+            ),
+            "the panel says when the answer is due, counted from the last reading",
         )
         assert f"ONSET T = {onset:.1f} S + THE {math.floor(early['wait_s'] + 0.5)} S WAIT" in text
         assert "LOCATING" not in text and f"PIPE {early['pipes'][0]['pipe']}" in text
-        # counted down in reading time: the last reading fed is half the wait in
-        last = float(feed[(ONSET_STEPS + half) * len(METERS) - 1].split(",")[0])
-        left = early["answer_at"] - last
-        assert left > 0 and f"IN {math.floor(left + 0.5)} S" in text
     finally:
         m.stop()

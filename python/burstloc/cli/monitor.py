@@ -185,20 +185,23 @@ def run(args: argparse.Namespace) -> int:
         meter_model=args.meter_model,
     )
     state = None if args.state is None else StateFile(args.state, ident)
-    link = None
-    if args.mqtt is not None:
-        from burstloc.live.mqtt import MqttLink, parse_address
+    flags = {"waiting": False, "stop": False}
 
-        host, port = parse_address(args.mqtt)
-        digest = hashlib.sha256(json.dumps([ident, args.topic]).encode()).hexdigest()[:12]
-        link = MqttLink(
-            host,
-            port,
-            args.topic,
-            client_id=args.client_id or f"burstloc-monitor-{digest}",
-            report=report,
-            queue_size=args.queue_size,
-        )
+    def on_term(signum: int, frame: Any) -> None:
+        flags["stop"] = True
+        if flags["waiting"]:
+            raise _StopError
+
+    # before the broker link connects (and says so): a SIGTERM from then on stops cleanly
+    previous = signal.signal(signal.SIGTERM, on_term)
+    try:
+        link = _link(args, ident, report)
+    except BaseException:
+        signal.signal(signal.SIGTERM, previous)
+        _incidents.stop(recorder)
+        if web is not None:
+            web.stop()
+        raise
 
     def emit(record: dict[str, Any]) -> None:
         print(json.dumps(record), flush=True)
@@ -221,35 +224,28 @@ def run(args: argparse.Namespace) -> int:
     try:
         sender = _incidents.start_alerts(args, recorder, loop, web, write)
     except BaseException:
+        signal.signal(signal.SIGTERM, previous)
         if link is not None:
             link.close()
         if web is not None:
             web.stop()
         _incidents.stop(recorder)
         raise
-    metrics = _service.attach(args, web, loop, link)
-    if metrics is not None and recorder is not None:  # the incident store's open incidents
-        store = recorder.store
-        metrics.incidents_open = lambda: len(store.incidents(open_only=True))
-        metrics.webhooks = sender
-    saved = None if state is None else state.load()
-    if saved is not None:
-        try:
-            loop.restore(saved)
-        except ConfigError:
-            raise
-        except (KeyError, TypeError, ValueError, AttributeError, IndexError) as exc:
-            raise ConfigError(f"state file {args.state!r} is malformed: {exc!r}") from exc
-        report("state", f"resumed from state file {args.state}")
-    flags = {"waiting": False, "stop": False}
-
-    def on_term(signum: int, frame: Any) -> None:
-        flags["stop"] = True
-        if flags["waiting"]:
-            raise _StopError
-
-    previous = signal.signal(signal.SIGTERM, on_term)
     try:
+        metrics = _service.attach(args, web, loop, link)
+        if metrics is not None and recorder is not None:  # the incident store's open incidents
+            store = recorder.store
+            metrics.incidents_open = lambda: len(store.incidents(open_only=True))
+            metrics.webhooks = sender
+        saved = None if state is None else state.load()
+        if saved is not None:
+            try:
+                loop.restore(saved)
+            except ConfigError:
+                raise
+            except (KeyError, TypeError, ValueError, AttributeError, IndexError) as exc:
+                raise ConfigError(f"state file {args.state!r} is malformed: {exc!r}") from exc
+            report("state", f"resumed from state file {args.state}")
         if link is not None:
             items: Iterator[Any] = _from_broker(link, flags)
         else:
@@ -279,6 +275,24 @@ def run(args: argparse.Namespace) -> int:
         source = "stdin" if args.readings == "-" else repr(args.readings)
         raise InputError(f"no usable readings in {source}: nothing was monitored")
     return 0
+
+
+def _link(args: argparse.Namespace, ident: Any, report: Any) -> Any:
+    """The MQTT link of ``--mqtt`` (connecting in the background), or ``None``."""
+    if args.mqtt is None:
+        return None
+    from burstloc.live.mqtt import MqttLink, parse_address
+
+    host, port = parse_address(args.mqtt)
+    digest = hashlib.sha256(json.dumps([ident, args.topic]).encode()).hexdigest()[:12]
+    return MqttLink(
+        host,
+        port,
+        args.topic,
+        client_id=args.client_id or f"burstloc-monitor-{digest}",
+        report=report,
+        queue_size=args.queue_size,
+    )
 
 
 def _from_broker(link: Any, flags: dict[str, bool]) -> Iterator[Any]:
