@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from burstloc.localize.evidence import IndexedAlarm, evidence_from_alarms
-from burstloc.localize.onset import FINEST_STEP_INTERVAL, hinge_onset
+from burstloc.localize.onset import FINEST_STEP_INTERVAL, _fit, hinge_onset
 
 
 def _front(dt: float, onset: float, seed: int) -> tuple[np.ndarray, np.ndarray]:
@@ -51,3 +51,18 @@ def test_evidence_centres_a_fine_alarms_window_on_the_fitted_change() -> None:
             assert began + 0.5 * dt == pytest.approx(1.0, abs=0.02)
         else:  # the detector's own start
             assert began == t[start]
+
+
+def test_a_fit_is_kept_for_the_same_readings_and_redone_for_others() -> None:
+    t, y = _front(0.004, 1.0, 2)
+    index, start = int(np.searchsorted(t, 1.25)), int(np.searchsorted(t, 0.9))
+    first = hinge_onset(t, y, start, index, -1.0)
+    hits = _fit.cache_info().hits
+    longer = np.concatenate([y, [49.0]])  # the same readings, one more after: the same fit
+    assert hinge_onset(np.append(t, t[-1] + 0.004), longer, start, index, -1.0) == first
+    assert _fit.cache_info().hits == hits + 1
+    other = y.copy()
+    other[index - 40 :] -= 0.2  # other readings at the same times: fitted anew, elsewhere
+    moved = hinge_onset(t, other, start, index, -1.0)
+    assert _fit.cache_info().hits == hits + 1
+    assert moved is not None and moved != first

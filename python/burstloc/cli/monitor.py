@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import hashlib
 import json
 import os
@@ -124,7 +125,6 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Handle ``burstloc monitor``."""
-    from burstloc.cli import _service
     from burstloc.live.health import Health, PlausibleRange
     from burstloc.live.loop import LiveLoop, Reporter
     from burstloc.live.monitor import BurstMonitor
@@ -164,110 +164,64 @@ def run(args: argparse.Namespace) -> int:
         silent_after=args.silent_after,
         clock_tolerance=args.clock_tolerance,
     )
-    recorder = _incidents.start(args, lambda text: write(text))
-    try:
-        web = _web.start(args, monitor, None if recorder is None else recorder.store)
-    except BaseException:
-        _incidents.stop(recorder)
-        raise
-
-    def write(text: str) -> None:
-        print(text, file=sys.stderr, flush=True)
-        if web is not None:
-            web.hub.message(text.removeprefix("burstloc monitor: "))
-
-    report = Reporter(write)
-    ident = identity(
-        config,
-        capture_interval=args.capture_interval,
-        detector=args.detector,
-        localizer=args.localizer,
-        meter_model=args.meter_model,
-    )
-    state = None if args.state is None else StateFile(args.state, ident)
     flags = {"waiting": False, "stop": False}
+    with contextlib.ExitStack() as stack:  # whatever started is stopped, in reverse order
+        recorder = _incidents.start(args, lambda text: write(text))
+        alerts: dict[str, Any] = {"sender": None}
+        stack.callback(lambda: _incidents.stop(recorder, alerts["sender"]))
+        web = _web.start(args, monitor, None if recorder is None else recorder.store)
+        if web is not None:
+            stack.callback(web.stop)
 
-    def on_term(signum: int, frame: Any) -> None:
-        flags["stop"] = True
-        if flags["waiting"]:
-            raise _StopError
+        def write(text: str) -> None:
+            print(text, file=sys.stderr, flush=True)
+            if web is not None:
+                web.hub.message(text.removeprefix("burstloc monitor: "))
 
-    # before the broker link connects (and says so): a SIGTERM from then on stops cleanly
-    previous = signal.signal(signal.SIGTERM, on_term)
-    try:
+        report = Reporter(write)
+        ident = identity(
+            config,
+            capture_interval=args.capture_interval,
+            detector=args.detector,
+            localizer=args.localizer,
+            meter_model=args.meter_model,
+        )
+        state = None if args.state is None else StateFile(args.state, ident)
+
+        def on_term(signum: int, frame: Any) -> None:
+            flags["stop"] = True
+            if flags["waiting"]:
+                raise _StopError
+
+        # before the broker link connects (and says so): a SIGTERM from then on stops cleanly
+        stack.callback(signal.signal, signal.SIGTERM, signal.signal(signal.SIGTERM, on_term))
         link = _link(args, ident, report)
-    except BaseException:
-        signal.signal(signal.SIGTERM, previous)
-        _incidents.stop(recorder)
-        if web is not None:
-            web.stop()
-        raise
+        if link is not None:
+            stack.callback(link.close)
 
-    def emit(record: dict[str, Any]) -> None:
-        print(json.dumps(record), flush=True)
-        if link is not None:
-            topic = args.decisions_topic if record["type"] == "decision" else args.health_topic
-            link.publish(topic, record)
+        def emit(record: dict[str, Any]) -> None:
+            print(json.dumps(record), flush=True)
+            if link is not None:
+                topic = args.decisions_topic if record["type"] == "decision" else args.health_topic
+                link.publish(topic, record)
 
-    loop = LiveLoop(
-        monitor,
-        health,
-        emit,
-        report,
-        timeout=args.timeout,
-        missing=args.missing,
-        health_every=args.health_every,
-        state=state,
-        save_every=args.save_every,
-        observer=fan_out(None if web is None else web.hub, recorder),
-    )
-    try:
-        sender = _incidents.start_alerts(args, recorder, loop, web, write)
-    except BaseException:
-        signal.signal(signal.SIGTERM, previous)
-        if link is not None:
-            link.close()
-        if web is not None:
-            web.stop()
-        _incidents.stop(recorder)
-        raise
-    try:
-        metrics = _service.attach(args, web, loop, link)
-        if metrics is not None and recorder is not None:  # the incident store's open incidents
-            store = recorder.store
-            metrics.incidents_open = lambda: len(store.incidents(open_only=True))
-            metrics.webhooks = sender
-        saved = None if state is None else state.load()
-        if saved is not None:
-            try:
-                loop.restore(saved)
-            except ConfigError:
-                raise
-            except (KeyError, TypeError, ValueError, AttributeError, IndexError) as exc:
-                raise ConfigError(f"state file {args.state!r} is malformed: {exc!r}") from exc
-            report("state", f"resumed from state file {args.state}")
-        if link is not None:
-            items: Iterator[Any] = _from_broker(link, flags)
-        else:
-            idle = min(max(args.save_every, 0.05), 1.0)
-            items = _from_file(args.readings, flags, idle, loop.timestamps)
-            if args.replay_speed is not None:
-                from burstloc.live.replay import paced
-
-                items = paced(items, args.replay_speed, lambda: flags["stop"])
-        items = _service.reloading(items, args, loop=loop, web=web, metrics=metrics, report=report)
-        loop.run(items)
-        if web is not None and link is None and args.readings != "-":
-            _web.linger(web, lambda: flags["stop"])
-    except _StopError:
-        loop.finish()
-    finally:
-        signal.signal(signal.SIGTERM, previous)
-        if link is not None:
-            link.close()
-        if web is not None:
-            web.stop()
-        _incidents.stop(recorder, sender)
+        loop = LiveLoop(
+            monitor,
+            health,
+            emit,
+            report,
+            timeout=args.timeout,
+            missing=args.missing,
+            health_every=args.health_every,
+            state=state,
+            save_every=args.save_every,
+            observer=fan_out(None if web is None else web.hub, recorder),
+        )
+        sender = alerts["sender"] = _incidents.start_alerts(args, recorder, loop, web, write)
+        try:
+            _serve(args, loop, state, link, web, recorder, sender, flags, report)
+        except _StopError:
+            loop.finish()
     if flags["stop"]:
         saved_to = f"; state saved to {args.state}" if args.state else ""
         print(f"burstloc monitor: stopped by SIGTERM{saved_to}", file=sys.stderr)
@@ -275,6 +229,50 @@ def run(args: argparse.Namespace) -> int:
         source = "stdin" if args.readings == "-" else repr(args.readings)
         raise InputError(f"no usable readings in {source}: nothing was monitored")
     return 0
+
+
+def _serve(
+    args: argparse.Namespace,
+    loop: Any,
+    state: Any,
+    link: Any,
+    web: Any,
+    recorder: Any,
+    sender: Any,
+    flags: dict[str, bool],
+    report: Any,
+) -> None:
+    """Resume from the state file, then run ``loop`` over the readings until they end (or, from
+    a broker, until SIGTERM), serving the page after a finished file while it is open."""
+    from burstloc.cli import _service
+
+    metrics = _service.attach(args, web, loop, link)
+    if metrics is not None and recorder is not None:  # the incident store's open incidents
+        store = recorder.store
+        metrics.incidents_open = lambda: len(store.incidents(open_only=True))
+        metrics.webhooks = sender
+    saved = None if state is None else state.load()
+    if saved is not None:
+        try:
+            loop.restore(saved)
+        except ConfigError:
+            raise
+        except (KeyError, TypeError, ValueError, AttributeError, IndexError) as exc:
+            raise ConfigError(f"state file {args.state!r} is malformed: {exc!r}") from exc
+        report("state", f"resumed from state file {args.state}")
+    if link is not None:
+        items: Iterator[Any] = _from_broker(link, flags)
+    else:
+        idle = min(max(args.save_every, 0.05), 1.0)
+        items = _from_file(args.readings, flags, idle, loop.timestamps)
+        if args.replay_speed is not None:
+            from burstloc.live.replay import paced
+
+            items = paced(items, args.replay_speed, lambda: flags["stop"])
+    items = _service.reloading(items, args, loop=loop, web=web, metrics=metrics, report=report)
+    loop.run(items)
+    if web is not None and link is None and args.readings != "-":
+        _web.linger(web, lambda: flags["stop"])
 
 
 def _link(args: argparse.Namespace, ident: Any, report: Any) -> Any:

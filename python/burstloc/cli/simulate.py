@@ -144,6 +144,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> int:
     """Handle ``burstloc simulate``."""
     from burstloc.experiments.paper import SCENARIO
+    from burstloc.network import as_network
     from burstloc.sim.scenarios import scenario
     from burstloc.sim.transient.time_step import with_capture_time_step
     from burstloc.sim.transient.tsnet import simulate_many
@@ -155,8 +156,9 @@ def run(args: argparse.Namespace) -> int:
     if args.event is not None:
         return _event(args, start)
     coeff, flow = burst_size_of(args)
+    network = as_network(args.network)  # read once, here at the edge
     scenarios = scenario.burst_scenarios(
-        args.network,
+        network,
         None if args.all else args.pipe,
         position=args.position,
         burst_start=args.burst_start,
@@ -172,7 +174,7 @@ def run(args: argparse.Namespace) -> int:
         scenarios = with_capture_time_step(scenarios, args.capture_interval)
     from burstloc.sim.signatures.burst_size import describe_sizes, sized_scenarios, with_size
 
-    scenarios, sizes = sized_scenarios(scenarios, flow)
+    scenarios, sizes = sized_scenarios(scenarios, flow, network)
     print(describe_sizes(sizes, flow))
     size_of = {s.pipe: size for s, size in zip(scenarios, sizes, strict=True)}
     cache = cache_of(args)

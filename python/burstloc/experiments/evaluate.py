@@ -196,7 +196,7 @@ def evaluate(
     params["time_step"] = time_step
     finest = min(spec.capture_interval for spec in runs)
     scenarios = with_capture_time_step(burst_scenarios(read, chosen, **params), finest)
-    scenarios, sizes = sized_scenarios(scenarios, burst_flow)
+    scenarios, sizes = sized_scenarios(scenarios, burst_flow, read)
     if burst_flow is not None:
         del params["burst_coeff"]
         params["burst_flow_lps"] = round(sizes[0].flow_lps, 6)

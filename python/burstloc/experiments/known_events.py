@@ -34,7 +34,7 @@ from burstloc.experiments.position import NetworkDistance, PipePoint
 from burstloc.live.feeds import StepFeed
 from burstloc.live.parse import BadReading, parse_lines
 from burstloc.localize.config import Calibration, calibrated_bank
-from burstloc.localize.onset import change_start
+from burstloc.localize.evidence import IndexedAlarm, evidence_from_alarms
 from burstloc.localize.travel_fit import EventArrivals
 from burstloc.network import Network
 from burstloc.readings import Reading, Step, timestamp_seconds
@@ -181,17 +181,18 @@ def _onsets(
     feed = StepFeed(meters, period=capture_interval)
     times: list[float] = []
     rows: list[np.ndarray] = []
-    first: dict[str, tuple[int, int, float]] = {}  # meter: the alarm's start, index, amplitude
+    alarms: list[IndexedAlarm] = []  # those that start at or after the event
 
     def run(steps: list[Step]) -> None:
         for step in steps:
             times.append(float(step.timestamp))
             rows.append(np.asarray(step.values, dtype=np.float64))
             for alarm in bank.step(rows[-1]):
-                meter = meters[int(alarm.channel or 0)]
                 start = max(int(alarm.start), 0)
-                if meter not in first and times[start] + capture_interval >= event.time:
-                    first[meter] = (start, len(times) - 1, float(alarm.amplitude))
+                if times[start] + capture_interval >= event.time:
+                    index = len(times) - 1
+                    channel = int(alarm.channel or 0)
+                    alarms.append(IndexedAlarm(channel, index, start, float(alarm.amplitude)))
 
     try:
         for reading in readings:
@@ -204,11 +205,14 @@ def _onsets(
             f"known event {event.name!r}: its readings must start before the event "
             f"(at {event.time:g} s) so that the detectors know the level before it"
         )
-    t, values = np.asarray(times), np.asarray(rows)
-    onsets = {  # where each change starts, as the monitor's localizers read it
-        meter: change_start(t, values[:, meters.index(meter)], start, index, amp, capture_interval)
-        for meter, (start, index, amp) in first.items()
-    }
+    if not alarms:
+        return {}, capture_interval
+    heard = (
+        evidence_from_alarms(  # each meter's first, its start as the monitor's localizers read it
+            meters, np.asarray(times), np.asarray(rows), alarms, capture_interval=capture_interval
+        )
+    )
+    onsets = {meter: alarm.start for meter, alarm in heard.alarms.items()}
     return onsets, capture_interval
 
 

@@ -17,10 +17,19 @@ Numpy only: on the live path.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["FINEST_STEP_INTERVAL", "LOOKBACK", "SUBSTEPS", "change_start", "hinge_onset"]
+__all__ = [
+    "FINEST_STEP_INTERVAL",
+    "FITS_KEPT",
+    "LOOKBACK",
+    "SUBSTEPS",
+    "change_start",
+    "hinge_onset",
+]
 
 FINEST_STEP_INTERVAL = 0.02
 """Capture intervals (s) up to this one time a change by :func:`hinge_onset`: a burst's front,
@@ -40,15 +49,29 @@ def hinge_onset(
     """The time (s) one meter's change starts: the hinge (module docstring) fitted to
     ``values`` (its readings at ``times``) from :data:`LOOKBACK` s before reading ``start`` (the
     CUSUM's) to reading ``index`` (the alarm's), its slope of the alarm's ``sign``; ``None``
-    where no such hinge fits (too few readings, or a departure the wrong way)."""
+    where no such hinge fits (too few readings, or a departure the wrong way). A fit is kept
+    (:data:`FITS_KEPT` of them, keyed by the readings it read), so the monitor's looks at the same
+    alarm fit it once."""
     t = np.asarray(times, dtype=np.float64)
     y = np.asarray(values, dtype=np.float64)
     if index - start < 1 or start < 0 or index >= t.size:
         return None
     first = int(np.searchsorted(t, t[start] - LOOKBACK, side="left"))
     tt, yy = t[first : index + 1], y[first : index + 1]
-    if tt.size < 4:
+    if tt.size < 4 or sign == 0:
         return None
+    return _fit(tt.tobytes(), yy.tobytes(), bool(sign > 0))
+
+
+FITS_KEPT = 4096
+"""Hinge fits :func:`hinge_onset` keeps: a few per meter of a few bursts."""
+
+
+@functools.lru_cache(maxsize=FITS_KEPT)
+def _fit(times: bytes, values: bytes, rising: bool) -> float | None:
+    """The best hinge's change point over these readings (float64 bytes), its slope rising or
+    falling; ``None`` where none fits."""
+    tt, yy = np.frombuffer(times), np.frombuffer(values)
     step = (tt[-1] - tt[0]) / (tt.size - 1)
     cands = np.arange(tt[0] + step, tt[-1], step / SUBSTEPS)
     if cands.size == 0:
@@ -62,7 +85,7 @@ def hinge_onset(
     slope = np.where(ok, (n * sxy - sx * sy) / np.where(ok, det, 1.0), 0.0)
     level = (sy - slope * sx) / n
     rss = ((level[:, None] + slope[:, None] * x - yy[None, :]) ** 2).sum(axis=1)
-    rss = np.where(ok & (np.sign(slope) == np.sign(sign)), rss, np.inf)
+    rss = np.where(ok & ((slope > 0) == rising) & (slope != 0), rss, np.inf)
     best = int(np.argmin(rss))
     if not np.isfinite(rss[best]):
         return None

@@ -20,6 +20,7 @@ junction below zero pressure is larger than the network can feed.
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any
@@ -28,6 +29,7 @@ import numpy as np
 
 from burstloc.constants import BURST_FLOW, BURST_SHARE
 from burstloc.exceptions import ConfigError, NetworkError
+from burstloc.network import Network
 from burstloc.sim.scenarios.scenario import BurstScenario, ScenarioResult
 
 __all__ = [
@@ -211,20 +213,23 @@ def burst_sizes(
 
 
 def sized_scenarios(
-    scenarios: Sequence[BurstScenario], flow: float | BurstFlow | None = None
+    scenarios: Sequence[BurstScenario],
+    flow: float | BurstFlow | None = None,
+    network: Network | None = None,
 ) -> tuple[list[BurstScenario], list[BurstSize]]:
     """The bursts ``scenarios`` with their sizes: with ``flow`` (m³/s, or a :class:`BurstFlow`:
     a share of each network's demand) each one's coefficient set to draw that flow at its burst
     point's pressure before it opens; without, their own coefficients and the flows those draw
     there. The network's steady state is solved once per network file (its engine the first
-    scenario's).
+    scenario's), on ``network`` (the loaded network the scenarios burst) or, for a scenario of
+    another file, that file read once (:func:`~burstloc.network.as_network`).
 
     Raises:
         ConfigError: a bad flow, a burst point without pressure to size by flow, a share of a
             network that draws no water.
         NetworkError: an unknown pipe; EPANET cannot solve the network.
     """
-    from burstloc.network import load_network, steady_state
+    from burstloc.network import as_network, steady_state
 
     sizing = BurstFlow(flow=flow) if isinstance(flow, (int, float)) else flow
     out: list[BurstScenario] = []
@@ -232,7 +237,10 @@ def sized_scenarios(
     solved: dict[tuple[str, str], tuple[Any, dict[str, float], float]] = {}
     for s in scenarios:
         if (s.network, s.engine) not in solved:
-            wn = load_network(s.network)
+            if network is not None and os.fspath(network.path) == os.fspath(s.network):
+                wn = network.model
+            else:
+                wn = as_network(s.network).model
             state = steady_state(wn, s.engine)
             demand = sum(q for q in state.demands.values() if q > 0)
             solved[(s.network, s.engine)] = (wn, state.heads, demand)
