@@ -198,9 +198,12 @@ def shift_clocks(
 def silence(
     time: NDArray[np.float64], heads: NDArray[np.float64], column: int, after: float
 ) -> NDArray[np.float64]:
-    """``heads`` with column ``column`` NaN (no reading) from ``after`` (s) on."""
+    """``heads`` with column ``column`` NaN (no reading) from ``after`` (s) on: from the
+    simulated instant a reading at ``after`` samples (the last at or before it), so every
+    reading from ``after`` on is missing, whatever the capture clock."""
     out = np.array(heads, dtype=np.float64, copy=True)
-    out[time >= after - 1e-9, column] = np.nan
+    first = max(int(np.searchsorted(time, after + 1e-9, side="right")) - 1, 0)
+    out[first:, column] = np.nan
     return out
 
 
