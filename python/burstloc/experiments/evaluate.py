@@ -66,7 +66,7 @@ from burstloc.experiments.runs import (
     readings_after,
     required_duration,
 )
-from burstloc.experiments.truth import Hearing
+from burstloc.experiments.truth import Hearing, check_truth
 from burstloc.sim.scenarios.perturb import TruthPerturbation
 
 if TYPE_CHECKING:
@@ -173,15 +173,7 @@ def evaluate(
 
     if not runs:
         raise ConfigError("no runs to evaluate")
-    if (
-        truth is not None
-        and truth.silent_meter is not None
-        and any(spec.localizer == "paper" for spec in runs)
-    ):
-        raise ConfigError(
-            "--truth-silent-meter needs a ranking localizer: the paper's rules read every "
-            "junction and have no policy for a missing reading"
-        )
+    check_truth(truth, [spec.localizer for spec in runs])
     for spec in runs:
         phase_offsets(spec, phases, phase_span)  # validates phases and span
     read = netmod.as_network(network)

@@ -17,6 +17,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
+from burstloc.exceptions import ConfigError
 from burstloc.experiments.position import NetworkDistance, true_point
 from burstloc.sim.scenarios.perturb import TruthPerturbation, clock_offsets, shift_clocks, silence
 
@@ -25,7 +26,21 @@ if TYPE_CHECKING:
 
     from burstloc.sim.scenarios.scenario import ScenarioResult
 
-__all__ = ["Hearing"]
+__all__ = ["Hearing", "check_truth"]
+
+
+def check_truth(truth: TruthPerturbation | None, localizers: Sequence[str]) -> None:
+    """Refuse a silent meter for the paper's rules (they read every junction and have no
+    policy for a missing reading).
+
+    Raises:
+        ConfigError: naming the option.
+    """
+    if truth is not None and truth.silent_meter is not None and "paper" in localizers:
+        raise ConfigError(
+            "--truth-silent-meter needs a ranking localizer: the paper's rules read every "
+            "junction and have no policy for a missing reading"
+        )
 
 
 @dataclass
