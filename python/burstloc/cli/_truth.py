@@ -16,7 +16,7 @@ def add_truth_options(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group(
         "perturbed truth",
         "simulate what the meters hear on a perturbed copy of the network while the localizers "
-        "keep the model (all off by default): does the 95 %% search region keep its coverage?",
+        "keep the model (all off by default): does the 95 % search region keep its coverage?",
     )
     group.add_argument(
         "--truth-wave-speed-spread",
