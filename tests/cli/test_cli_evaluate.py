@@ -298,3 +298,56 @@ def test_bursts_sized_by_flow_and_every_bursts_flow_recorded(
     assert "--burst-flow: not allowed with argument --burst-coeff" in capsys.readouterr().err
     assert _evaluate_long_pipes(tmp_path, "--burst-flow", "0") == 2
     assert "--burst-flow must be a positive number of L/s" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--truth-wave-speed-spread", "1"], "--truth-wave-speed-spread must be in [0, 1), got 1"),
+        (["--truth-wave-speed-spread", "-0.1"], "--truth-wave-speed-spread must be a finite"),
+        (["--truth-roughness-spread", "1.5"], "--truth-roughness-spread must be in [0, 1)"),
+        (["--truth-clock-offset", "-0.005"], "--truth-clock-offset must be a finite number"),
+        (["--truth-clock-offset", "inf"], "--truth-clock-offset must be a finite number"),
+        (["--truth-silent-meter", "-2"], "--truth-silent-meter must be a finite number"),
+        (["--truth-seed", "-1", "--truth-clock-offset", "0.005"], "--truth-seed must be a whole"),
+        (
+            ["--truth-silent-meter", "1", "--localizer", "paper"],
+            "--truth-silent-meter needs a ranking localizer",
+        ),
+    ],
+)
+def test_evaluate_refuses_a_bad_truth_naming_the_option(args, message, capsys) -> None:
+    assert main(["evaluate", str(PAPER15), "--quiet", "--pipes", "P7", *args]) == 2
+    assert message in capsys.readouterr().err
+
+
+def test_evaluate_on_a_perturbed_truth_records_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv = ["evaluate", str(PAPER15), "--pipes", "P7", "--phases", "1", "--detector", "cusum"]
+    argv += ["--capture-interval", "0.2", "--quiet", "--workers", "1", "--json"]
+    assert main([*argv, str(tmp_path / "plain.json")]) == 0
+    plain = json.loads((tmp_path / "plain.json").read_text())
+    assert "truth" not in plain["scenario"] and "truth perturbed" not in capsys.readouterr().out
+    truth = ["--truth-wave-speed-spread", "0.15", "--truth-roughness-spread", "0.3"]
+    truth += ["--truth-clock-offset", "0.005", "--truth-silent-meter", "0.4", "--truth-seed", "3"]
+    assert main([*argv, str(tmp_path / "a.json"), *truth]) == 0
+    out = capsys.readouterr().out
+    assert out.count("truth perturbed: wave speeds ±15 % per pipe, roughness ±30 % per pipe, ") == 1
+    assert "the meter nearest each burst silent 0.4 s after it starts (seed 3)" in out
+    doc = json.loads((tmp_path / "a.json").read_text())
+    jsonschema.validate(doc, SCHEMA)
+    assert doc["scenario"]["truth"] == {
+        "wave_speed_spread": 0.15,
+        "roughness_spread": 0.3,
+        "clock_offset": 0.005,
+        "silent_meter": 0.4,
+        "seed": 3,
+    }
+    assert doc["scenario"]["truth_silent_meters"] == {"P7": "N5"}
+    # the same seed, the same truth (simulated again: the cache keys it apart from the plain
+    # burst, whose result is not taken for it)
+    assert main([*argv, str(tmp_path / "b.json"), *truth, "--no-cache"]) == 0
+    again = json.loads((tmp_path / "b.json").read_text())
+    assert again["runs"] == doc["runs"]
+    assert doc["runs"] != plain["runs"]

@@ -202,3 +202,25 @@ def test_steady_readings_are_not_located(
             capture_interval=0.2,
             localizers=["arrival"],
         )
+
+
+def test_a_meter_that_sends_nothing_is_named_to_the_monitor_as_filled(
+    tiny_burst: tuple[ScenarioResult, RankingSetup],
+) -> None:
+    # NaN = no reading (a silent meter of a perturbed truth): the monitor gets the step with
+    # the meter named in ``filled``, as from the live feed, and still decides on the others;
+    # before, every step with a NaN was refused and skipped, and nothing was decided
+    result, setup = tiny_burst
+    times, values = capture_readings(result, Clock(0.2, 0.0, 11))
+    burst = float(result.metadata["burst_start"])
+    quiet = values.copy()
+    quiet[times >= burst, 0] = np.nan
+    ranked = rank_attempts(
+        result,
+        (times, quiet),
+        setup,
+        detector="cusum",
+        capture_interval=0.2,
+        localizers=["arrival"],
+    )["arrival"]
+    assert ranked.located and ranked.decided_at is not None and ranked.decided_at > burst

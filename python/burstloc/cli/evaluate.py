@@ -24,6 +24,7 @@ from burstloc.cli._options import (
     run_of,
     time_step_of,
 )
+from burstloc.cli._truth import add_truth_options, truth_of
 from burstloc.constants import DETECTORS, LOCALIZERS, METER_MODELS
 from burstloc.exceptions import ConfigError
 from burstloc.experiments.evaluate import DEFAULT_LOCALIZER
@@ -189,6 +190,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         metavar="PATH",
         help="--events: write the calibrated classifier (for burstloc monitor --classify)",
     )
+    add_truth_options(parser)
     add_run_options(parser)
     parser.set_defaults(handler=run)
     return parser
@@ -246,6 +248,9 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError(f"--noise must be a number of metres >= 0, got {args.noise}")
     if args.noise_seed < 0:
         raise ConfigError(f"--noise-seed must be >= 0, got {args.noise_seed}")
+    truth = truth_of(args)
+    if truth is not None:
+        print(f"truth perturbed: {truth.describe()}; the localizers keep the model", flush=True)
     ev = evaluate(
         network,
         runs,
@@ -263,6 +268,7 @@ def run(args: argparse.Namespace) -> int:
         # each burst scored as it arrives unless the plots or the classifier read its heads
         keep_heads=bool(args.plot or args.events),
         burst_flow=flow,
+        truth=truth,
     )
     print(_flows_line(ev.scenario))
     print(report.format_tables(ev, True if args.paper_tables else None), end="")

@@ -66,6 +66,8 @@ from burstloc.experiments.runs import (
     readings_after,
     required_duration,
 )
+from burstloc.experiments.truth import Hearing, check_truth
+from burstloc.sim.scenarios.perturb import TruthPerturbation
 
 if TYPE_CHECKING:
     from burstloc.localize.config import Calibration
@@ -108,6 +110,7 @@ def evaluate(
     noise_seed: int = 0,
     keep_heads: bool = True,
     burst_flow: float | BurstFlow | None = None,
+    truth: TruthPerturbation | None = None,
 ) -> Evaluation:
     """Run the experiment: simulate (cached), stream, localize and score every run.
 
@@ -149,10 +152,16 @@ def evaluate(
     at most 5 L/s") and each pipe's coefficient (``burst_coeffs``) in place of
     ``burst_coeff``.
 
+    ``truth`` simulates the truth the meters hear on a perturbed network while the localizers
+    keep the model (:mod:`burstloc.sim.scenarios.perturb`, :mod:`burstloc.experiments.truth`);
+    the JSON's ``scenario`` records it (``truth``) and, with a silent meter, which meter fell
+    silent for each burst (``truth_silent_meters``).
+
     Raises:
         NetworkError: missing or malformed network, unknown pipe, a named pipe that is closed.
         ConfigError: no runs, bad phases, a time step that is not a positive number of seconds,
-            or a capture interval finer than the simulation's time step; a bad burst flow.
+            or a capture interval finer than the simulation's time step; a bad burst flow; a
+            silent meter with the paper's rules (they have no missing-reading policy).
         SimulationError: a burst could not be simulated.
     """
     from burstloc import inp
@@ -164,6 +173,7 @@ def evaluate(
 
     if not runs:
         raise ConfigError("no runs to evaluate")
+    check_truth(truth, [spec.localizer for spec in runs])
     for spec in runs:
         phase_offsets(spec, phases, phase_span)  # validates phases and span
     read = netmod.as_network(network)
@@ -207,6 +217,9 @@ def evaluate(
         )
         params["burst_coeffs"] = {s.pipe: s.coeff for s in sizes}
     params["burst_flows_lps"] = {s.pipe: round(s.flow_lps, 3) for s in sizes}
+    if truth is not None and truth.active:
+        scenarios = [replace(s, truth=truth) for s in scenarios]
+        params["truth"] = truth.to_dict()
     ranked = [spec for spec in runs if spec.localizer != "paper"]
     scoring: dict[str, Any] = {}  # the ranking setup and sensors, made from the first result
 
@@ -218,6 +231,8 @@ def evaluate(
             intervals = sorted({spec.capture_interval for spec in ranked})
             setup = RankingSetup.build(read, metered, intervals, config)
         scoring.update(setup=setup, sensors=_sensors(noise, noise_seed, setup))
+        heard_by = None if setup is None else setup.meters
+        scoring["hear"] = Hearing(truth or TruthPerturbation(), wn, heard_by)
 
     streamed: dict[str, dict[RunSpec, list[Attempt]]] = {}
 
@@ -228,7 +243,7 @@ def evaluate(
             prepare(result)
         scored = _score(
             runs,
-            {result.pipe: result},
+            {result.pipe: scoring["hear"](result)},
             [result.pipe],
             graph,
             scoring["setup"],
@@ -260,16 +275,20 @@ def evaluate(
         _check_results(runs, list(results.values()), phases, phase_span)
 
     warnings += [w for r in results.values() if (w := r.negative_pressure()) is not None]
-    truth = {p: r.true_endpoints for p, r in results.items()}
+    endpoints = {p: r.true_endpoints for p, r in results.items()}
     if not scoring:
         prepare(next(iter(results.values())))
     setup, sensors = scoring["setup"], scoring["sensors"]
     params["noise"] = _noise_record(noise, setup)
     params["noise_seed"] = noise_seed
+    hear = scoring["hear"]
     if keep_heads:
-        attempts = _score(runs, results, chosen, graph, setup, phases, phase_span, sensors)
+        heard = {p: hear(r) for p, r in results.items()}
+        attempts = _score(runs, heard, chosen, graph, setup, phases, phase_span, sensors)
     else:  # scored as they arrived; in the order of the pipes
         attempts = {spec: {p: streamed[p][spec] for p in chosen} for spec in runs}
+    if hear.truth.silent_meter is not None:
+        params["truth_silent_meters"] = {p: hear.silent[p] for p in chosen}
     scorer = PositionScorer(wn, {p: results[p] for p in chosen})
     lengths = {p: float(wn.get_link(p).length) for p in chosen}
     out = []
@@ -281,7 +300,7 @@ def evaluate(
         offsets = phase_offsets(spec, phases, phase_span)
         out.append(
             RunResult(
-                spec, chosen, truth, offsets, attempts[spec], scorer.points, positions, regions
+                spec, chosen, endpoints, offsets, attempts[spec], scorer.points, positions, regions
             )
         )
     meters_used = [] if setup is None else list(setup.meters)

@@ -391,11 +391,14 @@ def monitor_answer(
     """``(early, answer)``: the first answer of ``monitor`` fed the readings ``(times,
     values)`` step by step (a decision or event, ``None`` without one) and the early
     (transient) records before it. A burst it detects but cannot place is skipped, as the live
-    loop skips it."""
+    loop skips it. A NaN is a meter that sent nothing: named in the step's ``filled``, as the
+    live feed names it."""
     early: list[Decision] = []
-    for t, row in zip(times.tolist(), values, strict=True):
+    gaps = np.isnan(values)
+    for t, row, gap in zip(times.tolist(), values, gaps, strict=True):
+        filled = tuple(monitor.meters[j] for j in np.flatnonzero(gap)) if gap.any() else ()
         try:
-            decided = monitor.push(Step(t, row))
+            decided = monitor.push(Step(t, row, filled))
         except InputError:
             continue
         if decided is not None and decided.transient:

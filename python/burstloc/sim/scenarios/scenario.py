@@ -45,6 +45,7 @@ from burstloc.exceptions import ConfigError
 from burstloc.network import Network, NetworkSource
 from burstloc.sim.scenarios import capture
 from burstloc.sim.scenarios.cache import network_cache_key
+from burstloc.sim.scenarios.perturb import TruthPerturbation
 
 __all__ = [
     "DEFAULT_BURST_COEFF",
@@ -145,6 +146,10 @@ class BurstScenario:
             heads are TSNet's, see :mod:`burstloc.sim.transient.moc`; ``"tsnet"`` for the other
             friction
             models).
+        truth: ``None`` (default) simulates the network as the model has it; a
+            :class:`~burstloc.sim.scenarios.perturb.TruthPerturbation` simulates a perturbed
+            truth (per-pipe wave speeds and roughness; only that part is kept: clock offsets
+            and a silent meter are applied when the meters read the result).
 
     Raises:
         ConfigError: a parameter is out of range (the message names it and its value).
@@ -163,6 +168,7 @@ class BurstScenario:
     friction: str = "steady"
     min_pipe_length: float | None = None
     solver: str = "vectorized"
+    truth: TruthPerturbation | None = None
 
     def __post_init__(self) -> None:
         def put(name: str, value: Any) -> None:
@@ -205,12 +211,17 @@ class BurstScenario:
             put("min_pipe_length", _number("min_pipe_length", self.min_pipe_length))
             if self.min_pipe_length <= 0:  # type: ignore[operator]
                 raise ConfigError(f"min_pipe_length must be > 0 m, got {self.min_pipe_length}")
+        if self.truth is not None:
+            if not isinstance(self.truth, TruthPerturbation):
+                raise ConfigError(f"truth must be a TruthPerturbation, got {self.truth!r}")
+            put("truth", self.truth.simulated())
 
     def parameters(self) -> dict[str, Any]:
         """Every field except the network path (the cache hashes the file's bytes instead).
 
-        The default friction model, ``min_pipe_length=None`` and the ``"tsnet"`` solver are left
-        out, so scenarios cached before those fields existed keep their keys (TSNet's results).
+        The default friction model, ``min_pipe_length=None``, the ``"tsnet"`` solver and
+        ``truth=None`` are left out, so scenarios cached before those fields existed keep their
+        keys (TSNet's results); a perturbed truth is keyed by its simulated part.
         """
         params = asdict(self)
         del params["network"]
@@ -220,6 +231,8 @@ class BurstScenario:
             del params["min_pipe_length"]
         if params["solver"] == "tsnet":
             del params["solver"]
+        if params["truth"] is None:
+            del params["truth"]
         return params
 
     def cache_key(self) -> str:

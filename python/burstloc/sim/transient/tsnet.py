@@ -24,7 +24,7 @@ import contextlib
 import os
 import threading
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -36,6 +36,7 @@ from burstloc._diagnostics import capture_diagnostics
 from burstloc.constants import PRESSURE_NOISE
 from burstloc.exceptions import ConfigError, NetworkError, SimulationError
 from burstloc.sim.scenarios.cache import DiskCache, file_sha256, package_versions
+from burstloc.sim.scenarios.perturb import perturb_model
 from burstloc.sim.scenarios.scenario import SCHEMA, BurstScenario, ScenarioResult
 from burstloc.sim.scenarios.sweep import SweepReport, sweep
 from burstloc.sim.transient import _tsnet_compat, moc
@@ -156,7 +157,9 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
         true_start, true_end = network.pipe_endpoints(steady.graph, scenario.pipe)
         meters = network.junction_names(wn)
         model, pipe, position, shortened = kept.transient_model(scenario)
-        split = network.split_pipe(model, pipe, position)
+        split = network.split_pipe(model, pipe, position)  # a copy: the truth may perturb it
+        truth, aliases = scenario.truth, {split.second_pipe: pipe}
+        speeds = perturb_model(truth, split.network, scenario.wave_speed, aliases) if truth else {}
         prepared = prepare_for_tsnet(split.network, engine=scenario.engine)
         where = f"pipe {scenario.pipe!r} of {scenario.network}"
 
@@ -169,7 +172,7 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
             split.network,
             meters,
             os.path.join(tmp, "scenario.inp"),
-            TransientSettings.of(scenario),
+            replace(TransientSettings.of(scenario), pipe_speeds=speeds or None),
             burst,
             where=f"{where} split at {scenario.position:g}",
         )
@@ -237,7 +240,9 @@ def scenario_result(
 class TransientSettings:
     """How a transient runs: wave speed (m/s), duration (s), requested time step (s, ``None`` =
     TSNet's largest), initial steady state engine, friction model and solver
-    (:data:`~burstloc.sim.scenarios.scenario.SOLVERS`)."""
+    (:data:`~burstloc.sim.scenarios.scenario.SOLVERS`); ``pipe_speeds``, the wave speed (m/s)
+    of the pipes it names in place of ``wave_speed`` (a perturbed truth,
+    :mod:`burstloc.sim.scenarios.perturb`; TSNet discretises with each pipe's own)."""
 
     wave_speed: float
     duration: float
@@ -245,6 +250,7 @@ class TransientSettings:
     engine: str
     friction: str
     solver: str = "vectorized"
+    pipe_speeds: Mapping[str, float] | None = None
 
     @classmethod
     def of(cls, scenario: Any) -> TransientSettings:
@@ -329,6 +335,10 @@ def _run_tsnet(
     try:
         tm = tsnet.network.TransientModel(inp)
         tm.set_wavespeed(settings.wave_speed)
+        if settings.pipe_speeds:  # those still pipes once prepared for TSNet
+            pipes = set(tm.pipe_name_list)
+            named = [p for p in settings.pipe_speeds if p in pipes]
+            tm.set_wavespeed([settings.pipe_speeds[p] for p in named], pipes=named)
     except Exception as exc:
         raise SimulationError(f"TSNet could not load {where}: {exc}") from exc
     if settings.time_step is not None:
