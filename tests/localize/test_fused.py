@@ -46,6 +46,26 @@ def test_weights_follow_the_capture_interval() -> None:
         FusedLocalizer(line_arrival(), line_signature(np.eye(3, 4)), tau=-1.0)
 
 
+def test_where_meters_are_few_the_weights_follow_the_wave_to_the_nearest_meter() -> None:
+    # 20 pipes of 50 m in a line, metered at its two ends only: a burst is placed between the
+    # two meters, not told from its 50 m neighbour, so tau is the travel to the nearer meter
+    nodes = [f"n{i}" for i in range(21)]
+    ends = ("n0", "n20")
+    distances = {n: np.array([50.0 * i, 50.0 * (20 - i)]) for i, n in enumerate(nodes)}
+    names = [f"q{i}" for i in range(20)]
+    names[12] = "p12"  # one pipe the signature localizer knows
+    pipes = [PipeGeometry(names[i], nodes[i], nodes[i + 1], 50.0) for i in range(20)]
+    sparse = ArrivalLocalizer(pipes, ends, distances, wave_speed=WAVE)
+    assert sparse.pipe_travel == pytest.approx(50.0 / WAVE)
+    middles = sorted(min(50.0 * i + 25.0, 1000.0 - 50.0 * i - 25.0) for i in range(20))
+    assert sparse.meter_travel == pytest.approx(float(np.median(middles)) / WAVE)
+    signature = line_signature(np.eye(3, 4) + 0.1)
+    assert FusedLocalizer(sparse, signature).tau == pytest.approx(sparse.meter_travel)
+    assert FusedLocalizer(sparse, signature, tau=0.1).tau == 0.1
+    # metered at every junction, the pipe's own travel time decides, as before
+    assert FusedLocalizer(line_arrival(), signature).tau == pytest.approx(600.0 / WAVE)
+
+
 def test_arrivals_decide_at_fine_intervals_signatures_at_coarse() -> None:
     # signatures barely separate p12 from p01 (nearly equal columns) and favour p01 slightly;
     # arrivals point at p12 clearly when the capture interval resolves them

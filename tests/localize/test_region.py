@@ -130,6 +130,12 @@ def test_the_lasting_drop_tells_the_pipes_at_a_junction_apart() -> None:
     # the same residuals from two meters (one degree of freedom) say much less
     two = posterior(arrival, evidence, drop=DropFit(drop, meters=2, size=0.5))
     assert 0.5 < two.pipe_probabilities()["p12"] < both.pipe_probabilities()["p12"]
+    # counted at a fused localizer's signature weight of a quarter, it says less again
+    weighed = posterior(arrival, evidence, drop=DropFit(drop, meters=4, size=0.5, weight=0.25))
+    assert 0.5 < weighed.pipe_probabilities()["p12"] < both.pipe_probabilities()["p12"]
+    assert posterior(arrival, evidence, drop=DropFit(drop, 4, 0.5, 0.0)).pipe_probabilities() == (
+        pytest.approx(alone)
+    )
 
 
 def test_the_stated_probability_is_honest_under_the_timing_error_it_assumes() -> None:

@@ -287,6 +287,14 @@ class ArrivalLocalizer:
         )
         self.pipe_travel = float(np.median(length)) / self.wave_speed
         """Median wave travel time (s) along one candidate pipe."""
+        nearest = self._dist[:, int(np.argmin(np.abs(pos - 0.5))), :].min(axis=1)
+        nearest = nearest[np.isfinite(nearest)]  # a pipe no meter is reached from counts not
+        self.meter_travel = (
+            float(np.median(nearest)) / self.wave_speed if nearest.size else self.pipe_travel
+        )
+        """Median wave travel time (s) from a candidate pipe's middle to the meter nearest it:
+        where meters are few, what the arrivals must time is a burst's place among them, not one
+        pipe against its neighbour."""
         self.decision_delay = (
             float(decision_delay) if decision_delay is not None else self.pipe_travel
         )

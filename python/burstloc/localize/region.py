@@ -30,7 +30,8 @@ middle of each segment is a candidate point, with a prior proportional to the se
   model's own error (:data:`DROP_MODEL_ERROR` of the drop, at least
   :data:`~burstloc.localize.fused.SIGNATURE_FLOOR`) added to every residual. The model's error
   is shared by the meters, so ``n - 1`` is at most :data:`DROP_DOF`: the drop narrows the
-  region, it does not decide it alone.
+  region, it does not decide it alone. It counts with the fused localizer's signature weight at
+  the capture interval: where the arrivals time the wave finely, they decide the region.
 
 The region is the highest-density set: segments in decreasing posterior probability per metre
 until they hold the stated probability (the shortest main that does). Adjacent segments of a
@@ -111,15 +112,18 @@ meters (one burst size, one steady state), not independent at each of them."""
 class DropFit:
     """The lasting drop's evidence: the signature localizer's ``ranking`` (score: minus the RMS
     residual, m) over ``meters`` meters, of a drop of RMS ``size`` m (``None``: not known, the
-    model error is then :data:`~burstloc.localize.fused.SIGNATURE_FLOOR`)."""
+    model error is then :data:`~burstloc.localize.fused.SIGNATURE_FLOOR`), its log-likelihood
+    counted with ``weight`` (the fused localizer's signature weight at the capture interval,
+    :meth:`~burstloc.localize.fused.FusedLocalizer.weights`)."""
 
     ranking: Ranking
     meters: int
     size: float | None = None
+    weight: float = 1.0
 
     def loglik(self, pipes: Sequence[str]) -> NDArray[np.float64]:
-        """Log-likelihood of each of ``pipes`` (module docstring); a pipe the ranking does
-        not hold gets its worst."""
+        """Log-likelihood of each of ``pipes`` (module docstring), times ``weight``; a pipe
+        the ranking does not hold gets its worst."""
         floor = SIGNATURE_FLOOR
         if self.size is not None and math.isfinite(self.size):
             floor = max(floor, DROP_MODEL_ERROR * self.size)
@@ -128,7 +132,7 @@ class DropFit:
         worst = max(rss.values(), default=floor * floor)
         dof = min(max(self.meters - 1, 1), DROP_DOF)
         values = np.array([rss.get(p, worst) for p in pipes], dtype=np.float64)
-        return np.asarray(-0.5 * dof * np.log(values / best), dtype=np.float64)
+        return np.asarray(-0.5 * self.weight * dof * np.log(values / best), dtype=np.float64)
 
 
 @dataclass(frozen=True)
@@ -368,16 +372,18 @@ def posterior(
 def drop_fit(
     fused: FusedLocalizer, evidence: BurstEvidence, given: Ranking | None
 ) -> DropFit | None:
-    """The lasting drop the fused localizer weighs at ``evidence``: ``given`` (the caller's
-    signature ranking of these readings), else the signature localizer's fit when the readings
-    have settled and signatures weigh at this capture interval, else ``None``."""
+    """The lasting drop the fused localizer weighs at ``evidence``, with its signature weight
+    at the capture interval: ``given`` (the caller's signature ranking of these readings), else
+    the signature localizer's fit when the readings have settled and signatures weigh at this
+    capture interval, else ``None``."""
     meters = len(fused.signature.signatures.meters)
+    weight = fused.weights(evidence.capture_interval)[1]
     if given is not None:
-        return DropFit(given, meters)
-    if fused.weights(evidence.capture_interval)[1] > 0 and fused.signature_ready(evidence):
+        return DropFit(given, meters, weight=weight)
+    if weight > 0 and fused.signature_ready(evidence):
         drop = fused.signature.drop(evidence)
         ranking = rank_drop(drop, fused.signature.signature_sets)
-        return DropFit(ranking, meters, float(np.sqrt(np.mean(drop**2))))
+        return DropFit(ranking, meters, float(np.sqrt(np.mean(drop**2))), weight)
     return None
 
 
