@@ -114,6 +114,18 @@ def test_series_connector_merges_branch_connector_lengthens(connectors: Path) ->
     assert prepared.moved_demands == {}  # J5 had none
 
 
+def test_a_merged_pipe_keeps_its_pieces_travel_time(connectors: Path) -> None:
+    wn = network.load_network(connectors)
+    prepared = skeleton.prepare_transient_model(wn, 20.0, keep=METERS)
+    given = {p: 1200.0 for p in wn.pipe_name_list} | {"C2": 300.0, "C1": 400.0}
+    speeds = prepared.wave_speeds(given)
+    # P5 carries C2 (0.5 m at 300 m/s) and the old P5 (35 m at 1200 m/s)
+    assert speeds["P5"] * (0.5 / 300.0 + 35.0 / 1200.0) == pytest.approx(35.5)
+    assert speeds["C1"] == 400.0  # lengthened: its own speed
+    assert "C2" not in speeds  # merged away
+    assert set(speeds) == set(prepared.network.pipe_name_list)
+
+
 def test_every_original_pipe_is_carried_and_located(connectors: Path) -> None:
     wn = network.load_network(connectors)
     prepared = skeleton.prepare_transient_model(wn, 20.0, keep=METERS)

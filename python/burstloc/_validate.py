@@ -44,6 +44,7 @@ __all__ = [
     "read_json",
     "read_json_npz",
     "read_npz",
+    "read_text",
     "some_names",
 ]
 
@@ -58,6 +59,30 @@ NPZ_REFERENCE = "$npz"
 NPZ_MIN_SIZE = 1024
 
 
+def read_text(
+    path: str | os.PathLike[str], what: str, max_bytes: int = MAX_JSON_BYTES, bom: bool = False
+) -> str:
+    """Read ``path`` as UTF-8 text of at most ``max_bytes`` (with ``bom``, a leading byte-order
+    mark is dropped, as spreadsheets write one).
+
+    Raises:
+        ConfigError: the file cannot be read, is too large or is not UTF-8; the message names
+            ``what`` and the file.
+    """
+    where = f"{what} {os.fspath(path)}"
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read(max_bytes + 1)
+    except OSError as exc:
+        raise ConfigError(f"cannot read {where}: {exc.strerror or exc}") from None
+    if len(data) > max_bytes:
+        raise ConfigError(f"cannot read {where}: larger than {max_bytes} bytes")
+    try:
+        return data.decode("utf-8-sig" if bom else "utf-8")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"cannot read {where}: not UTF-8 text (byte {exc.start})") from None
+
+
 def read_json(path: str | os.PathLike[str], what: str) -> Any:
     """Read ``path`` as strict JSON (UTF-8, no NaN or infinity, at most :data:`MAX_JSON_BYTES`).
 
@@ -65,20 +90,7 @@ def read_json(path: str | os.PathLike[str], what: str) -> Any:
         ConfigError: the file cannot be read, is too large, is not UTF-8 or not strict JSON;
             the message names ``what`` and the file.
     """
-    where = f"{what} {os.fspath(path)}"
-    try:
-        with open(path, "rb") as fh:
-            data = fh.read(MAX_JSON_BYTES + 1)
-    except OSError as exc:
-        raise ConfigError(f"cannot read {where}: {exc.strerror or exc}") from None
-    if len(data) > MAX_JSON_BYTES:
-        raise ConfigError(f"cannot read {where}: larger than {MAX_JSON_BYTES} bytes")
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise ConfigError(f"cannot read {where}: not UTF-8 text (byte {exc.start})") from None
-
-    return _loads(text, where)
+    return _loads(read_text(path, what), f"{what} {os.fspath(path)}")
 
 
 def read_npz(

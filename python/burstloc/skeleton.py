@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import copy
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -136,6 +136,19 @@ class PreparedNetwork:
                 span = piece.end - piece.start
                 return name, min(1.0, max(0.0, (fraction - piece.start) / span))
         raise NetworkError(f"model pipe {model_pipe!r} carries no original pipe")
+
+    def wave_speeds(self, speeds: Mapping[str, float]) -> dict[str, float]:
+        """The model pipes' wave speeds (m/s) from the original pipes' ``speeds``: a merged
+        pipe the one that keeps its pieces' travel time (``1 / sum(share / a)``, the shares of
+        its length), a lengthened pipe its original's. Model pipes carrying no original pipe in
+        ``speeds`` are left out."""
+        slowness: dict[str, float] = {}
+        for name, piece in self.pieces.items():
+            if name not in speeds:
+                continue
+            share = abs(piece.end - piece.start)
+            slowness[piece.pipe] = slowness.get(piece.pipe, 0.0) + share / speeds[name]
+        return {pipe: 1.0 / s for pipe, s in slowness.items() if s > 0}
 
     def summary(self) -> dict[str, Any]:
         """What was done, as JSON: merged pipes (original -> model pipe), moved demands,

@@ -351,3 +351,47 @@ def test_evaluate_on_a_perturbed_truth_records_it(
     again = json.loads((tmp_path / "b.json").read_text())
     assert again["runs"] == doc["runs"]
     assert doc["runs"] != plain["runs"]
+
+
+def test_evaluate_simulates_the_pipes_wave_speeds_and_says_what_the_localizers_keep(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    speeds = tmp_path / "speeds.csv"
+    speeds.write_text("pipe,wave_speed\nP7,600\n")
+    knows, assumes = tmp_path / "knows.npz", tmp_path / "assumes.npz"
+    calibrate = ["calibrate", str(PAPER15), "--capture-interval", "0.05", "--signatures", "linear"]
+    assert main([*calibrate, "--out", str(assumes)]) == 0
+    assert main([*calibrate, "--out", str(knows), "--wave-speeds", str(speeds)]) == 0
+    capsys.readouterr()
+    argv = ["evaluate", str(PAPER15), "--pipes", "P7", "--phases", "1", "--detector", "cusum"]
+    argv += ["--capture-interval", "0.05", "--quiet", "--workers", "1", "--position", "0.25"]
+    argv += ["--localizer", "arrival", "--wave-speeds", str(speeds), "--json"]
+    assert main([*argv, str(tmp_path / "k.json"), "--config", str(knows)]) == 0
+    assert "the localizers keep" not in capsys.readouterr().out  # the same speeds
+    doc = json.loads((tmp_path / "k.json").read_text())
+    jsonschema.validate(doc, SCHEMA)
+    assert doc["scenario"]["wave_speeds"] == {"pipes": {"P7": 600.0}, "diameters": []}
+    assert main([*argv, str(tmp_path / "a.json"), "--config", str(assumes)]) == 0
+    out = capsys.readouterr().out
+    assert (
+        "the bursts are simulated with the --wave-speeds file's; the localizers keep the "
+        "configuration's one wave speed" in out
+    )
+    # the same simulated burst: the model that times P7 at its speed places it nearer
+    err = {
+        name: json.loads((tmp_path / f"{name}.json").read_text())["runs"][0]["pipes"][0][
+            "position_error_m"
+        ]
+        for name in ("k", "a")
+    }
+    assert err["k"] < err["a"]
+
+
+def test_evaluate_refuses_a_bad_wave_speeds_file_naming_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    speeds = tmp_path / "speeds.csv"
+    speeds.write_text("P7,600\nP99,500\n")
+    argv = ["evaluate", str(PAPER15), "--pipes", "P7", "--quiet", "--wave-speeds", str(speeds)]
+    assert main(argv) == 2
+    assert "name 1 pipe(s) the network does not have: ['P99']" in capsys.readouterr().err

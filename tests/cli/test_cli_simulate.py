@@ -76,6 +76,28 @@ def test_min_pipe_length_simulates_the_transient_ready_model(tmp_path: Path) -> 
     assert meta["time_step"] == pytest.approx(3.0 / 2400, rel=0.05)
 
 
+def test_wave_speeds_reach_the_burst_and_the_event_simulations(tmp_path: Path) -> None:
+    network = tmp_path / "connectors.inp"
+    network.write_text(CONNECTOR_INP)
+    speeds = tmp_path / "speeds.json"
+    speeds.write_text(
+        '{"pipes": {"P5": 900}, "diameters": [{"up_to_mm": 1000, "wave_speed": 600}]}'
+    )
+    out = tmp_path / "out"
+    common = ["--burst-start", "0.05", "--duration", "0.3", "--out", out, "--no-cache", "--quiet"]
+    common += ["--workers", "1", "--wave-speeds", speeds]
+    assert _run("simulate", network, "--pipe", "C1", "--min-pipe-length", "6", *common) == 0
+    event = ["--event", "demand-step", "--asset", "J3", "--demand-change", "0.001"]
+    assert _run("simulate", network, *event, *common) == 0
+    recorded = {"pipes": {"P5": 900.0}, "diameters": [{"up_to_mm": 1000.0, "wave_speed": 600.0}]}
+    for path in out.iterdir():
+        with np.load(path, allow_pickle=False) as data:
+            assert json.loads(str(data["metadata"]))["wave_speeds"] == recorded, path.name
+    # C1's 3 m halves at 600 m/s, not 1200 (3 / 2400 s): a step twice as long
+    with np.load(out / "connectors_pipe-C1.npz", allow_pickle=False) as data:
+        assert json.loads(str(data["metadata"]))["time_step"] == pytest.approx(3.0 / 1200, rel=0.05)
+
+
 @pytest.mark.parametrize(
     ("args", "words"),
     [
@@ -93,6 +115,7 @@ def test_min_pipe_length_simulates_the_transient_ready_model(tmp_path: Path) -> 
         (["--pipe", "B", "--wave-speed", "0"], "wave_speed must be > 0 m/s, got 0.0"),
         (["--pipe", "B", "--workers", "0"], "workers must be a positive integer, got 0"),
         (["--pipe", "B", "--min-pipe-length", "0"], "min_pipe_length must be > 0 m, got 0.0"),
+        (["--pipe", "B", "--wave-speeds", "nowhere.csv"], "cannot read wave speeds nowhere.csv"),
         (
             ["--event", "demand-step", "--asset", "J1", "--min-pipe-length", "5"],
             "--min-pipe-length applies to bursts only",

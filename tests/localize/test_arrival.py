@@ -14,40 +14,16 @@ import networkx as nx
 import numpy as np
 import pytest
 
+from alarm_evidence import arrival_evidence
 from burstloc.exceptions import ConfigError, InputError, NetworkError
 from burstloc.localize.arrival import ArrivalLocalizer, PipeGeometry
 from burstloc.localize.evidence import (
     BurstEvidence,
-    MeterAlarm,
 )
 from burstloc.network import load_network
 from burstloc.sim.model.prepare import arrival_localizer, length_graph
 
 A = 1000.0  # wave speed used by these tests, m/s
-
-
-def _evidence(
-    arrivals: dict[str, float], dt: float, amplitudes: dict[str, float] | None = None
-) -> BurstEvidence:
-    """Alarm starts as a detector reports them: the last capture tick before the wave."""
-    meters = tuple(sorted(arrivals))
-    alarms = {
-        m: MeterAlarm(
-            m,
-            math.floor(arrivals[m] / dt - 1e-9) * dt,
-            (amplitudes or {}).get(m, -1.0),
-        )
-        for m in meters
-    }
-    t = np.arange(0.0, 5.0, dt)
-    return BurstEvidence(
-        meters=meters,
-        times=t,
-        readings=np.zeros((t.size, len(meters))),
-        onset=min(a.start for a in alarms.values()),
-        capture_interval=dt,
-        alarms=alarms,
-    )
 
 
 def _true_arrivals(
@@ -72,7 +48,7 @@ def test_true_pipe_ranks_first_at_a_fine_capture_interval(
 ) -> None:
     loc = arrival_localizer(tiny_network, wave_speed=A)
     arrivals = _true_arrivals(loc, tiny_network, pipe, fraction, t0=1.0037)
-    ranking = loc.rank(_evidence(arrivals, dt=0.01))
+    ranking = loc.rank(arrival_evidence(arrivals, dt=0.01))
     assert ranking.best is not None and ranking.best.pipe == pipe
     assert len(ranking) == 5
 
@@ -80,7 +56,7 @@ def test_true_pipe_ranks_first_at_a_fine_capture_interval(
 def test_exact_arrivals_fit_with_zero_misfit(tiny_network: Path) -> None:
     loc = arrival_localizer(tiny_network, wave_speed=A, positions=[0.5])
     arrivals = _true_arrivals(loc, tiny_network, "D", 0.5, t0=2.0)
-    misfit = loc.misfit(_evidence(arrivals, dt=0.001))
+    misfit = loc.misfit(arrival_evidence(arrivals, dt=0.001))
     d = [p.pipe for p in loc.pipes].index("D")
     assert misfit[d] < 0.001
     assert np.all(np.delete(misfit, d) > 0.005)
@@ -91,7 +67,7 @@ def test_amplitudes_break_ties_at_coarse_intervals(tiny_network: Path) -> None:
     arrivals = _true_arrivals(loc, tiny_network, "E", 0.5, t0=1.0)
     # at a 10 s capture interval every alarm lands in one tick: timing cannot tell pipes apart
     amps = {"J1": -0.5, "J2": -0.6, "J3": -1.5, "J4": -2.0}
-    ranking = loc.rank(_evidence(arrivals, dt=10.0, amplitudes=amps))
+    ranking = loc.rank(arrival_evidence(arrivals, dt=10.0, amplitudes=amps))
     assert ranking.best is not None and ranking.best.pipe == "E"  # J3 and J4: the largest drops
     scores = ranking.scores()
     assert scores["E"] > scores["C"] > scores["A"]
@@ -108,11 +84,11 @@ def test_pipes_follow_the_flow_direction(tiny_network: Path) -> None:
 def test_meters_subset_and_missing_alarms(tiny_network: Path) -> None:
     loc = arrival_localizer(tiny_network, ["J2", "J4"], wave_speed=A)
     arrivals = _true_arrivals(loc, tiny_network, "E", 0.5, t0=0.5)
-    ranking = loc.rank(_evidence({"J4": arrivals["J4"]}, dt=0.01, amplitudes={"J4": -1}))
+    ranking = loc.rank(arrival_evidence({"J4": arrivals["J4"]}, dt=0.01, amplitudes={"J4": -1}))
     assert ranking.best is not None
     assert ranking.rank_of("E") is not None
     with pytest.raises(InputError, match="no meter"):
-        loc.rank(_evidence({"J1": 1.0}, dt=0.01))
+        loc.rank(arrival_evidence({"J1": 1.0}, dt=0.01))
 
 
 def test_bad_configuration_is_refused(tiny_network: Path) -> None:
@@ -129,7 +105,7 @@ def test_bad_configuration_is_refused(tiny_network: Path) -> None:
 def _line_evidence(loc: ArrivalLocalizer, where: float, dt: float, t0: float) -> BurstEvidence:
     """Alarm starts of a burst ``where`` metres along the line m0 - m1 - m2 - m3 (600 m apart)."""
     spots = {m: 600.0 * i for i, m in enumerate(loc.meters)}
-    return _evidence({m: t0 + abs(where - x) / loc.wave_speed for m, x in spots.items()}, dt)
+    return arrival_evidence({m: t0 + abs(where - x) / loc.wave_speed for m, x in spots.items()}, dt)
 
 
 @pytest.mark.parametrize(("where", "dt"), [(700.0, 0.01), (1130.0, 0.01), (900.0, 0.2)])
@@ -161,7 +137,7 @@ def test_position_interval_is_the_whole_pipe_when_meters_are_beyond_one_end() ->
     }
     pipes = [PipeGeometry("p01", "m0", "m1", 600.0), PipeGeometry("p12", "m1", "m2", 600.0)]
     loc = ArrivalLocalizer(pipes, ("m2", "m3"), distances, wave_speed=1200.0)
-    evidence = _evidence({"m2": 1.5, "m3": 2.0}, 0.01)
+    evidence = arrival_evidence({"m2": 1.5, "m3": 2.0}, 0.01)
     at = loc.position(evidence, "p01")
     assert (at.low, at.high) == (0.0, 600.0)
     assert at.metres == pytest.approx(300.0)
@@ -236,7 +212,7 @@ def test_a_meter_too_weakly_reached_to_alarm_does_not_count_against_the_true_pip
     blind = arrival_localizer(tiny_network, meters, wave_speed=A, fronts=None)
     arrivals = _true_arrivals(loc, tiny_network, "E", 0.5, t0=1.0037)
     seen = {m: arrivals[m] for m in ("J3", "J4")}
-    evidence = _silent_too(_evidence(seen, dt=0.01), ["J1", "J2"])
+    evidence = _silent_too(arrival_evidence(seen, dt=0.01), ["J1", "J2"])
     assert evidence.decision_time > max(arrivals.values()) + 1.0
     e = [p.pipe for p in loc.pipes].index("E")
     assert loc.misfit(evidence)[e] == pytest.approx(0.0, abs=1e-6)
@@ -253,7 +229,9 @@ def test_a_meter_that_should_have_heard_the_wave_still_counts(tiny_network: Path
     loc = arrival_localizer(tiny_network, meters, wave_speed=A)
     blind = arrival_localizer(tiny_network, meters, wave_speed=A, fronts=None)
     arrivals = _true_arrivals(loc, tiny_network, "C", 0.5, t0=1.0037)
-    evidence = _silent_too(_evidence({m: arrivals[m] for m in ("J1", "J3")}, dt=0.01), ["J2", "J4"])
+    evidence = _silent_too(
+        arrival_evidence({m: arrivals[m] for m in ("J1", "J3")}, dt=0.01), ["J2", "J4"]
+    )
     c = [p.pipe for p in loc.pipes].index("C")
     assert loc.misfit(evidence)[c] > 0.05
     assert loc.misfit(evidence)[c] == pytest.approx(blind.misfit(evidence)[c])

@@ -25,6 +25,7 @@ from burstloc.sim.scenarios.scenario import (
 )
 from burstloc.sim.transient.time_step import expected_time_step
 from burstloc.sim.transient.tsnet import simulate_burst, simulate_many
+from burstloc.wave_speeds import WaveSpeeds
 from conftest import write_tiny
 
 SHORT = {"burst_start": 0.5, "duration": 3.0}
@@ -159,13 +160,30 @@ def test_friction_model_reaches_tsnet_and_the_cache_key(tiny_network: Path) -> N
 
 
 @pytest.mark.parametrize(
-    ("pipe", "position", "time_step"), [("B", 0.5, None), ("E", 0.1, None), ("C", 0.7, 0.004)]
+    ("pipe", "position", "time_step", "speeds"),
+    [
+        ("B", 0.5, None, None),
+        ("E", 0.1, None, None),  # a half shorter than every pipe: the connectors shorten too
+        ("C", 0.7, 0.004, None),
+        ("D", 0.3, None, WaveSpeeds((("D", 400.0), ("A", 900.0)))),
+        ("B", 0.5, None, WaveSpeeds(diameters=((1.0, 500.0),))),
+    ],
 )
 def test_expected_time_step_is_tsnets(
-    tiny_network: Path, pipe: str, position: float, time_step: float | None
+    tiny_network: Path,
+    pipe: str,
+    position: float,
+    time_step: float | None,
+    speeds: WaveSpeeds | None,
 ) -> None:
     scenario = BurstScenario(
-        tiny_network, pipe, position=position, burst_start=0.2, duration=1.5, time_step=time_step
+        tiny_network,
+        pipe,
+        position=position,
+        burst_start=0.2,
+        duration=1.5,
+        time_step=time_step,
+        wave_speeds=speeds,
     )
     result = simulate_burst(scenario, cache=False)
     assert expected_time_step(scenario) == pytest.approx(result.time_step, rel=1e-12)

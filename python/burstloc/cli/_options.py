@@ -14,6 +14,7 @@ if TYPE_CHECKING:
     from burstloc.network import NetworkSource
     from burstloc.sim.scenarios.cache import DiskCache
     from burstloc.sim.signatures.burst_size import BurstFlow
+    from burstloc.wave_speeds import WaveSpeeds
 
 __all__ = [
     "DefaultsFormatter",
@@ -28,12 +29,14 @@ __all__ = [
     "add_solver_option",
     "add_time_step_option",
     "add_wave_speed_option",
+    "add_wave_speeds_option",
     "burst_size_of",
     "cache_of",
     "check_run_options",
     "meters_of",
     "run_of",
     "time_step_of",
+    "wave_speeds_of",
 ]
 
 
@@ -90,6 +93,35 @@ def add_noise_option(parser: Options, default: float | None, help: str) -> None:
 def add_wave_speed_option(parser: Options, help: str = "pressure wave speed, m/s") -> None:
     """``--wave-speed A``: the pressure wave speed (:data:`burstloc.constants.WAVE_SPEED`)."""
     add_number(parser, "--wave-speed", WAVE_SPEED, "A", help)
+
+
+def add_wave_speeds_option(parser: Options, help: str) -> None:
+    """``--wave-speeds FILE``: pipes (or diameter classes) of their own wave speed
+    (:mod:`burstloc.wave_speeds`; :func:`wave_speeds_of` reads it)."""
+    parser.add_argument(
+        "--wave-speeds",
+        default=None,
+        metavar="FILE",
+        help="pipes of their own pressure wave speed: a CSV 'pipe,wave_speed' (m/s) or a JSON "
+        "file of pipes and diameter classes; the other pipes run at --wave-speed. " + help,
+    )
+
+
+def wave_speeds_of(args: argparse.Namespace, network: NetworkSource) -> WaveSpeeds | None:
+    """The ``--wave-speeds`` file read and checked against ``network`` (``None`` without it).
+
+    Raises:
+        ConfigError: the file cannot be read or is not a wave-speeds file (naming it).
+        NetworkError: it names a pipe the network does not have.
+    """
+    if getattr(args, "wave_speeds", None) is None:
+        return None
+    from burstloc.network import as_network
+    from burstloc.wave_speeds import read_wave_speeds
+
+    speeds = read_wave_speeds(args.wave_speeds)
+    speeds.of(as_network(network).model, WAVE_SPEED)  # every pipe it names is the network's
+    return speeds
 
 
 def add_burst_options(parser: Options, position: float | None) -> None:

@@ -14,7 +14,9 @@ from burstloc.cli._options import (
     add_noise_option,
     add_number,
     add_wave_speed_option,
+    add_wave_speeds_option,
     meters_of,
+    wave_speeds_of,
 )
 from burstloc.constants import (
     CAPTURE_INTERVALS,
@@ -82,6 +84,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     add_wave_speed_option(
         parser, "the pressure wave speed the localizers assume, m/s (--known-events fits it)"
     )
+    add_wave_speeds_option(
+        parser,
+        "The localizers time each path at its pipes' speeds (--known-events scales them all).",
+    )
     parser.add_argument(
         "--known-events",
         default=None,
@@ -134,6 +140,7 @@ def run(args: argparse.Namespace) -> int:
         wave_speed_tolerance=args.wave_speed_tolerance,
         clock_tolerance=args.clock_tolerance,
         wave_speed=args.wave_speed,
+        wave_speeds=wave_speeds_of(args, network),
     )
     if args.known_events:
         config = _learn(args, network, config)
@@ -165,7 +172,13 @@ def _learn(args: argparse.Namespace, network: Network, config: Calibration) -> C
     offsets = sorted(fit.clock_offsets.values())
     print(
         f"known events: {len(events)}, {fit.arrivals} arrivals ({fit.dropped} dropped as "
-        f"outliers); wave speed {model.wave_speed:.0f} -> {fit.wave_speed:.0f} m/s, "
+        f"outliers); wave speed {model.wave_speed:.0f} -> {fit.wave_speed:.0f} m/s"
+        + (
+            f" (each pipe's own speed x {fit.wave_speed / model.wave_speed:.3f})"
+            if any(p.stretch != 1.0 for p in model.pipes)
+            else ""
+        )
+        + ", "
         f"travel-time tolerance {model.wave_speed_tolerance:.1%} -> "
         f"{fit.wave_speed_tolerance:.1%}, residual RMS {1000 * fit.rms:.1f} ms"
         + (

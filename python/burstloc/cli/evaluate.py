@@ -17,12 +17,14 @@ from burstloc.cli._options import (
     add_run_options,
     add_solver_option,
     add_time_step_option,
+    add_wave_speeds_option,
     burst_size_of,
     cache_of,
     check_run_options,
     meters_of,
     run_of,
     time_step_of,
+    wave_speeds_of,
 )
 from burstloc.cli._truth import add_truth_options, truth_of
 from burstloc.constants import DETECTORS, LOCALIZERS, METER_MODELS
@@ -30,7 +32,9 @@ from burstloc.exceptions import ConfigError
 from burstloc.experiments.evaluate import DEFAULT_LOCALIZER
 
 if TYPE_CHECKING:
+    from burstloc.localize.config import Calibration
     from burstloc.network import Network
+    from burstloc.wave_speeds import WaveSpeeds
 
 __all__ = ["add_parser", "run"]
 
@@ -190,6 +194,11 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         metavar="PATH",
         help="--events: write the calibrated classifier (for burstloc monitor --classify)",
     )
+    add_wave_speeds_option(
+        parser,
+        "The bursts are simulated so, and a calibration made here times paths so; a --config "
+        "keeps the speeds it was calibrated with.",
+    )
     add_truth_options(parser)
     add_run_options(parser)
     parser.set_defaults(handler=run)
@@ -251,6 +260,8 @@ def run(args: argparse.Namespace) -> int:
     truth = truth_of(args)
     if truth is not None:
         print(f"truth perturbed: {truth.describe()}; the localizers keep the model", flush=True)
+    wave_speeds = wave_speeds_of(args, network)
+    _say_wave_speeds(wave_speeds, config)
     ev = evaluate(
         network,
         runs,
@@ -269,6 +280,7 @@ def run(args: argparse.Namespace) -> int:
         keep_heads=bool(args.plot or args.events),
         burst_flow=flow,
         truth=truth,
+        wave_speeds=wave_speeds,
     )
     print(_flows_line(ev.scenario))
     print(report.format_tables(ev, True if args.paper_tables else None), end="")
@@ -284,6 +296,23 @@ def run(args: argparse.Namespace) -> int:
         for path in plot.write_plots(ev, args.plot):
             print(f"wrote {path}")
     return 0
+
+
+def _say_wave_speeds(wave_speeds: WaveSpeeds | None, config: Calibration | None) -> None:
+    """Say when the simulated pipes' wave speeds are not those the configuration's localizers
+    time paths with."""
+    if config is None:
+        return
+    calibrated = config.provenance.get("wave_speeds")
+    given = wave_speeds.to_json() if wave_speeds else None
+    if calibrated != given:
+        print(
+            "the bursts are simulated with "
+            + ("the --wave-speeds file's" if given else "one wave speed")
+            + "; the localizers keep the configuration's "
+            + ("own wave speeds per pipe" if calibrated else "one wave speed"),
+            flush=True,
+        )
 
 
 def _flows_line(scenario: dict[str, Any]) -> str:

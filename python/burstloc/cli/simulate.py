@@ -21,11 +21,13 @@ from burstloc.cli._options import (
     add_solver_option,
     add_time_step_option,
     add_wave_speed_option,
+    add_wave_speeds_option,
     burst_size_of,
     cache_of,
     check_run_options,
     meters_of,
     run_of,
+    wave_speeds_of,
 )
 from burstloc.constants import SCENARIO_DURATION
 from burstloc.exceptions import ConfigError
@@ -93,6 +95,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     ):
         add_number(parser, flag, default, metavar, text)
     add_wave_speed_option(parser)
+    add_wave_speeds_option(parser, "A merged pipe of --min-pipe-length keeps its travel time.")
     add_time_step_option(parser)
     add_min_pipe_length_option(parser)
     add_solver_option(parser)
@@ -169,6 +172,7 @@ def run(args: argparse.Namespace) -> int:
         time_step=args.time_step,
         min_pipe_length=args.min_pipe_length,
         solver=args.solver,
+        wave_speeds=wave_speeds_of(args, network),
     )
     if args.capture_interval is not None:  # a step fine enough for the readings asked for
         scenarios = with_capture_time_step(scenarios, args.capture_interval)
@@ -292,6 +296,7 @@ def _event(args: argparse.Namespace, start: datetime | None) -> int:
         duration=args.duration,
         time_step=args.time_step,
         solver=args.solver,
+        wave_speeds=wave_speeds_of(args, args.network),
     )
     result = simulate_event(scenario, cache=cache_of(args))
     if args.capture_interval is not None:

@@ -80,6 +80,7 @@ from burstloc.localize.config import (
     IntervalCalibration,
 )
 from burstloc.localize.onset import FINEST_STEP_INTERVAL
+from burstloc.wave_speeds import WaveSpeeds
 
 if TYPE_CHECKING:
     from burstloc.network import NetworkSource
@@ -310,8 +311,12 @@ def calibrate(
     workers: int | None = None,
     wave_speed_tolerance: float = WAVE_SPEED_TOLERANCE,
     clock_tolerance: float = CLOCK_TOLERANCE,
+    wave_speeds: WaveSpeeds | None = None,
 ) -> Calibration:
     """Calibrate every capture interval for ``network`` (see the module docstring).
+
+    ``wave_speeds``: pipes (or diameter classes) of their own wave speed; the others run at
+    ``wave_speed``. The localization model then times each path at its pipes' speeds.
 
     ``wave_speed_tolerance`` (a share of each travel time) and ``clock_tolerance`` (s): how well
     the wave speed and the meters' clocks are known, stored in the localization model for its
@@ -369,8 +374,10 @@ def calibrate(
         sigmas = np.full(len(meter_list), sigma)
         kind = "noise-model"
         extra = {}
-    spread = travel_time_spread(length_graph(wn), meter_list, wave_speed)
-    pipe_travel = float(np.median([wn.get_link(p).length for p in wn.pipe_name_list])) / wave_speed
+    stretch = wave_speeds.stretch(wn, wave_speed) if wave_speeds else {}
+    spread = travel_time_spread(length_graph(wn, stretch), meter_list, wave_speed)
+    travel = [wn.get_link(p).length * stretch.get(p, 1.0) for p in wn.pipe_name_list]
+    pipe_travel = float(np.median(travel)) / wave_speed
     items = []
     for dt in intervals:
         n = localization_interval(dt, spread)
@@ -411,7 +418,12 @@ def calibrate(
         intervals=tuple(items),
         model=replace(
             prepare_model(
-                read, meter_list, wave_speed=wave_speed, signatures=signatures, workers=workers
+                read,
+                meter_list,
+                wave_speed=wave_speed,
+                wave_speeds=wave_speeds,
+                signatures=signatures,
+                workers=workers,
             ),
             wave_speed_tolerance=wave_speed_tolerance,
             clock_tolerance=clock_tolerance,
@@ -420,6 +432,7 @@ def calibrate(
             "baseline": kind,
             "seed": seed,
             "wave_speed": wave_speed,
+            **({"wave_speeds": wave_speeds.to_json()} if wave_speeds else {}),
             "travel_spread_s": spread,
             "resolution_m": RESOLUTION,
             "signatures": signature_method(signatures, wn.num_pipes),

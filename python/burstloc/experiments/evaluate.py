@@ -75,6 +75,7 @@ if TYPE_CHECKING:
     from burstloc.sim.scenarios.scenario import ScenarioResult
     from burstloc.sim.scenarios.sensors import SensorModel
     from burstloc.sim.signatures.burst_size import BurstFlow
+    from burstloc.wave_speeds import WaveSpeeds
 
 __all__ = [
     "DEFAULT_LOCALIZER",
@@ -111,6 +112,7 @@ def evaluate(
     keep_heads: bool = True,
     burst_flow: float | BurstFlow | None = None,
     truth: TruthPerturbation | None = None,
+    wave_speeds: WaveSpeeds | None = None,
 ) -> Evaluation:
     """Run the experiment: simulate (cached), stream, localize and score every run.
 
@@ -155,7 +157,9 @@ def evaluate(
     ``truth`` simulates the truth the meters hear on a perturbed network while the localizers
     keep the model (:mod:`burstloc.sim.scenarios.perturb`, :mod:`burstloc.experiments.truth`);
     the JSON's ``scenario`` records it (``truth``) and, with a silent meter, which meter fell
-    silent for each burst (``truth_silent_meters``).
+    silent for each burst (``truth_silent_meters``). ``wave_speeds``: pipes of their own wave
+    speed in the simulation and in a calibration made here (a ``config`` keeps its own model);
+    the JSON's ``scenario`` records them (``wave_speeds``).
 
     Raises:
         NetworkError: missing or malformed network, unknown pipe, a named pipe that is closed.
@@ -220,6 +224,9 @@ def evaluate(
     if truth is not None and truth.active:
         scenarios = [replace(s, truth=truth) for s in scenarios]
         params["truth"] = truth.to_dict()
+    if wave_speeds:
+        scenarios = [replace(s, wave_speeds=wave_speeds) for s in scenarios]
+        params["wave_speeds"] = wave_speeds.to_json()
     ranked = [spec for spec in runs if spec.localizer != "paper"]
     scoring: dict[str, Any] = {}  # the ranking setup and sensors, made from the first result
 
@@ -229,7 +236,7 @@ def evaluate(
             junctions = list(first.junctions)
             metered = inp.check_meters(meters, junctions, path) if meters else junctions
             intervals = sorted({spec.capture_interval for spec in ranked})
-            setup = RankingSetup.build(read, metered, intervals, config)
+            setup = RankingSetup.build(read, metered, intervals, config, wave_speeds)
         scoring.update(setup=setup, sensors=_sensors(noise, noise_seed, setup))
         heard_by = None if setup is None else setup.meters
         scoring["hear"] = Hearing(truth or TruthPerturbation(), wn, heard_by)

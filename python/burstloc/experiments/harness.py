@@ -59,6 +59,7 @@ if TYPE_CHECKING:
 
     from burstloc.sim.scenarios.scenario import ScenarioResult
     from burstloc.sim.scenarios.sensors import SensorModel
+    from burstloc.wave_speeds import WaveSpeeds
 
 __all__ = [
     "Attempt",
@@ -315,20 +316,24 @@ class RankingSetup:
         meters: Sequence[str],
         capture_intervals: Sequence[float],
         config: Calibration | None = None,
+        wave_speeds: WaveSpeeds | None = None,
     ) -> RankingSetup:
         """Localizers for ``meters`` of ``network`` and a calibration covering the intervals.
 
         The localizers are the calibration's own localization model (``config.model``, what the
         monitor reads: its signatures as ``calibrate`` computed them). Without ``config`` the
         network is calibrated here
-        (:func:`burstloc.experiments.calibrate.calibrate` with its defaults). A ``config`` for
+        (:func:`burstloc.experiments.calibrate.calibrate` with its defaults and
+        ``wave_speeds``). A ``config`` for
         another network or other meters is refused by name
         (:meth:`burstloc.experiments.calibrate.Calibration.check`), as is one without an
         interval.
         """
         read = as_network(network)
         if config is None:
-            config = calibrate(read, capture_intervals=capture_intervals, meters=meters)
+            config = calibrate(
+                read, capture_intervals=capture_intervals, meters=meters, wave_speeds=wave_speeds
+            )
         else:
             config.check(read, meters)
             for ci in capture_intervals:

@@ -230,7 +230,9 @@ def event_arrivals(
             capture interval, or readings that start after the event.
     """
     found = []
-    distance = NetworkDistance(network.model)  # one graph and path cache for every event
+    # one graph and path cache for every event, timed as the model times paths
+    stretch = {p.pipe: p.stretch for p in config.model.pipes if p.stretch != 1.0}
+    distance = NetworkDistance(network.model, stretch)
     for e in events:
         onsets, interval = _onsets(e, config, detector)
         found.append(

@@ -89,11 +89,14 @@ class NetworkDistance:
     """Shortest path lengths (m) along the pipes between points on pipes of one network.
 
     Valves and pumps count as length 0 (:func:`burstloc.sim.model.prepare.length_graph`). Path
-    lengths from a node are computed once and kept.
+    lengths from a node are computed once and kept. With ``stretch`` (pipes of their own wave
+    speed: :meth:`burstloc.wave_speeds.WaveSpeeds.stretch`) they are metres of wave travel at
+    the model's wave speed, as the localizers time them.
     """
 
-    def __init__(self, wn: WaterNetworkModel) -> None:
-        self._graph = length_graph(wn)
+    def __init__(self, wn: WaterNetworkModel, stretch: Mapping[str, float] | None = None) -> None:
+        self._graph = length_graph(wn, stretch)
+        self._stretch = dict(stretch or {})
         self._ends = {
             p: (wn.get_link(p).start_node_name, wn.get_link(p).end_node_name, wn.get_link(p).length)
             for p in wn.pipe_name_list
@@ -115,7 +118,8 @@ class NetworkDistance:
         if point.node not in (start, end):
             raise NetworkError(f"node {point.node!r} is not an end of pipe {point.pipe!r}")
         other = end if point.node == start else start
-        return [(point.node, point.metres), (other, float(length) - point.metres)]
+        k = self._stretch.get(point.pipe, 1.0)
+        return [(point.node, k * point.metres), (other, k * (float(length) - point.metres))]
 
     def between_nodes(self, a: str, b: str) -> float:
         """Network distance (m) from node ``a`` to node ``b`` (``inf`` without a path)."""
@@ -130,8 +134,7 @@ class NetworkDistance:
         legs_a, legs_b = self._legs(a), self._legs(b)
         best = math.inf
         if a.pipe == b.pipe:
-            along_b = dict(legs_b)
-            best = abs(a.metres - along_b[a.node])
+            best = abs(dict(legs_a)[a.node] - dict(legs_b)[a.node])
         for node_a, to_a in legs_a:
             reach = self._node(node_a)
             for node_b, to_b in legs_b:

@@ -71,12 +71,20 @@ DEFAULT_POSITIONS = CANDIDATE_POSITIONS
 
 @dataclass(frozen=True)
 class PipeGeometry:
-    """A candidate pipe: its end nodes (``start``, ``end``, flow direction) and length (m)."""
+    """A candidate pipe: its end nodes (``start``, ``end``, flow direction) and length (m);
+    ``stretch``: the metres of wave travel at the localizer's wave speed that one metre of it
+    takes (that speed over the pipe's own, :mod:`burstloc.wave_speeds`; 1 for a pipe at it)."""
 
     pipe: str
     start: str
     end: str
     length: float
+    stretch: float = 1.0
+
+    @property
+    def travel(self) -> float:
+        """The pipe's length in metres of wave travel at the localizer's wave speed."""
+        return self.length * self.stretch
 
 
 def position_tolerance(alarms: int) -> float:
@@ -165,7 +173,7 @@ def fit_windows(
     """The least-squares burst time of each point's windows (:meth:`ArrivalLocalizer.windows`,
     the first ``alarmed`` of them alarms) and each meter's misfit to it: ``(gap, placed)``,
     ``placed`` where some alarm's window is finite (the point explains an alarm). The misfit is
-    convex in ``t0``: bisection on its derivative."""
+    convex in ``t0``: bisection on its derivative, to a millionth of ``capture_interval``."""
     dt = capture_interval
     says = np.isfinite(lo)
     lo_f, hi_f = np.where(says, lo, -np.inf), np.where(says, hi, np.inf)
@@ -179,7 +187,12 @@ def fit_windows(
         + dt
     )
     a, b = left.copy(), right.copy()
-    for _ in range(64):
+    # to a millionth of a capture interval (the RMS misfit is flat at its least: its error is
+    # of the order of that squared), at most 64 halvings of the widest bracket
+    width = np.where(np.isfinite(b - a), b - a, 0.0)
+    widest = float(width.max(initial=0.0))
+    steps = 64 if widest <= 0 else min(64, max(1, math.ceil(math.log2(widest / (1e-6 * dt)))))
+    for _ in range(steps):
         mid = 0.5 * (a + b)
         grad = np.sum(
             np.maximum(mid[..., None] - hi_f, 0.0) - np.maximum(lo_f - mid[..., None], 0.0),
@@ -268,11 +281,13 @@ class ArrivalLocalizer:
         # (pipes, positions, meters): path length from each candidate point to each meter
         d_start = np.array([node_distances[p.start] for p in self.pipes], dtype=np.float64)
         d_end = np.array([node_distances[p.end] for p in self.pipes], dtype=np.float64)
-        length = np.array([p.length for p in self.pipes], dtype=np.float64)
+        length = np.array([p.travel for p in self.pipes], dtype=np.float64)
         self._ends = list(zip(d_start, d_end, strict=True))
         self.end_distances = (d_start, d_end)
         """Path lengths (m) from each pipe's start and end node to each meter, (pipes, meters)
-        each."""
+        each (metres of wave travel at ``wave_speed`` where pipes have speeds of their own)."""
+        self.stretch = np.array([p.stretch for p in self.pipes], dtype=np.float64)
+        """Per pipe, metres of wave travel per metre of pipe (:class:`PipeGeometry`)."""
         self._fronts: NDArray[np.float64] | None = None
         if fronts is not None:
             missing = [p.pipe for p in self.pipes if p.pipe not in fronts]
@@ -287,6 +302,8 @@ class ArrivalLocalizer:
         )
         self.pipe_travel = float(np.median(length)) / self.wave_speed
         """Median wave travel time (s) along one candidate pipe."""
+        self.longest_travel = float(length.max()) / self.wave_speed
+        """The longest wave travel time (s) along one candidate pipe."""
         nearest = self._dist[:, int(np.argmin(np.abs(pos - 0.5))), :].min(axis=1)
         nearest = nearest[np.isfinite(nearest)]  # a pipe no meter is reached from counts not
         self.meter_travel = (
@@ -431,7 +448,8 @@ class ArrivalLocalizer:
         count = int(np.clip(math.ceil(geo.length / POSITION_STEP), 49, 1999)) + 1
         along = np.linspace(0.0, geo.length, count)
         d_start, d_end = self._ends[index[pipe]]
-        dist = np.minimum(along[:, None] + d_start, (geo.length - along)[:, None] + d_end)
+        wave = along * geo.stretch
+        dist = np.minimum(wave[:, None] + d_start, (geo.travel - wave)[:, None] + d_end)
         rms = self._rms(dist[None], evidence, [index[pipe]])[0]
         best = float(rms.min())
         dt = evidence.capture_interval

@@ -10,7 +10,8 @@ that explain them is: the unit is the metre of main, not the pipe.
 :func:`posterior_center` takes the :data:`CANDIDATES` densest grid points of the posterior as
 candidates (each inside the search region, whose segments are the densest ones), measures the
 network distance from each to every point of the region along the candidate pipes (Dijkstra
-from the candidates' end nodes on the pipes' graph, built once per arrival localizer) and
+from the candidates' end nodes on the pipes' graph, built once per arrival localizer; each
+node's path lengths kept once found) and
 returns the candidate of least expected distance, as a position on its pipe (the segment's
 middle, within the region's stretch that holds it). Numpy and NetworkX only: on the live path.
 """
@@ -36,21 +37,44 @@ CANDIDATES = 24
 MAX_MASS_POINTS = 4000
 """Most points of the region the expected distance is summed over (the most probable ones)."""
 
-_GRAPHS: weakref.WeakKeyDictionary[ArrivalLocalizer, nx.Graph] = weakref.WeakKeyDictionary()
 
+class _Paths:
+    """Path lengths along the candidate pipes of one arrival localizer (undirected, weighted by
+    length, the shortest of parallel pipes): from a node to every node, one Dijkstra per node
+    asked for, kept (a few kB each)."""
 
-def _graph(arrival: ArrivalLocalizer) -> nx.Graph:
-    """The candidate pipes as an undirected graph weighted by length (the shortest of parallel
-    pipes), once per localizer."""
-    graph = _GRAPHS.get(arrival)
-    if graph is None:
-        graph = nx.Graph()
+    def __init__(self, arrival: ArrivalLocalizer) -> None:
+        self.graph = nx.Graph()
         for p in arrival.pipes:
-            known = graph.get_edge_data(p.start, p.end)
+            known = self.graph.get_edge_data(p.start, p.end)
             if known is None or known["length"] > p.length:
-                graph.add_edge(p.start, p.end, length=float(p.length))
-        _GRAPHS[arrival] = graph
-    return graph
+                self.graph.add_edge(p.start, p.end, length=float(p.length))
+        self.index = {n: i for i, n in enumerate(self.graph.nodes)}
+        self.starts = np.array([self.index[p.start] for p in arrival.pipes], dtype=np.int64)
+        """Each candidate pipe's start node, as an index into :meth:`from_node`'s arrays."""
+        self.ends = np.array([self.index[p.end] for p in arrival.pipes], dtype=np.int64)
+        self._from: dict[str, NDArray[np.float64]] = {}
+
+    def from_node(self, node: str) -> NDArray[np.float64]:
+        """Path length (m) from ``node`` to every node (``inf`` where no path joins them)."""
+        found = self._from.get(node)
+        if found is None:
+            found = np.full(len(self.index), np.inf)
+            lengths = nx.single_source_dijkstra_path_length(self.graph, node, weight="length")
+            found[[self.index[n] for n in lengths]] = list(lengths.values())
+            self._from[node] = found
+        return found
+
+
+_PATHS: weakref.WeakKeyDictionary[ArrivalLocalizer, _Paths] = weakref.WeakKeyDictionary()
+
+
+def _paths(arrival: ArrivalLocalizer) -> _Paths:
+    """The localizer's :class:`_Paths`, made once."""
+    paths = _PATHS.get(arrival)
+    if paths is None:
+        paths = _PATHS[arrival] = _Paths(arrival)
+    return paths
 
 
 @dataclass(frozen=True)
@@ -82,22 +106,21 @@ def posterior_center(
     pipes = arrival.pipes
     lengths = np.array([p.length for p in pipes], dtype=np.float64)
     mid = 0.5 * (grid.low + grid.high)
-    graph = _graph(arrival)
+    paths = _paths(arrival)
     tried_pipes = [pipes[int(grid.pipe[i])] for i in tried.tolist()]
     ends = sorted({n for p in tried_pipes for n in (p.start, p.end)})
     # path lengths from each candidate end node to the two end nodes of each mass point
     m_pipe = grid.pipe[mass]
-    m_start = [pipes[i].start for i in m_pipe.tolist()]
-    m_end = [pipes[i].end for i in m_pipe.tolist()]
+    m_start, m_end = paths.starts[m_pipe], paths.ends[m_pipe]
     m_off = mid[mass]
     m_len = lengths[m_pipe]
     reach: dict[str, NDArray[np.float64]] = {}
     for node in ends:
-        lengths_from = nx.single_source_dijkstra_path_length(graph, node, weight="length")
-        to_start = np.array([lengths_from.get(n, np.inf) for n in m_start], dtype=np.float64)
-        to_end = np.array([lengths_from.get(n, np.inf) for n in m_end], dtype=np.float64)
+        lengths_from = paths.from_node(node)
         # from the node to each mass point, entering its pipe at either end
-        reach[node] = np.minimum(to_start + m_off, to_end + (m_len - m_off))
+        reach[node] = np.minimum(
+            lengths_from[m_start] + m_off, lengths_from[m_end] + (m_len - m_off)
+        )
     weights = prob[mass] / prob[mass].sum()
     best_i, best_cost = int(tried[0]), np.inf
     for i in tried.tolist():

@@ -148,7 +148,7 @@ class FusedLocalizer:
         self.arrival = arrival
         self.signature = signature
         self.tau = float(tau)
-        self.longest_travel = max(p.length for p in arrival.pipes) / arrival.wave_speed
+        self.longest_travel = arrival.longest_travel
         """Wave travel time (s) along the arrival localizer's longest pipe."""
 
     def weights(self, capture_interval: float) -> tuple[float, float]:

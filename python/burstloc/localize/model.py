@@ -44,6 +44,8 @@ MAX_PIPES = 100_000
 MAX_SIGNATURE_SETS = 64
 #: Pressure waves in water pipes travel at most about 1500 m/s; this leaves room for any unit.
 MAX_WAVE_SPEED = 10_000.0
+#: A pipe's wave travel per metre (its stretch, the model's wave speed over its own) is at most.
+MAX_STRETCH = 100.0
 #: Pipe lengths and path lengths (m) are at most this.
 MAX_LENGTH = 1e8
 
@@ -52,9 +54,11 @@ MAX_LENGTH = 1e8
 class LocalizationModel:
     """The network facts the ranking localizers need (module docstring).
 
-    ``pipes``: every candidate pipe with its flow-direction end nodes and length (m).
+    ``pipes``: every candidate pipe with its flow-direction end nodes, length (m) and stretch
+    (its wave travel per metre: :class:`~burstloc.localize.arrival.PipeGeometry`).
     ``node_distances[node][j]``: shortest path length (m) along the pipes from ``node`` (an end
-    node of a candidate pipe) to ``meters[j]`` (``inf`` when there is no path).
+    node of a candidate pipe) to ``meters[j]`` (``inf`` when there is no path); where pipes have
+    wave speeds of their own, in metres of wave travel at ``wave_speed`` (travel time times it).
     ``signature_sets``: the burst signatures at ``meters``, one set per position along the pipes.
     ``wave_speed``: the pressure-wave speed (m/s) the arrival localizer assumes;
     ``wave_speed_tolerance`` the relative uncertainty of a travel time along a path, and
@@ -90,6 +94,7 @@ class LocalizationModel:
             raise FieldError("pipes", f"must hold 1 to {MAX_PIPES} pipes, got {len(self.pipes)}")
         for i, p in enumerate(self.pipes):
             check_number(p.length, f"pipes[{i}].length", low=0, low_open=True, high=MAX_LENGTH)
+            check_number(p.stretch, f"pipes[{i}].stretch", low=0, low_open=True, high=MAX_STRETCH)
         check_number(self.wave_speed, "wave_speed", low=0, low_open=True, high=MAX_WAVE_SPEED)
         check_number(self.wave_speed_tolerance, "wave_speed_tolerance", low=0, high=1)
         check_number(self.clock_tolerance, "clock_tolerance_s", low=0, high=60)
@@ -186,6 +191,7 @@ class LocalizationModel:
             **({} if self.clock_offsets is None else {"clock_offsets_s": dict(self.clock_offsets)}),
             "pipes": [
                 {"pipe": p.pipe, "start": p.start, "end": p.end, "length": p.length}
+                | ({} if p.stretch == 1.0 else {"stretch": p.stretch})
                 for p in self.pipes
             ],
             "node_distances": {
@@ -220,7 +226,13 @@ class LocalizationModel:
                 clock_tolerance=float(data.get("clock_tolerance_s", CLOCK_TOLERANCE)),
                 clock_offsets=data.get("clock_offsets_s"),
                 pipes=tuple(
-                    PipeGeometry(str(p["pipe"]), str(p["start"]), str(p["end"]), float(p["length"]))
+                    PipeGeometry(
+                        str(p["pipe"]),
+                        str(p["start"]),
+                        str(p["end"]),
+                        float(p["length"]),
+                        float(p.get("stretch", 1.0)),
+                    )
                     for p in data["pipes"]
                 ),
                 node_distances={

@@ -206,7 +206,7 @@ class RegionGrid:
     segments of at most ``step`` metres (longer where the network would give more than
     :data:`MAX_GRID_POINTS`); ``pipe[i]`` (index into ``arrival.pipes``), ``low[i]`` /
     ``high[i]`` (m from the pipe's flow-direction start) and ``dist[i, j]``, the path length from
-    the segment's middle to meter ``j``."""
+    the segment's middle to meter ``j`` (in metres of wave travel, as the localizer's)."""
 
     def __init__(self, arrival: ArrivalLocalizer, step: float = GRID_STEP) -> None:
         if not (math.isfinite(step) and step > 0):
@@ -223,10 +223,9 @@ class RegionGrid:
         self.length = width
         mid = 0.5 * (self.low + self.high)
         d_start, d_end = arrival.end_distances
-        total = lengths[self.pipe]
-        self.dist = np.minimum(
-            mid[:, None] + d_start[self.pipe], (total - mid)[:, None] + d_end[self.pipe]
-        )
+        wave = (mid * arrival.stretch[self.pipe])[:, None]
+        total = (lengths * arrival.stretch)[self.pipe][:, None]
+        self.dist = np.minimum(wave + d_start[self.pipe], (total - wave) + d_end[self.pipe])
         self.rows = self.pipe.tolist()
 
     def __len__(self) -> int:

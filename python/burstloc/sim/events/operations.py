@@ -31,7 +31,7 @@ import math
 import os
 import re
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -54,6 +54,7 @@ from burstloc.sim.transient.tsnet import (
     scenario_result,
 )
 from burstloc.sim.transient.tsnet_ready import prepare_for_tsnet
+from burstloc.wave_speeds import WaveSpeeds
 
 __all__ = ["EVENT_KINDS", "SCHEMA", "EventScenario", "event_output_path", "simulate_event"]
 
@@ -95,8 +96,8 @@ class EventScenario:
         setting: a valve's final fraction open, in [0, 1) for a closure, (0, 1] for an
             opening; unused otherwise.
         demand_change: a demand step's change, m³/s (non-zero); unused otherwise.
-        wave_speed, duration, engine, time_step, friction, solver: as for a burst
-            (:class:`~burstloc.sim.scenarios.scenario.BurstScenario`).
+        wave_speed, duration, engine, time_step, friction, solver, wave_speeds: as for a
+            burst (:class:`~burstloc.sim.scenarios.scenario.BurstScenario`).
 
     Raises:
         ConfigError: a parameter out of range (named with its value).
@@ -115,9 +116,13 @@ class EventScenario:
     time_step: float | None = None
     friction: str = "steady"
     solver: str = "vectorized"
+    wave_speeds: WaveSpeeds | None = None
 
     def __post_init__(self) -> None:
         put = object.__setattr__
+        if self.wave_speeds is not None and not isinstance(self.wave_speeds, WaveSpeeds):
+            raise ConfigError(f"wave_speeds must be WaveSpeeds, got {self.wave_speeds!r}")
+        put(self, "wave_speeds", self.wave_speeds or None)
         put(self, "network", os.fspath(self.network))
         if self.kind not in EVENT_KINDS:
             raise ConfigError(f"event kind must be one of {list(EVENT_KINDS)}, got {self.kind!r}")
@@ -162,6 +167,10 @@ class EventScenario:
         del params["network"]
         if params["solver"] == "tsnet":
             del params["solver"]
+        if self.wave_speeds is None:
+            del params["wave_speeds"]
+        else:  # keyed by the speeds, not by the file they came from
+            params["wave_speeds"] = self.wave_speeds.to_json()
         return params
 
     @property
@@ -246,12 +255,17 @@ def _simulate(scenario: EventScenario) -> ScenarioResult:
         wn = network.as_network(source, diagnostics=True).editable()  # the events change it
         nodes = _asset_nodes(wn, scenario)
         meters = network.junction_names(wn)
+        given = scenario.wave_speeds.of(wn, scenario.wave_speed) if scenario.wave_speeds else {}
+        speeds = {p: a for p, a in given.items() if a != scenario.wave_speed}
         prepared = prepare_for_tsnet(wn, keep=(scenario.asset,))
         transient = run_transient(
             wn,
             meters,
             os.path.join(tmp, "event.inp"),
-            TransientSettings.of(scenario),
+            replace(
+                TransientSettings.of(scenario),
+                pipe_speeds=speeds or None,
+            ),
             _operate(scenario, wn),
             where=f"{scenario.label} of {scenario.network}",
         )

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import networkx as nx
@@ -29,6 +29,7 @@ from burstloc.localize.decide import RankingLocalizers
 from burstloc.localize.model import LocalizationModel
 from burstloc.network import Network, NetworkSource, as_network, flow_direction_graph
 from burstloc.sim.signatures.compute import SignatureMethod, cached_signature_sets
+from burstloc.wave_speeds import WaveSpeeds
 
 if TYPE_CHECKING:
     from wntr.network import WaterNetworkModel
@@ -45,19 +46,23 @@ __all__ = [
 ]
 
 
-def length_graph(wn: WaterNetworkModel) -> nx.Graph:
+def length_graph(wn: WaterNetworkModel, stretch: Mapping[str, float] | None = None) -> nx.Graph:
     """Undirected graph of a WNTR model weighted by link length (m).
 
     Pipes weigh their length; valves and pumps, which have none, weigh 0 (the wave passes them).
+    With ``stretch`` (pipe -> metres of wave travel at the model's wave speed per metre of pipe,
+    :meth:`burstloc.wave_speeds.WaveSpeeds.stretch`), a pipe weighs its length times its stretch:
+    path lengths are then travel times times the model's wave speed.
     Parallel links keep the shortest: edge attributes ``length``, ``link`` (the first shortest
     link in INP order) and ``links`` (every link of that shortest length, which a wave front
     crosses side by side: :func:`wave_fronts`).
     """
     graph = nx.Graph()
     graph.add_nodes_from(wn.node_name_list)
+    stretch = stretch or {}
     for name in wn.link_name_list:
         link = wn.get_link(name)
-        length = float(getattr(link, "length", 0.0) or 0.0)
+        length = float(getattr(link, "length", 0.0) or 0.0) * stretch.get(name, 1.0)
         u, v = link.start_node_name, link.end_node_name
         if graph.has_edge(u, v):
             edge = graph[u][v]
@@ -94,23 +99,37 @@ def _meters_of(wn: WaterNetworkModel, meters: Sequence[str] | None) -> list[str]
     )
 
 
-def pipe_geometry(wn: WaterNetworkModel) -> list[PipeGeometry]:
-    """Every pipe's flow-direction end nodes and length (m), in the network's pipe order.
+def pipe_geometry(
+    wn: WaterNetworkModel, stretch: Mapping[str, float] | None = None
+) -> list[PipeGeometry]:
+    """Every pipe's flow-direction end nodes, length (m) and ``stretch`` (:func:`length_graph`;
+    1 where not given), in the network's pipe order.
 
     One EPANET steady state (:func:`burstloc.network.flow_direction_graph`, pressure-driven).
     """
     by_pipe = flow_direction_graph(wn).graph["edges_by_pipe"]
+    stretch = stretch or {}
     return [
-        PipeGeometry(p, str(by_pipe[p][0]), str(by_pipe[p][1]), float(wn.get_link(p).length))
+        PipeGeometry(
+            p,
+            str(by_pipe[p][0]),
+            str(by_pipe[p][1]),
+            float(wn.get_link(p).length),
+            float(stretch.get(p, 1.0)),
+        )
         for p in wn.pipe_name_list
     ]
 
 
 def arrival_geometry(
-    network: NetworkSource | WaterNetworkModel, meters: Sequence[str] | None = None
+    network: NetworkSource | WaterNetworkModel,
+    meters: Sequence[str] | None = None,
+    stretch: Mapping[str, float] | None = None,
 ) -> tuple[list[PipeGeometry], dict[str, NDArray[np.float64]]]:
     """Every pipe's flow-direction end nodes and length, and the shortest path lengths (m) from
-    those end nodes to each of ``meters`` (default: every junction; ``inf`` without a path).
+    those end nodes to each of ``meters`` (default: every junction; ``inf`` without a path);
+    with ``stretch`` (pipes of their own wave speed, :func:`length_graph`) the paths are
+    weighted by travel time (metres at the model's wave speed).
 
     One EPANET steady state (:func:`burstloc.network.flow_direction_graph`, pressure-driven).
 
@@ -119,8 +138,8 @@ def arrival_geometry(
     """
     wn = _model_of(network)
     meter_list = _meters_of(wn, meters)
-    graph = length_graph(wn)
-    pipes = pipe_geometry(wn)
+    graph = length_graph(wn, stretch)
+    pipes = pipe_geometry(wn, stretch)
     per_meter = {
         m: nx.single_source_dijkstra_path_length(graph, m, weight="length") for m in meter_list
     }
@@ -143,7 +162,10 @@ def _link_area(link: Any) -> float:
 
 
 def wave_fronts(
-    wn: WaterNetworkModel, meters: Sequence[str], pipes: Sequence[PipeGeometry]
+    wn: WaterNetworkModel,
+    meters: Sequence[str],
+    pipes: Sequence[PipeGeometry],
+    stretch: Mapping[str, float] | None = None,
 ) -> dict[str, NDArray[np.float64]]:
     """Per pipe, the head step at each meter, relative to the step a burst on the pipe starts,
     of the first wave front to reach it (``fronts[pipe][j]`` for ``meters[j]``).
@@ -159,9 +181,10 @@ def wave_fronts(
     product of the shares along the path, the end node's own share of a front coming from ``p``
     included. Friction, demands, fronts along other paths and the reflections that follow are
     left out: this is the *shape* the arrival localizer compares between meters, not a head in
-    metres (:func:`burstloc.localize.arrival.silence_counts`).
+    metres (:func:`burstloc.localize.arrival.silence_counts`). ``stretch``: pipes of their own
+    wave speed (:func:`length_graph`); the first front then takes the quickest path.
     """
-    graph = length_graph(wn)
+    graph = length_graph(wn, stretch)
     areas = {name: _link_area(wn.get_link(name)) for name in wn.link_name_list}
     finite = [a for a in areas.values() if math.isfinite(a)]
     widest = max(finite, default=1.0)
@@ -210,21 +233,25 @@ def arrival_localizer(
     meters: Sequence[str] | None = None,
     *,
     wave_speed: float = WAVE_SPEED,
+    wave_speeds: WaveSpeeds | None = None,
     positions: Iterable[float] = CANDIDATE_POSITIONS,
     **options: Any,
 ) -> ArrivalLocalizer:
     """An :class:`~burstloc.localize.arrival.ArrivalLocalizer` for ``meters`` (default: every
-    junction) of an INP path or a WNTR model, from :func:`arrival_geometry`; ``options`` are the
+    junction) of an INP path or a WNTR model, from :func:`arrival_geometry`; ``wave_speeds``:
+    pipes of their own speed (the rest run at ``wave_speed``); ``options`` are the
     localizer's other keyword arguments (``amplitude_weight``, ``decision_delay``, ``silence``).
 
     Raises:
-        NetworkError: missing or malformed network, or a meter that is not a junction.
+        NetworkError: missing or malformed network, a meter that is not a junction, or wave
+            speeds of pipes it does not have.
         ConfigError: a bad wave speed, position or option.
     """
     wn = _model_of(network)
     meter_list = _meters_of(wn, meters)
-    pipes, node_distances = arrival_geometry(wn, meter_list)
-    options.setdefault("fronts", wave_fronts(wn, meter_list, pipes))
+    stretch = wave_speeds.stretch(wn, wave_speed) if wave_speeds else None
+    pipes, node_distances = arrival_geometry(wn, meter_list, stretch)
+    options.setdefault("fronts", wave_fronts(wn, meter_list, pipes, stretch))
     return ArrivalLocalizer(
         pipes, meter_list, node_distances, wave_speed=wave_speed, positions=positions, **options
     )
@@ -235,6 +262,7 @@ def prepare_model(
     meters: Sequence[str] | None = None,
     *,
     wave_speed: float = WAVE_SPEED,
+    wave_speeds: WaveSpeeds | None = None,
     positions: Sequence[float] = CANDIDATE_POSITIONS,
     cache_dir: str | os.PathLike[str] | None = None,
     signatures: SignatureMethod = "auto",
@@ -242,17 +270,20 @@ def prepare_model(
 ) -> LocalizationModel:
     """The :class:`~burstloc.localize.model.LocalizationModel` of ``meters`` (default: every
     junction) on ``network`` (a :class:`~burstloc.network.Network` or its INP file; module
-    docstring). ``cache_dir``: where the signatures are cached;
+    docstring). ``wave_speeds``: pipes of their own speed (the rest run at ``wave_speed``): the
+    paths are timed at each pipe's speed. ``cache_dir``: where the signatures are cached;
     ``signatures``: how they are computed (:data:`burstloc.sim.signatures.compute.SignatureMethod`;
     ``workers``: the local processes of the hybrid method's EPANET runs).
 
     Raises:
-        NetworkError: missing or malformed network, or a meter that is not a junction.
+        NetworkError: missing or malformed network, a meter that is not a junction, or wave
+            speeds of pipes it does not have.
     """
     read = as_network(network)
     model = read.model
     meter_list = _meters_of(model, meters)
-    pipes, node_distances = arrival_geometry(model, meter_list)
+    stretch = wave_speeds.stretch(model, wave_speed) if wave_speeds else None
+    pipes, node_distances = arrival_geometry(model, meter_list, stretch)
     return LocalizationModel(
         network_hash=read.hash,
         meters=tuple(meter_list),
@@ -267,7 +298,7 @@ def prepare_model(
             workers=workers,
         ),
         wave_speed=wave_speed,
-        fronts=wave_fronts(model, meter_list, pipes),
+        fronts=wave_fronts(model, meter_list, pipes, stretch),
     )
 
 

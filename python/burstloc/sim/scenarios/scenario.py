@@ -46,6 +46,7 @@ from burstloc.network import Network, NetworkSource
 from burstloc.sim.scenarios import capture
 from burstloc.sim.scenarios.cache import network_cache_key
 from burstloc.sim.scenarios.perturb import TruthPerturbation
+from burstloc.wave_speeds import WaveSpeeds
 
 __all__ = [
     "DEFAULT_BURST_COEFF",
@@ -130,7 +131,11 @@ class BurstScenario:
         opening_time: how long it takes to open fully, s (>= 0; 0 = instantly).
         burst_coeff: the burst's final emitter coefficient, m³/s per m^½ of pressure head
             (TSNet's ``final_burst_coeff``), > 0.
-        wave_speed: pressure wave speed in every pipe, m/s, > 0.
+        wave_speed: pressure wave speed in every pipe, m/s, > 0 (but those ``wave_speeds``
+            gives).
+        wave_speeds: ``None`` (default), or :class:`~burstloc.wave_speeds.WaveSpeeds`: pipes
+            (or diameter classes) of their own wave speed; through a transient-ready model
+            each merged pipe keeps its pieces' travel time.
         duration: simulated time, s, > ``burst_start``.
         engine: initial steady state: ``"PDD"`` (pressure-driven) or ``"DD"``.
         time_step: TSNet's requested time step, s; ``None`` = TSNet's largest stable step.
@@ -169,6 +174,7 @@ class BurstScenario:
     min_pipe_length: float | None = None
     solver: str = "vectorized"
     truth: TruthPerturbation | None = None
+    wave_speeds: WaveSpeeds | None = None
 
     def __post_init__(self) -> None:
         def put(name: str, value: Any) -> None:
@@ -211,6 +217,10 @@ class BurstScenario:
             put("min_pipe_length", _number("min_pipe_length", self.min_pipe_length))
             if self.min_pipe_length <= 0:  # type: ignore[operator]
                 raise ConfigError(f"min_pipe_length must be > 0 m, got {self.min_pipe_length}")
+        if self.wave_speeds is not None:
+            if not isinstance(self.wave_speeds, WaveSpeeds):
+                raise ConfigError(f"wave_speeds must be WaveSpeeds, got {self.wave_speeds!r}")
+            put("wave_speeds", self.wave_speeds or None)
         if self.truth is not None:
             if not isinstance(self.truth, TruthPerturbation):
                 raise ConfigError(f"truth must be a TruthPerturbation, got {self.truth!r}")
@@ -221,7 +231,8 @@ class BurstScenario:
 
         The default friction model, ``min_pipe_length=None``, the ``"tsnet"`` solver and
         ``truth=None`` are left out, so scenarios cached before those fields existed keep their
-        keys (TSNet's results); a perturbed truth is keyed by its simulated part.
+        keys (TSNet's results); a perturbed truth is keyed by its simulated part, wave speeds
+        per pipe by their values.
         """
         params = asdict(self)
         del params["network"]
@@ -233,6 +244,10 @@ class BurstScenario:
             del params["solver"]
         if params["truth"] is None:
             del params["truth"]
+        if self.wave_speeds is None:
+            del params["wave_speeds"]
+        else:  # keyed by the speeds, not by the file they came from
+            params["wave_speeds"] = self.wave_speeds.to_json()
         return params
 
     def cache_key(self) -> str:

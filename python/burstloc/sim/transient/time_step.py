@@ -9,7 +9,9 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from copy import deepcopy
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 
@@ -17,7 +19,7 @@ from burstloc import network
 from burstloc.exceptions import NetworkError
 from burstloc.sim.scenarios.scenario import BurstScenario
 from burstloc.sim.transient.intact import IntactNetwork, intact
-from burstloc.sim.transient.tsnet_ready import prepare_for_tsnet
+from burstloc.sim.transient.tsnet_ready import pipe_speeds, prepare_for_tsnet
 
 __all__ = ["capture_time_step", "expected_time_step", "with_capture_time_step"]
 
@@ -28,30 +30,61 @@ FLOAT_MARGIN = 1e-9
 def expected_time_step(scenario: BurstScenario) -> float:
     """The time step (s) TSNet will use for ``scenario``, without running TSNet.
 
-    TSNet's discretisation is arithmetic on the pipe lengths of the split network (of its
-    transient-ready model with ``min_pipe_length``, :func:`~burstloc.sim.transient.tsnet_ready.
-    transient_model`, prepared for TSNet): each pipe
-    gets ``N = floor(L / (a dt))`` reaches for the requested step ``dt`` (default: the Courant
-    limit ``min L / (2 a)``), and the step becomes ``sum(phi^2) / sum(phi)`` with
-    ``phi = L / (a N)`` (its wave-speed adjustment). This reproduces it, so a caller can choose
-    ``time_step`` before simulating (e.g. finer than a capture interval).
+    TSNet's discretisation is arithmetic on the pipes' travel times ``L / a`` in the split
+    network (of its transient-ready model with ``min_pipe_length``, :func:`~burstloc.sim.
+    transient.tsnet_ready.transient_model`, prepared for TSNet; each pipe at its own speed with
+    ``wave_speeds``): each pipe gets ``N = floor(L / (a dt))`` reaches for the requested step
+    ``dt`` (default: the Courant limit ``min L / (2 a)``), and the step becomes
+    ``sum(phi^2) / sum(phi)`` with ``phi = L / (a N)`` (its wave-speed adjustment). This
+    reproduces it, so a caller can choose ``time_step`` before simulating (e.g. finer than a
+    capture interval). The network is prepared for TSNet once (:func:`_prepared_pipes`); the
+    burst pipe is then cut in two at ``position`` (a split's preparation is the same but for
+    those halves; where the preparation does not keep the burst pipe a pipe, the split
+    network is prepared as the simulation will).
 
     Raises:
         NetworkError: the network or pipe cannot be read.
     """
     kept = intact(scenario.network)
     network.require_pipe(kept.wn, scenario.pipe)
-    model, pipe, position, _ = kept.transient_model(scenario)
-    split = network.split_pipe(model, pipe, position)
-    prepare_for_tsnet(split.network)  # the pipes TSNet will see
-    lengths = [float(pipe.length) for _, pipe in split.network.pipes()]
-    travel = np.array(lengths) / scenario.wave_speed
-    dt = float(travel.min() / 2.0) if scenario.time_step is None else float(scenario.time_step)
-    reaches = np.floor(travel / dt)
+    model, pipe, position, prepared = kept.transient_model(scenario)
+    lengths, connectors = kept.step(
+        ("prepared pipes", scenario.min_pipe_length), lambda: _prepared_pipes(model)
+    )
+    if pipe in lengths:
+        whole = lengths[pipe]
+        halves = (position * whole, (1.0 - position) * whole)
+        # connectors are as long as the shortest pipe, a half of the split one included
+        pieces = {
+            n: min(length, *halves) if n in connectors else length for n, length in lengths.items()
+        }
+        pieces |= {pipe: halves[0], f"{pipe} ": halves[1]}
+        aliases = {f"{pipe} ": pipe}
+    else:  # a check-valve pipe made a valve, ...: as the simulation will see it
+        split = network.split_pipe(model, pipe, position)
+        prepare_for_tsnet(split.network)
+        pieces = {name: float(p.length) for name, p in split.network.pipes()}
+        aliases = {split.second_pipe: pipe}
+    speeds = pipe_speeds(scenario, kept.wn, list(pieces), prepared, aliases)
+    length = np.array(list(pieces.values()))
+    speed = np.array([speeds.get(n, scenario.wave_speed) for n in pieces])
+    # in TSNet's order of operations (tsnet.network.discretize), to the last bit
+    dt = float(np.min(length / (2.0 * speed))) if scenario.time_step is None else scenario.time_step
+    reaches = np.floor(length / (speed * dt))
     if np.any(reaches < 1):
         return dt  # TSNet refuses such a step; _run_tsnet reports it
-    phi = travel / reaches
+    phi = length / speed / reaches
     return float(np.sum(phi**2) / np.sum(phi))
+
+
+def _prepared_pipes(model: Any) -> tuple[dict[str, float], frozenset[str]]:
+    """Each pipe's length (m) in a copy of ``model`` prepared for TSNet
+    (:func:`~burstloc.sim.transient.tsnet_ready.prepare_for_tsnet`), and which are its
+    connectors."""
+    copy = deepcopy(model)
+    preparation = prepare_for_tsnet(copy)
+    connectors = frozenset(c.pipe for c in preparation.connectors)
+    return {name: float(p.length) for name, p in copy.pipes()}, connectors
 
 
 def capture_time_step(

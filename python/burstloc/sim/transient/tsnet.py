@@ -44,7 +44,7 @@ from burstloc.sim.transient._tsnet_results import results_by_name
 from burstloc.sim.transient.intact import intact
 from burstloc.sim.transient.steady import check_steady_start
 from burstloc.sim.transient.tsnet_elements import check_steady_state, hold_valves
-from burstloc.sim.transient.tsnet_ready import prepare_for_tsnet, transient_model
+from burstloc.sim.transient.tsnet_ready import pipe_speeds, prepare_for_tsnet, transient_model
 
 __all__ = [
     "TransientSettings",
@@ -159,7 +159,10 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
         model, pipe, position, shortened = kept.transient_model(scenario)
         split = network.split_pipe(model, pipe, position)  # a copy: the truth may perturb it
         truth, aliases = scenario.truth, {split.second_pipe: pipe}
-        speeds = perturb_model(truth, split.network, scenario.wave_speed, aliases) if truth else {}
+        speeds = pipe_speeds(scenario, kept.wn, split.network.pipe_name_list, shortened, aliases)
+        drawn = perturb_model(truth, split.network, scenario.wave_speed, aliases) if truth else {}
+        for p, a in drawn.items():  # the truth's draw about each pipe's own speed
+            speeds[p] = speeds.get(p, scenario.wave_speed) * a / scenario.wave_speed
         prepared = prepare_for_tsnet(split.network, engine=scenario.engine)
         where = f"pipe {scenario.pipe!r} of {scenario.network}"
 

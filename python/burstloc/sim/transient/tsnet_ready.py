@@ -55,7 +55,7 @@ steady state is unchanged (the valve loses no head), and the metadata lists the 
 
 from __future__ import annotations
 
-from collections.abc import Collection
+from collections.abc import Collection, Iterable, Mapping
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
@@ -75,6 +75,7 @@ __all__ = [
     "TsnetPreparation",
     "add_connectors",
     "add_supply_boundaries",
+    "pipe_speeds",
     "prepare_for_tsnet",
     "supply_junctions",
     "transient_model",
@@ -357,3 +358,22 @@ def transient_model(
     )
     pipe, position = prepared.locate(scenario.pipe, scenario.position)
     return prepared.network, pipe, position, prepared
+
+
+def pipe_speeds(
+    scenario: BurstScenario,
+    original: Any,
+    pipes: Iterable[str],
+    prepared: skeleton.PreparedNetwork | None,
+    aliases: Mapping[str, str],
+) -> dict[str, float]:
+    """The wave speed (m/s) of each of the simulated model's ``pipes`` whose speed is not the
+    scenario's: ``scenario.wave_speeds`` of the ``original`` network's pipes, carried through
+    the transient-ready model (``prepared``: merged pipes keep their travel time) and the split
+    burst pipe (``aliases``: a half -> the pipe it was cut from)."""
+    if scenario.wave_speeds is None:
+        return {}
+    given = scenario.wave_speeds.of(original, scenario.wave_speed)
+    by_model = given if prepared is None else prepared.wave_speeds(given)
+    speeds = {p: by_model.get(aliases.get(p, p)) for p in pipes}
+    return {p: a for p, a in speeds.items() if a is not None and a != scenario.wave_speed}
