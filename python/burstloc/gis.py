@@ -24,7 +24,6 @@ The collection's foreign member ``"burstloc"`` says which, and summarizes the re
 
 from __future__ import annotations
 
-import itertools
 import json
 import math
 from collections.abc import Iterable, Mapping, Sequence
@@ -32,7 +31,7 @@ from typing import Any
 
 from burstloc._validate import Fields, check_number, check_string
 from burstloc.exceptions import ConfigError
-from burstloc.layout import Layout
+from burstloc.layout import Layout, drawn_lengths
 
 __all__ = ["ROUNDING", "WGS84", "located_records", "record_geojson", "to_wgs84"]
 
@@ -255,30 +254,22 @@ def _pipe(layout: Layout, fields: Fields) -> tuple[str, str, list[Point]]:
     start = check_string(fields.get("from"), "from")
     if pipe not in layout.lengths:
         raise ConfigError(f"pipe {pipe!r} is not a pipe of the network (another network's record?)")
-    _, a, b, vertices = layout.links[pipe]
+    _, a, b, _ = layout.links[pipe]
     if start not in (a, b):
         raise ConfigError(f"node {start!r} is not an end of pipe {pipe!r} ({a!r}, {b!r})")
     if layout.lengths[pipe] <= 0:
         raise ConfigError(f"pipe {pipe!r} has no length in the network file")
-    line = [tuple(layout.nodes[a][1:]), *vertices, tuple(layout.nodes[b][1:])]
-    return pipe, start, [(float(x), float(y)) for x, y in (line if start == a else line[::-1])]
+    line = layout.line(pipe)
+    return pipe, start, line if start == a else line[::-1]
 
 
 def _feature(geometry: dict[str, Any], **properties: Any) -> dict[str, Any]:
     return {"type": "Feature", "geometry": geometry, "properties": properties}
 
 
-def _distances(line: Sequence[Point]) -> list[float]:
-    """Cumulative drawn length at each point of ``line``."""
-    out = [0.0]
-    for (x0, y0), (x1, y1) in itertools.pairwise(line):
-        out.append(out[-1] + math.hypot(x1 - x0, y1 - y0))
-    return out
-
-
 def _at(line: Sequence[Point], fraction: float) -> Point:
     """The point ``fraction`` (0..1) of the way along ``line``'s drawn length."""
-    along = _distances(line)
+    along = drawn_lengths(line)
     target = min(max(fraction, 0.0), 1.0) * along[-1]
     for k in range(1, len(line)):
         if along[k] >= target and along[k] > along[k - 1]:
@@ -291,7 +282,7 @@ def _at(line: Sequence[Point], fraction: float) -> Point:
 def _cut(line: Sequence[Point], low: float, high: float) -> list[list[float]]:
     """The part of ``line`` from ``low`` to ``high`` (fractions of its drawn length), as GeoJSON
     positions: its two ends and the vertices between (two equal points for an empty part)."""
-    along = _distances(line)
+    along = drawn_lengths(line)
     total = along[-1]
     inner: Iterable[Point] = (
         p for p, d in zip(line, along, strict=True) if low * total < d < high * total

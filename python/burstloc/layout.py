@@ -9,14 +9,19 @@ mean of its neighbours' (or at the origin when none has any), so every link can 
 
 from __future__ import annotations
 
+import itertools
+import math
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from burstloc.inp import _rows, pipe_names_in_file
 
-__all__ = ["Layout", "read_layout"]
+__all__ = ["Layout", "drawn_lengths", "read_layout"]
+
+Point = tuple[float, float]
 
 _NODE_KINDS = {"[JUNCTIONS]": "junction", "[RESERVOIRS]": "reservoir", "[TANKS]": "tank"}
 _LINK_KINDS = {"[PIPES]": "pipe", "[PUMPS]": "pump", "[VALVES]": "valve"}
@@ -55,6 +60,40 @@ class Layout:
                 "length": [self.lengths.get(k) for k in links],
             },
         }
+
+    def line(self, link: str) -> list[Point]:
+        """The drawing of ``link`` from its INP start node to its end node (their coordinates
+        and the vertices between)."""
+        _, a, b, vertices = self.links[link]
+        ends = (self.nodes[a][1:], self.nodes[b][1:])
+        return [(float(x), float(y)) for x, y in (ends[0], *vertices, ends[1])]
+
+    def nearest_pipe(self, x: float, y: float) -> tuple[str, float, float] | None:
+        """The pipe whose drawing passes nearest the point ``(x, y)``: ``(pipe, fraction,
+        distance)``, ``fraction`` the share of its drawn length from its INP start node to the
+        point's projection (0..1), ``distance`` from the point to it in the drawing's units;
+        ``None`` for a network without pipes. Ties go to the pipe listed first."""
+        best: tuple[str, float, float] | None = None
+        for pipe in self.lengths:
+            line = self.line(pipe)
+            along = drawn_lengths(line)
+            for k, ((x0, y0), (x1, y1)) in enumerate(itertools.pairwise(line)):
+                dx, dy = x1 - x0, y1 - y0
+                span = dx * dx + dy * dy
+                t = 0.0 if span == 0 else min(max(((x - x0) * dx + (y - y0) * dy) / span, 0.0), 1.0)
+                gap = math.hypot(x - (x0 + t * dx), y - (y0 + t * dy))
+                if best is None or gap < best[2]:
+                    share = 0.0 if along[-1] == 0 else (along[k] + t * math.sqrt(span)) / along[-1]
+                    best = (pipe, share, gap)
+        return best
+
+
+def drawn_lengths(line: Sequence[Point]) -> list[float]:
+    """Cumulative drawn length at each point of ``line``."""
+    out = [0.0]
+    for (x0, y0), (x1, y1) in itertools.pairwise(line):
+        out.append(out[-1] + math.hypot(x1 - x0, y1 - y0))
+    return out
 
 
 def read_layout(path: str | os.PathLike[str]) -> Layout:

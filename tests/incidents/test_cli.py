@@ -91,6 +91,12 @@ def test_operators_act_on_the_monitors_incidents_from_the_command_line(
     assert doc["id"] == incident and doc["pipe"] == PIPE and doc["outcome"] == "found"
     assert (doc["acknowledged_by"], doc["closed_by"]) == ("ann", "bob")
     assert float(doc["found_x"]) == 410.5 and float(doc["reading_time"]) == decision["first_alarm"]
+    assert doc["alarmed"].split() == decision["alarmed"]
+    if target.startswith("postgresql"):  # no --state: nowhere on this machine to keep them
+        assert doc["readings"] == ""
+        assert "the readings around each alarm not kept (a PostgreSQL store" in done.stderr
+    else:
+        assert Path(doc["readings"]).parent == Path(target).with_suffix(".readings")
     out = tmp_path / "incidents.json"
     written = _burstloc(
         "incidents", "export", "--db", target, "--format", "json", "--out", str(out)
@@ -98,6 +104,7 @@ def test_operators_act_on_the_monitors_incidents_from_the_command_line(
     assert written.returncode == 0, written.stderr
     (full,) = json.loads(out.read_text())
     assert full["record"]["time"] == decision["time"] and full["state"] == "closed"
+    assert full["alarmed"] == decision["alarmed"]
     assert [h["action"] for h in full["history"]][-1] == "closed"
 
 

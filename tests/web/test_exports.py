@@ -17,6 +17,7 @@ from web_browser import Monitor, wait_for
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from burstloc.gis import record_geojson
+from burstloc.incidents import IncidentStore, Outcome
 from burstloc.layout import read_layout
 from utm_network import CRS, burst, utm_copy
 
@@ -173,6 +174,24 @@ def test_the_open_incidents_are_a_gauge_with_a_store(
     wait_for(lambda: _get(m.url.split("?")[0] + "metrics")[0] == 200, "the metrics served")
     assert _metrics(m)[("burstloc_incidents_open", ())] == 0
     m.feed(lines)
-    m.record("decision")
+    decision = m.record("decision")
     opened = ("burstloc_incidents_open", ())
     wait_for(lambda: _metrics(m)[opened] >= 1, "the located burst an open incident")
+    meters, alarmed = decision["meters"], set(decision["alarmed"])
+
+    def false_alarms(samples: dict[Any, float]) -> dict[str, float]:
+        return {k: samples[("burstloc_meter_false_alarms", (("meter", k),))] for k in meters}
+
+    before = _metrics(m)
+    assert false_alarms(before) == {k: 0 for k in meters}
+    for k in meters:  # every configured meter is there; those that alarmed made one incident
+        assert before[("burstloc_meter_alarmed_incidents", (("meter", k),))] == (k in alarmed)
+    # an operator closes it as a false alarm (another process, as `burstloc incidents` does)
+    store = IncidentStore.open(str(tmp_path / "incidents.sqlite"))
+    try:
+        (row,) = store.incidents()
+        store.acknowledge(row["id"], "ann", "cli")
+        store.close_incident(row["id"], "ann", "cli", Outcome.false_alarm())
+    finally:
+        store.close()
+    assert false_alarms(_metrics(m)) == {k: float(k in alarmed) for k in meters}

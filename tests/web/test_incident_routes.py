@@ -165,6 +165,38 @@ def test_the_life_cycle_through_the_routes_and_its_refusals(store: IncidentStore
         server.stop()
 
 
+def test_the_list_counts_each_meters_false_alarms(tmp_path: Path) -> None:
+    opened = IncidentStore.open(str(tmp_path / "incidents.sqlite"))
+    for first, alarmed in [(62.4, ["N3", "N7"]), (900.0, ["N7", "N9"])]:
+        item = from_record({**RECORD, "first_alarm": first, "alarmed": alarmed}, time.time())
+        assert item is not None
+        opened.take([item])
+    server = _server(opened, TOKEN)
+    try:
+        base = f"http://127.0.0.1:{server.port}"
+        status, doc = _request(f"{base}/incidents.json", headers=_write_headers())
+        assert status == 200
+        assert {m["meter"]: m["false_alarms"] for m in doc["meters"]} == {"N3": 0, "N7": 0, "N9": 0}
+        first = next(r["id"] for r in doc["incidents"] if r["alarmed"] == ["N3", "N7"])
+        for action, body in [
+            ("acknowledge", {"by": "ann"}),
+            ("close", {"by": "ann", "outcome": "false-alarm"}),
+        ]:
+            status, _ = _request(
+                f"{base}/incidents/{first}/{action}", "POST", body, _write_headers()
+            )
+            assert status == 200
+        status, doc = _request(f"{base}/incidents.json", headers=_write_headers())
+        meters = {m["meter"]: m for m in doc["meters"]}
+        assert [m["meter"] for m in doc["meters"]] == ["N3", "N7", "N9"]  # most false alarms first
+        assert (meters["N7"]["false_alarms"], meters["N7"]["alarmed"]) == (1, 2)
+        assert meters["N7"]["false_alarm_incidents"] == [first]
+        assert (meters["N9"]["false_alarms"], meters["N9"]["alarmed"]) == (0, 1)
+    finally:
+        server.stop()
+        opened.close()
+
+
 def test_without_a_store_the_page_says_incidents_are_not_kept() -> None:
     server = _server(None, TOKEN)
     try:

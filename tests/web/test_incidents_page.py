@@ -1,7 +1,7 @@
 """The control-room page's incidents in a real browser (Debian's Chromium) over a real monitor
 process keeping a real burst in a real store: an operator acknowledges, dispatches and closes it
 (found at a point clicked on the map); after the monitor restarts on the same store, the page
-shows the same incident and history."""
+shows the same incident and history, and the Meters table each alarmed meter's false alarms."""
 
 from __future__ import annotations
 
@@ -125,6 +125,22 @@ def test_an_operator_acts_on_an_incident_and_the_page_remembers_it_after_a_resta
             "b-ack": False, "b-dispatch": False, "b-found": False, "b-false": False,
             "b-note": True,
         }  # fmt: skip
+        # the Meters table: each alarmed meter's false alarms of the incidents it alarmed in
+        alarmed = set(record["alarmed"])
+
+        def cells() -> dict[str, tuple[str, str]]:
+            rows = browser.find_elements("css selector", "#health tbody tr")
+            found = {
+                tr.get_attribute("data-m"): tr.find_element("css selector", "td.fa") for tr in rows
+            }
+            return {m: (td.text, td.get_attribute("title") or "") for m, td in found.items()}
+
+        shown = wait_for(
+            lambda: (c := cells()) and all(c.get(m, ("",))[0] == "0/1" for m in alarmed) and c,
+            "the alarmed meters' false alarms in the Meters table",
+        )
+        assert {m for m, (text, _) in shown.items() if text} == alarmed
+        assert all(f"#{closed['id']}" in shown[m][1] for m in alarmed)
     finally:
         second.stop()
 

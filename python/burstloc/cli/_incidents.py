@@ -9,7 +9,7 @@ import os
 import socket
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -92,10 +92,12 @@ def _check_webhooks(args: argparse.Namespace) -> None:
         )
 
 
-def start(args: argparse.Namespace, say: Callable[[str], None]) -> Any:
+def start(args: argparse.Namespace, say: Callable[[str], None], meters: Sequence[str] = ()) -> Any:
     """The started :class:`~burstloc.incidents.recorder.Recorder` (``None`` without ``--db``);
     the store it writes is its ``store``; ``say`` tells the operator (called from the
-    recorder's thread, never before this returns).
+    recorder's thread, never before this returns). The readings around each alarm of
+    ``meters`` (the steps' columns) are kept beside the store
+    (:func:`~burstloc.incidents.kept.readings_dir`), or said not to be.
 
     Raises:
         ConfigError: ``--db`` alone without ``--state``; the incidents extra missing.
@@ -117,11 +119,20 @@ def start(args: argparse.Namespace, say: Callable[[str], None]) -> Any:
             "--db needs the incidents extra: pip install 'burstloc[incidents]' (SQLAlchemy, "
             "Alembic, psycopg)"
         ) from None
+    from burstloc.incidents.kept import readings_dir
     from burstloc.incidents.recorder import Recorder
 
     store = IncidentStore.open(args.db or beside_state(args.state))
     print(f"burstloc monitor: incidents kept in {store.where}", file=sys.stderr, flush=True)
-    return Recorder(store, lambda text: say(f"burstloc monitor: {text}"))
+    readings = readings_dir(store, args.state)
+    if readings is None:
+        kept = "not kept (a PostgreSQL store: give --state to keep them beside its file)"
+    else:
+        kept = f"kept in {readings}"
+    print(f"burstloc monitor: the readings around each alarm {kept}", file=sys.stderr, flush=True)
+    return Recorder(
+        store, lambda text: say(f"burstloc monitor: {text}"), meters=meters, readings=readings
+    )
 
 
 def _dead_letter(args: argparse.Namespace, store: Any) -> str:

@@ -1,5 +1,7 @@
 """``burstloc incidents``: list, show and export the incidents the monitor kept, and act on
-them (acknowledge, dispatch, close with an outcome, add a note) without the page."""
+them (acknowledge, dispatch, close with an outcome, add a note) without the page; what closed
+incidents teach: false alarms per meter (``meters``) and the bursts found as a known-events file
+for calibration (``known-events``)."""
 
 from __future__ import annotations
 
@@ -34,7 +36,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     parser = subparsers.add_parser(
         "incidents",
-        help="the monitor's incidents: list, show, export, picture; acknowledge, dispatch, close",
+        help="the monitor's incidents: list, show, export, picture; acknowledge, dispatch, close; "
+        "false alarms per meter; found bursts as known events",
         description=(
             "The incidents kept by `burstloc monitor --db` (every located burst, early alarm "
             "record, event and meter fault, with its history). An incident is detected, then "
@@ -52,6 +55,37 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     export = actions.add_parser("export", parents=[where], help="every incident, CSV or JSON")
     export.add_argument("--format", choices=("csv", "json"), default="csv")
     export.add_argument("--out", metavar="FILE", help="write here (default: stdout)")
+    meters = actions.add_parser(
+        "meters",
+        parents=[where],
+        help="per meter: the incidents its alarms made and how many were false alarms",
+        description="Each meter whose alarms made an incident: how many incidents, how many "
+        "of them were closed as false alarms and how many as found, and their numbers (most "
+        "false alarms first).",
+    )
+    meters.add_argument("--format", choices=("table", "csv", "json"), default="table")
+    meters.add_argument("--out", metavar="FILE", help="write here (default: stdout)")
+    known = actions.add_parser(
+        "known-events",
+        parents=[where],
+        help="the bursts found, as a known-events file for `burstloc calibrate --known-events`",
+        description="Every incident closed as found, as a known event: the found point snapped "
+        "to the nearest pipe (and its position along it), the time the first alarmed meter's "
+        "change began and the readings the monitor kept around the alarm. Each found incident "
+        "that cannot become an event is named on stderr with the reason.",
+    )
+    known.add_argument(
+        "--network", required=True, metavar="NETWORK.inp", help="the network the monitor watched"
+    )
+    known.add_argument("--out", required=True, metavar="FILE.json", help="write the file here")
+    known.add_argument(
+        "--within",
+        type=float,
+        default=None,
+        metavar="D",
+        help="the farthest a found point may be from the nearest pipe, in the network's "
+        "coordinates (default: 50)",
+    )
     png = actions.add_parser(
         "png",
         parents=[where],
@@ -144,6 +178,10 @@ def run(args: argparse.Namespace) -> int:
             _export(store, args.format, args.out)
         elif args.action == "png":
             _png(store, args)
+        elif args.action == "meters":
+            _meters(store, args.format, args.out)
+        elif args.action == "known-events":
+            return _known_events(store, args)
         else:
             outcome = None
             if args.action == "close":
@@ -192,17 +230,93 @@ def _show(doc: dict[str, Any]) -> None:
 
 
 def _export(store: Any, form: str, out: str | None) -> None:
-    from burstloc._atomic import check_output, write_text
+    from burstloc._atomic import check_output
     from burstloc.incidents.export import export
 
     if out is not None:
         check_output(out)
-    text = export(store, form)
+    _write(export(store, form), out)
+
+
+def _write(text: str, out: str | None) -> None:
+    """``text`` to stdout, or atomically to ``out`` (said on stderr)."""
+    from burstloc._atomic import write_text
+
     if out is None:
         sys.stdout.write(text)
     else:
         write_text(out, text)
         print(f"wrote {out}", file=sys.stderr)
+
+
+def _meters(store: Any, form: str, out: str | None) -> None:
+    import csv
+    import io
+    import json
+
+    from burstloc._atomic import check_output
+    from burstloc.incidents.outcomes import meter_outcomes
+
+    if out is not None:
+        check_output(out)
+    rows = meter_outcomes(store.incidents())
+    if form == "json":
+        _write(json.dumps([m.to_json() for m in rows], indent=1) + "\n", out)
+        return
+    if form == "csv":
+        text = io.StringIO()
+        writer = csv.writer(text, lineterminator="\n")
+        writer.writerow(("meter", "alarmed", "false_alarms", "found", "incidents",
+                         "false_alarm_incidents", "found_incidents"))  # fmt: skip
+        for m in rows:
+            lists = [" ".join(map(str, x)) for x in (m.incidents, m.false_alarms, m.found)]
+            writer.writerow((m.meter, len(m.incidents), len(m.false_alarms), len(m.found), *lists))
+        _write(text.getvalue(), out)
+        return
+    if not rows:
+        print(f"no meter has alarmed in an incident of {store.where}", file=sys.stderr)
+        return
+    lines = [f"{'METER':<16}  {'ALARMED':>7}  {'FALSE ALARMS':>12}  {'FOUND':>5}  INCIDENTS"]
+    for m in rows:
+        ids = ", ".join(f"{i}{'*' if i in m.false_alarms else ''}" for i in m.incidents)
+        lines.append(
+            f"{m.meter:<16}  {len(m.incidents):>7}  {len(m.false_alarms):>12}  "
+            f"{len(m.found):>5}  {ids}"
+        )
+    lines.append("(* closed as a false alarm)")
+    _write("\n".join(lines) + "\n", out)
+
+
+def _known_events(store: Any, args: argparse.Namespace) -> int:
+    """Write the known-events file; 1 when no found incident could become an event."""
+    import math
+
+    from burstloc._atomic import check_output, write_json
+    from burstloc.incidents.outcomes import SNAP_WITHIN, known_events
+    from burstloc.layout import read_layout
+
+    within = SNAP_WITHIN if args.within is None else args.within
+    if not (math.isfinite(within) and within > 0):
+        raise ConfigError(f"--within must be a finite distance > 0, got {args.within}")
+    check_output(args.out)
+    layout = read_layout(args.network)
+    entries, refusals = known_events(store.incidents(), layout, args.out, within=within)
+    for why in refusals:
+        print(f"burstloc incidents: not a known event: {why}", file=sys.stderr)
+    if not entries:
+        print(
+            f"burstloc incidents: no found incident can become a known event "
+            f"({len(refusals)} found in {store.where}); {args.out} not written",
+            file=sys.stderr,
+        )
+        return 1
+    write_json(args.out, {"events": entries})
+    print(
+        f"wrote {args.out}: {len(entries)} known event(s), {len(refusals)} found incident(s) "
+        "left out (said above)",
+        file=sys.stderr,
+    )
+    return 0
 
 
 def _png(store: Any, args: argparse.Namespace) -> None:

@@ -166,7 +166,7 @@ def run(args: argparse.Namespace) -> int:
     )
     flags = {"waiting": False, "stop": False}
     with contextlib.ExitStack() as stack:  # whatever started is stopped, in reverse order
-        recorder = _incidents.start(args, lambda text: write(text))
+        recorder = _incidents.start(args, lambda text: write(text), monitor.meters)
         alerts: dict[str, Any] = {"sender": None}
         stack.callback(lambda: _incidents.stop(recorder, alerts["sender"]))
         web = _web.start(args, monitor, None if recorder is None else recorder.store)
@@ -248,8 +248,11 @@ def _serve(
 
     metrics = _service.attach(args, web, loop, link)
     if metrics is not None and recorder is not None:  # the incident store's open incidents
+        from burstloc.incidents.outcomes import meter_outcomes
+
         store = recorder.store
         metrics.incidents_open = lambda: len(store.incidents(open_only=True))
+        metrics.meter_outcomes = lambda: meter_outcomes(store.incidents())
         metrics.webhooks = sender
     saved = None if state is None else state.load()
     if saved is not None:

@@ -10,6 +10,9 @@ outcome, operators' notes), kept in SQLite (the default) or PostgreSQL.
 * :mod:`~burstloc.incidents.store`: the store (SQLAlchemy Core; durable commits);
 * :mod:`~burstloc.incidents.writing`: the monitor's news as SQL, statements built once;
 * :mod:`~burstloc.incidents.recorder`: the monitor's observer, writing on a thread of its own;
+* :mod:`~burstloc.incidents.kept`: the readings around each alarm, kept beside the store;
+* :mod:`~burstloc.incidents.outcomes`: what closed incidents teach (false alarms per meter,
+  bursts found as known events for calibration);
 * :mod:`~burstloc.incidents.export`: CSV and JSON;
 * :mod:`~burstloc.incidents.errors`: the typed errors;
 * :mod:`burstloc.incidents.alerts`: webhook alerts of new and unacknowledged incidents, from a

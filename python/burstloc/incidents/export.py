@@ -1,5 +1,6 @@
-"""Incidents written out for other tools: CSV (one row per incident) or JSON (every incident
-with its latest record and its history)."""
+"""Incidents written out for other tools: CSV (one row per incident; ``alarmed``: the meters
+whose alarms made it, space-separated; ``readings``: the feed file kept around its alarm) or
+JSON (every incident with its latest record and its history)."""
 
 from __future__ import annotations
 
@@ -19,7 +20,7 @@ FORMATS = ("csv", "json")
 CSV_COLUMNS = (
     "id", "kind", "state", "detected_at", "updated_at", "closed_at", "reading_time", "pipe",
     "meter", "summary", "outcome", "found_x", "found_y", "acknowledged_by", "dispatched_by",
-    "closed_by", "notes",
+    "closed_by", "notes", "alarmed", "readings",
 )  # fmt: skip
 
 
@@ -68,6 +69,7 @@ def export(store: IncidentStore, form: str) -> str:
             "dispatched_by": _by(history, "dispatched"),
             "closed_by": _by(history, "closed"),
             "notes": notes,
+            "alarmed": " ".join(row["alarmed"] or ()),
         }
         writer.writerow(["" if doc[c] is None else doc[c] for c in CSV_COLUMNS])
     return out.getvalue()

@@ -5,7 +5,8 @@ A located burst (``"type": "decision"``), the early record of an alarm still bei
 per alarm, keyed by the first alarm's reading time: the early record opens it and the answer
 updates it. A meter fault (a meter gone silent, implausible readings) is one incident per meter
 and fault while it is open: the fault clearing and coming back are history rows of the same
-incident. Pure functions, no database.
+incident. The readings the recorder keeps around an alarm (:mod:`burstloc.incidents.kept`)
+reach the store as a :class:`Kept`. Pure functions, no database.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ __all__ = [
     "ALARM_RECORDS",
     "FAULTS",
     "MONITOR",
+    "Kept",
     "Observed",
     "clean",
     "from_record",
@@ -41,7 +43,8 @@ class Observed:
     ``key`` names the incident it belongs to; ``kind`` is ``burst``, ``event``, ``alarm`` (an
     early record still being answered) or ``meter``; ``at`` the wall-clock time it was seen (s
     since the epoch); ``reading_time`` the feed's time; ``record`` the monitor's record (alarms);
-    ``active`` whether a meter fault is present (``True``) or has cleared (``False``).
+    ``active`` whether a meter fault is present (``True``) or has cleared (``False``);
+    ``alarmed`` the meters whose alarms made an alarm's record (its ``"alarmed"``).
     """
 
     key: str
@@ -53,11 +56,16 @@ class Observed:
     meter: str | None = None
     record: dict[str, Any] | None = None
     active: bool | None = None
+    alarmed: tuple[str, ...] | None = None
 
     @property
     def is_fault(self) -> bool:
         """Whether this is a meter fault (else an alarm's record)."""
         return self.kind == "meter"
+
+    def alarmed_json(self) -> str | None:
+        """The alarmed meters as a JSON list (``None`` when the record names none)."""
+        return None if self.alarmed is None else json.dumps(list(self.alarmed))
 
     def record_json(self) -> str | None:
         """The record as strict, stable JSON (keys sorted; non-finite numbers as null)."""
@@ -69,6 +77,17 @@ class Observed:
             return json.dumps(
                 clean(self.record), sort_keys=True, separators=(",", ":"), allow_nan=False
             )
+
+
+@dataclass(frozen=True)
+class Kept:
+    """The readings kept around the alarm of incident ``key``: the feed file ``path`` (absolute)
+    and ``onset``, the reading time after which the first alarmed meter's change began (the
+    reading before it), or ``None`` when unknown."""
+
+    key: str
+    path: str
+    onset: float | None
 
 
 def clean(value: Any) -> Any:
@@ -115,6 +134,7 @@ def from_record(record: dict[str, Any], at: float) -> Observed | None:
     if kind not in ALARM_RECORDS or first is None:
         return None
     pipes = record.get("pipes") or []
+    alarmed = record.get("alarmed")
     return Observed(
         key=f"alarm:{first:.6f}",
         kind={"decision": "burst", "transient": "alarm", "event": "event"}[kind],
@@ -123,6 +143,7 @@ def from_record(record: dict[str, Any], at: float) -> Observed | None:
         reading_time=first,
         pipe=str(pipes[0]["pipe"]) if pipes else None,
         record=record,
+        alarmed=tuple(str(m) for m in alarmed) if isinstance(alarmed, list) else None,
     )
 
 

@@ -19,6 +19,10 @@ written (a PostgreSQL server down) is retried with back-off, every failure said;
 dropped while the queue has room. When it has none, the item is dropped, counted in
 :attr:`Recorder.dropped` and said at once (at most one message a second, with the count).
 :meth:`Recorder.close` stores what is queued and says what could not be stored.
+
+Given a readings directory, the recorder also keeps the readings around each alarm
+(:mod:`burstloc.incidents.kept`): the monitor's thread only holds steps and hands a claimed
+capture to the queue; the writer thread writes its feed file and stores it on the incident.
 """
 
 from __future__ import annotations
@@ -27,11 +31,14 @@ import contextlib
 import queue
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
+from pathlib import Path
 from typing import Any
 
+from burstloc.exceptions import OutputError
 from burstloc.incidents.errors import IncidentStoreError
-from burstloc.incidents.intake import Observed, from_record, meter_fault
+from burstloc.incidents.intake import Kept, Observed, from_record, meter_fault
+from burstloc.incidents.kept import Capture, ReadingsKeeper, write_feed
 from burstloc.incidents.store import SYNC_EVERY, IncidentStore
 from burstloc.live.observe import LiveObserver
 
@@ -55,7 +62,9 @@ class Recorder(LiveObserver):
     """Incidents from the monitor's records to ``store`` on a thread (module docstring).
 
     ``say`` gets the messages for the operator (stderr); ``committed`` (tests, benchmarks) is
-    called on the writer thread with each stored batch and the incidents it changed.
+    called on the writer thread with each stored batch and the incidents it changed. With
+    ``readings`` (a directory) and ``meters`` (the steps' columns, the configuration's order),
+    the readings around each alarm are kept there.
     """
 
     def __init__(
@@ -64,11 +73,20 @@ class Recorder(LiveObserver):
         say: Callable[[str], None],
         *,
         size: int = QUEUE,
-        committed: Callable[[list[Observed], list[int]], None] | None = None,
+        committed: Callable[[list[Observed | Kept], list[int]], None] | None = None,
+        meters: Sequence[str] = (),
+        readings: Path | None = None,
     ) -> None:
         self.store = store
         self.say = say
         self.committed = committed
+        self.meters = tuple(meters)
+        #: Where the readings around each alarm are kept (``None``: not kept).
+        self.readings = readings if meters else None
+        #: The readings keeper (``None`` without a readings directory).
+        self.keeper = None if self.readings is None else ReadingsKeeper(self._put)
+        if self.keeper is not None:  # the step of every reading: the cheapest call there is
+            self.step = self.keeper.step  # type: ignore[method-assign]
         self.queue: queue.Queue[Any] = queue.Queue(maxsize=size)
         #: Items dropped because the queue was full; items stored; failed writes (retried).
         self.dropped = self.stored = self.failures = 0
@@ -81,7 +99,7 @@ class Recorder(LiveObserver):
         self._thread.start()
 
     # ------------------------------------------------------------------ the monitor's thread
-    def _put(self, item: Observed) -> None:
+    def _put(self, item: Observed | Capture) -> None:
         try:
             self.queue.put_nowait(item)
         except queue.Full:
@@ -102,9 +120,16 @@ class Recorder(LiveObserver):
         item = from_record(record, time.time())
         if item is not None:
             self._put(item)
+            if self.keeper is not None and item.reading_time is not None:
+                self.keeper.claim(item.key, item.reading_time)
         health = record.get("health")
         if isinstance(health, dict):
             self._look(health)
+
+    def alarm(self, meter: str, time: float, onset: float, amplitude: float) -> None:
+        """A meter's first alarm toward a decision: the readings around it are kept."""
+        if self.keeper is not None:
+            self.keeper.alarm(time, onset)
 
     def tick(self, health: Callable[[], dict[str, Any]]) -> None:
         """Look at the health for meter faults every :data:`FAULT_EVERY` s (wall clock)."""
@@ -140,7 +165,7 @@ class Recorder(LiveObserver):
     # ------------------------------------------------------------------ the writer thread
     def _run(self) -> None:
         delay = RETRY[0]
-        batch: list[Observed] = []
+        batch: list[Any] = []
         while True:
             if not batch:
                 try:  # records not on disk yet (SQLite): synced after a quiet second
@@ -164,6 +189,7 @@ class Recorder(LiveObserver):
                     batch.append(more)
             else:
                 stop = False
+            batch = self._written(batch)
             try:
                 changed = self.store.take(batch)
             except IncidentStoreError as exc:
@@ -190,6 +216,22 @@ class Recorder(LiveObserver):
                 self._sync_last()
                 return
 
+    def _written(self, batch: list[Any]) -> list[Observed | Kept]:
+        """``batch`` with each capture written to its feed file (a file that cannot be written
+        is said, and its incident keeps no readings)."""
+        out: list[Observed | Kept] = []
+        for item in batch:
+            if isinstance(item, Capture):
+                assert self.readings is not None  # captures come only from the keeper
+                try:
+                    out.append(write_feed(item, self.meters, self.readings))
+                except OutputError as exc:
+                    what = f"the readings around the alarm at t = {item.first:g} s"
+                    self.say(f"{what} not kept: {exc}")
+            else:
+                out.append(item)
+        return out
+
     def _sync(self, failed: str) -> None:
         """What was committed, on disk; a failure said (``failed``: what it means)."""
         try:
@@ -205,6 +247,8 @@ class Recorder(LiveObserver):
     def close(self, timeout: float = 60.0) -> None:
         """Store what is queued, stop the thread (waiting up to ``timeout`` s) and say what was
         not stored."""
+        if self.keeper is not None:
+            self.keeper.flush()  # the readings of an alarm whose span the feed did not reach
         with contextlib.suppress(queue.Full):  # the writer is stuck: said below
             self.queue.put(_STOP, timeout=timeout)
         self._closing.set()

@@ -4,7 +4,8 @@ one per webhook alert and URL.
 The schema is created and changed only by the migrations in ``migrations/versions/``
 (:mod:`burstloc.incidents.migrate`); these tables describe the newest revision, for the
 queries. Times are seconds since the epoch (UTC, wall clock) as floats; ``reading_time`` is the
-feed's own time (the first alarm's reading time, or the meter's newest reading).
+feed's own time (the first alarm's reading time, or the meter's newest reading), as is
+``onset``.
 """
 
 from __future__ import annotations
@@ -48,6 +49,11 @@ incidents = Table(
     Column("found_x", Float),
     Column("found_y", Float),
     Column("closed_at", Float),
+    # the meters whose alarms made it (JSON list; alarms only), from its latest record
+    Column("alarmed", Text),
+    # the feed file of the readings kept around the alarm (an absolute path; alarms only)
+    Column("readings", String(1000)),
+    Column("onset", Float),  # reading time: the first alarmed meter's change began after it
     Index("ix_incidents_key", "key"),
     Index("ix_incidents_state_detected", "state", "detected_at"),
 )

@@ -38,7 +38,7 @@ from typing import TYPE_CHECKING, Any
 from burstloc.exceptions import InputError
 from burstloc.incidents.engine import make_engine, store_url
 from burstloc.incidents.errors import IncidentStoreError, UnknownIncidentError
-from burstloc.incidents.intake import MONITOR, Observed
+from burstloc.incidents.intake import MONITOR, Kept, Observed
 from burstloc.incidents.lifecycle import CLOSED, DONE, Outcome, next_state
 
 if TYPE_CHECKING:
@@ -59,21 +59,10 @@ NAME_CHARS, NOTE_CHARS = 200, 10_000
 
 #: The columns a listing shows (the record itself only with one incident).
 _LISTED = (
-    "id",
-    "kind",
-    "state",
-    "detected_at",
-    "updated_at",
-    "reading_time",
-    "pipe",
-    "meter",
-    "summary",
-    "active",
-    "outcome",
-    "found_x",
-    "found_y",
-    "closed_at",
-)
+    "id", "kind", "state", "detected_at", "updated_at", "reading_time", "pipe", "meter",
+    "summary", "active", "outcome", "found_x", "found_y", "closed_at", "alarmed", "readings",
+    "onset",
+)  # fmt: skip
 
 
 def _text(value: str | None, what: str, most: int, required: bool) -> str | None:
@@ -97,6 +86,14 @@ def _fsync(path: str) -> int:
         return os.fstat(fd).st_size
     finally:
         os.close(fd)
+
+
+def _listed(mapping: Any) -> dict[str, Any]:
+    """A row's listed columns, ``alarmed`` as a list of meters (``None``: not an alarm's)."""
+    doc = {c: mapping[c] for c in _LISTED}
+    if doc["alarmed"] is not None:
+        doc["alarmed"] = json.loads(doc["alarmed"])
+    return doc
 
 
 def _history_row(r: Any) -> dict[str, Any]:
@@ -206,7 +203,7 @@ class IncidentStore:
         return self._read()
 
     # ------------------------------------------------------------------ the monitor's news
-    def take(self, news: Sequence[Observed]) -> list[int]:
+    def take(self, news: Sequence[Observed | Kept]) -> list[int]:
         """Record the monitor's ``news`` in one transaction; return the incidents each item
         changed (``0`` where it changed nothing: a record already stored, a fault already
         open). Idempotent: taking the same news again adds nothing. An incident it opens is
@@ -339,7 +336,7 @@ class IncidentStore:
         if limit is not None:
             query = query.limit(limit)
         with self._read() as connection:
-            return [dict(row._mapping) for row in connection.execute(query)]
+            return [_listed(row._mapping) for row in connection.execute(query)]
 
     def get(self, incident: int) -> dict[str, Any]:
         """One incident with its latest record (parsed) and its history, oldest first.
@@ -359,7 +356,7 @@ class IncidentStore:
             rows = connection.execute(
                 select(h).where(h.c.incident_id == incident).order_by(h.c.id)
             ).all()
-        doc = {c: row._mapping[c] for c in _LISTED}
+        doc = _listed(row._mapping)
         doc["record"] = None if row.record is None else json.loads(row.record)
         doc["history"] = [_history_row(r) for r in rows]
         return doc

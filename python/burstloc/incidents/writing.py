@@ -15,7 +15,7 @@ from typing import Any
 
 from sqlalchemy import bindparam, select
 
-from burstloc.incidents.intake import MONITOR, Observed
+from burstloc.incidents.intake import MONITOR, Kept, Observed
 from burstloc.incidents.lifecycle import CLOSED, DETECTED
 from burstloc.incidents.schema import history as h
 from burstloc.incidents.schema import incidents as t
@@ -62,10 +62,19 @@ def add_history(
     )  # fmt: skip
 
 
-def take_one(connection: Any, item: Observed, on_new: OnNew | None = None) -> int:
+def take_one(connection: Any, item: Observed | Kept, on_new: OnNew | None = None) -> int:
     """Record ``item`` (:meth:`IncidentStore.take <burstloc.incidents.store.IncidentStore.take>`);
     the incident it changed, ``0`` when it changed nothing. ``on_new`` is told of an incident
-    this opened, in the same transaction."""
+    this opened, in the same transaction. Kept readings go to the newest incident of their key
+    (no history row: they change nothing an operator acts on)."""
+    if isinstance(item, Kept):
+        kept = connection.execute(_LATEST, {"k": item.key}).first()
+        if kept is None:
+            return 0
+        connection.execute(
+            _UPDATE, {"incident": kept.id, "readings": item.path, "onset": item.onset}
+        )
+        return int(kept.id)
     query = _OPEN if item.is_fault else _LATEST
     row = connection.execute(query, {"k": item.key}).first()
     record = item.record_json()
@@ -81,7 +90,10 @@ def take_one(connection: Any, item: Observed, on_new: OnNew | None = None) -> in
         return 0  # already stored (a replay after a restart)
     if row is None or row.state == CLOSED:
         return _insert(connection, item, record, on_new)
-    columns = {"kind": item.kind, "pipe": item.pipe, "summary": item.summary, "record": record}
+    columns = {
+        "kind": item.kind, "pipe": item.pipe, "summary": item.summary, "record": record,
+        "alarmed": item.alarmed_json(),
+    }  # fmt: skip
     _update(connection, row.id, row.state, "answered", item, record, columns)
     return int(row.id)
 
@@ -93,7 +105,7 @@ def _insert(connection: Any, item: Observed, record: str | None, on_new: OnNew |
             "key": item.key, "kind": item.kind, "state": DETECTED, "detected_at": item.at,
             "updated_at": item.at, "reading_time": item.reading_time, "pipe": item.pipe,
             "meter": item.meter, "summary": item.summary, "record": record,
-            "active": item.active,
+            "active": item.active, "alarmed": item.alarmed_json(),
         },
     )  # fmt: skip
     incident = int(result.inserted_primary_key[0])

@@ -1,7 +1,9 @@
 """The page's incident routes: the list and one incident from the store, and the operators'
 actions on them.
 
-Reads (GET): ``/incidents.json`` (every incident, open first; ``?after=VERSION`` answers
+Reads (GET): ``/incidents.json`` (every incident, open first, and per meter the incidents its
+alarms made and how many were closed as false alarms:
+:func:`~burstloc.incidents.outcomes.meter_outcomes`; ``?after=VERSION`` answers
 ``{"unchanged": true}`` when nothing changed since the version the page has, so that polling
 costs one indexed query) and ``/incidents/{id}.json`` (one incident with its record and
 history). They are read from the store, not the monitor's memory: after a restart the page
@@ -40,6 +42,7 @@ from burstloc.incidents.errors import (
     UnknownIncidentError,
 )
 from burstloc.incidents.lifecycle import ACTIONS, FALSE_ALARM, FOUND, Outcome
+from burstloc.incidents.outcomes import meter_outcomes
 
 __all__ = ["CSRF_HEADER", "NOT_KEPT", "NO_TOKEN", "routes", "write_refusal"]
 
@@ -122,6 +125,7 @@ def routes(server: Any) -> list[Any]:
             "version": version,
             "now": time.time(),
             "incidents": rows,
+            "meters": [m.to_json() for m in meter_outcomes(rows)],
         }
         return JSONResponse(doc)
 

@@ -50,6 +50,11 @@ name                                         type      what
                                                        ``outcome`` (``applied``, ``refused``)
 ``burstloc_incidents_open``                  gauge     open incidents (only with an incident
                                                        store: :attr:`MonitorMetrics.incidents_open`)
+``burstloc_meter_false_alarms``              gauge     per ``meter``: incidents its alarms made
+                                                       that were closed as false alarms (only
+                                                       with an incident store:
+                                                       :attr:`MonitorMetrics.meter_outcomes`)
+``burstloc_meter_alarmed_incidents``         gauge     per ``meter``: incidents its alarms made
 ``burstloc_webhook_pending``                 gauge     webhook alerts due and not yet delivered
                                                        (only with ``--webhook``:
                                                        :attr:`MonitorMetrics.webhooks`)
@@ -66,9 +71,12 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from burstloc.live.timing import HistogramSnapshot, RecordTimer
+
+if TYPE_CHECKING:
+    from burstloc.incidents.outcomes import MeterOutcomes
 
 __all__ = ["CONTENT_TYPE", "MonitorMetrics"]
 
@@ -93,6 +101,9 @@ class MonitorMetrics:
     info: dict[str, str] = field(default_factory=dict)
     #: How many incidents are open (set by an incident store; ``None``: the gauge is absent).
     incidents_open: Callable[[], int] | None = None
+    #: Per meter, its alarms' incidents and their outcomes (set with an incident store:
+    #: :func:`burstloc.incidents.outcomes.meter_outcomes`; ``None``: the gauges are absent).
+    meter_outcomes: Callable[[], list[MeterOutcomes]] | None = None
     #: The webhook alerts' sender (:class:`~burstloc.incidents.alerts.sender.WebhookSender`;
     #: ``None``: the ``burstloc_webhook_*`` metrics are absent).
     webhooks: Any = None
@@ -205,6 +216,8 @@ class MonitorMetrics:
         yield reloads
         if self.incidents_open is not None:
             yield gauge("burstloc_incidents_open", "open incidents", self.incidents_open())
+        if self.meter_outcomes is not None:
+            yield from _outcomes(meters, self.meter_outcomes())
         if self.webhooks is not None:
             yield from _webhooks(self.webhooks)
 
@@ -228,6 +241,29 @@ class MonitorMetrics:
             yield CounterMetricFamily(
                 "burstloc_unsent_records", "records MQTT could not queue", value=self.link.unsent
             )
+
+
+def _outcomes(meters: list[str], outcomes: list[MeterOutcomes]) -> Iterator[Any]:
+    """The per-meter outcome gauges: every configured meter (0 when it never alarmed), and any
+    other meter the store names."""
+    from prometheus_client.core import GaugeMetricFamily
+
+    known = {m.meter: m for m in outcomes}
+    names = meters + sorted(set(known) - set(meters))
+    false = GaugeMetricFamily(
+        "burstloc_meter_false_alarms",
+        "incidents the meter's alarms made, closed as false alarms",
+        labels=["meter"],
+    )
+    alarmed = GaugeMetricFamily(
+        "burstloc_meter_alarmed_incidents", "incidents the meter's alarms made", labels=["meter"]
+    )
+    for name in names:
+        doc = known.get(name)
+        false.add_metric([name], 0 if doc is None else len(doc.false_alarms))
+        alarmed.add_metric([name], 0 if doc is None else len(doc.incidents))
+    yield false
+    yield alarmed
 
 
 def _webhooks(sender: Any) -> Iterator[Any]:

@@ -172,6 +172,15 @@ function waitRows(rec) {
   return html + "</div>";
 }
 
+// a meter's false alarms of the incidents its alarms made (incidents.js: S.meterOutcomes)
+function falseAlarmsCell(m) {
+  const o = S.meterOutcomes ? S.meterOutcomes[m] : null;
+  if (!o) return `<td class="fa"></td>`;
+  const title = `alarmed in incident${o.alarmed === 1 ? "" : "s"} ${o.incidents.map((i) => "#" + i).join(", ")}` +
+    (o.false_alarms ? `; false alarms: ${o.false_alarm_incidents.map((i) => "#" + i).join(", ")}` : "");
+  return `<td class="fa" title="${esc(title)}">${o.false_alarms}/${o.alarmed}</td>`;
+}
+
 function renderHealth() {
   const tb = $("health").tBodies[0];
   tb.innerHTML = meta.meters
@@ -183,7 +192,7 @@ function renderHealth() {
         `<td data-status="${st}"><span class="dot" style="background:${COLORS[st]}"></span>${STATE_NAMES[st]}</td>` +
         `<td>${last ? fmt(last[1]) : "–"}</td><td>${last ? fmt(last[0], 1) : "–"}</td>` +
         `<td>${h.clock_offset ? (h.clock_offset > 0 ? "+" : "") + fmt(h.clock_offset, 1) + " s" : ""}</td><td>${h.implausible || ""}</td>` +
-        `<td>${h.late || ""}</td><td>${h.filled || ""}</td></tr>`;
+        `<td>${h.late || ""}</td><td>${h.filled || ""}</td>${falseAlarmsCell(m)}</tr>`;
     })
     .join("");
 }

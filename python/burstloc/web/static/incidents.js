@@ -59,6 +59,9 @@ async function refresh() {
   I.writable = doc.writable;
   I.why = doc.why;
   I.list = doc.incidents;
+  // per meter: false alarms of the incidents its alarms made (app.js's Meters table shows them)
+  S.meterOutcomes = Object.fromEntries((doc.meters || []).map((m) => [m.meter, m]));
+  if (S.ready) schedulePanels();
   serverNow = doc.now;
   fetchedAt = Date.now();
   if (I.selected === null) {

@@ -1,0 +1,154 @@
+"""burstloc.incidents.kept: the readings around each alarm, held on the monitor's thread,
+handed on once claimed and complete, written as a feed the monitor (and calibration) reads; and
+through the recorder, the readings of a real burst kept on its incident, on SQLite and
+PostgreSQL."""
+
+from __future__ import annotations
+
+import io
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from burstloc.incidents import IncidentStore
+from burstloc.incidents.kept import AFTER, BEFORE, CAPTURES, Capture, ReadingsKeeper, write_feed
+from burstloc.incidents.recorder import Recorder
+from burstloc.live.monitor import BurstMonitor
+from burstloc.live.parse import parse_lines
+from burstloc.localize.config import Calibration
+from burstloc.readings import Reading, Step
+
+sys.path.insert(0, str(Path(__file__).parents[1] / "live"))  # live_feed: a real burst
+
+METERS = ("M1", "M2")
+
+
+def _steps(start: float, stop: float, dt: float = 0.5) -> list[Step]:
+    return [Step(t, np.array([t, -t])) for t in np.round(np.arange(start, stop, dt), 6).tolist()]
+
+
+def _keeper() -> tuple[ReadingsKeeper, list[Capture]]:
+    handed: list[Capture] = []
+    return ReadingsKeeper(handed.append), handed
+
+
+def test_a_claimed_capture_holds_before_the_onset_to_after_the_newest_alarm() -> None:
+    keeper, handed = _keeper()
+    for step in _steps(0.0, 200.0):
+        keeper.step(step)
+        if step.timestamp == 100.0:
+            keeper.alarm(100.0, 98.5)  # the first meter, its change after 98.5 s
+        if step.timestamp == 103.0:
+            keeper.alarm(103.0, 101.0)  # the second, later: the capture runs on
+            keeper.claim("alarm:100.000000", 100.0)  # its record
+            assert not handed  # not complete yet
+    (capture,) = handed
+    times = [s.timestamp for s in capture.steps]
+    assert times[0] == 98.5 - BEFORE and times[-1] == 103.0 + AFTER
+    assert np.allclose(np.diff(times), 0.5)  # none missing, none twice
+    assert capture.onset == 98.5 and capture.key == "alarm:100.000000"
+    keeper.flush()
+    assert len(handed) == 1  # handed on once
+
+
+def test_a_record_after_the_capture_is_complete_claims_it_then() -> None:
+    keeper, handed = _keeper()
+    for step in _steps(0.0, 60.0):
+        keeper.step(step)
+        if step.timestamp == 10.0:
+            keeper.alarm(10.0, 9.0)
+    assert not handed
+    keeper.claim("alarm:10.000000", 10.0)
+    (capture,) = handed
+    assert capture.steps[0].timestamp == 0.0  # the feed began 9 s before the onset
+    assert capture.steps[-1].timestamp == 10.0 + AFTER
+
+
+def test_unclaimed_captures_are_let_go_and_a_record_of_none_changes_nothing() -> None:
+    keeper, handed = _keeper()
+    stamps = [10.0 + 100.0 * k for k in range(CAPTURES + 3)]
+    for step in _steps(0.0, stamps[-1] + 50.0):
+        keeper.step(step)
+        if step.timestamp in stamps:
+            keeper.alarm(step.timestamp, step.timestamp - 1.0)  # a lone meter, dismissed
+    keeper.claim("alarm:10.000000", 10.0)  # the first capture was let go
+    keeper.claim("alarm:55.000000", 55.0)  # no alarm at 55 s
+    keeper.flush()
+    assert not handed
+    keeper.claim(f"alarm:{stamps[-1]:.6f}", stamps[-1])
+    assert [c.first for c in handed] == [stamps[-1]]
+
+
+def test_at_the_stop_a_claimed_capture_is_handed_with_what_it_holds() -> None:
+    keeper, handed = _keeper()
+    for step in _steps(0.0, 20.0):
+        keeper.step(step)
+        if step.timestamp == 15.0:
+            keeper.alarm(15.0, 14.0)
+            keeper.claim("alarm:15.000000", 15.0)
+    assert not handed
+    keeper.flush()
+    (capture,) = handed
+    assert capture.steps[-1].timestamp == 19.5
+
+
+def test_the_feed_file_is_what_the_monitor_reads_without_the_filled_values(
+    tmp_path: Path,
+) -> None:
+    steps = [
+        Step(1.0, np.array([50.0, 40.0])),
+        Step(1.2, np.array([49.123456789, 40.5]), filled=("M2",)),
+        Step(1.4, np.array([float("nan"), 39.0])),
+    ]
+    capture = Capture(1.2, 1.4, steps, [(1.2, 1.0)], complete=True, key="alarm:1.200000")
+    capture.first_alarm = 1.2
+    kept = write_feed(capture, METERS, tmp_path / "readings")
+    assert kept.key == "alarm:1.200000" and kept.onset == 1.0
+    path = Path(kept.path)
+    assert path.is_absolute() and path.parent == (tmp_path / "readings").resolve()
+    text = path.read_text(encoding="utf-8")
+    assert text.splitlines()[0] == "timestamp,meter,value"
+    read = [r for r in parse_lines(io.StringIO(text)) if isinstance(r, Reading)]
+    assert [(r.timestamp, r.meter, r.value) for r in read] == [
+        (1.0, "M1", 50.0), (1.0, "M2", 40.0), (1.2, "M1", 49.123456789), (1.4, "M2", 39.0),
+    ]  # fmt: skip
+
+
+def test_a_real_bursts_readings_are_kept_on_its_incident(
+    tiny: Path,
+    tiny_config: Calibration,
+    tiny_feed: list[Reading],
+    target: str,
+    tmp_path: Path,
+) -> None:
+    from live_feed import Collected
+
+    store = IncidentStore.open(target)
+    said: list[str] = []
+    monitor = BurstMonitor(tiny, tiny_config, capture_interval=0.2)
+    recorder = Recorder(store, said.append, meters=monitor.meters, readings=tmp_path / "readings")
+    done = Collected(monitor, observer=recorder, health_every=0).run(tiny_feed)
+    recorder.close()
+    try:
+        (decision,) = done.decisions
+        (row,) = [r for r in store.incidents() if r["kind"] == "burst"]
+        assert row["alarmed"] == decision["alarmed"] and len(row["alarmed"]) >= 2
+        first = decision["first_alarm"]
+        assert first - 5.0 < row["onset"] < first  # the change began before the first alarm
+        path = Path(row["readings"])
+        assert path.parent == (tmp_path / "readings").resolve()
+        with path.open(encoding="utf-8") as lines:
+            kept = [r for r in parse_lines(lines) if isinstance(r, Reading)]
+        stamps = [round(r.timestamp, 6) for r in kept]
+        # from BEFORE s before the onset to at least AFTER s after the first alarm
+        assert stamps[0] == pytest.approx(row["onset"] - BEFORE, abs=0.2 + 1e-6)
+        assert stamps[-1] >= first + AFTER - 1e-6
+        wanted = [r for r in tiny_feed if stamps[0] - 1e-6 <= r.timestamp <= stamps[-1] + 1e-6]
+        assert [(t, r.meter, r.value) for t, r in zip(stamps, kept, strict=True)] == [
+            (round(r.timestamp, 6), r.meter, r.value) for r in wanted
+        ]  # every reading of the span, exactly
+        assert not said
+    finally:
+        store.close()
