@@ -77,6 +77,10 @@ def test_a_wave_speed_15_percent_off_is_learnt_back(
         ({"readings": "P7.csv", "time": True, "pipe": "P7"}, "'time' must be seconds"),
         ({"readings": "P7.csv", "time": 10.0, "pipe": "P7", "position": 2}, "within 0..1"),
         ({"readings": "P7.csv", "time": 10.0, "pipe": "P7", "when": 1}, "unknown key(s) ['when']"),
+        (
+            {"readings": "P7.csv", "time": 10.0, "pipe": "P7", "time_known": "no"},
+            "'time_known' must be true or false, got 'no'",
+        ),
     ],
 )
 def test_a_bad_event_is_named(

@@ -101,9 +101,11 @@ def test_a_burst_found_becomes_a_known_event_and_a_false_alarm_counts_per_meter(
     (event,) = read_known_events(out, network)
     assert event.pipe == PIPE and event.position == pytest.approx(0.5, abs=1e-6)
     assert 9.0 <= event.time < decision["first_alarm"]  # the burst began at 10 s
+    assert not event.time_known  # the first change, not the burst's time: fitted
     # calibration hears the event in the kept readings, as the monitor heard it
     (arrivals,) = event_arrivals([event], network, Calibration.load(burst[0]))
     assert set(arrivals.onsets) >= set(decision["alarmed"])
+    assert not arrivals.time_known
     assert all(event.time <= t < event.time + 3.0 for t in arrivals.onsets.values())
 
     # the same burst an hour later: a new incident, closed as a false alarm

@@ -139,6 +139,7 @@ def test_a_found_point_becomes_an_event_on_the_nearest_pipe(tiny: Path, tmp_path
     assert [(e["pipe"], e["position"], e["time"]) for e in entries] == [
         ("C", 0.5, 61.8), (("C", pytest.approx(0.8, abs=1e-6), 61.8)),
     ]  # fmt: skip
+    assert all(e["time_known"] is False for e in entries)
     assert entries[0]["readings"] == "../kept/alarm-62.400000.csv"
     assert entries[0]["name"] == "incident 1: burst found at 400,-50"
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -52,6 +53,22 @@ def test_a_wrong_wave_speed_is_corrected_from_three_events() -> None:
     # arrivals known to a reading: what is left is rounding, stated at the floor
     assert fit.wave_speed_tolerance == pytest.approx(0.02)
     assert fit.rms < 0.01
+
+
+def test_bursts_found_later_teach_the_speed_from_their_arrivals_differences() -> None:
+    # the time recorded is the first meter's change, not the burst's: up to seconds off
+    exact = _events(1000.0, {}, 0.01, seed=5)
+    first = [min(e.onsets.values()) for e in exact]
+    found = [replace(e, time=t, time_known=False) for e, t in zip(exact, first, strict=True)]
+    options = {"wave_speed": 1150.0, "wave_speed_tolerance": 0.05, "clock_tolerance": 0.0}
+    fit = fit_travel_times(found, METERS, **options)
+    assert fit.wave_speed == pytest.approx(1000.0, rel=0.02)
+    # taken as the burst's time, the first change makes every wave look far too fast
+    taken = [replace(e, time_known=True) for e in found]
+    assert fit_travel_times(taken, METERS, **options).wave_speed > 1300.0
+    # an event of unknown time heard at one distance says nothing; the others still speak
+    lone = replace(found[0], name="lone", onsets={"m0": found[0].onsets["m0"]})
+    assert fit_travel_times([*found, lone], METERS, **options).arrivals == fit.arrivals
 
 
 def test_clock_offsets_are_fitted_within_their_tolerance() -> None:

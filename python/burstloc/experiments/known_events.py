@@ -9,7 +9,10 @@ readings the meters sent around it (a feed in the form ``burstloc monitor --read
          "pipe": "p233", "position": 0.5}
     ]}
 
-``time`` is in the readings' own clock (seconds, or ISO 8601 like the readings); the place is a
+``time`` is in the readings' own clock (seconds, or ISO 8601 like the readings);
+``"time_known": false`` says it is not when the event happened but about when the first meter
+heard it (a burst found later, ``burstloc incidents known-events``): the fit then takes the
+event's time from its arrivals (:mod:`burstloc.localize.travel_fit`). The place is a
 ``junction`` or a ``pipe`` with the ``position`` along it (a fraction from its INP start node,
 default 0.5); a relative ``readings`` path is read from the file's directory.
 :func:`event_arrivals` runs the calibrated detector bank of the readings' capture interval over
@@ -45,7 +48,8 @@ __all__ = ["KnownEvent", "event_arrivals", "read_known_events"]
 @dataclass(frozen=True)
 class KnownEvent:
     """One entry of a known-events file: its ``name``, ``readings`` feed, ``time`` (s) and
-    place: a ``junction``, or a ``pipe`` with ``position`` (fraction from its INP start)."""
+    place: a ``junction``, or a ``pipe`` with ``position`` (fraction from its INP start);
+    ``time_known=False``: ``time`` is about when the first meter heard it (module docstring)."""
 
     name: str
     readings: Path
@@ -53,6 +57,7 @@ class KnownEvent:
     junction: str | None = None
     pipe: str | None = None
     position: float = 0.5
+    time_known: bool = True
 
 
 def _event(entry: Any, index: int, base: Path, network: Network) -> KnownEvent:
@@ -60,7 +65,8 @@ def _event(entry: Any, index: int, base: Path, network: Network) -> KnownEvent:
     where = f"events[{index}]"
     if not isinstance(entry, dict):
         raise ConfigError(f"{where} must be an object, got {type(entry).__name__}")
-    unknown = sorted(set(entry) - {"name", "readings", "time", "junction", "pipe", "position"})
+    keys = {"name", "readings", "time", "time_known", "junction", "pipe", "position"}
+    unknown = sorted(set(entry) - keys)
     if unknown:
         raise ConfigError(f"{where}: unknown key(s) {unknown}")
     name = str(entry.get("name", where))
@@ -92,7 +98,12 @@ def _event(entry: Any, index: int, base: Path, network: Network) -> KnownEvent:
         raise ConfigError(f"{where} ({name}): 'position' must be a number, got {position!r}")
     if not 0.0 <= position <= 1.0:
         raise ConfigError(f"{where} ({name}): 'position' must be within 0..1, got {position}")
-    return KnownEvent(name, readings, t, junction, pipe, float(position))
+    time_known = entry.get("time_known", True)
+    if not isinstance(time_known, bool):
+        raise ConfigError(
+            f"{where} ({name}): 'time_known' must be true or false, got {time_known!r}"
+        )
+    return KnownEvent(name, readings, t, junction, pipe, float(position), time_known)
 
 
 def read_known_events(path: str | Path, network: Network) -> list[KnownEvent]:
@@ -242,6 +253,7 @@ def event_arrivals(
                 distances=_distances(e, network, distance, config.meters),
                 onsets=onsets,
                 capture_interval=interval,
+                time_known=e.time_known,
             )
         )
     return found

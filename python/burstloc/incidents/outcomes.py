@@ -7,7 +7,8 @@
   reads): the found point snapped to the nearest pipe of the network's drawing
   (:meth:`burstloc.layout.Layout.nearest_pipe`) and its position along it (a fraction from the
   pipe's INP start node), the time the first alarmed meter's change began (the incident's
-  ``onset``, the readings' clock) and the readings kept around it
+  ``onset``, the readings' clock; marked ``time_known: false``: calibration fits the burst's
+  own time from the arrivals) and the readings kept around it
   (:mod:`burstloc.incidents.kept`), as a path relative to the file written. A found incident
   that cannot become an event is named with the reason, never left out silently.
 
@@ -116,7 +117,8 @@ def _entry(row: dict[str, Any], layout: Layout, base: Path, within: float) -> di
     return {
         "name": f"incident {row['id']}: burst found at {x:g},{y:g}",
         "readings": os.path.relpath(row["readings"], base),
-        "time": row["onset"],
+        "time": row["onset"],  # the first meter's change, not the burst's own time:
+        "time_known": False,  # calibration fits that from the arrivals
         "pipe": pipe,
         "position": round(fraction, 6),
     }

@@ -6,7 +6,9 @@ the shortest path (m) from its place to meter ``k``, ``a`` the wave speed and ``
 meter's clock offset (s, its clock and its sensor's response together). A meter's detector
 places the change between two readings: its onset (the last reading before it) plus half a
 capture interval is the observed arrival. :func:`fit_travel_times` fits ``1 / a`` and the
-``c_k`` to every observed arrival of every event by weighted least squares, each arrival
+``c_k`` to every observed arrival of every event by weighted least squares (an event whose time
+is not known, a burst found later, gets its own time fitted: only the differences between its
+arrivals count), each arrival
 weighted by its timing error (a capture interval's rounding, ``dt^2 / 12``, and the stated
 relative error of its travel time), the offsets held near zero by the stated clock tolerance
 (with a tolerance of 0 they are not fitted). One pass more drops the arrivals more than
@@ -59,7 +61,9 @@ class EventArrivals:
     ``name`` names it in messages; ``time`` (s, the readings' clock) is when it happened;
     ``distances[meter]`` the shortest path (m) from its place to each meter (``inf``: no path);
     ``onsets[meter]`` the reading time (s) before each alarmed meter's change;
-    ``capture_interval`` (s) the readings' period.
+    ``capture_interval`` (s) the readings' period. ``time_known=False``: when it happened is
+    not known (a burst found later): the fit takes its time from the arrivals, and only the
+    differences between its meters' arrivals count.
     """
 
     name: str
@@ -67,6 +71,7 @@ class EventArrivals:
     distances: Mapping[str, float]
     onsets: Mapping[str, float]
     capture_interval: float
+    time_known: bool = True
 
 
 @dataclass(frozen=True)
@@ -96,43 +101,66 @@ class TravelFit:
 
 def _rows(
     events: Sequence[EventArrivals], meters: Sequence[str]
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Per arrival: the observed travel time (s), the distance (m), the meter's column and the
-    capture interval."""
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Per arrival: the observed travel time (s; from its event's ``time``), the distance (m),
+    the meter's column, the capture interval and its event's column among the events whose time
+    is fitted (-1: a known time). An event of unknown time heard at fewer than two distances
+    says nothing and is left out."""
     column = {m: k for k, m in enumerate(meters)}
-    y, x, k, dt = [], [], [], []
+    y, x, k, dt, e = [], [], [], [], []
+    unknown = 0
     for event in events:
         if not (math.isfinite(event.time) and event.capture_interval > 0):
             raise ConfigError(f"known event {event.name!r}: a time and a capture interval > 0")
+        rows = []
         for meter, onset in event.onsets.items():
             if meter not in column:
                 raise ConfigError(f"known event {event.name!r}: {meter!r} is not a meter")
             distance = float(event.distances.get(meter, math.inf))
             if not (math.isfinite(distance) and math.isfinite(onset)):
                 continue  # no path: the meter heard something else
-            y.append(onset + event.capture_interval / 2 - event.time)
+            rows.append((onset + event.capture_interval / 2 - event.time, distance, column[meter]))
+        if not event.time_known:
+            if len({r[1] for r in rows}) < 2:
+                continue
+            unknown += 1
+        for travel, distance, meter_column in rows:
+            y.append(travel)
             x.append(distance)
-            k.append(column[meter])
+            k.append(meter_column)
             dt.append(event.capture_interval)
-    return np.array(y), np.array(x), np.array(k, dtype=np.intp), np.array(dt)
+            e.append(-1 if event.time_known else unknown - 1)
+    return (
+        np.array(y),
+        np.array(x),
+        np.array(k, dtype=np.intp),
+        np.array(dt),
+        np.array(e, dtype=np.intp),
+    )
 
 
 def _solve(
     y: np.ndarray,
     x: np.ndarray,
     k: np.ndarray,
+    e: np.ndarray,
     weight: np.ndarray,
     meters: int,
     clock_tolerance: float,
-) -> tuple[float, np.ndarray]:
-    """Weighted least squares for ``(slowness, offsets)``; offsets held near 0 by
-    ``clock_tolerance`` (none fitted when it is 0)."""
+) -> tuple[float, np.ndarray, np.ndarray]:
+    """Weighted least squares for ``(slowness, offsets, times)``: offsets held near 0 by
+    ``clock_tolerance`` (none fitted when it is 0), a time for each event of unknown time
+    (``e`` its column, -1 for none)."""
     fit_offsets = clock_tolerance > 0
-    columns = 1 + (meters if fit_offsets else 0)
+    clocks = meters if fit_offsets else 0
+    times = int(e.max(initial=-1)) + 1
+    columns = 1 + clocks + times
     a = np.zeros((y.size, columns))
     a[:, 0] = x
     if fit_offsets:
         a[np.arange(y.size), 1 + k] = 1.0
+    timed = e >= 0
+    a[np.flatnonzero(timed), 1 + clocks + e[timed]] = 1.0
     sw = np.sqrt(weight)
     lhs, rhs = a * sw[:, None], y * sw
     if fit_offsets:  # the prior: each offset ~ N(0, clock_tolerance^2)
@@ -140,8 +168,9 @@ def _solve(
         prior[np.arange(meters), 1 + np.arange(meters)] = 1.0 / clock_tolerance
         lhs, rhs = np.vstack([lhs, prior]), np.concatenate([rhs, np.zeros(meters)])
     theta, *_ = np.linalg.lstsq(lhs, rhs, rcond=None)
-    offsets = theta[1:] if fit_offsets else np.zeros(meters)
-    return float(theta[0]), offsets
+    offsets = theta[1 : 1 + clocks] if fit_offsets else np.zeros(meters)
+    shifts = theta[1 + clocks :]
+    return float(theta[0]), offsets, shifts
 
 
 def _relative(residual: np.ndarray, travel: np.ndarray, dt: np.ndarray) -> float:
@@ -172,7 +201,7 @@ def fit_travel_times(
     """
     if not events:
         raise ConfigError("no known event to learn the travel times from")
-    y, x, k, dt = _rows(events, meters)
+    y, x, k, dt, e = _rows(events, meters)
     if y.size < 3 or np.ptp(x) <= 0:
         raise ConfigError(
             f"the known events give {y.size} arrival(s) at {np.unique(x).size} distance(s): at "
@@ -182,10 +211,12 @@ def fit_travel_times(
     keep = np.ones(y.size, dtype=bool)
     for _ in range(3):  # fit; weigh by what the fit leaves, drop the outliers; fit again
         variance = dt**2 / 12 + (tolerance * slowness * x) ** 2 + 1e-12
-        slowness, offsets = _solve(
-            y[keep], x[keep], k[keep], 1 / variance[keep], len(meters), clock_tolerance
+        slowness, offsets, shifts = _solve(
+            y[keep], x[keep], k[keep], e[keep], 1 / variance[keep], len(meters), clock_tolerance
         )
-        residual = y - slowness * x - offsets[k]
+        shift = np.zeros(y.size)
+        shift[e >= 0] = shifts[e[e >= 0]]
+        residual = y - slowness * x - offsets[k] - shift
         spread = np.maximum(1.4826 * float(np.median(np.abs(residual[keep]))), np.sqrt(variance))
         keep = np.abs(residual) <= OUTLIER_SIGMAS * spread
         if keep.sum() < 3:
