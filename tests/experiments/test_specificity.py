@@ -97,6 +97,19 @@ def test_evaluate_events_on_the_tiny_network(tiny: Path, tmp_path: Path, capsys)
     assert "as burst" in capsys.readouterr().out
 
 
+def test_the_classifier_is_calibrated_on_another_network_s_bursts(
+    tiny: Path, tmp_path: Path
+) -> None:
+    other = tmp_path / "other.inp"
+    other.write_bytes(tiny.read_bytes().replace(b"[JUNCTIONS]", b"; another town\n[JUNCTIONS]"))
+    classifier = tmp_path / "classifier.json"
+    args = ["evaluate", str(tiny), "--events", "--detector", "cusum", "--capture-interval", "2"]
+    args += ["--phases", "1", "--workers", "1", "--quiet", "--normal-hours", "0"]
+    args += ["--classifier-network", str(other), "--classifier-out", str(classifier)]
+    assert main([*args, "--burst-flow", "1"]) == 0  # bursts sized per pipe: each its own coeff
+    assert json.loads(classifier.read_text())["provenance"]["bursts"] == 5
+
+
 def test_an_event_that_cannot_be_simulated_is_left_out_and_said(
     tiny: Path, tmp_path: Path, capsys, monkeypatch: pytest.MonkeyPatch
 ) -> None:

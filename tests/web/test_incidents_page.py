@@ -129,11 +129,16 @@ def test_an_operator_acts_on_an_incident_and_the_page_remembers_it_after_a_resta
         alarmed = set(record["alarmed"])
 
         def cells() -> dict[str, tuple[str, str]]:
-            rows = browser.find_elements("css selector", "#health tbody tr")
-            found = {
-                tr.get_attribute("data-m"): tr.find_element("css selector", "td.fa") for tr in rows
-            }
-            return {m: (td.text, td.get_attribute("title") or "") for m, td in found.items()}
+            # read in one go in the page: the table is redrawn with each health record
+            read = browser.execute_script(
+                "const out = {};"
+                "for (const tr of document.querySelectorAll('#health tbody tr')) {"
+                "  const td = tr.querySelector('td.fa');"
+                "  if (td) out[tr.dataset.m] = [td.innerText.trim(), td.title || ''];"
+                "}"
+                "return out;"
+            )
+            return {m: (text, title) for m, (text, title) in read.items()}
 
         shown = wait_for(
             lambda: (c := cells()) and all(c.get(m, ("",))[0] == "0/1" for m in alarmed) and c,

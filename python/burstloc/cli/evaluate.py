@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 import math
-from dataclasses import replace
+from dataclasses import fields, replace
 from typing import TYPE_CHECKING, Any
 
 from burstloc._atomic import check_output
@@ -332,7 +332,7 @@ def _events(args: argparse.Namespace, network: Network, ev: Any, cache: Any) -> 
     from burstloc.experiments.specificity import evaluate_events
     from burstloc.localize.classify import ClassifierConfig
     from burstloc.network import read_network
-    from burstloc.sim.scenarios.scenario import burst_scenarios
+    from burstloc.sim.scenarios.scenario import BurstScenario, burst_scenarios
     from burstloc.sim.transient.time_step import with_capture_time_step
     from burstloc.sim.transient.tsnet import simulate_many
 
@@ -341,8 +341,16 @@ def _events(args: argparse.Namespace, network: Network, ev: Any, cache: Any) -> 
     calibration = network
     if args.classifier_network and args.classifier_network != args.network:
         calibration = read_network(args.classifier_network)
+        # how the bursts were simulated, less what belongs to this network's pipes
+        shared = {f.name for f in fields(BurstScenario)} - {
+            "network",
+            "pipe",
+            "truth",
+            "wave_speeds",
+        }
+        how = {k: v for k, v in ev.scenario.items() if k in shared}
         scenarios = with_capture_time_step(
-            burst_scenarios(calibration, None, **ev.scenario), min(intervals)
+            burst_scenarios(calibration, None, **how), min(intervals)
         )
         report = simulate_many(scenarios, cache=cache, workers=args.workers, progress=False)
         cal_bursts = {s.pipe: r for s, r in report.succeeded()}
