@@ -145,7 +145,7 @@ def test_the_life_cycle_through_the_routes_and_its_refusals(store: IncidentStore
         assert status == 409 and f"incident {n} is closed" in doc["error"]
         assert _request(f"{base}/incidents/999/acknowledge", "POST", {"by": "a"},
                         _write_headers())[0] == 404  # fmt: skip
-        assert post("shelve", {"by": "ann"})[0] == 404
+        assert post("archive", {"by": "ann"})[0] == 404
         status, listed = _request(
             f"{base}/incidents.json", headers={"Authorization": f"Bearer {TOKEN}"}
         )
@@ -206,5 +206,64 @@ def test_without_a_store_the_page_says_incidents_are_not_kept() -> None:
         status, doc = _request(f"{base}/incidents/1/acknowledge", "POST", {"by": "a"},
                                _write_headers())  # fmt: skip
         assert status == 404 and "--db" in doc["error"]
+    finally:
+        server.stop()
+
+
+def test_shelving_through_the_routes_needs_the_token_and_the_page_itself(
+    store: IncidentStore,
+) -> None:
+    server = _server(store, TOKEN)
+    try:
+        base = f"http://127.0.0.1:{server.port}"
+        (row,) = store.incidents()
+        n = row["id"]
+        url = f"{base}/incidents/{n}/shelve"
+        body = {"by": "mallory", "for": "30m", "reason": "hide it"}
+        for extra, status in [
+            ({"Authorization": "Bearer wrong"}, 401),
+            ({"Sec-Fetch-Site": "cross-site"}, 403),
+            ({"Origin": "http://evil.example"}, 403),
+            ({CSRF_HEADER: ""}, 403),
+        ]:
+            assert _request(url, "POST", body, _write_headers(**extra))[0] == status, extra
+        meter = f"{base}/incidents/meters/N3/shelve"
+        assert _request(meter, "POST", body, _write_headers(Origin="http://evil.example"))[0] == 403
+        assert store.get(n)["shelved_until"] is None and store.shelves.meters() == {}
+
+        def post(path: str, payload: dict[str, Any]) -> tuple[int, Any]:
+            return _request(f"{base}/{path}", "POST", payload, _write_headers())
+
+        status, doc = post(f"incidents/{n}/shelve", {"by": "ann", "for": "30m"})
+        assert status == 400 and "shelving needs a reason" in doc["error"]
+        status, doc = post(f"incidents/{n}/shelve", {"by": "ann", "for": "3d", "reason": "r"})
+        assert status == 400 and "at most 24 h" in doc["error"] and "'3d'" in doc["error"]
+        status, doc = post(f"incidents/{n}/shelve", {"by": "ann", "reason": "r"})
+        assert status == 400 and "a number with a unit" in doc["error"]
+        status, doc = post(f"incidents/{n}/shelve", {"by": "ann", "for": "2h", "reason": "works"})
+        assert status == 200 and doc["shelved_by"] == "ann" and doc["shelved_reason"] == "works"
+        assert 7100 < doc["shelved_until"] - time.time() <= 7200
+        last = doc["history"][-1]
+        assert (last["action"], last["by"], last["via"], last["note"]) == (
+            "shelved", "ann", "page 127.0.0.1", "works",
+        )  # fmt: skip
+        status, listed = _request(f"{base}/incidents.json", headers=_write_headers())
+        assert listed["incidents"][0]["shelved_until"] == doc["shelved_until"]
+        status, doc = post(f"incidents/{n}/unshelve", {"by": "bob"})
+        assert status == 200 and doc["shelved_until"] is None
+        status, doc = post(f"incidents/{n}/unshelve", {"by": "bob"})
+        assert status == 409 and "cannot be unshelved" in doc["error"]
+
+        status, doc = post(
+            "incidents/meters/N3/shelve", {"by": "ann", "for": "4h", "reason": "recal"}
+        )
+        assert status == 200 and doc["reason"] == "recal"
+        status, listed = _request(f"{base}/incidents.json", headers=_write_headers())
+        assert list(listed["shelved_meters"]) == ["N3"]
+        assert listed["shelved_meters"]["N3"]["by"] == "ann"
+        assert post("incidents/meters/N3/unshelve", {"by": "ann"})[0] == 200
+        status, doc = post("incidents/meters/N3/unshelve", {"by": "ann"})
+        assert status == 400 and "not shelved" in doc["error"]
+        assert post("incidents/meters/N3/archive", {"by": "ann"})[0] == 404
     finally:
         server.stop()

@@ -67,6 +67,23 @@ def test_an_operator_acts_on_an_incident_and_the_page_remembers_it_after_a_resta
         row = browser.find_element("css selector", f"#inclist tr[data-i='{incidents['selected']}']")
         assert "DETECTED" in row.text.upper() and f"pipe {pipe}" in row.text
         browser.find_element("id", "op-name").send_keys("ann")
+        # shelved for a while with a reason: listed apart, then brought back
+        browser.find_element("id", "op-reason").send_keys("valve exercise nearby")
+        _click(browser, "b-shelve")
+        shelved = wait_for(
+            lambda: (d := _state(browser)["detail"])["shelved_until"] and d, "shelved"
+        )
+        assert shelved["history"][-1]["action"] == "shelved"
+        assert shelved["shelved_until"] - shelved["history"][-1]["at"] == 1800.0  # 30 min
+        assert shelved["shelved_reason"] == "valve exercise nearby"
+        wait_for(
+            lambda: browser.find_elements("css selector", "#shelvedgroup ~ tr.shelved"),
+            "the list shows it in the shelved group",
+        )
+        assert "shelved until" in browser.find_element("id", "incdetail").text
+        _click(browser, "b-unshelve")
+        wait_for(lambda: _state(browser)["detail"]["shelved_until"] is None, "unshelved")
+        wait_for(lambda: not browser.find_elements("id", "shelvedgroup"), "the list shows it back")
         browser.find_element("id", "op-note").send_keys("seen on the map")
         _click(browser, "b-ack")
         wait_for(lambda: _state(browser)["detail"]["state"] == "acknowledged", "acknowledged")
@@ -120,10 +137,11 @@ def test_an_operator_acts_on_an_incident_and_the_page_remembers_it_after_a_resta
         )  # fmt: skip
         # and the operator's buttons follow the state: nothing but a note on a closed incident
         buttons = {b: browser.find_element("id", b).is_enabled() for b in
-                   ("b-ack", "b-dispatch", "b-found", "b-false", "b-note")}  # fmt: skip
+                   ("b-ack", "b-dispatch", "b-found", "b-false", "b-note", "b-shelve",
+                    "b-unshelve")}  # fmt: skip
         assert buttons == {
             "b-ack": False, "b-dispatch": False, "b-found": False, "b-false": False,
-            "b-note": True,
+            "b-note": True, "b-shelve": False, "b-unshelve": False,
         }  # fmt: skip
         # the Meters table: each alarmed meter's false alarms of the incidents it alarmed in
         alarmed = set(record["alarmed"])

@@ -1,5 +1,6 @@
 """``burstloc incidents``: list, show and export the incidents the monitor kept, and act on
-them (acknowledge, dispatch, close with an outcome, add a note) without the page; what closed
+them (acknowledge, dispatch, close with an outcome, add a note; shelve, in
+:mod:`burstloc.cli.shelving`) without the page; what closed
 incidents teach: false alarms per meter (``meters``) and the bursts found as a known-events file
 for calibration (``known-events``)."""
 
@@ -11,9 +12,11 @@ import sys
 import time
 from typing import Any
 
+from burstloc.cli.shelving import SHELVING
+from burstloc.cli.shelving import add_parsers as add_shelving
 from burstloc.exceptions import ConfigError
 
-__all__ = ["DB_VARIABLE", "add_parser", "age", "open_store", "run"]
+__all__ = ["DB_VARIABLE", "add_parser", "age", "open_store", "run", "stamp"]
 
 #: The environment variable naming the store when neither --db nor --state does.
 DB_VARIABLE = "BURSTLOC_DB"
@@ -42,8 +45,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
             "The incidents kept by `burstloc monitor --db` (every located burst, early alarm "
             "record, event and meter fault, with its history). An incident is detected, then "
             "acknowledged, possibly dispatched, and closed with an outcome: found at a point "
-            "(X,Y in the network's coordinates) or a false alarm. Each action is recorded with "
-            "who (--by) and when."
+            "(X,Y in the network's coordinates) or a false alarm. An open incident may be "
+            "shelved for a while with a reason (not escalated meanwhile; it comes back by "
+            "itself), and a meter's faults too. Each action is recorded with who (--by) and "
+            "when."
         ),
     )
     actions = parser.add_subparsers(dest="action", required=True, metavar="ACTION")
@@ -118,6 +123,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                 "--found", metavar="X,Y", help="found at this point (network coordinates)"
             )
             outcome.add_argument("--false-alarm", action="store_true", help="a false alarm")
+    add_shelving(actions, where)
     parser.set_defaults(handler=run)
     return parser
 
@@ -158,7 +164,8 @@ def age(seconds: float) -> str:
     return f"{s // 86_400} d {s % 86_400 // 3600} h"
 
 
-def _stamp(seconds: float | None) -> str:
+def stamp(seconds: float | None) -> str:
+    """A wall-clock time as ISO 8601 UTC (``2026-11-28T06:02:00Z``)."""
     from burstloc.incidents.export import iso
 
     return iso(seconds).replace("+00:00", "Z")
@@ -182,6 +189,10 @@ def run(args: argparse.Namespace) -> int:
             _meters(store, args.format, args.out)
         elif args.action == "known-events":
             return _known_events(store, args)
+        elif args.action in SHELVING:
+            from burstloc.cli.shelving import run as shelving
+
+            shelving(store, args)
         else:
             outcome = None
             if args.action == "close":
@@ -203,30 +214,44 @@ def _list(store: Any, open_only: bool, limit: int | None) -> None:
     if limit is not None and limit < 1:
         raise ConfigError(f"--limit must be >= 1, got {limit}")
     rows = store.incidents(open_only=open_only, limit=limit)
+    now = time.time()
     if not rows:
         print(f"no incidents in {store.where}", file=sys.stderr)
-        return
-    now = time.time()
-    print(f"{'ID':>6}  {'STATE':<12}  {'KIND':<6}  {'AGE':>12}  {'DETECTED':<20}  WHAT")
+    else:
+        print(f"{'ID':>6}  {'STATE':<12}  {'KIND':<6}  {'AGE':>12}  {'DETECTED':<20}  WHAT")
     for r in rows:
+        until = r["shelved_until"]
+        shelved = "" if until is None else f"[shelved until {stamp(until)}] "
         print(
             f"{r['id']:>6}  {r['state']:<12}  {r['kind']:<6}  {age(now - r['detected_at']):>12}  "
-            f"{_stamp(r['detected_at']):<20}  {r['summary']}"
+            f"{stamp(r['detected_at']):<20}  {shelved}{r['summary']}"
         )
+    for meter, doc in store.shelves.meters().items():
+        print(f"meter {meter} shelved until {stamp(doc['until'])} by {doc['by']}: {doc['reason']}")
 
 
 def _show(doc: dict[str, Any]) -> None:
+    from burstloc.incidents.shelving import SHELVED, action_label
+
     print(f"incident {doc['id']}: {doc['kind']}, {doc['state']}")
     print(f"  {doc['summary']}")
-    print(f"  detected {_stamp(doc['detected_at'])} (reading time {doc['reading_time']} s)")
+    print(f"  detected {stamp(doc['detected_at'])} (reading time {doc['reading_time']} s)")
     if doc["outcome"] == "found":
         print(f"  found at {doc['found_x']:g},{doc['found_y']:g}")
     elif doc["outcome"]:
         print(f"  outcome: {doc['outcome']}")
+    if doc["shelved_until"] is not None:
+        print(
+            f"  shelved until {stamp(doc['shelved_until'])} by {doc['shelved_by']}: "
+            f"{doc['shelved_reason']}"
+        )
     print("history:")
     for h in doc["history"]:
         note = f": {h['note']}" if h["note"] else ""
-        print(f"  {_stamp(h['at'])}  {h['action']:<12}  by {h['by']} ({h['via']}){note}")
+        until = (h["detail"] or {}).get("until") if h["action"] == SHELVED else None
+        note += f" (until {stamp(until)})" if until is not None else ""
+        what = action_label(h["action"], h["via"])
+        print(f"  {stamp(h['at'])}  {what:<12}  by {h['by']} ({h['via']}){note}")
 
 
 def _export(store: Any, form: str, out: str | None) -> None:

@@ -3,6 +3,8 @@ monitor reports, with its history (detected, answered, acknowledged, dispatched,
 outcome, operators' notes), kept in SQLite (the default) or PostgreSQL.
 
 * :mod:`~burstloc.incidents.lifecycle`: the states, the operators' actions, the outcomes;
+* :mod:`~burstloc.incidents.shelving`, :mod:`~burstloc.incidents.shelves`: shelving an incident
+  or a meter's faults for a while, with a reason (what it is; its SQL);
 * :mod:`~burstloc.incidents.intake`: the monitor's records as the store takes them;
 * :mod:`~burstloc.incidents.schema`, :mod:`~burstloc.incidents.migrate` (and ``migrations/``):
   the tables and their Alembic migrations;

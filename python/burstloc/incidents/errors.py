@@ -62,4 +62,6 @@ def _past(action: str) -> str:
         "dispatch": "dispatched",
         "close": "closed",
         "note": "annotated",
+        "shelve": "shelved",
+        "unshelve": "unshelved",
     }.get(action, action)

@@ -23,7 +23,7 @@ from sqlalchemy import (
     Text,
 )
 
-__all__ = ["alerts", "history", "incidents", "metadata"]
+__all__ = ["alerts", "history", "incidents", "metadata", "meter_shelves"]
 
 metadata = MetaData()
 
@@ -54,8 +54,13 @@ incidents = Table(
     # the feed file of the readings kept around the alarm (an absolute path; alarms only)
     Column("readings", String(1000)),
     Column("onset", Float),  # reading time: the first alarmed meter's change began after it
+    # shelved (burstloc.incidents.shelving) until this wall-clock time, by whom, why (else None)
+    Column("shelved_until", Float),
+    Column("shelved_by", String(200)),
+    Column("shelved_reason", Text),
     Index("ix_incidents_key", "key"),
     Index("ix_incidents_state_detected", "state", "detected_at"),
+    Index("ix_incidents_shelved", "shelved_until"),
 )
 
 #: One row per change: who did what when, and the state after it.
@@ -76,8 +81,9 @@ history = Table(
 
 #: The webhook alerts' outbox (:mod:`burstloc.incidents.alerts`): one row per alert and URL, kept
 #: after delivery. ``status``: ``waiting`` (an escalation not yet due), ``pending``,
-#: ``delivered``, ``dead`` (given up: in the dead-letter file) or ``cancelled`` (an escalation
-#: of an incident acknowledged in time). ``due_at`` and ``next_at`` are on the alerts' clock
+#: ``delivered``, ``dead`` (given up: in the dead-letter file), ``cancelled`` (an escalation
+#: of an incident acknowledged in time) or ``held`` (an escalation of a shelved incident,
+#: waiting again from the incident's return). ``due_at`` and ``next_at`` are on the alerts' clock
 #: (the monitor's); ``created_at`` and ``delivered_at`` wall-clock times.
 alerts = Table(
     "alerts",
@@ -96,4 +102,21 @@ alerts = Table(
     Column("last_error", Text),
     Column("payload", Text),  # JSON, as sent (an escalation's: made when it is due)
     Index("ix_alerts_queue", "status", "url", "due_at", "id"),
+)
+
+#: One row per shelving of a meter (:mod:`burstloc.incidents.shelving`): in force while
+#: ``ended_at`` is None and ``until`` (wall clock) is ahead.
+meter_shelves = Table(
+    "meter_shelves",
+    metadata,
+    Column("id", Integer, primary_key=True, autoincrement=True),
+    Column("meter", String(200), nullable=False),
+    Column("at", Float, nullable=False),
+    Column("by", String(200), nullable=False),
+    Column("via", String(100), nullable=False),
+    Column("until", Float, nullable=False),
+    Column("reason", Text, nullable=False),
+    Column("ended_at", Float),  # unshelved by an operator before its time
+    Column("ended_by", String(200)),
+    Index("ix_meter_shelves_meter", "meter", "id"),
 )

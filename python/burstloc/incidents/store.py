@@ -61,7 +61,7 @@ NAME_CHARS, NOTE_CHARS = 200, 10_000
 _LISTED = (
     "id", "kind", "state", "detected_at", "updated_at", "reading_time", "pipe", "meter",
     "summary", "active", "outcome", "found_x", "found_y", "closed_at", "alarmed", "readings",
-    "onset",
+    "onset", "shelved_until", "shelved_by", "shelved_reason",
 )  # fmt: skip
 
 
@@ -133,6 +133,10 @@ class IncidentStore:
         #: Told of each incident :meth:`take` opens, in its transaction (the alerts' outbox).
         self.on_new: OnNew | None = None
         self.engine = make_engine(url)
+        from burstloc.incidents.shelves import Shelves
+
+        #: Shelving incidents and meters (:mod:`burstloc.incidents.shelving`).
+        self.shelves = Shelves(self)
 
     @classmethod
     def open(cls, target: str, *, clock: Callable[[], float] = time.time) -> IncidentStore:
@@ -285,6 +289,7 @@ class IncidentStore:
             )
         from burstloc.incidents.writing import add_history
 
+        self.shelves.expire()
         with self._write("write to") as connection:
             query = select(t.c.state).where(t.c.id == incident).with_for_update()
             row = connection.execute(query).first()
@@ -295,9 +300,10 @@ class IncidentStore:
             values: dict[str, Any] = {"state": state, "updated_at": now}
             detail = None
             if outcome is not None:
-                values.update(
-                    outcome=outcome.kind, found_x=outcome.x, found_y=outcome.y, closed_at=now
-                )
+                values.update(  # closing ends a shelving
+                    outcome=outcome.kind, found_x=outcome.x, found_y=outcome.y, closed_at=now,
+                    shelved_until=None, shelved_by=None, shelved_reason=None,
+                )  # fmt: skip
                 detail = json.dumps(outcome.to_json())
             connection.execute(t.update().where(t.c.id == incident).values(**values))
             add_history(
@@ -322,11 +328,13 @@ class IncidentStore:
 
     # ------------------------------------------------------------------ reading
     def incidents(self, *, open_only: bool = False, limit: int | None = None) -> list[dict]:
-        """The incidents, open ones first, newest first within each (without their records)."""
+        """The incidents, open ones first, newest first within each (without their records);
+        the shelvings that ran out ended first (as by every read)."""
         from sqlalchemy import case, select
 
         from burstloc.incidents.schema import incidents as t
 
+        self.shelves.expire()
         closed = case((t.c.state == CLOSED, 1), else_=0)
         query = select(*(t.c[c] for c in _LISTED)).order_by(
             closed, t.c.detected_at.desc(), t.c.id.desc()
@@ -349,6 +357,7 @@ class IncidentStore:
         from burstloc.incidents.schema import history as h
         from burstloc.incidents.schema import incidents as t
 
+        self.shelves.expire()
         with self._read() as connection:
             row = connection.execute(select(t).where(t.c.id == incident)).first()
             if row is None:
@@ -390,5 +399,6 @@ class IncidentStore:
 
         from burstloc.incidents.schema import history as h
 
+        self.shelves.expire()  # a shelving that ran out is a change
         with self._read() as connection:
             return int(connection.execute(select(func.max(h.c.id))).scalar() or 0)

@@ -10,6 +10,7 @@ only once a store is opened (it imports SQLAlchemy).
 
 from __future__ import annotations
 
+import json
 from collections.abc import Callable
 from typing import Any
 
@@ -19,11 +20,14 @@ from burstloc.incidents.intake import MONITOR, Kept, Observed
 from burstloc.incidents.lifecycle import CLOSED, DETECTED
 from burstloc.incidents.schema import history as h
 from burstloc.incidents.schema import incidents as t
+from burstloc.incidents.schema import meter_shelves as m
+from burstloc.incidents.shelving import SHELVED
 
 __all__ = ["OnNew", "add_history", "take_one"]
 
-#: Called in the transaction that opened an incident: ``(connection, incident, item)``.
-OnNew = Callable[[Any, int, Observed], None]
+#: Called in the transaction that opened an incident: ``(connection, incident, item, shelved)``
+#: (``shelved``: it arrived shelved, its meter being shelved).
+OnNew = Callable[[Any, int, Observed, bool], None]
 
 _COLUMNS = (t.c.id, t.c.state, t.c.record, t.c.active)
 #: The newest incident of an alarm's key.
@@ -33,6 +37,13 @@ _OPEN = (
     select(*_COLUMNS)
     .where(t.c.key == bindparam("k"), t.c.state != CLOSED)
     .order_by(t.c.id.desc())
+    .limit(1)
+)
+#: A meter's shelving in force at ``at`` (wall clock), the newest.
+_METER_SHELVED = (
+    select(m.c.by, m.c.until, m.c.reason)
+    .where(m.c.meter == bindparam("m"), m.c.ended_at.is_(None), m.c.until > bindparam("at"))
+    .order_by(m.c.id.desc())
     .limit(1)
 )
 _INSERT = t.insert()
@@ -99,6 +110,10 @@ def take_one(connection: Any, item: Observed | Kept, on_new: OnNew | None = None
 
 
 def _insert(connection: Any, item: Observed, record: str | None, on_new: OnNew | None) -> int:
+    """A new incident; a meter fault of a shelved meter arrives shelved."""
+    shelf = None
+    if item.is_fault:
+        shelf = connection.execute(_METER_SHELVED, {"m": item.meter, "at": item.at}).first()
     result = connection.execute(
         _INSERT,
         {
@@ -106,14 +121,23 @@ def _insert(connection: Any, item: Observed, record: str | None, on_new: OnNew |
             "updated_at": item.at, "reading_time": item.reading_time, "pipe": item.pipe,
             "meter": item.meter, "summary": item.summary, "record": record,
             "active": item.active, "alarmed": item.alarmed_json(),
+            "shelved_until": None if shelf is None else shelf.until,
+            "shelved_by": None if shelf is None else shelf.by,
+            "shelved_reason": None if shelf is None else shelf.reason,
         },
     )  # fmt: skip
     incident = int(result.inserted_primary_key[0])
     add_history(
         connection, incident, item.at, MONITOR, MONITOR, "detected", DETECTED, item.summary, record
     )
+    if shelf is not None:
+        detail = json.dumps({"until": shelf.until, "meter": item.meter})
+        add_history(
+            connection, incident, item.at, shelf.by, "meter shelved", SHELVED, DETECTED,
+            shelf.reason, detail,
+        )  # fmt: skip
     if on_new is not None:
-        on_new(connection, incident, item)
+        on_new(connection, incident, item, shelf is not None)
     return incident
 
 

@@ -9,9 +9,11 @@ costs one indexed query) and ``/incidents/{id}.json`` (one incident with its rec
 history). They are read from the store, not the monitor's memory: after a restart the page
 shows the same incidents.
 
-Writes (POST ``/incidents/{id}/{action}``, action ``acknowledge``, ``dispatch``, ``close`` or
-``note``; a JSON body ``{"by": NAME, "note": TEXT, "outcome": "found" | "false-alarm",
-"at": [X, Y]}``) are refused, before the store is touched:
+Writes (POST ``/incidents/{id}/{action}``, action ``acknowledge``, ``dispatch``, ``close``,
+``note``, ``shelve`` or ``unshelve``; a JSON body ``{"by": NAME, "note": TEXT, "outcome":
+"found" | "false-alarm", "at": [X, Y], "for": "30m", "reason": TEXT}``; and POST
+``/incidents/meters/{meter}/shelve`` or ``/unshelve``, the listing's ``shelved_meters``:
+:mod:`burstloc.incidents.shelving`) are refused, before the store is touched:
 
 * with 403 when the server has no token, even on a loopback address (anyone on the machine
   could act in an operator's name): the message says to set ``--web-token``; a wrong or missing
@@ -43,6 +45,7 @@ from burstloc.incidents.errors import (
 )
 from burstloc.incidents.lifecycle import ACTIONS, FALSE_ALARM, FOUND, Outcome
 from burstloc.incidents.outcomes import meter_outcomes
+from burstloc.incidents.shelving import parse_duration
 
 __all__ = ["CSRF_HEADER", "NOT_KEPT", "NO_TOKEN", "routes", "write_refusal"]
 
@@ -57,6 +60,8 @@ NO_TOKEN = (
     "with ?token=TOKEN"
 )
 _MOST_BODY = 64 * 1024
+#: The shelving actions, on an incident and on a meter.
+_SHELVING = ("shelve", "unshelve")
 
 
 def write_refusal(headers: Any, own_origin: str, token: str | None) -> str | None:
@@ -116,6 +121,7 @@ def routes(server: Any) -> list[Any]:
             if after is not None and after == str(version):
                 return JSONResponse({"enabled": True, "version": version, "unchanged": True})
             rows = await asyncio.to_thread(store.incidents)
+            shelved = await asyncio.to_thread(store.shelves.meters)
         except IncidentStoreError as exc:
             return error(503, str(exc))
         doc = {
@@ -126,6 +132,7 @@ def routes(server: Any) -> list[Any]:
             "now": time.time(),
             "incidents": rows,
             "meters": [m.to_json() for m in meter_outcomes(rows)],
+            "shelved_meters": shelved,
         }
         return JSONResponse(doc)
 
@@ -142,51 +149,95 @@ def routes(server: Any) -> list[Any]:
         except IncidentStoreError as exc:
             return error(503, str(exc))
 
-    async def act(request: Any) -> Any:
-        store = server.incidents
-        if store is None:
+    async def guarded(request: Any) -> Any:
+        """The JSON body of a write (a dict), or the response refusing it."""
+        if server.incidents is None:
             return error(404, NOT_KEPT)
         own = f"{request.url.scheme}://{request.headers.get('host', '')}"
         refused = write_refusal(request.headers, own, server.token)
         if refused is not None:
             return error(403, refused)
-        action = request.path_params["action"]
-        if action not in ACTIONS:
-            return error(404, f"no action {action!r}: one of {', '.join(ACTIONS)}")
         if request.headers.get("content-type", "").split(";")[0].strip() != "application/json":
             return error(415, "the body must be JSON (Content-Type: application/json)")
         raw = await request.body()
         try:
-            number = int(request.path_params["id"])
             if len(raw) > _MOST_BODY:
                 raise InputError(f"the body is longer than {_MOST_BODY} bytes")
             body = json.loads(raw or b"{}")
             if not isinstance(body, dict):
                 raise InputError("the body must be a JSON object")
-            outcome = _outcome(body) if action == "close" else None
-            by, note = _text(body, "by") or "", _text(body, "note")
-            client = request.client.host if request.client else "?"
-            doc = await asyncio.to_thread(
-                store.act,
-                number,
-                action,
-                by=by,
-                via=f"page {client}",
-                note=note,
-                outcome=outcome,
-            )
+        except (InputError, ValueError) as exc:  # json's errors are ValueErrors
+            return error(400, str(exc))
+        return body
+
+    async def answer(call: Any, *args: Any, **kwargs: Any) -> Any:
+        """``call`` on a worker thread, its errors as the HTTP statuses of the module docstring."""
+        try:
+            return JSONResponse(await asyncio.to_thread(call, *args, **kwargs))
         except UnknownIncidentError as exc:
             return error(404, str(exc))
         except IncidentStateError as exc:
             return error(409, str(exc))
         except IncidentStoreError as exc:
             return error(503, str(exc))
-        except (InputError, ValueError) as exc:  # a bad body (json's errors are ValueErrors)
+        except (InputError, ValueError) as exc:
             return error(400, str(exc))
-        return JSONResponse(doc)
+
+    async def act(request: Any) -> Any:
+        action = request.path_params["action"]
+        if action not in ACTIONS and action not in _SHELVING:
+            known = ", ".join((*ACTIONS, *_SHELVING))
+            return error(404, f"no action {action!r}: one of {known}")
+        body = await guarded(request)
+        if not isinstance(body, dict):
+            return body
+        store = server.incidents
+        client = request.client.host if request.client else "?"
+        try:
+            number = int(request.path_params["id"])
+            by, note = _text(body, "by") or "", _text(body, "note")
+            if action == "shelve":
+                seconds = parse_duration(_text(body, "for") or "")
+                reason = _text(body, "reason") or ""
+                return await answer(
+                    store.shelves.shelve, number, seconds, by=by, via=f"page {client}",
+                    reason=reason,
+                )  # fmt: skip
+            if action == "unshelve":
+                return await answer(
+                    store.shelves.unshelve, number, by=by, via=f"page {client}", note=note
+                )
+            outcome = _outcome(body) if action == "close" else None
+        except (InputError, ValueError) as exc:
+            return error(400, str(exc))
+        return await answer(
+            store.act, number, action, by=by, via=f"page {client}", note=note, outcome=outcome
+        )
+
+    async def meter(request: Any) -> Any:
+        action = request.path_params["action"]
+        if action not in _SHELVING:
+            return error(404, f"no action {action!r} on a meter: one of {', '.join(_SHELVING)}")
+        body = await guarded(request)
+        if not isinstance(body, dict):
+            return body
+        shelves = server.incidents.shelves
+        name, client = request.path_params["meter"], request.client.host if request.client else "?"
+        try:
+            by = _text(body, "by") or ""
+            if action == "unshelve":
+                return await answer(shelves.unshelve_meter, name, by=by, via=f"page {client}")
+            seconds = parse_duration(_text(body, "for") or "")
+            reason = _text(body, "reason") or ""
+        except (InputError, ValueError) as exc:
+            return error(400, str(exc))
+        return await answer(
+            shelves.shelve_meter, name, seconds, by=by, via=f"page {client}", reason=reason
+        )
 
     return [
         Route("/incidents.json", listing),
         Route("/incidents/{id}.json", one),
         Route("/incidents/{id}/{action}", act, methods=["POST"]),
+        Route("/incidents/meters/{meter:path}/{action}", meter, methods=["POST"]),
     ]

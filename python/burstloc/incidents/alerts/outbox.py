@@ -12,7 +12,12 @@ the order they became due (``due_at``, then ``id``); the sender
 
 An escalation becomes ``pending`` when due (:meth:`Outbox.promote`) if its incident is still
 ``detected`` (its payload made then, with the incident as it is), else ``cancelled``: each fires
-at most once. Imported once a store is opened (it imports SQLAlchemy).
+at most once. A shelved incident is never escalated (:mod:`burstloc.incidents.shelving`): its
+escalations are ``held`` (by the shelving, or here if one falls due meanwhile), and once it is
+back (:meth:`Outbox.promote` first ends the shelvings that ran out) wait again the full
+escalation time from then, on the alerts' clock; an incident that arrives shelved (a fault of a
+shelved meter) gets no ``new`` alert, only its held escalations. Imported once a store is
+opened (it imports SQLAlchemy).
 """
 
 from __future__ import annotations
@@ -36,7 +41,7 @@ from burstloc.incidents.store import IncidentStore
 __all__ = ["STATUSES", "Clock", "Outbox"]
 
 #: An alert's statuses (:data:`burstloc.incidents.schema.alerts`).
-STATUSES = ("waiting", "pending", "delivered", "dead", "cancelled")
+STATUSES = ("waiting", "pending", "delivered", "dead", "cancelled", "held")
 
 #: The alerts' clock: seconds, or ``None`` while it has no time yet (a replay before its first
 #: reading).
@@ -57,11 +62,19 @@ _DUE = (
         a.c.key.label("alert_key"),
         a.c.due_at.label("alert_due"),
         t.c.record,
+        t.c.shelved_until,
         *(t.c[c] for c in _INCIDENT),
     )
     .join(t, t.c.id == a.c.incident_id)
     .where(a.c.status == "waiting", a.c.url == bindparam("url"), a.c.due_at <= bindparam("now"))
     .order_by(a.c.due_at, a.c.id)
+)
+#: The held escalations of incidents no longer shelved.
+_BACK = (
+    select(a.c.id.label("alert"), t.c.state)
+    .join(t, t.c.id == a.c.incident_id)
+    .where(a.c.status == "held", a.c.url == bindparam("url"), t.c.shelved_until.is_(None))
+    .order_by(a.c.id)
 )
 
 
@@ -87,8 +100,9 @@ class Outbox:
         self.store.on_new = self.on_new
 
     # ------------------------------------------------------------------ in the recorder's
-    def on_new(self, connection: Any, incident: int, item: Observed) -> None:
-        """The alerts of ``incident``, just opened from ``item``, in its transaction."""
+    def on_new(self, connection: Any, incident: int, item: Observed, shelved: bool) -> None:
+        """The alerts of ``incident``, just opened from ``item``, in its transaction (only its
+        held escalations when it arrived ``shelved``)."""
         now = self.clock()
         if now is None:  # a replay's clock before its first reading: the record's own time
             now = item.reading_time if item.reading_time is not None else 0.0
@@ -101,25 +115,40 @@ class Outbox:
         rows = []
         for url in self.settings.urls:
             key = uuid.uuid4().hex
-            body = payload(NEW, key, doc, now, link=self.link(incident), source=self.source)
-            rows.append(_row(key, url, incident, NEW, "pending", now, wall, body))
+            if not shelved:
+                body = payload(NEW, key, doc, now, link=self.link(incident), source=self.source)
+                rows.append(_row(key, url, incident, NEW, "pending", now, wall, body))
             if self.settings.escalate_after is not None:
                 due = now + self.settings.escalate_after
-                rows.append(_row(uuid.uuid4().hex, url, incident, ESCALATED, "waiting", due, wall))
-        connection.execute(_INSERT, rows)
+                status = "held" if shelved else "waiting"
+                rows.append(_row(uuid.uuid4().hex, url, incident, ESCALATED, status, due, wall))
+        if rows:
+            connection.execute(_INSERT, rows)
 
     # ------------------------------------------------------------------ in the sender's
     def promote(self, url: str, now: float) -> int:
         """``url``'s escalations due by ``now``: pending (their payload made now) if their
-        incident is still unacknowledged, else cancelled; how many became pending."""
+        incident is still unacknowledged, held if it is shelved, else cancelled; how many became
+        pending. First the shelvings that ran out are ended, and the held escalations of the
+        incidents back wait again (the full escalation time from ``now``) or are cancelled."""
+        self.store.shelves.expire()
         with self.store.read() as connection:
-            if connection.execute(_DUE, {"url": url, "now": now}).first() is None:
+            due = connection.execute(_DUE, {"url": url, "now": now}).first()
+            if due is None and connection.execute(_BACK, {"url": url}).first() is None:
                 return 0  # the common case: no write lock taken
         promoted = 0
         with self.store.write("write to") as connection:
+            for row in connection.execute(_BACK, {"url": url}).all():
+                if row.state == DETECTED and self.settings.escalate_after is not None:
+                    again = now + self.settings.escalate_after
+                    values = {"status": "waiting", "due_at": again, "next_at": again}
+                else:
+                    values = {"status": "cancelled"}
+                connection.execute(_SET, {"alert": row.alert, **values})
             for row in connection.execute(_DUE, {"url": url, "now": now}).all():
-                if row.state != DETECTED:
-                    connection.execute(_SET, {"alert": row.alert, "status": "cancelled"})
+                if row.state != DETECTED or row.shelved_until is not None:
+                    status = "cancelled" if row.state != DETECTED else "held"
+                    connection.execute(_SET, {"alert": row.alert, "status": status})
                     continue
                 doc = {c: row._mapping[c] for c in _INCIDENT}
                 doc["record"] = None if row.record is None else json.loads(row.record)
@@ -160,10 +189,12 @@ class Outbox:
         return {s: got.get(s, 0) for s in STATUSES}
 
     def strays(self) -> list[Any]:
-        """Undelivered alerts (pending or waiting) to URLs no longer configured."""
+        """Undelivered alerts (pending, waiting or held) to URLs no longer configured."""
         query = (
             select(a)
-            .where(a.c.status.in_(("pending", "waiting")), a.c.url.not_in(self.settings.urls))
+            .where(
+                a.c.status.in_(("pending", "waiting", "held")), a.c.url.not_in(self.settings.urls)
+            )
             .order_by(a.c.due_at, a.c.id)
         )
         with self.store.read() as connection:

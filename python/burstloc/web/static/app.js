@@ -181,6 +181,14 @@ function falseAlarmsCell(m) {
   return `<td class="fa" title="${esc(title)}">${o.false_alarms}/${o.alarmed}</td>`;
 }
 
+// a meter's shelving (incidents.js: S.shelvedMeters, S.shelveMeter): when it returns, a button
+function shelfCell(m) {
+  const sh = S.shelvedMeters ? S.shelvedMeters[m] : null;
+  const label = sh ? `<span class="shelf" title="${esc(`by ${sh.by}: ${sh.reason}`)}">until ${new Date(sh.until * 1000).toLocaleTimeString()}</span> ` : "";
+  const button = S.shelveMeter ? `<button data-shelve="${sh ? "unshelve" : "shelve"}">${sh ? "Unshelve" : "Shelve"}</button>` : "";
+  return `<td class="shelfcell">${label}${button}</td>`;
+}
+
 function renderHealth() {
   const tb = $("health").tBodies[0];
   tb.innerHTML = meta.meters
@@ -188,11 +196,12 @@ function renderHealth() {
       const h = health && health.meters ? health.meters[m] || {} : {};
       const st = S.meterStatus[m] || "unknown";
       const last = lastReading(j);
-      return `<tr data-m="${esc(m)}" class="${m === selected ? "sel" : ""}"><td>${esc(m)}</td>` +
+      const shelved = S.shelvedMeters && S.shelvedMeters[m] ? " shelved" : "";
+      return `<tr data-m="${esc(m)}" class="${m === selected ? "sel" : ""}${shelved}"><td>${esc(m)}</td>` +
         `<td data-status="${st}"><span class="dot" style="background:${COLORS[st]}"></span>${STATE_NAMES[st]}</td>` +
         `<td>${last ? fmt(last[1]) : "–"}</td><td>${last ? fmt(last[0], 1) : "–"}</td>` +
         `<td>${h.clock_offset ? (h.clock_offset > 0 ? "+" : "") + fmt(h.clock_offset, 1) + " s" : ""}</td><td>${h.implausible || ""}</td>` +
-        `<td>${h.late || ""}</td><td>${h.filled || ""}</td>${falseAlarmsCell(m)}</tr>`;
+        `<td>${h.late || ""}</td><td>${h.filled || ""}</td>${falseAlarmsCell(m)}${shelfCell(m)}</tr>`;
     })
     .join("");
 }
@@ -353,6 +362,8 @@ map.addEventListener("wheel", (e) => {
 map.addEventListener("dblclick", () => fit());
 $("health").addEventListener("click", (e) => {
   const tr = e.target.closest("tr[data-m]");
+  const button = e.target.closest("button[data-shelve]");
+  if (tr && button && S.shelveMeter) { S.shelveMeter(tr.dataset.m, button.dataset.shelve); return; }
   if (tr) { selected = tr.dataset.m; chosen = true; dirty = true; schedulePanels(); }
 });
 window.addEventListener("resize", () => { dirty = true; schedulePanels(); });

@@ -1,5 +1,6 @@
 // burstloc control room: the incidents the monitor keeps (burstloc monitor --db), open first,
-// and the operators' actions on them (acknowledge, dispatch, close with an outcome, note).
+// and the operators' actions on them (acknowledge, dispatch, close with an outcome, note; shelve
+// for a while with a reason, unshelve; a meter's shelving from the Meters table).
 // Read from the store through /incidents.json (polled cheaply: ?after=VERSION); written by POST
 // with the page's token (its cookie) and the X-Burstloc-Request header. Uses app.js's globals
 // ($, S, esc, fmt, map, view, net, sx, sy, dirty, tokenQuery). window.burstloc.incidents holds
@@ -61,6 +62,8 @@ async function refresh() {
   I.list = doc.incidents;
   // per meter: false alarms of the incidents its alarms made (app.js's Meters table shows them)
   S.meterOutcomes = Object.fromEntries((doc.meters || []).map((m) => [m.meter, m]));
+  S.shelvedMeters = doc.shelved_meters || {}; // app.js's Meters table marks them
+  S.shelveMeter = I.writable ? shelveMeter : null;
   if (S.ready) schedulePanels();
   serverNow = doc.now;
   fetchedAt = Date.now();
@@ -77,31 +80,72 @@ async function loadDetail(id) {
   if (response.ok) I.detail = await response.json();
 }
 
-async function act(action, extra) {
+// the operator's name (remembered), or null after saying it is needed
+function operator() {
   const by = $("op-name").value.trim();
-  if (!by) { I.error = "type your name first: every action is recorded with who did it"; renderIncidents(); return; }
+  if (!by) { I.error = "type your name first: every action is recorded with who did it"; renderIncidents(); return null; }
   localStorage.setItem("burstloc.operator", by);
-  const note = $("op-note").value.trim();
-  const body = Object.assign({ by, note: note || null }, extra || {});
-  const response = await fetch(withToken(`incidents/${I.selected}/${action}`, ""), {
+  return by;
+}
+
+async function post(path, body) {
+  const response = await fetch(withToken(path, ""), {
     method: "POST",
     headers: { "Content-Type": "application/json", "X-Burstloc-Request": "page" },
     body: JSON.stringify(body),
   });
   let doc = {};
   try { doc = await response.json(); } catch (e) { doc = { error: response.statusText }; }
-  if (response.ok) {
+  return [response.ok, doc];
+}
+
+async function act(action, extra) {
+  const by = operator();
+  if (!by) return;
+  const note = $("op-note").value.trim();
+  const body = Object.assign({ by, note: note || null }, extra || {});
+  const [ok, doc] = await post(`incidents/${I.selected}/${action}`, body);
+  if (ok) {
     I.error = null;
     I.detail = doc;
     I.posts++;
     $("op-note").value = "";
   } else {
-    I.error = doc.error || response.statusText;
+    I.error = doc.error || "refused";
   }
+  if (ok && action === "shelve") $("op-reason").value = "";
   I.picking = false;
   dirty = true;
   renderIncidents(); // the state shown and the buttons it allows, at once
   await refresh();
+}
+
+// a meter's shelving from the Meters table (app.js): how long and why asked for
+async function shelveMeter(meter, action) {
+  const by = operator();
+  if (!by) return;
+  const body = { by };
+  if (action === "shelve") {
+    body.for = prompt(`Shelve meter ${meter}'s faults for how long? (e.g. 4h, at most 24h; it still takes part in localization)`, "4h");
+    if (body.for === null) return;
+    body.reason = prompt(`Why is meter ${meter} shelved? (recorded)`, "");
+    if (body.reason === null) return;
+  }
+  const [ok, doc] = await post(`incidents/meters/${encodeURIComponent(meter)}/${action}`, body);
+  I.error = ok ? null : doc.error || "refused";
+  I.posts += ok ? 1 : 0;
+  I.version = null; // the listing again, with the meters' shelvings
+  await refresh();
+}
+
+const clockOf = (t) => new Date(t * 1000).toLocaleTimeString();
+const isShelved = (r) => r.shelved_until !== null && r.shelved_until !== undefined;
+
+function rowOf(r) {
+  const back = isShelved(r) ? ` <span class="shelf">back ${clockOf(r.shelved_until)}</span>` : "";
+  return `<tr data-i="${r.id}" class="${r.id === I.selected ? "sel" : ""} ${esc(r.state)}${isShelved(r) ? " shelved" : ""}">` +
+    `<td>${r.id}</td><td><span class="st ${esc(r.state)}">${esc(r.state)}</span>${back}</td>` +
+    `<td>${esc(r.kind)}</td><td>${ageOf(r.detected_at)}</td><td class="what">${esc(r.summary)}</td></tr>`;
 }
 
 function renderIncidents() {
@@ -114,15 +158,16 @@ function renderIncidents() {
     return;
   }
   const open = I.list.filter((r) => OPEN.includes(r.state)).length;
-  status.textContent = `${open} open · ${I.list.length} in all` +
+  const shelved = I.list.filter(isShelved);
+  status.textContent = `${open} open${shelved.length ? ` (${shelved.length} shelved)` : ""} · ${I.list.length} in all` +
     (I.list.length > SHOWN ? ` (the newest ${SHOWN} shown; burstloc incidents list has every one)` : "");
-  const rows = I.list.slice(0, SHOWN);
-  I.rendered = rows.length;
-  box.innerHTML = rows
-    .map((r) => `<tr data-i="${r.id}" class="${r.id === I.selected ? "sel" : ""} ${esc(r.state)}">` +
-      `<td>${r.id}</td><td><span class="st ${esc(r.state)}">${esc(r.state)}</span></td>` +
-      `<td>${esc(r.kind)}</td><td>${ageOf(r.detected_at)}</td><td class="what">${esc(r.summary)}</td></tr>`)
-    .join("");
+  // the shelved ones apart, after the open ones (the store lists open first, closed last)
+  const rest = I.list.filter((r) => !isShelved(r)).slice(0, SHOWN);
+  const opened = rest.filter((r) => OPEN.includes(r.state));
+  const group = shelved.length ? `<tr class="group" id="shelvedgroup"><td colspan="5">shelved: they come back by themselves</td></tr>` : "";
+  I.rendered = rest.length + shelved.length;
+  box.innerHTML = opened.map(rowOf).join("") + group + shelved.map(rowOf).join("") +
+    rest.filter((r) => !OPEN.includes(r.state)).map(rowOf).join("");
   renderDetail();
 }
 
@@ -136,20 +181,27 @@ function renderDetail() {
     dispatch: d.state === "acknowledged",
     close: d.state === "acknowledged" || d.state === "dispatched",
     note: true,
+    shelve: OPEN.includes(d.state),
+    unshelve: isShelved(d),
   };
   const outcome = d.outcome === "found"
     ? `found at ${fmt(d.found_x, 1)}, ${fmt(d.found_y, 1)}`
     : d.outcome === "false-alarm" ? "false alarm" : "";
+  const label = (h) => (h.action === "unshelved" && h.via === "expiry" ? "unshelved (expired)" : h.action);
+  const until = (h) => (h.action === "shelved" && h.detail && h.detail.until ? ` until ${clockOf(h.detail.until)}` : "");
   const history = d.history
-    .map((h) => `<li data-action="${esc(h.action)}"><span class="t">${new Date(h.at * 1000).toLocaleTimeString()}</span> ` +
-      `<b>${esc(h.action)}</b> by ${esc(h.by)}${h.via !== "monitor" ? ` <span class="via">(${esc(h.via)})</span>` : ""}` +
+    .map((h) => `<li data-action="${esc(h.action)}"><span class="t">${clockOf(h.at)}</span> ` +
+      `<b>${esc(label(h))}</b>${until(h)} by ${esc(h.by)}${h.via !== "monitor" ? ` <span class="via">(${esc(h.via)})</span>` : ""}` +
       `${h.note && h.by !== "monitor" ? ": " + esc(h.note) : ""}</li>`)
     .join("");
+  const shelf = isShelved(d)
+    ? ` · <b id="shelved">shelved until ${clockOf(d.shelved_until)}</b> <span class="shelf">by ${esc(d.shelved_by)}: ${esc(d.shelved_reason)}</span>`
+    : "";
   box.innerHTML =
     `<div class="head">incident <b>${d.id}</b> · <span class="st ${esc(d.state)}">${esc(d.state)}</span> · ${esc(d.kind)}` +
-    `${outcome ? ` · <b id="outcome">${esc(outcome)}</b>` : ""}</div>` +
+    `${outcome ? ` · <b id="outcome">${esc(outcome)}</b>` : ""}${shelf}</div>` +
     `<div class="sum">${esc(d.summary)}</div><ol id="inchistory">${history}</ol>`;
-  for (const [id, action] of [["b-ack", "acknowledge"], ["b-dispatch", "dispatch"], ["b-found", "close"], ["b-false", "close"], ["b-note", "note"]]) {
+  for (const [id, action] of [["b-ack", "acknowledge"], ["b-dispatch", "dispatch"], ["b-found", "close"], ["b-false", "close"], ["b-note", "note"], ["b-shelve", "shelve"], ["b-unshelve", "unshelve"]]) {
     $(id).disabled = !(I.writable && can[action]);
   }
   $("b-found").textContent = I.picking ? "Click the map…" : "Close: found at…";
@@ -164,6 +216,8 @@ $("b-dispatch").onclick = () => act("dispatch");
 $("b-found").onclick = () => { I.picking = !I.picking; map.classList.toggle("picking", I.picking); renderDetail(); };
 $("b-false").onclick = () => act("close", { outcome: "false-alarm" });
 $("b-note").onclick = () => act("note");
+$("b-shelve").onclick = () => act("shelve", { for: $("op-shelve-for").value, reason: $("op-reason").value.trim() });
+$("b-unshelve").onclick = () => act("unshelve");
 
 // the found point of the selected incident, on the map (called by app.js's draw)
 S.drawIncidents = (c) => {
