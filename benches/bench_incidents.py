@@ -19,7 +19,8 @@ Usage: ``.venv/bin/python benches/bench_incidents.py [--writes N] [--incidents N
    (``?after=VERSION``). Target: <= 1 s.
 3. **The monitor with the store on and off**: a feed of ``--bursts`` simulated bursts on
    paper15 (a real TSNet burst, repeated), one by one through a fresh live loop, ``--runs``
-   times each way, alternated: no observer; the recorder on SQLite; on PostgreSQL. Decisions
+   times each way, alternated: no observer; the recorder on SQLite; on PostgreSQL (each
+   keeping the readings around every alarm in a directory beside it, as the monitor does). Decisions
    per second of wall time and readings/s (median), and the decision latency (wall time from the
    reading that completes a decision to its record, median), each as a ratio to the loop
    without the store. Target: within 5 %.
@@ -223,13 +224,19 @@ def on_and_off(
     for k in range(runs):
         for setup in setups if k % 2 == 0 else setups[::-1]:
             store = None if setup.startswith("off") else stores[setup]()
-            recorder = None if store is None else Recorder(store, print)
-            gc.collect()  # each run from the same start: opening a store leaves garbage
-            results[setup].append(monitor_run(config, readings, recorder))
-            if recorder is not None:
-                recorder.close()
-                assert recorder.dropped == 0
-                store.close()
+            with tempfile.TemporaryDirectory(prefix="bench-readings-") as kept:
+                # as the monitor runs it: the readings around each alarm kept beside the store
+                recorder = (
+                    None
+                    if store is None
+                    else Recorder(store, print, meters=config.meters, readings=Path(kept))
+                )
+                gc.collect()  # each run from the same start: opening a store leaves garbage
+                results[setup].append(monitor_run(config, readings, recorder))
+                if recorder is not None:
+                    recorder.close()
+                    assert recorder.dropped == 0
+                    store.close()
     return results
 
 

@@ -15,7 +15,7 @@ from typing import Any
 
 from burstloc.exceptions import ConfigError
 
-__all__ = ["add_arguments", "start", "start_alerts", "stop"]
+__all__ = ["add_arguments", "stamp", "start", "start_alerts", "stop"]
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -224,3 +224,10 @@ def stop(recorder: Any, sender: Any = None) -> None:
                 sender.close()
         finally:
             recorder.store.close()
+
+
+def stamp(seconds: float | None) -> str:
+    """A wall-clock time as ISO 8601 UTC (``2026-11-28T06:02:00Z``)."""
+    from burstloc.incidents.export import iso
+
+    return iso(seconds).replace("+00:00", "Z")

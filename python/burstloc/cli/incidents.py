@@ -12,11 +12,12 @@ import sys
 import time
 from typing import Any
 
+from burstloc.cli._incidents import stamp
 from burstloc.cli.shelving import SHELVING
 from burstloc.cli.shelving import add_parsers as add_shelving
 from burstloc.exceptions import ConfigError
 
-__all__ = ["DB_VARIABLE", "add_parser", "age", "open_store", "run", "stamp"]
+__all__ = ["DB_VARIABLE", "add_parser", "age", "open_store", "run"]
 
 #: The environment variable naming the store when neither --db nor --state does.
 DB_VARIABLE = "BURSTLOC_DB"
@@ -162,13 +163,6 @@ def age(seconds: float) -> str:
     if s < 86_400:
         return f"{s // 3600} h {s % 3600 // 60:02d} min"
     return f"{s // 86_400} d {s % 86_400 // 3600} h"
-
-
-def stamp(seconds: float | None) -> str:
-    """A wall-clock time as ISO 8601 UTC (``2026-11-28T06:02:00Z``)."""
-    from burstloc.incidents.export import iso
-
-    return iso(seconds).replace("+00:00", "Z")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -42,7 +42,7 @@ def add_parsers(actions: Any, where: argparse.ArgumentParser) -> None:
 
 def run(store: Any, args: argparse.Namespace) -> None:
     """Handle one of :data:`SHELVING`."""
-    from burstloc.cli.incidents import stamp
+    from burstloc.cli._incidents import stamp
     from burstloc.incidents.shelving import parse_duration
 
     shelves = store.shelves

@@ -13,7 +13,8 @@ escalation time, once the incident is back. Imported once a store is opened (SQL
 from __future__ import annotations
 
 import json
-from typing import TYPE_CHECKING, Any
+from contextlib import AbstractContextManager
+from typing import Any, Protocol
 
 from sqlalchemy import bindparam, select
 
@@ -30,10 +31,21 @@ from burstloc.incidents.shelving import (
     UNSHELVED,
     check_shelving,
 )
-from burstloc.incidents.writing import add_history
+from burstloc.incidents.writing import NAME_CHARS, NOTE_CHARS, add_history, checked_text
 
-if TYPE_CHECKING:
-    from burstloc.incidents.store import IncidentStore
+
+class _Store(Protocol):
+    """What shelving needs of :class:`~burstloc.incidents.store.IncidentStore` (which holds
+    a :class:`Shelves`: named structurally, so that neither module imports the other)."""
+
+    @property
+    def where(self) -> str: ...
+    def clock(self) -> float: ...
+    def _read(self) -> AbstractContextManager[Any]: ...
+    def _write(self, doing: str, sync: str = ...) -> AbstractContextManager[Any]: ...
+    def _durable(self, durable: bool) -> None: ...
+    def get(self, incident: int) -> dict[str, Any]: ...
+
 
 __all__ = ["Shelves"]
 
@@ -54,7 +66,7 @@ _HOLD = (
 class Shelves:
     """The shelvings of ``store``'s incidents and meters (module docstring)."""
 
-    def __init__(self, store: IncidentStore) -> None:
+    def __init__(self, store: _Store) -> None:
         self.store = store
 
     def expire(self) -> int:
@@ -96,10 +108,8 @@ class Shelves:
             InputError: no operator name, no reason, a time out of bounds.
             IncidentStoreError: the database cannot be written.
         """
-        from burstloc.incidents.store import NAME_CHARS, _text
-
         store = self.store
-        name = str(_text(by, "the operator's name", NAME_CHARS, True))
+        name = str(checked_text(by, "the operator's name", NAME_CHARS, True))
         why = check_shelving(seconds, reason)
         self.expire()
         with store._write("write to") as connection:
@@ -130,11 +140,9 @@ class Shelves:
             InputError: no operator name.
             IncidentStoreError: the database cannot be written.
         """
-        from burstloc.incidents.store import NAME_CHARS, NOTE_CHARS, _text
-
         store = self.store
-        name = str(_text(by, "the operator's name", NAME_CHARS, True))
-        text = _text(note, "a note", NOTE_CHARS, False)
+        name = str(checked_text(by, "the operator's name", NAME_CHARS, True))
+        text = checked_text(note, "a note", NOTE_CHARS, False)
         self.expire()
         with store._write("write to") as connection:
             row = self._lock(connection, incident)
@@ -168,10 +176,8 @@ class Shelves:
             InputError: no meter, no operator name, no reason, a time out of bounds.
             IncidentStoreError: the database cannot be written.
         """
-        from burstloc.incidents.store import NAME_CHARS, _text
-
         store = self.store
-        name = str(_text(by, "the operator's name", NAME_CHARS, True))
+        name = str(checked_text(by, "the operator's name", NAME_CHARS, True))
         which = _meter(meter)
         why = check_shelving(seconds, reason)
         with store._write("write to") as connection:
@@ -193,10 +199,8 @@ class Shelves:
             InputError: no meter, no operator name, a meter not shelved.
             IncidentStoreError: the database cannot be written.
         """
-        from burstloc.incidents.store import NAME_CHARS, _text
-
         store = self.store
-        name = str(_text(by, "the operator's name", NAME_CHARS, True))
+        name = str(checked_text(by, "the operator's name", NAME_CHARS, True))
         which = _meter(meter)
         with store._write("write to") as connection:
             if not self._end_meter(connection, which, store.clock(), name):

@@ -54,25 +54,12 @@ SYNC_EVERY = 1.0
 #: Bytes of SQLite's log past which :meth:`IncidentStore.sync` checkpoints it into the database
 #: (no commit checkpoints: a checkpoint, and the log's restart after it, each wait for the disk).
 CHECKPOINT_BYTES = 16 << 20
-#: Longest operator name and note.
-NAME_CHARS, NOTE_CHARS = 200, 10_000
-
 #: The columns a listing shows (the record itself only with one incident).
 _LISTED = (
     "id", "kind", "state", "detected_at", "updated_at", "reading_time", "pipe", "meter",
     "summary", "active", "outcome", "found_x", "found_y", "closed_at", "alarmed", "readings",
     "onset", "shelved_until", "shelved_by", "shelved_reason",
 )  # fmt: skip
-
-
-def _text(value: str | None, what: str, most: int, required: bool) -> str | None:
-    if value is None or not value.strip():
-        if required:
-            raise InputError(f"{what} is required (who acts on an incident is recorded)")
-        return None
-    if len(value) > most:
-        raise InputError(f"{what} is longer than {most} characters")
-    return value.strip()
 
 
 def _fsync(path: str) -> int:
@@ -278,17 +265,16 @@ class IncidentStore:
         from sqlalchemy import select
 
         from burstloc.incidents.schema import incidents as t
+        from burstloc.incidents.writing import NAME_CHARS, NOTE_CHARS, add_history, checked_text
 
-        name = _text(by, "the operator's name", NAME_CHARS, True)
-        text = _text(note, "a note", NOTE_CHARS, action == "note")
+        name = checked_text(by, "the operator's name", NAME_CHARS, True)
+        text = checked_text(note, "a note", NOTE_CHARS, action == "note")
         if (action == "close") != (outcome is not None):
             raise InputError(
                 "closing an incident needs an outcome (found at a point, or a false alarm)"
                 if action == "close"
                 else f"an outcome is given only when closing, not to {action}"
             )
-        from burstloc.incidents.writing import add_history
-
         self.shelves.expire()
         with self._write("write to") as connection:
             query = select(t.c.state).where(t.c.id == incident).with_for_update()

@@ -16,6 +16,7 @@ from typing import Any
 
 from sqlalchemy import bindparam, select
 
+from burstloc.exceptions import InputError
 from burstloc.incidents.intake import MONITOR, Kept, Observed
 from burstloc.incidents.lifecycle import CLOSED, DETECTED
 from burstloc.incidents.schema import history as h
@@ -23,7 +24,10 @@ from burstloc.incidents.schema import incidents as t
 from burstloc.incidents.schema import meter_shelves as m
 from burstloc.incidents.shelving import SHELVED
 
-__all__ = ["OnNew", "add_history", "take_one"]
+__all__ = ["NAME_CHARS", "NOTE_CHARS", "OnNew", "add_history", "checked_text", "take_one"]
+
+#: The longest operator name and note kept (characters).
+NAME_CHARS, NOTE_CHARS = 200, 10_000
 
 #: Called in the transaction that opened an incident: ``(connection, incident, item, shelved)``
 #: (``shelved``: it arrived shelved, its meter being shelved).
@@ -154,3 +158,19 @@ def _update(
     add_history(
         connection, incident, item.at, MONITOR, MONITOR, action, state, item.summary, detail
     )
+
+
+def checked_text(value: str | None, what: str, most: int, required: bool) -> str | None:
+    """``value`` stripped, at most ``most`` characters; ``None`` when empty and not
+    ``required``.
+
+    Raises:
+        InputError: empty and ``required``, or too long (naming ``what``).
+    """
+    if value is None or not value.strip():
+        if required:
+            raise InputError(f"{what} is required (who acts on an incident is recorded)")
+        return None
+    if len(value) > most:
+        raise InputError(f"{what} is longer than {most} characters")
+    return value.strip()
