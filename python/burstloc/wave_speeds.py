@@ -35,8 +35,9 @@ import io
 import itertools
 import math
 import os
+from collections import Counter
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from burstloc._validate import FieldError, check_number, read_json, read_text
@@ -66,19 +67,22 @@ class WaveSpeeds:
         source: where they were read from (for messages and the records).
 
     Raises:
-        ConfigError: a speed out of ``[MIN_WAVE_SPEED, MAX_WAVE_SPEED]``, a pipe named twice or
+        ConfigError: a speed out of ``[MIN_WAVE_SPEED, MAX_WAVE_SPEED]``, a pipe listed twice or
             diameter classes out of order.
     """
 
     pipes: tuple[tuple[str, float], ...] = ()
     diameters: tuple[tuple[float, float], ...] = ()
     source: str = ""
+    _by_pipe: dict[str, float] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        names = [p for p, _ in self.pipes]
-        if len(set(names)) != len(names):
-            twice = sorted({p for p in names if names.count(p) > 1})
-            raise ConfigError(f"wave speeds{self._where}: pipe(s) named twice: {twice[:5]}")
+        by_pipe = dict(self.pipes)
+        if len(by_pipe) != len(self.pipes):
+            counts = Counter(p for p, _ in self.pipes)
+            twice = sorted(p for p, n in counts.items() if n > 1)
+            raise ConfigError(f"wave speeds{self._where}: pipe(s) listed twice: {twice[:5]}")
+        object.__setattr__(self, "_by_pipe", by_pipe)
         for name, speed in self.pipes:
             self._checked(speed, f"pipe {name!r}")
         bounds = [d for d, _ in self.diameters]
@@ -108,7 +112,7 @@ class WaveSpeeds:
     def speed(self, pipe: str, diameter: float, default: float) -> float:
         """The wave speed (m/s) of ``pipe`` of ``diameter`` (m); ``default`` when neither its
         name nor a diameter class gives one."""
-        own = dict(self.pipes).get(pipe)
+        own = self._by_pipe.get(pipe)
         if own is not None:
             return own
         for bound, speed in self.diameters:
@@ -116,29 +120,38 @@ class WaveSpeeds:
                 return speed
         return default
 
-    def of(self, wn: WaterNetworkModel, default: float) -> dict[str, float]:
-        """Every pipe's wave speed (m/s) in ``wn``, ``default`` where none is given.
+    def check(self, wn: WaterNetworkModel) -> None:
+        """Refuse speeds for pipes ``wn`` does not have.
 
         Raises:
             NetworkError: the file names a pipe the network does not have.
         """
         pipes = set(wn.pipe_name_list)
-        unknown = sorted(p for p, _ in self.pipes if p not in pipes)
+        unknown = sorted(p for p in self._by_pipe if p not in pipes)
         if unknown:
             raise NetworkError(
                 f"wave speeds{self._where} name {len(unknown)} pipe(s) the network does not "
                 f"have: {unknown[:5]}"
             )
+
+    def of(self, wn: WaterNetworkModel, default: float) -> dict[str, float]:
+        """Every pipe's wave speed (m/s) in ``wn``, ``default`` where none is given
+        (:meth:`check`'s errors)."""
+        self.check(wn)
         return {
             p: self.speed(p, float(wn.get_link(p).diameter), default) for p in wn.pipe_name_list
         }
 
+    def differing(self, wn: WaterNetworkModel, default: float) -> dict[str, float]:
+        """The speeds (m/s) of the pipes of ``wn`` that do not run at ``default``
+        (:meth:`check`'s errors)."""
+        return {p: a for p, a in self.of(wn, default).items() if a != default}
+
     def stretch(self, wn: WaterNetworkModel, wave_speed: float) -> dict[str, float]:
         """Per pipe of ``wn`` whose speed is not ``wave_speed``, the metres of wave travel at
         ``wave_speed`` that one metre of it takes (``wave_speed / its speed``): path lengths
-        weighted so are travel times times ``wave_speed`` (:func:`of`'s errors)."""
-        speeds = self.of(wn, wave_speed)
-        return {p: wave_speed / a for p, a in speeds.items() if a != wave_speed}
+        weighted so are travel times times ``wave_speed`` (:meth:`check`'s errors)."""
+        return {p: wave_speed / a for p, a in self.differing(wn, wave_speed).items()}
 
     def to_json(self) -> dict[str, Any]:
         """``{"pipes": {name: m/s}, "diameters": [{"up_to_mm", "wave_speed"}]}``, the JSON form
@@ -229,11 +242,7 @@ def read_wave_speeds(path: str | os.PathLike[str]) -> WaveSpeeds:
         return WaveSpeeds.from_json(read_json(path, "wave speeds"), source)
     where = f"wave speeds {source}"
     text = read_text(path, "wave speeds", _MAX_FILE_BYTES, bom=True)
-    rows = list(_csv_rows(text, where))
+    rows = tuple(_csv_rows(text, where))
     if not rows:
         raise ConfigError(f"{where}: no 'pipe,wave_speed' line")
-    names = [p for p, _ in rows]
-    twice = sorted({p for p in names if names.count(p) > 1})
-    if twice:
-        raise ConfigError(f"{where}: pipe(s) listed twice: {twice[:5]}")
-    return WaveSpeeds(tuple(rows), (), source)
+    return WaveSpeeds(rows, (), source)  # a pipe listed twice is refused there

@@ -120,7 +120,7 @@ def wave_speeds_of(args: argparse.Namespace, network: NetworkSource) -> WaveSpee
     from burstloc.wave_speeds import read_wave_speeds
 
     speeds = read_wave_speeds(args.wave_speeds)
-    speeds.of(as_network(network).model, WAVE_SPEED)  # every pipe it names is the network's
+    speeds.check(as_network(network).model)
     return speeds
 
 

@@ -255,8 +255,8 @@ def _simulate(scenario: EventScenario) -> ScenarioResult:
         wn = network.as_network(source, diagnostics=True).editable()  # the events change it
         nodes = _asset_nodes(wn, scenario)
         meters = network.junction_names(wn)
-        given = scenario.wave_speeds.of(wn, scenario.wave_speed) if scenario.wave_speeds else {}
-        speeds = {p: a for p, a in given.items() if a != scenario.wave_speed}
+        given = scenario.wave_speeds
+        speeds = given.differing(wn, scenario.wave_speed) if given else {}
         prepared = prepare_for_tsnet(wn, keep=(scenario.asset,))
         transient = run_transient(
             wn,
