@@ -87,7 +87,7 @@ def arrival_objective(network: str, meters: tuple[str, ...], pipes: int | None) 
 
     from burstloc.constants import WAVE_SPEED
     from burstloc.sim.model.prepare import arrival_geometry
-    from burstloc.sim.placement.methods import ARRIVAL_POINTS, _travel
+    from burstloc.sim.placement.arrival import ARRIVAL_POINTS, _travel
 
     resolution = 0.2
     geometry, distances = arrival_geometry(network, list(meters))

@@ -335,7 +335,8 @@ def _check_results(
     shortest = min(results, key=lambda r: float(r.time[-1]))
     for spec in runs:
         for offset in phase_offsets(spec, phases, phase_span):
-            times, _ = readings_at_offset(shortest, spec, offset)
+            # the ticks alone: one meter's column (every junction's is a copy of the heads)
+            times, _ = readings_at_offset(shortest, spec, offset, list(shortest.junctions)[:1])
             n = readings_after(times, float(shortest.metadata["burst_start"]))
             if n < 2 * spec.localization_interval:
                 raise ConfigError(
