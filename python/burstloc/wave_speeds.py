@@ -46,7 +46,7 @@ from burstloc.exceptions import ConfigError, NetworkError
 if TYPE_CHECKING:
     from wntr.network import WaterNetworkModel
 
-__all__ = ["MAX_WAVE_SPEED", "MIN_WAVE_SPEED", "WaveSpeeds", "read_wave_speeds"]
+__all__ = ["MAX_WAVE_SPEED", "MIN_WAVE_SPEED", "WaveSpeeds", "read_wave_speeds", "stretch_of"]
 
 #: The slowest wave a pipe may be given (m/s): thin plastic mains run at about 200-300 m/s.
 MIN_WAVE_SPEED = 50.0
@@ -147,6 +147,17 @@ class WaveSpeeds:
         (:meth:`check`'s errors)."""
         return {p: a for p, a in self.of(wn, default).items() if a != default}
 
+    def describe(self, wn: WaterNetworkModel, default: float) -> str:
+        """``"3 of 25 pipes at their own wave speed (400-600 m/s), the others at 1200 m/s"``:
+        what :meth:`differing` finds on ``wn``, in words (:meth:`check`'s errors)."""
+        own = self.differing(wn, default)
+        low, high = min(own.values(), default=default), max(own.values(), default=default)
+        speeds = "" if not own else f" ({low:g} m/s)" if low == high else f" ({low:g}-{high:g} m/s)"
+        return (
+            f"{len(own)} of {wn.num_pipes} pipes at their own wave speed{speeds}, the others "
+            f"at {default:g} m/s"
+        )
+
     def stretch(self, wn: WaterNetworkModel, wave_speed: float) -> dict[str, float]:
         """Per pipe of ``wn`` whose speed is not ``wave_speed``, the metres of wave travel at
         ``wave_speed`` that one metre of it takes (``wave_speed / its speed``): path lengths
@@ -193,6 +204,14 @@ class WaveSpeeds:
             speed = _checked_at(where, entry["wave_speed"], f"diameters[{i}].wave_speed")
             bounds.append((mm / 1000.0, speed))
         return cls(named, tuple(bounds), source)
+
+
+def stretch_of(
+    wave_speeds: WaveSpeeds | None, wn: WaterNetworkModel, wave_speed: float
+) -> dict[str, float]:
+    """:meth:`WaveSpeeds.stretch` of ``wave_speeds`` on ``wn`` at ``wave_speed``; ``{}`` (every
+    pipe at ``wave_speed``) without them (:meth:`WaveSpeeds.check`'s errors)."""
+    return wave_speeds.stretch(wn, wave_speed) if wave_speeds else {}
 
 
 def _checked_at(where: str, value: Any, field: str, *, bound: bool = False) -> float:

@@ -23,6 +23,8 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+import pytest
+
 from burstloc.cli import main
 from conftest import write_tiny
 
@@ -85,5 +87,29 @@ def test_evaluate_reads_the_network_once(tmp_path: Path, capsys: Any, monkeypatc
     with opens_of(path) as opened:
         assert main([*argv, "--phases", "1", "--quiet", "--workers", "1"]) == 0
     assert "fused" in capsys.readouterr().out
+    assert len(opened) == 1, "\n".join(opened)
+    assert "read_network" in opened[0]
+
+
+@pytest.mark.parametrize(
+    "mode",
+    [
+        ["--meters", "2", "--compare", "--phases", "1"],
+        ["--keep", "J1", "--meters", "1"],
+        ["--score", "J1", "J4"],
+    ],
+    ids=["compare", "keep", "score"],
+)
+def test_place_with_wave_speeds_reads_the_network_once(
+    mode: list[str], tmp_path: Path, capsys: Any, monkeypatch: Any
+) -> None:
+    monkeypatch.setenv("BURSTLOC_CACHE_DIR", str(tmp_path / "cache"))  # every burst simulated
+    path = _network(tmp_path)
+    speeds = tmp_path / "speeds.csv"
+    speeds.write_text("D,250\n")
+    argv = ["place", str(path), *mode, "--wave-speeds", str(speeds), "--quiet", "--workers", "1"]
+    with opens_of(path) as opened:
+        assert main(argv) == 0
+    assert "1 of 5 pipes at their own wave speed (250 m/s)" in capsys.readouterr().out
     assert len(opened) == 1, "\n".join(opened)
     assert "read_network" in opened[0]

@@ -12,7 +12,15 @@ import pytest
 
 from burstloc.cli import main
 from burstloc.localize.config import Calibration
-from burstloc.sim.placement.methods import MeterSet, meter_ambiguity, score_meters
+from burstloc.network import load_network
+from burstloc.sim.placement.methods import (
+    MeterScores,
+    MeterSet,
+    meter_ambiguity,
+    place_meters,
+    score_meters,
+)
+from burstloc.wave_speeds import read_wave_speeds
 from conftest import write_tiny
 
 SCHEMA = json.loads((Path(__file__).parents[1] / "evaluate_schema.json").read_text())
@@ -125,6 +133,11 @@ def _scores(out: str, what: str) -> tuple[int, int, int]:
     return int(found.group(1)), int(found.group(2)), int(found.group(3))
 
 
+def _printed(scores: MeterScores) -> tuple[int, int, int]:
+    """What :func:`_scores` reads back for ``scores``."""
+    return round(scores.ambiguous), round(scores.ambiguity.median), round(100 * scores.searchable)
+
+
 def test_place_keep_keeps_the_owned_meters_and_reports_the_gain(
     paper15: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -142,9 +155,7 @@ def test_place_keep_keeps_the_owned_meters_and_reports_the_gain(
     before, after = score_meters(paper15, ("N4", "5")), score_meters(paper15, placed.meters)
     assert after.ambiguous < before.ambiguous
     for what, scores in (("the 2 kept", before), ("with the 2 added", after)):
-        printed = _scores(out, what)
-        expected = (scores.ambiguous, scores.ambiguity.median, 100 * scores.searchable)
-        assert printed == tuple(round(x) for x in expected)
+        assert _scores(out, what) == _printed(scores)
     gain = before.ambiguous - after.ambiguous
     assert f"the 2 added rule out {gain:.0f} m ({100 * gain / before.ambiguous:.0f} %)" in out
     # the same owned meters as IDs, with another method
@@ -190,3 +201,72 @@ def test_place_refuses_meter_lists_it_cannot_use(
     assert "place needs --meters K" in capsys.readouterr().err
     assert main(["place", str(paper15), "--keep", "N4", "--meters", "15"]) == 2
     assert "meter count must be between 1 and 14" in capsys.readouterr().err
+
+
+def test_place_times_paths_at_the_pipes_wave_speeds(
+    paper15: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    speeds = tmp_path / "speeds.csv"
+    speeds.write_text("pipe,wave_speed\nP7,400\nP8,400\n")  # two PE mains
+    slow = read_wave_speeds(speeds)
+    meters = ["N4", "N7", "1", "8"]
+    assert main(["place", str(paper15), "--score", *meters, "--wave-speeds", str(speeds)]) == 0
+    out = capsys.readouterr().out
+    assert (
+        f"travel times from {speeds}: 2 of 25 pipes at their own wave speed (400 m/s), the "
+        "others at 1200 m/s" in out
+    )
+    timed, uniform = score_meters(paper15, meters, wave_speeds=slow), score_meters(paper15, meters)
+    assert _scores(out, "4 meters") == _printed(timed)
+    assert round(timed.ambiguous) != round(uniform.ambiguous)  # 417 m against 366 m
+
+    # every pipe at 400 m/s is the run at --wave-speed 400: three times the travel time, a
+    # capture interval rules out three times finer, the ambiguous main far shorter
+    every = tmp_path / "every.csv"
+    every.write_text("".join(f"{p},400\n" for p in load_network(paper15).pipe_name_list))
+    assert main(["place", str(paper15), "--score", *meters, "--wave-speeds", str(every)]) == 0
+    plastic = _scores(capsys.readouterr().out, "4 meters")
+    assert main(["place", str(paper15), "--score", *meters, "--wave-speed", "400"]) == 0
+    assert plastic == _scores(capsys.readouterr().out, "4 meters")
+    assert plastic[0] < 0.5 * uniform.ambiguous
+
+    # --keep and --out: placed with them, the meter file records them
+    out_file = tmp_path / "more.json"
+    argv = ["place", str(paper15), "--keep", "N4,5", "--meters", "2", "--out", str(out_file)]
+    assert main([*argv, "--wave-speeds", str(speeds)]) == 0
+    out = capsys.readouterr().out
+    placed = MeterSet.load(out_file)
+    assert placed.meters == (
+        place_meters(paper15, 2, keep=("N4", "5"), method="region", wave_speeds=slow).meters
+    )
+    # N4 N8 1 5: at one speed the greedy adds N3 and N8 instead
+    assert placed.meters != place_meters(paper15, 2, keep=("N4", "5"), method="region").meters
+    doc = json.loads(out_file.read_text())
+    assert doc["wave_speeds"] == {"pipes": {"P7": 400.0, "P8": 400.0}, "diameters": []}
+    after = score_meters(paper15, placed.meters, wave_speeds=slow)
+    assert _scores(out, "with the 2 added") == _printed(after)
+    argv = ["place", str(paper15), "--meters", "2", "--out", str(tmp_path / "plain.json")]
+    assert main(argv) == 0
+    assert "wave_speeds" not in json.loads((tmp_path / "plain.json").read_text())
+
+
+def test_place_refuses_a_bad_wave_speeds_file_naming_it(
+    paper15: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    unknown = tmp_path / "unknown.csv"
+    unknown.write_text("P7,600\nP99,500\n")
+    malformed = tmp_path / "malformed.csv"
+    malformed.write_text("pipe,wave_speed\nP7,fast\n")
+    out_file = tmp_path / "m.json"
+    for mode in (["--score", "N4", "8"], ["--meters", "2", "--out", str(out_file)]):
+        argv = ["place", str(paper15), *mode, "--wave-speeds"]
+        assert main([*argv, str(unknown)]) == 2
+        err = capsys.readouterr().err
+        assert f"wave speeds ({unknown}) name 1 pipe(s) the network does not have: ['P99']" in err
+        assert str(paper15) in err
+        assert main([*argv, str(malformed)]) == 2
+        err = capsys.readouterr().err
+        assert f"wave speeds {malformed} line 2: the wave speed 'fast' is not a number" in err
+        assert main([*argv, str(tmp_path / "missing.csv")]) == 2
+        assert f"cannot read wave speeds {tmp_path / 'missing.csv'}" in capsys.readouterr().err
+    assert not out_file.exists()

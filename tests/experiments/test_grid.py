@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -16,6 +17,7 @@ from burstloc.experiments.grid import (
     study_grid,
     study_time_step,
 )
+from burstloc.wave_speeds import WaveSpeeds
 
 
 def test_grid_varies_one_factor_at_a_time_on_the_first_network() -> None:
@@ -63,6 +65,22 @@ def test_scenarios_carry_the_factors_and_settings(tiny_network: Path) -> None:
     assert {(s.friction, s.position, s.duration, s.time_step) for s in scenarios} == {
         ("unsteady", 0.3, 50.0, 0.05)
     }
+    assert {s.wave_speeds for s in scenarios} == {None}
+    slow = WaveSpeeds((("D", 250.0),), source="speeds.csv")
+    timed = point_scenarios(point, replace(settings, wave_speeds=slow))
+    assert {s.wave_speeds for s in timed} == {slow}  # simulated at D's speed
+    assert timed[0].cache_key() != scenarios[0].cache_key()
+
+
+def test_the_settings_record_the_wave_speeds_only_when_given() -> None:
+    assert "wave_speeds" not in StudySettings().to_json()
+    slow = WaveSpeeds((("D", 250.0),), source="speeds.csv")
+    assert StudySettings(wave_speeds=slow).to_json()["wave_speeds"] == {
+        "pipes": {"D": 250.0},
+        "diameters": [],
+    }
+    with pytest.raises(ConfigError, match="wave_speeds must be WaveSpeeds"):
+        StudySettings(wave_speeds={"D": 250.0})  # type: ignore[arg-type]
 
 
 def test_time_step_rule_keeps_tsnets_step_unless_coarser_than_the_finest_capture(

@@ -4,7 +4,9 @@ study (the grid itself: test_grid.py)."""
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -13,6 +15,7 @@ from burstloc.exceptions import ConfigError
 from burstloc.experiments.grid import StudyPoint, StudySettings, study_grid
 from burstloc.experiments.report import write_study_report as write_report
 from burstloc.experiments.study import run_study
+from burstloc.wave_speeds import WaveSpeeds
 
 
 def test_tiny_study_end_to_end(tiny_network: Path, tmp_path: Path) -> None:
@@ -110,21 +113,25 @@ def test_cli_study_and_calibrate_commands(
     assert "wrote" in capsys.readouterr().out
 
 
-def test_study_takes_a_meter_file_and_a_placement_method(tiny_network: Path) -> None:
-    from burstloc.sim.placement.methods import place_meters
-
-    meter_set = place_meters(tiny_network, 3, method="arrival")
-    settings = StudySettings(
+def _arrivals_at_fine_capture(**settings: Any) -> StudySettings:
+    """A quick study: CUSUM, the arrival localizer, instantaneous readings at 0.2 s, one
+    phase, 90 s bursts; ``settings`` the rest."""
+    return StudySettings(
         capture_intervals=(0.2,),
         detectors=("cusum",),
         localizers=("arrival",),
         meter_models=("instantaneous",),
         phases=1,
         duration=90.0,
-        pipes=("B",),
-        placement="arrival",
-        meter_sets=(meter_set,),
+        **settings,
     )
+
+
+def test_study_takes_a_meter_file_and_a_placement_method(tiny_network: Path) -> None:
+    from burstloc.sim.placement.methods import place_meters
+
+    meter_set = place_meters(tiny_network, 3, method="arrival")
+    settings = _arrivals_at_fine_capture(pipes=("B",), placement="arrival", meter_sets=(meter_set,))
     assert settings.meters_for(tiny_network) == meter_set.meters
     points = study_grid([tiny_network], {"meter_fraction": (1.0, 0.5)})
     rows, problems = run_study(points, settings, workers=1, progress=False)
@@ -135,3 +142,41 @@ def test_study_takes_a_meter_file_and_a_placement_method(tiny_network: Path) -> 
     assert meters == {f"{name}: default": 3, f"{name}: meter_fraction=0.5": 2}
     with pytest.raises(ConfigError, match="placement must be one of"):
         StudySettings(placement="random")
+
+
+def test_a_study_simulates_and_localizes_at_the_pipes_wave_speeds(
+    tiny_network: Path, tmp_path: Path
+) -> None:
+    plastic = WaveSpeeds(tuple((p, 400.0) for p in "ABCDE"), source="pe.csv")  # every main PE
+    settings = _arrivals_at_fine_capture(pipes=("B", "C", "D", "E"), wave_speeds=plastic)
+    points = study_grid([tiny_network], {"position": (0.5, 0.2)})
+    rows, problems = run_study(points, settings, workers=1, progress=False)
+    plain, _ = run_study(points, replace(settings, wave_speeds=None), workers=1, progress=False)
+    assert problems == [] and len(rows) == len(plain) == 2
+    at_one_speed = {r["point"]: r for r in plain}
+    for row in rows:
+        # simulated at 400 m/s: the meters hear each burst three times later than at 1200
+        assert row["median_time_s"] > at_one_speed[row["point"]]["median_time_s"]
+        # and the localizer, timing each path at 400 m/s, names every burst's pipe first
+        # (told one speed of 1200 m/s it names half of them at 0.2 of the pipe)
+        assert row["top1"] == 1.0
+    report = write_report(rows, settings, tmp_path / "out", problems).read_text()
+    assert "Wave speeds per pipe from pe.csv: 5 pipe(s) and 0 diameter class(es)" in report
+    saved = json.loads((tmp_path / "out" / "results.json").read_text())
+    assert saved["settings"]["wave_speeds"] == plastic.to_json()
+
+
+def test_cli_study_refuses_a_wave_speeds_file_naming_what_is_wrong(
+    tiny_network: Path, paper15: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    speeds = tmp_path / "speeds.csv"
+    speeds.write_text("pipe,wave_speed\nD,250\n")  # a pipe of the tiny network, not paper15's
+    argv = ["study", str(tiny_network), str(paper15), "--out", str(tmp_path / "s")]
+    assert main([*argv, "--wave-speeds", str(speeds)]) == 2
+    err = capsys.readouterr().err
+    assert f"wave speeds ({speeds}) name 1 pipe(s) the network does not have: ['D']" in err
+    assert str(paper15) in err
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"pipes": {"D": 9000}}')
+    assert main([*argv, "--wave-speeds", str(bad)]) == 2
+    assert f"wave speeds {bad}: pipes.D" in capsys.readouterr().err

@@ -8,7 +8,7 @@ import math
 from typing import TYPE_CHECKING, Any
 
 from burstloc.constants import BURST_FLOW, BURST_SHARE, WAVE_SPEED
-from burstloc.exceptions import ConfigError
+from burstloc.exceptions import ConfigError, NetworkError
 
 if TYPE_CHECKING:
     from burstloc.network import NetworkSource
@@ -107,12 +107,13 @@ def add_wave_speeds_option(parser: Options, help: str) -> None:
     )
 
 
-def wave_speeds_of(args: argparse.Namespace, network: NetworkSource) -> WaveSpeeds | None:
-    """The ``--wave-speeds`` file read and checked against ``network`` (``None`` without it).
+def wave_speeds_of(args: argparse.Namespace, *networks: NetworkSource) -> WaveSpeeds | None:
+    """The ``--wave-speeds`` file read and checked against each of ``networks`` (``None``
+    without it).
 
     Raises:
         ConfigError: the file cannot be read or is not a wave-speeds file (naming it).
-        NetworkError: it names a pipe the network does not have.
+        NetworkError: it names a pipe one of the networks does not have.
     """
     if getattr(args, "wave_speeds", None) is None:
         return None
@@ -120,7 +121,12 @@ def wave_speeds_of(args: argparse.Namespace, network: NetworkSource) -> WaveSpee
     from burstloc.wave_speeds import read_wave_speeds
 
     speeds = read_wave_speeds(args.wave_speeds)
-    speeds.check(as_network(network).model)
+    for network in networks:
+        read = as_network(network)
+        try:
+            speeds.check(read.model)
+        except NetworkError as exc:
+            raise NetworkError(f"{exc} ({read.path})") from None
     return speeds
 
 

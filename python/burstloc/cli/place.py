@@ -9,15 +9,20 @@ from burstloc._atomic import check_output
 from burstloc.cli._options import (
     add_run_options,
     add_wave_speed_option,
+    add_wave_speeds_option,
     check_run_options,
     run_of,
+    wave_speeds_of,
 )
 from burstloc.constants import SEARCHABLE
 from burstloc.exceptions import ConfigError
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
     from burstloc.network import Network
     from burstloc.sim.placement.methods import MeterScores
+    from burstloc.wave_speeds import WaveSpeeds
 
 __all__ = ["add_parser", "run"]
 
@@ -46,8 +51,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "times, over burst points weighted by pipe length: what 'region' minimises), its "
         "median over the bursts and the share of bursts it leaves at most 1 km to search. "
         "--score rates a given set on the same measures and ranks its meters by what each "
-        "adds. The meter file (JSON, format burstloc-meters/1) is accepted by `evaluate`, "
-        "`calibrate`, `simulate` and `study` (--meters-file, or --meters FILE).",
+        "adds. Arrival times are path lengths over --wave-speed, or with --wave-speeds each "
+        "pipe's travel at its own speed. The meter file (JSON, format burstloc-meters/1) is "
+        "accepted by `evaluate`, `calibrate`, `simulate` and `study` (--meters-file, or "
+        "--meters FILE).",
     )
     parser.add_argument("network", metavar="NETWORK.inp", help="EPANET INP file")
     parser.add_argument(
@@ -89,6 +96,12 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "arrival times closer than that count as alike",
     )
     add_wave_speed_option(parser, "arrival, region: the pressure wave speed, m/s")
+    add_wave_speeds_option(
+        parser,
+        "The arrival and region methods and the scores time each path at its pipes' speeds (a "
+        "pipe at 400 m/s takes three times as long as at 1200); the meter file records them; "
+        "--compare also simulates the bursts and calibrates with them.",
+    )
     parser.add_argument("--out", default=None, metavar="FILE", help="write the meter file")
     parser.add_argument(
         "--compare",
@@ -115,7 +128,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> int:
     """Handle ``burstloc place``: print the meters; write the file with ``--out``."""
     from burstloc.network import read_network
-    from burstloc.sim.placement.methods import meter_list, place_meters, score_meters
+    from burstloc.sim.placement.methods import meter_list, place_meters
 
     if args.score is not None:
         for option, value in [("--meters", args.meters), ("--keep", args.keep)]:
@@ -124,7 +137,8 @@ def run(args: argparse.Namespace) -> int:
         if args.out or args.compare:
             raise ConfigError("--score rates a given set: --out and --compare do not apply")
         network = read_network(args.network)
-        return _score(args, network, meter_list(args.score, network))
+        wave_speeds = _wave_speeds(args, network)
+        return _score(args, network, meter_list(args.score, network), wave_speeds)
     if args.meters is None:
         raise ConfigError("place needs --meters K (how many meters to place or add), or --score")
     if args.out:
@@ -134,6 +148,7 @@ def run(args: argparse.Namespace) -> int:
             raise ConfigError("--compare places from scratch: it does not take --keep")
         check_run_options(args)
     network = read_network(args.network)
+    wave_speeds = _wave_speeds(args, network)
     keep = () if args.keep is None else meter_list(args.keep, network)
     method = args.method or ("region" if keep else "arrival")
     placed = place_meters(
@@ -143,16 +158,16 @@ def run(args: argparse.Namespace) -> int:
         wave_speed=args.wave_speed,
         resolution=args.capture_interval,
         keep=keep,
+        wave_speeds=wave_speeds,
     )
-    timing = {"wave_speed": args.wave_speed, "resolution": args.capture_interval}
     if keep:
         added = [m for m in placed.meters if m not in set(keep)]
         print(
             f"{len(placed.meters)} of {placed.junctions} junctions ({placed.method}): the "
             f"{len(keep)} kept and {len(added)} added: " + " ".join(added)
         )
-        before = score_meters(network, keep, **timing)
-        after = score_meters(network, placed.meters, **timing)
+        before = _scores(args, network, keep, wave_speeds)
+        after = _scores(args, network, placed.meters, wave_speeds)
         print(_scores_line(f"the {len(keep)} kept", before))
         print(_scores_line(f"with the {len(added)} added", after))
         gain = before.ambiguous - after.ambiguous
@@ -166,7 +181,7 @@ def run(args: argparse.Namespace) -> int:
             f"{len(placed.meters)} of {placed.junctions} junctions ({placed.method}): "
             + " ".join(placed.meters)
         )
-        print(_scores_line("the meters", score_meters(network, placed.meters, **timing)))
+        print(_scores_line("the meters", _scores(args, network, placed.meters, wave_speeds)))
     if args.out:
         print(f"wrote {placed.save(args.out)}")
     if args.compare:
@@ -179,9 +194,44 @@ def run(args: argparse.Namespace) -> int:
             phases=args.phases,
             position=args.position,
             **run_of(args),
+            wave_speeds=wave_speeds,
         )
         print(format_comparison(rows), end="")
     return 0
+
+
+def _wave_speeds(args: argparse.Namespace, network: Network) -> WaveSpeeds | None:
+    """The ``--wave-speeds`` file checked against ``network`` (:func:`wave_speeds_of`), said
+    in one line when given."""
+    wave_speeds = wave_speeds_of(args, network)
+    if wave_speeds is not None:
+        print(
+            f"travel times from {args.wave_speeds}: "
+            + wave_speeds.describe(network.model, args.wave_speed)
+        )
+    return wave_speeds
+
+
+def _scores(
+    args: argparse.Namespace,
+    network: Network,
+    meters: Sequence[str],
+    wave_speeds: WaveSpeeds | None,
+    *,
+    each: bool = False,
+) -> MeterScores:
+    """:func:`~burstloc.sim.placement.methods.score_meters` of ``meters`` at the options'
+    timing (``--wave-speed``, ``--capture-interval``, the ``--wave-speeds`` file)."""
+    from burstloc.sim.placement.methods import score_meters
+
+    return score_meters(
+        network,
+        meters,
+        wave_speed=args.wave_speed,
+        resolution=args.capture_interval,
+        each=each,
+        wave_speeds=wave_speeds,
+    )
 
 
 def _scores_line(what: str, scores: MeterScores) -> str:
@@ -194,17 +244,14 @@ def _scores_line(what: str, scores: MeterScores) -> str:
     )
 
 
-def _score(args: argparse.Namespace, network: Network, meters: tuple[str, ...]) -> int:
+def _score(
+    args: argparse.Namespace,
+    network: Network,
+    meters: tuple[str, ...],
+    wave_speeds: WaveSpeeds | None,
+) -> int:
     """``place --score``: the set's scores and its meters ranked by what each adds."""
-    from burstloc.sim.placement.methods import score_meters
-
-    scores = score_meters(
-        network,
-        meters,
-        wave_speed=args.wave_speed,
-        resolution=args.capture_interval,
-        each=True,
-    )
+    scores = _scores(args, network, meters, wave_speeds, each=True)
     print(_scores_line(f"{len(meters)} meters", scores))
     print("each meter's contribution: the expected ambiguous main without it, minus with it")
     ranked = scores.contributions()

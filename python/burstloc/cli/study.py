@@ -10,11 +10,19 @@ from burstloc._atomic import check_output
 from burstloc.cli._options import (
     add_run_options,
     add_time_step_option,
+    add_wave_speeds_option,
     check_run_options,
     run_of,
     time_step_of,
+    wave_speeds_of,
 )
-from burstloc.constants import CAPTURE_INTERVALS, DETECTORS, RANKING_LOCALIZERS, SCENARIO_DURATION
+from burstloc.constants import (
+    CAPTURE_INTERVALS,
+    DETECTORS,
+    RANKING_LOCALIZERS,
+    SCENARIO_DURATION,
+    WAVE_SPEED,
+)
 from burstloc.exceptions import ConfigError
 from burstloc.experiments.grid import DEFAULT_LEVELS, DEFAULT_NETWORKS, StudySettings, study_grid
 from burstloc.experiments.report import write_study_report as write_report
@@ -70,6 +78,12 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="meter files from `burstloc place`: a network with one uses its meters instead of "
         "every junction at full coverage; a file for none of the networks is refused",
     )
+    add_wave_speeds_option(
+        parser,
+        f"The study runs the other pipes at {WAVE_SPEED:g} m/s. On every network of the study "
+        "(a pipe one of them does not have is refused): the bursts are simulated, the meters "
+        "placed and the localizers calibrated with them; results.json records them.",
+    )
     add_run_options(parser, cache=False)
     parser.set_defaults(handler=run)
     return parser
@@ -100,6 +114,7 @@ def run(args: argparse.Namespace) -> int:
         time_step=time_step_of(args),
         placement=args.placement,
         meter_sets=meter_sets,
+        wave_speeds=wave_speeds_of(args, *args.networks),
     )
     points = study_grid(args.networks, {f: DEFAULT_LEVELS[f] for f in args.factors})
     rows, problems = run_study(points, settings, **run_of(args))

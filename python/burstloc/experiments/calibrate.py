@@ -80,7 +80,7 @@ from burstloc.localize.config import (
     IntervalCalibration,
 )
 from burstloc.localize.onset import FINEST_STEP_INTERVAL
-from burstloc.wave_speeds import WaveSpeeds
+from burstloc.wave_speeds import WaveSpeeds, stretch_of
 
 if TYPE_CHECKING:
     from burstloc.network import NetworkSource
@@ -374,7 +374,7 @@ def calibrate(
         sigmas = np.full(len(meter_list), sigma)
         kind = "noise-model"
         extra = {}
-    stretch = wave_speeds.stretch(wn, wave_speed) if wave_speeds else {}
+    stretch = stretch_of(wave_speeds, wn, wave_speed)
     spread = travel_time_spread(length_graph(wn, stretch), meter_list, wave_speed)
     travel = [wn.get_link(p).length * stretch.get(p, 1.0) for p in wn.pipe_name_list]
     pipe_travel = float(np.median(travel)) / wave_speed

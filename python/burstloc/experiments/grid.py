@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -23,6 +23,7 @@ from burstloc.constants import (
 from burstloc.exceptions import ConfigError
 from burstloc.network import Network, NetworkSource, as_network, identify
 from burstloc.sim.placement.methods import PLACEMENT_METHODS, MeterSet
+from burstloc.wave_speeds import WaveSpeeds
 
 if TYPE_CHECKING:
     from burstloc.localize.evidence import MeterModel
@@ -115,9 +116,11 @@ class StudySettings:
             capture interval).
         placement: how meters are placed for a meter fraction below 1, one of
             :data:`burstloc.sim.placement.methods.PLACEMENT_METHODS` (default ``"coverage"``).
-        meter_sets: meter files (:class:`burstloc.sim.placement.methods.MeterSet`); a network with
-        one
-            uses its meters instead of every junction at full coverage.
+        meter_sets: meter files (:class:`burstloc.sim.placement.methods.MeterSet`); a network
+            with one uses its meters instead of every junction at full coverage.
+        wave_speeds: pipes (or diameter classes) of their own wave speed, on every network of
+            the study (``None``: one speed): the bursts are simulated, the meters placed and
+            the localizers calibrated with them.
     """
 
     capture_intervals: tuple[float, ...] = CAPTURE_INTERVALS
@@ -132,6 +135,7 @@ class StudySettings:
     time_step: float | None = None
     placement: str = "coverage"
     meter_sets: tuple[MeterSet, ...] = ()
+    wave_speeds: WaveSpeeds | None = None
 
     def meters_for(self, network: NetworkSource) -> tuple[str, ...] | None:
         """The meters of ``network``'s meter file among :attr:`meter_sets`, or ``None``."""
@@ -160,6 +164,18 @@ class StudySettings:
             raise ConfigError(f"capture_intervals must be > 0 s, got {self.capture_intervals}")
         if not (isinstance(self.phases, int) and self.phases >= 1):
             raise ConfigError(f"phases must be a positive integer, got {self.phases!r}")
+        if self.wave_speeds is not None and not isinstance(self.wave_speeds, WaveSpeeds):
+            raise ConfigError(f"wave_speeds must be WaveSpeeds, got {self.wave_speeds!r}")
+
+    def to_json(self) -> dict[str, Any]:
+        """The settings as the study's ``results.json`` records them: the meter files as
+        written, ``wave_speeds`` only when given (in the wave-speeds file's JSON form)."""
+        document = {f.name: getattr(self, f.name) for f in fields(self)}
+        document["meter_sets"] = [m.to_json() for m in self.meter_sets]
+        del document["wave_speeds"]
+        if self.wave_speeds:
+            document["wave_speeds"] = self.wave_speeds.to_json()
+        return document
 
 
 def study_grid(
@@ -214,6 +230,7 @@ def point_scenarios(
             solver="vectorized" if f.friction == "steady" else "tsnet",
             duration=settings.duration,
             time_step=settings.time_step,
+            wave_speeds=settings.wave_speeds,
         )
         for pipe in pipes
     ]

@@ -12,13 +12,16 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from burstloc.experiments import paper
 from burstloc.experiments.evaluate import evaluate
 from burstloc.experiments.runs import plan_runs
 from burstloc.network import NetworkSource, as_network
 from burstloc.sim.placement.methods import PLACEMENT_METHODS, place_meters
+
+if TYPE_CHECKING:
+    from burstloc.wave_speeds import WaveSpeeds
 
 __all__ = ["compare_placements", "format_comparison"]
 
@@ -36,12 +39,15 @@ def compare_placements(
     workers: int | None = None,
     scheduler: str | None = None,
     progress: bool = False,
+    wave_speeds: WaveSpeeds | None = None,
 ) -> list[dict[str, Any]]:
     """Place ``count`` meters by each of ``methods`` and evaluate each placement.
 
     Every pipe bursts at ``position`` of its length (the paper's scenario otherwise; simulated
     once and cached, shared by the methods); the meters are calibrated for each placement
     (no hand tuning) and scored by ``burstloc evaluate``'s harness at ``capture_interval``.
+    ``wave_speeds``: pipes of their own wave speed, the others at the scenario's: the meters
+    are placed, the bursts simulated and the localizers calibrated with them.
 
     Returns:
         One row per method and localizer: ``method``, ``meters`` (the junctions), ``localizer``,
@@ -54,7 +60,14 @@ def compare_placements(
     read = as_network(network)
     rows: list[dict[str, Any]] = []
     for method in methods:
-        placed = place_meters(read, count, method=method, resolution=capture_interval)
+        placed = place_meters(
+            read,
+            count,
+            method=method,
+            wave_speed=scenario.wave_speed,
+            resolution=capture_interval,
+            wave_speeds=wave_speeds,
+        )
         ev = evaluate(
             read,
             runs,
@@ -64,6 +77,7 @@ def compare_placements(
             workers=workers,
             scheduler=scheduler,
             progress=progress,
+            wave_speeds=wave_speeds,
         )
         for run in ev.runs:
             tally, errors = run.tally(), run.position_errors()

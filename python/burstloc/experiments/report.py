@@ -20,12 +20,11 @@ import csv
 import io
 import os
 from collections.abc import Mapping, Sequence
-from dataclasses import asdict
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from burstloc import _atomic as atomic
-from burstloc.constants import CAPTURE_INTERVALS
+from burstloc.constants import CAPTURE_INTERVALS, WAVE_SPEED
 from burstloc.experiments import paper
 from burstloc.experiments.evaluate import Evaluation, RunResult
 from burstloc.experiments.position import PositionErrors, PositionOutcome
@@ -390,7 +389,7 @@ def write_study_report(
     from burstloc.experiments.plot import plot_accuracy_by_interval
 
     out = Path(out_dir)
-    document = {"settings": asdict(settings), "rows": rows, "problems": list(problems)}
+    document = {"settings": settings.to_json(), "rows": rows, "problems": list(problems)}
     atomic.write_json(out / "results.json", document)
     dts = list(settings.capture_intervals)
     parts = [
@@ -402,6 +401,15 @@ def write_study_report(
         "TSNet steady friction). See `burstloc.experiments.study` for the rules.",
         "",
     ]
+    speeds = settings.wave_speeds
+    if speeds:
+        parts += [
+            f"Wave speeds per pipe{f' from {speeds.source}' if speeds.source else ''}: "
+            f"{len(speeds.pipes)} pipe(s) and {len(speeds.diameters)} diameter class(es) of "
+            f"their own speed, the others at {WAVE_SPEED:g} m/s; the bursts are simulated, the "
+            "meters placed and the localizers calibrated with them.",
+            "",
+        ]
     if problems:
         parts += ["**Left out:**", "", *[f"- {p}" for p in problems], ""]
     best = settings.localizers[-1] if "fused" not in settings.localizers else "fused"

@@ -27,6 +27,11 @@ Meter placement for a fraction ``f < 1``: the greedy coverage of the burst signa
 --meters-file``) replaces every junction as the meters of its network's points at full
 coverage.
 
+Wave speeds per pipe (``StudySettings.wave_speeds``, ``burstloc study --wave-speeds``) apply
+to every point alike: the bursts are simulated with them, the meters placed, the arrival
+localizer built and the configuration calibrated with paths timed at each pipe's speed (as
+``burstloc simulate``, ``place`` and ``calibrate`` take them).
+
 History: every captured stream is preceded by 2N + 1 readings of the initial steady state
 (N = the calibrated localization interval), as a live meter's would be (TSNet starts from that
 steady state); noise is added to them too.
@@ -86,10 +91,13 @@ def score_point(task: tuple[StudyPoint, StudySettings]) -> list[dict[str, Any]]:
     signature_sets = cached_signature_sets(network, junctions)
     count = max(1, round(f.meter_fraction * len(junctions)))
     if count < len(junctions):
-        meters = list(place_meters(network, count, method=settings.placement).meters)
+        placed = place_meters(
+            network, count, method=settings.placement, wave_speeds=settings.wave_speeds
+        )
+        meters = list(placed.meters)
     else:
         meters = list(settings.meters_for(network) or junctions)
-    arrival = arrival_localizer(network, meters)
+    arrival = arrival_localizer(network, meters, wave_speeds=settings.wave_speeds)
     signature = SignatureLocalizer([s.for_meters(meters) for s in signature_sets])
     config = calibrate(
         network,
@@ -98,6 +106,7 @@ def score_point(task: tuple[StudyPoint, StudySettings]) -> list[dict[str, Any]]:
         noise_sigma=f.noise_sigma if f.noise_sigma > 0 else DEFAULT_NOISE_SIGMA,
         false_alarm_rate=settings.false_alarm_rate,
         seed=settings.seed,
+        wave_speeds=settings.wave_speeds,
     )
     localizers = RankingLocalizers(arrival, signature, FusedLocalizer(arrival, signature))
     setup = RankingSetup(meters, config, localizers, network)

@@ -29,7 +29,7 @@ from burstloc.localize.decide import RankingLocalizers
 from burstloc.localize.model import LocalizationModel
 from burstloc.network import Network, NetworkSource, as_network, flow_direction_graph
 from burstloc.sim.signatures.compute import SignatureMethod, cached_signature_sets
-from burstloc.wave_speeds import WaveSpeeds
+from burstloc.wave_speeds import WaveSpeeds, stretch_of
 
 if TYPE_CHECKING:
     from wntr.network import WaterNetworkModel
@@ -249,7 +249,7 @@ def arrival_localizer(
     """
     wn = _model_of(network)
     meter_list = _meters_of(wn, meters)
-    stretch = wave_speeds.stretch(wn, wave_speed) if wave_speeds else None
+    stretch = stretch_of(wave_speeds, wn, wave_speed)
     pipes, node_distances = arrival_geometry(wn, meter_list, stretch)
     options.setdefault("fronts", wave_fronts(wn, meter_list, pipes, stretch))
     return ArrivalLocalizer(
@@ -282,7 +282,7 @@ def prepare_model(
     read = as_network(network)
     model = read.model
     meter_list = _meters_of(model, meters)
-    stretch = wave_speeds.stretch(model, wave_speed) if wave_speeds else None
+    stretch = stretch_of(wave_speeds, model, wave_speed)
     pipes, node_distances = arrival_geometry(model, meter_list, stretch)
     return LocalizationModel(
         network_hash=read.hash,

@@ -14,7 +14,8 @@ from numpy.typing import NDArray
 
 from burstloc.exceptions import ConfigError
 from burstloc.localize.arrival import PipeGeometry
-from burstloc.network import NetworkSource
+from burstloc.network import NetworkSource, as_network
+from burstloc.wave_speeds import WaveSpeeds, stretch_of
 
 __all__ = ["check_meter_count", "check_timing", "kept_indices", "meter_geometry"]
 
@@ -50,11 +51,18 @@ def check_timing(wave_speed: float, resolution: float) -> None:
 
 
 def meter_geometry(
-    network: NetworkSource, meters: Sequence[str]
+    network: NetworkSource,
+    meters: Sequence[str],
+    wave_speed: float,
+    wave_speeds: WaveSpeeds | None = None,
 ) -> tuple[list[PipeGeometry], dict[str, NDArray[np.float64]]]:
-    """:func:`burstloc.sim.model.prepare.arrival_geometry` of ``meters`` (ConfigError for none)."""
+    """:func:`burstloc.sim.model.prepare.arrival_geometry` of ``meters`` (ConfigError for none);
+    with ``wave_speeds`` (the others at ``wave_speed``) the paths are timed at each pipe's own
+    speed (:func:`burstloc.wave_speeds.stretch_of`; NetworkError: a pipe ``network`` does not
+    have)."""
     from burstloc.sim.model.prepare import arrival_geometry
 
     if not meters:
         raise ConfigError("no meters to separate bursts with")
-    return arrival_geometry(network, list(meters))
+    read = as_network(network)
+    return arrival_geometry(read, list(meters), stretch_of(wave_speeds, read.model, wave_speed))

@@ -48,7 +48,8 @@ def arrival_meters(
     docstring).
 
     ``node_distances[n][j]`` is the path length (m) from pipe end node ``n`` to
-    ``junctions[j]`` (:func:`burstloc.sim.model.prepare.arrival_geometry` over every junction).
+    ``junctions[j]`` (:func:`burstloc.sim.model.prepare.arrival_geometry` over every junction;
+    with its ``stretch``, metres of wave travel at ``wave_speed``, as ``pipes``' travel).
     ``keep``: meters the network has already (junctions of ``junctions``): the greedy starts
     from them and adds ``count`` more.
 
@@ -202,9 +203,11 @@ def _travel(
 ) -> NDArray[np.float64]:
     """Wave travel times (s) from points at ``fractions`` along every pipe to every junction of
     ``node_distances``, shape (pipes x points, junctions), pipe by pipe; an unreachable junction
-    is ten times the longest reachable travel away (heard by no burst, alike for all)."""
+    is ten times the longest reachable travel away (heard by no burst, alike for all). A pipe
+    of its own wave speed is crossed in its travel (:attr:`PipeGeometry.travel`), as the paths
+    of ``node_distances`` are."""
     frac = np.asarray(fractions, dtype=np.float64)
-    length = np.array([p.length for p in pipes])[:, None, None]
+    length = np.array([p.travel for p in pipes])[:, None, None]
     d_start = np.array([node_distances[p.start] for p in pipes])[:, None, :]
     d_end = np.array([node_distances[p.end] for p in pipes])[:, None, :]
     along = frac[None, :, None] * length
@@ -225,7 +228,9 @@ def arrival_separation(
     """The fraction of candidate burst points the arrivals at the meters tell from every other
     pipe's, by a capture interval ``resolution`` (s) or more.
 
-    ``node_distances[n][j]`` is the path length (m) from pipe end node ``n`` to meter ``j``.
+    ``node_distances[n][j]`` is the path length (m) from pipe end node ``n`` to meter ``j``
+    (metres of wave travel at ``wave_speed`` where pipes have their own speeds, as for
+    :func:`arrival_meters`).
     Candidate points are :data:`burstloc.constants.CANDIDATE_POSITIONS` along every pipe; two
     points look alike when their arrival times at the meters differ by nearly the same amount at
     every meter (the burst time is unknown): their separation is the spread (largest minus

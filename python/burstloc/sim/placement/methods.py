@@ -59,55 +59,38 @@ It is 0 % on a network of short pipes whatever the meters (L-TOWN: a pipe's cand
 lie within half a capture interval's travel, 120 m at 0.2 s, of another pipe's), which is why
 ``burstloc place`` prints the ``region`` measure instead.
 
-:func:`place_meters` runs either on a network file and returns a :class:`MeterSet`, which saves
-as the documented JSON meter file (:data:`METERS_FORMAT`, read by ``burstloc evaluate``,
-``calibrate``, ``simulate`` and ``study`` with ``--meters-file`` or ``--meters FILE``)::
+:func:`place_meters` runs either on a network file and returns a
+:class:`~burstloc.sim.placement.meter_file.MeterSet`, which saves as the meter file
+(:mod:`burstloc.sim.placement.meter_file`, whose names this module re-exports).
 
-    {
-      "format": "burstloc-meters/1",
-      "network": "networks/paper15.inp",      # informative
-      "network_hash": "sha256:...",           # the INP file's SHA-256: checked on use
-      "method": "arrival",                    # "coverage", "arrival", "region" or "manual"
-      "meters": ["2", "7", "11", "14"],       # junction IDs
-      "junctions": 15                         # junctions the network has
-    }
-
-``method`` says how the meters were chosen: by one of :data:`PLACEMENT_METHODS`, or ``"manual"``
-for a set written by hand (a utility's own meters). A hand-made set needs no JSON at all:
-wherever a command takes ``--meters IDS|FILE`` (and ``place --keep`` / ``--score``) it takes the
-IDs themselves (``--meters n1,n4,n31``) or a text file of them (:func:`meter_list`)::
-
-    # BattLeDIM's pressure sensors on L-TOWN
-    n1, n4, n31
-    n54 n105   # any mix of commas, spaces and lines
+**Pipes of their own wave speed.** ``arrival``, ``region`` and the scores time every path at
+``wave_speed``; with ``wave_speeds`` (:class:`burstloc.wave_speeds.WaveSpeeds`: PE and PVC mains
+at 300-500 m/s among iron at 1 200) each pipe is crossed at its own speed instead, the paths
+weighted by travel time (:func:`burstloc.sim.model.prepare.length_graph`): a pipe at 400 m/s
+takes as long as three times its length at 1 200 m/s, as the localizers time it once
+``burstloc calibrate`` is given the same speeds. ``coverage`` reads steady states: wave speeds
+do not enter it.
 """
 
 from __future__ import annotations
 
-import os
-from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from burstloc._atomic import write_json
-from burstloc._validate import (
-    Fields,
-    attributes,
-    check_count,
-    check_names,
-    check_string,
-    read_json,
-    some_names,
-)
 from burstloc.constants import SEARCHABLE, WAVE_SPEED
 from burstloc.exceptions import ConfigError
-from burstloc.network import NetworkSource, as_network, identify
+from burstloc.network import NetworkSource, as_network
 from burstloc.sim.placement._checks import check_meter_count, kept_indices, meter_geometry
 from burstloc.sim.placement.arrival import ARRIVAL_POINTS, arrival_meters, arrival_separation
+from burstloc.sim.placement.meter_file import (
+    METERS_FORMAT,
+    PLACEMENT_METHODS,
+    MeterSet,
+    meter_list,
+)
 from burstloc.sim.placement.region import (
     AmbiguityProfile,
     ambiguity_profile,
@@ -115,6 +98,7 @@ from burstloc.sim.placement.region import (
     region_meters,
 )
 from burstloc.sim.placement.scaled import DEFAULT_SCALING, Scaling, reduced_problem
+from burstloc.wave_speeds import WaveSpeeds, stretch_of
 
 __all__ = [
     "ARRIVAL_POINTS",
@@ -132,18 +116,6 @@ __all__ = [
     "place_meters",
     "score_meters",
 ]
-
-METERS_FORMAT = "burstloc-meters/1"
-"""Format tag of a meter file."""
-
-PLACEMENT_METHODS: tuple[str, ...] = ("coverage", "arrival", "region")
-"""The placement methods of :func:`place_meters`."""
-
-#: Limit on the meters of a meter file (the localization model's).
-MAX_METERS = 10_000
-
-#: Limit on the junctions of the network a meter file is for (BWSN_Network_2 has 12 523).
-MAX_JUNCTIONS = 1_000_000
 
 
 def coverage_meters(signatures: Any, count: int, keep: Sequence[str] = ()) -> tuple[str, ...]:
@@ -181,67 +153,6 @@ def coverage_meters(signatures: Any, count: int, keep: Sequence[str] = ()) -> tu
     return tuple(meters[j] for j in sorted(chosen))
 
 
-@dataclass(frozen=True)
-class MeterSet:
-    """Meters chosen for one network: the junction IDs, how they were chosen, and the network's
-    fingerprint (:data:`METERS_FORMAT`).
-
-    Raises:
-        ConfigError: a bad field (named).
-    """
-
-    network: str
-    network_hash: str
-    method: str
-    meters: tuple[str, ...]
-    junctions: int
-
-    def __post_init__(self) -> None:
-        check_string(self.network, "network")
-        check_string(self.network_hash, "network_hash", max_length=128)
-        if self.method not in (*PLACEMENT_METHODS, "manual"):
-            raise ConfigError(
-                f"method must be one of {[*PLACEMENT_METHODS, 'manual']}, got {self.method!r}"
-            )
-        object.__setattr__(self, "meters", check_names(self.meters, "meters", high=MAX_METERS))
-        check_count(self.junctions, "junctions", high=MAX_JUNCTIONS)
-
-    def check(self, network: NetworkSource) -> tuple[str, ...]:
-        """The meters, once the file is known to be for ``network`` (ConfigError otherwise)."""
-        where, found = identify(network)
-        if found != self.network_hash:
-            raise ConfigError(
-                f"the meter file was made for network {self.network} ({self.network_hash}), "
-                f"not for {where} ({found}); run `burstloc place` for it"
-            )
-        return self.meters
-
-    def to_json(self) -> dict[str, Any]:
-        """The meter file's document."""
-        return {
-            "format": METERS_FORMAT,
-            **attributes(self, "network", "network_hash", "method"),
-            "meters": list(self.meters),
-            "junctions": self.junctions,
-        }
-
-    def save(self, path: str | os.PathLike[str]) -> Path:
-        """Write the meter file (atomically)."""
-        return write_json(path, self.to_json())
-
-    @classmethod
-    def load(cls, path: str | os.PathLike[str]) -> MeterSet:
-        """Read a meter file; every field is checked (ConfigError naming the file and field)."""
-        source = f"meter file {os.fspath(path)}"
-        fields = Fields(read_json(path, "meter file"), source)
-        if fields.data.get("format") != METERS_FORMAT:
-            raise ConfigError(
-                f"{source}: not a burstloc meter file (format {fields.data.get('format')!r}, "
-                f"want {METERS_FORMAT!r}); write one with `burstloc place`"
-            )
-        return fields.build(cls, ("network", "network_hash", "method", "meters", "junctions"))
-
-
 def place_meters(
     network: NetworkSource,
     count: int,
@@ -251,16 +162,19 @@ def place_meters(
     resolution: float = 0.2,
     scaling: Scaling = DEFAULT_SCALING,
     keep: Sequence[str] = (),
+    wave_speeds: WaveSpeeds | None = None,
 ) -> MeterSet:
     """Place ``count`` meters on the junctions of ``network`` (or its INP file) by ``method``
     (module docstring); ``resolution`` (s) is the ``arrival`` and ``region`` methods' capture
     interval. On a network of more junctions than ``scaling.above`` those two methods run on
     a reduced problem (:mod:`burstloc.sim.placement.scaled`; the kept meters among its
     candidates). ``keep``: meters the network has already; each method's greedy starts from
-    them and adds ``count`` more (the set returned holds both).
+    them and adds ``count`` more (the set returned holds both). ``wave_speeds``: pipes of their
+    own wave speed, the others at ``wave_speed`` (module docstring); the set records them where
+    they timed the paths (not for ``coverage``).
 
     Raises:
-        NetworkError: missing or malformed network.
+        NetworkError: missing or malformed network, or wave speeds of pipes it does not have.
         ConfigError: unknown method, ``count`` out of range, a kept meter that is not a
             junction.
     """
@@ -275,10 +189,11 @@ def place_meters(
     keep = tuple(keep)
     kept_indices(keep, junctions)
     check_meter_count(count, len(junctions) - len(keep))
+    stretch = stretch_of(wave_speeds, wn, wave_speed)
     if method == "coverage":
         meters = coverage_meters(cached_signatures(read, junctions), count, keep)
     elif scaling.applies(len(junctions)):
-        problem = reduced_problem(wn, count, scaling, keep)
+        problem = reduced_problem(wn, count, scaling, keep, stretch)
         if method == "arrival":
             meters = arrival_meters(
                 problem.arrival_pipes,
@@ -302,7 +217,7 @@ def place_meters(
                 keep=keep,
             )
     else:
-        pipes, distances = arrival_geometry(wn, junctions)
+        pipes, distances = arrival_geometry(wn, junctions, stretch)
         place: Callable[..., tuple[str, ...]] = arrival_meters
         if method == "region":
             place = region_meters
@@ -317,19 +232,34 @@ def place_meters(
         )
     order = {name: i for i, name in enumerate(junctions)}
     meters = tuple(sorted(meters, key=order.__getitem__))  # the network's order
-    return MeterSet(read.path, read.hash, method, meters, len(junctions))
+    timed = (wave_speeds or None) if method != "coverage" else None  # steady states: untimed
+    return MeterSet(read.path, read.hash, method, meters, len(junctions), timed)
 
 
-def meter_separation(network: NetworkSource, meters: Sequence[str], **timing: float) -> float:
+def meter_separation(
+    network: NetworkSource,
+    meters: Sequence[str],
+    *,
+    wave_speeds: WaveSpeeds | None = None,
+    **timing: float,
+) -> float:
     """:func:`arrival_separation` of ``meters`` on ``network`` (:func:`meter_scores`' first,
     alone; ``timing``: ``wave_speed``, ``resolution``)."""
-    return meter_scores(network, meters, scores=("separation",), **timing)[0]
+    scores = ("separation",)
+    return meter_scores(network, meters, scores=scores, wave_speeds=wave_speeds, **timing)[0]
 
 
-def meter_ambiguity(network: NetworkSource, meters: Sequence[str], **timing: float) -> float:
+def meter_ambiguity(
+    network: NetworkSource,
+    meters: Sequence[str],
+    *,
+    wave_speeds: WaveSpeeds | None = None,
+    **timing: float,
+) -> float:
     """:func:`~burstloc.sim.placement.region.ambiguous_length` of ``meters`` on ``network`` (m;
     :func:`meter_scores`' second, alone; ``timing``: ``wave_speed``, ``resolution``)."""
-    return meter_scores(network, meters, scores=("ambiguity",), **timing)[0]
+    scores = ("ambiguity",)
+    return meter_scores(network, meters, scores=scores, wave_speeds=wave_speeds, **timing)[0]
 
 
 def meter_scores(
@@ -339,19 +269,22 @@ def meter_scores(
     wave_speed: float = WAVE_SPEED,
     resolution: float = 0.2,
     scores: Sequence[str] = ("separation", "ambiguity"),
+    wave_speeds: WaveSpeeds | None = None,
 ) -> tuple[float, ...]:
     """The ``scores`` of ``meters`` on ``network`` from one arrival geometry (what ``burstloc
     place`` prints): ``"separation"``, :func:`arrival_separation`; ``"ambiguity"``,
-    :func:`~burstloc.sim.placement.region.ambiguous_length` (m).
+    :func:`~burstloc.sim.placement.region.ambiguous_length` (m). ``wave_speeds``: pipes of
+    their own wave speed (module docstring).
 
     Raises:
-        NetworkError: missing or malformed network, or a meter that is not a junction.
+        NetworkError: missing or malformed network, a meter that is not a junction, or wave
+            speeds of pipes it does not have.
         ConfigError: no meter, a bad wave speed or resolution, an unknown score.
     """
     unknown = [s for s in scores if s not in ("separation", "ambiguity")]
     if unknown:
         raise ConfigError(f"unknown meter score(s) {unknown}: use 'separation', 'ambiguity'")
-    pipes, distances = meter_geometry(network, meters)
+    pipes, distances = meter_geometry(network, meters, wave_speed, wave_speeds)
     return tuple(
         arrival_separation(pipes, distances, wave_speed=wave_speed, resolution=resolution)
         if score == "separation"
@@ -406,15 +339,18 @@ def score_meters(
     wave_speed: float = WAVE_SPEED,
     resolution: float = 0.2,
     each: bool = False,
+    wave_speeds: WaveSpeeds | None = None,
 ) -> MeterScores:
     """:class:`MeterScores` of ``meters`` on ``network``; with ``each`` also
-    every meter's contribution (the set scored without it).
+    every meter's contribution (the set scored without it). ``wave_speeds``: pipes of their own
+    wave speed (module docstring): the travel times, not the metres of main, change.
 
     Raises:
-        NetworkError: missing or malformed network, or a meter that is not a junction.
+        NetworkError: missing or malformed network, a meter that is not a junction, or wave
+            speeds of pipes it does not have.
         ConfigError: no meter, a bad wave speed or resolution.
     """
-    pipes, distances = meter_geometry(network, meters)
+    pipes, distances = meter_geometry(network, meters, wave_speed, wave_speeds)
     whole, without = ambiguity_profile(
         pipes,
         tuple(meters),
@@ -424,47 +360,3 @@ def score_meters(
         leave_out=each,
     )
     return MeterScores(tuple(meters), resolution, whole, tuple(p.mean for p in without))
-
-
-def meter_list(values: Sequence[str], network: NetworkSource) -> tuple[str, ...]:
-    """The meters ``values`` name on ``network``, in the order given.
-
-    ``values`` are junction IDs (each may hold several, separated by commas), or one file: a
-    meter file (:data:`METERS_FORMAT`, refused if made for another network) or a text file of
-    junction IDs separated by spaces, commas or new lines (``#`` starts a comment). What a
-    utility's list of its own meters looks like, e.g. ``n1,n4,n31`` or ``owned.txt``.
-
-    Raises:
-        ConfigError: no ID, an ID that is not a junction of ``network`` (the first
-            :data:`~burstloc._validate.LISTED` named, the rest counted) or listed twice, an
-            unreadable or malformed file.
-        NetworkError: missing or malformed network.
-    """
-    from burstloc.inp import check_meters
-
-    read = as_network(network)
-    if len(values) == 1 and os.path.isfile(values[0]):
-        names = _meters_in_file(values[0], read)
-        source = f"meter list {values[0]}"
-    else:
-        names = [n for value in values for n in value.split(",") if n]
-        source = "the meter list"
-    if not names:
-        raise ConfigError(f"{source} names no meter")
-    check_meters(names, read.junctions, read.path, ConfigError)
-    twice = sorted(n for n, c in Counter(names).items() if c > 1)
-    if twice:
-        raise ConfigError(f"{source} lists {some_names(twice)} more than once")
-    return tuple(names)
-
-
-def _meters_in_file(path: str, network: NetworkSource) -> list[str]:
-    """The junction IDs of a meter file or of a text file of IDs (:func:`meter_list`)."""
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(f"cannot read meter list {path}: {exc}") from None
-    if text.lstrip().startswith("{"):
-        return list(MeterSet.load(path).check(network))
-    words = (line.split("#", 1)[0].replace(",", " ").split() for line in text.splitlines())
-    return [w for line in words for w in line]

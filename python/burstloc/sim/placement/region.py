@@ -119,7 +119,9 @@ def ambiguity_grid(
 ) -> AmbiguityGrid:
     """The points and bursts of the objective (module docstring) for ``junctions``;
     ``node_distances[n][j]`` is the path length (m) from pipe end node ``n`` to
-    ``junctions[j]`` (:func:`burstloc.sim.model.prepare.arrival_geometry`). An unreachable junction
+    ``junctions[j]`` (:func:`burstloc.sim.model.prepare.arrival_geometry`; with its ``stretch``,
+    metres of wave travel at ``wave_speed``, and ``pipes`` crossed in their travel, as the
+    localizer's grid is: a point's ``length`` stays metres of main). An unreachable junction
     is ten times the longest reachable travel away (heard by no burst, alike for all).
 
     ``points``: at most this many points (default: every segment). A grid with more is

@@ -14,7 +14,8 @@ reduced problem instead; below it nothing changes (the exact greedy, the same me
   junction no chosen one reaches comes first, so every part of a disconnected network has
   candidates). Path lengths are measured from those candidates only (SciPy's sparse Dijkstra
   on :func:`burstloc.sim.model.prepare.length_graph`, the graph the exact methods use: pipes weigh
-  their length, valves and pumps nothing, parallel links their shortest; lengths are symmetric
+  their length (a pipe of its own wave speed its travel), valves and pumps nothing, parallel
+  links their shortest; lengths are symmetric
   on it, so they are the lengths from the pipe ends to the candidates). Meters are chosen
   among the candidates.
 * **bursts**: the ``arrival`` objective is summed over the pairs of a seeded sample of
@@ -34,7 +35,7 @@ objectives of the scaled meters are within 1-3 % of the exact greedy's at a fift
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -96,15 +97,17 @@ DEFAULT_SCALING = Scaling()
 """The scaling :func:`burstloc.sim.placement.methods.place_meters` uses by default."""
 
 
-def _node_graph(wn: WaterNetworkModel) -> tuple[list[str], object]:
-    """The nodes of :func:`burstloc.sim.model.prepare.length_graph` and its sparse matrix (one entry
-    per edge, zero-length valves and pumps kept as explicit zeros: SciPy counts them as
-    edges)."""
+def _node_graph(
+    wn: WaterNetworkModel, stretch: Mapping[str, float] | None = None
+) -> tuple[list[str], object]:
+    """The nodes of :func:`burstloc.sim.model.prepare.length_graph` (with ``stretch``) and its
+    sparse matrix (one entry per edge, zero-length valves and pumps kept as explicit zeros:
+    SciPy counts them as edges)."""
     from scipy.sparse import csr_matrix
 
     from burstloc.sim.model.prepare import length_graph
 
-    graph = length_graph(wn)
+    graph = length_graph(wn, stretch)
     nodes = list(graph.nodes)
     index = {n: i for i, n in enumerate(nodes)}
     rows, cols, weights = [], [], []
@@ -118,13 +121,18 @@ def _node_graph(wn: WaterNetworkModel) -> tuple[list[str], object]:
 
 
 def spread_junctions(
-    wn: WaterNetworkModel, count: int, first: Sequence[str] = ()
+    wn: WaterNetworkModel,
+    count: int,
+    first: Sequence[str] = (),
+    stretch: Mapping[str, float] | None = None,
 ) -> tuple[list[str], dict[str, NDArray[np.float64]]]:
     """``count`` junctions spread by farthest-point sampling on path length (module
     docstring), in the network's junction order, and the path lengths (m) from every node to
     them (``inf`` without a path): ``lengths[node][j]`` to the ``j``-th chosen junction.
     ``first``: junctions taken before the sampling starts (a network's own meters; the others
-    are then spread away from them); ``count`` includes them.
+    are then spread away from them); ``count`` includes them. ``stretch``: pipes of their own
+    wave speed (:func:`burstloc.sim.model.prepare.length_graph`): the lengths are then metres
+    of wave travel, and the junctions spread by travel time.
 
     Raises:
         ConfigError: ``count`` is not an integer in ``[1, junctions]``, or below the number of
@@ -137,7 +145,7 @@ def spread_junctions(
         raise ConfigError(
             f"the candidate count must be between 1 and {len(junctions)}, got {count!r}"
         )
-    nodes, matrix = _node_graph(wn)
+    nodes, matrix = _node_graph(wn, stretch)
     index = {n: i for i, n in enumerate(nodes)}
     columns = np.array([index[j] for j in junctions], dtype=np.int64)
     start = dijkstra(matrix, directed=False, indices=int(columns[0]))[columns]
@@ -171,19 +179,23 @@ def spread_junctions(
 
 
 def candidate_geometry(
-    wn: WaterNetworkModel, count: int, first: Sequence[str] = ()
+    wn: WaterNetworkModel,
+    count: int,
+    first: Sequence[str] = (),
+    stretch: Mapping[str, float] | None = None,
 ) -> tuple[list[PipeGeometry], list[str], dict[str, NDArray[np.float64]]]:
     """Every pipe's geometry (:func:`burstloc.sim.model.prepare.pipe_geometry`), ``count`` spread
     candidate junctions (:func:`spread_junctions`, ``first`` among them) and the path lengths
-    from every pipe end node to them: the arguments of the exact placements, on the candidates.
+    from every pipe end node to them: the arguments of the exact placements, on the candidates
+    (``stretch``: pipes of their own wave speed, as for :func:`spread_junctions`).
 
     Raises:
         ConfigError: ``count`` out of range.
     """
     from burstloc.sim.model.prepare import pipe_geometry
 
-    pipes = pipe_geometry(wn)
-    names, lengths = spread_junctions(wn, count, first)
+    pipes = pipe_geometry(wn, stretch)
+    names, lengths = spread_junctions(wn, count, first, stretch)
     ends = dict.fromkeys(n for p in pipes for n in (p.start, p.end))
     return pipes, names, {n: lengths[n] for n in ends}
 
@@ -215,10 +227,12 @@ def reduced_problem(
     count: int,
     scaling: Scaling = DEFAULT_SCALING,
     keep: Sequence[str] = (),
+    stretch: Mapping[str, float] | None = None,
 ) -> ReducedProblem:
     """The reduced problem for ``count`` meters on the WNTR model ``wn``: ``scaling.candidates``
     candidates (at least ``count``, at most every junction), ``scaling.pipes`` sampled pipes.
-    ``keep``: meters the network has, always candidates (``count`` more are to be added).
+    ``keep``: meters the network has, always candidates (``count`` more are to be added);
+    ``stretch``: pipes of their own wave speed (:func:`spread_junctions`).
 
     Raises:
         ConfigError: ``count`` out of range, a kept meter that is not a junction.
@@ -226,5 +240,5 @@ def reduced_problem(
     junctions = wn.num_junctions
     check_meter_count(count, junctions - len(keep))
     wanted = min(junctions, max(scaling.candidates, count + len(keep)))
-    pipes, names, distances = candidate_geometry(wn, wanted, keep)
+    pipes, names, distances = candidate_geometry(wn, wanted, keep, stretch)
     return ReducedProblem(pipes, names, distances, _sample(pipes, scaling.pipes, scaling.seed))
