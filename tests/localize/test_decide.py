@@ -243,7 +243,7 @@ def test_with_few_meters_the_arrivals_are_looked_at_again_until_decisive() -> No
     first = min(float(t[a.index]) for a in alarms)
     meters = ("m0", "m3")
 
-    def decide(until: float, resume: float | None = None) -> Decision:
+    def decide(until: float, resume: float | None = None, provisional: bool = True) -> Decision:
         n = int(np.searchsorted(t, until + 1e-9, side="right"))  # the readings so far
         seen = [a for a in alarms if a.index < n]
         return rank_alarms(
@@ -256,6 +256,7 @@ def test_with_few_meters_the_arrivals_are_looked_at_again_until_decisive() -> No
             cal,
             "instantaneous",
             resume=resume,
+            provisional=provisional,
         )
 
     early = evidence_at(first + 0.1, meters, t, readings, alarms, cal, "instantaneous")
@@ -277,3 +278,14 @@ def test_with_few_meters_the_arrivals_are_looked_at_again_until_decisive() -> No
     assert step.time == pytest.approx(decision.time, abs=1e-9)  # the same reading
     assert step.position == decision.position
     assert calls == round((decision.time - (first + 0.1)) / cal.capture_interval)
+    # a provisional answer carries its region and named point, unless the caller discards it
+    # (the live monitor): then the looks alone, and the same final answer
+    assert provisional.posterior is not None and provisional.position is not None
+    bare = decide(first + 0.1, provisional=False)
+    assert bare.look_again == provisional.look_again and bare.time == provisional.time
+    assert list(bare.ranking) == list(provisional.ranking)
+    assert bare.posterior is None and bare.position is None
+    while bare.look_again is not None:
+        bare = decide(bare.look_again, resume=bare.look_again, provisional=False)
+    assert (bare.pipe, bare.time, bare.position) == (step.pipe, step.time, step.position)
+    assert bare.posterior is not None and bare.region == step.region

@@ -460,6 +460,7 @@ class BurstMonitor:
                 cal,
                 self.meter_model,
                 resume=self._resume,
+                provisional=False,  # a look not decisive yet is discarded: looked at again
             )
         except InputError as exc:
             self._forget()

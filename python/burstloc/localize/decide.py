@@ -179,6 +179,7 @@ def rank_alarms(
     *,
     signature_ranking: Ranking | None = None,
     resume: float | None = None,
+    provisional: bool = True,
 ) -> Decision:
     """Rank the pipes with ``localizers[localizer]`` at its decision time (module docstring).
 
@@ -193,6 +194,11 @@ def rank_alarms(
     otherwise repeat every earlier look at every reading); or a reading time before which no look
     is taken (the monitor's, and the events evaluation's, first look at alarms that a second meter
     corroborated after the decision time: :mod:`burstloc.localize.corroborate`).
+    ``provisional=False``: where the looks are not decisive yet (``look_again`` set), only the
+    arrivals' ranking and ``look_again`` are returned, without the region, the named point or
+    the lasting drop's fit: for a caller that discards a provisional answer and calls again
+    (the live monitor, which would otherwise compute a whole search region at every look
+    while it waits).
 
     Raises:
         InputError: no alarm, or the localizer cannot answer from this evidence.
@@ -231,6 +237,8 @@ def rank_alarms(
     margin = quantisation_margin(len(arrival.meters)) if fused is None else fused.margin
     start = decided if resume is None else max(decided, resume)
     look = look_at(arrival, margin, arrivals, start, first, last, calibration)
+    if look.again is not None and not provisional:
+        return Decision(look.ranking, look.time, first, look_again=look.again)
     if fused is None or localizer != "fused":
         region = region_posterior(arrival, look.evidence, None)
         ranking, at = named_point(
