@@ -227,18 +227,24 @@ def test_the_horizon_is_the_longest_spread_of_arrivals_at_the_meters() -> None:
     assert line_arrival().horizon == pytest.approx((1800.0 - 120.0) / WAVE)
 
 
-def test_with_few_meters_the_arrivals_are_looked_at_again_until_decisive() -> None:
-    # 700 m along the line (p12), meters at its ends: m0 hears the wave at 0.58 s, m3 at 0.92 s.
-    # At the first look (0.1 s after the first alarm) only m0 has: p01 and p12 fit alike.
-    arrival = _two_meter_arrival()
-    t, readings, every = _burst(700.0, np.full(4, 0.5))
+def _two_meter_burst(dt: float = 0.05, until: float = 80.0) -> tuple:
+    """A burst 700 m along the line (p12) as its two end meters (m0, m3) read it: times,
+    readings and alarms."""
+    t, readings, every = _burst(700.0, np.full(4, 0.5), dt=dt, until=until)
     keep = [0, 3]
-    readings = readings[:, keep]
     alarms = [
         IndexedAlarm(keep.index(a.channel), a.index, a.start, a.amplitude)
         for a in every
         if a.channel in keep
     ]
+    return t, readings[:, keep], alarms
+
+
+def test_with_few_meters_the_arrivals_are_looked_at_again_until_decisive() -> None:
+    # 700 m along the line (p12), meters at its ends: m0 hears the wave at 0.58 s, m3 at 0.92 s.
+    # At the first look (0.1 s after the first alarm) only m0 has: p01 and p12 fit alike.
+    arrival = _two_meter_arrival()
+    t, readings, alarms = _two_meter_burst()
     cal = replace(_calibration(), arrival_decision_delay=0.1)
     first = min(float(t[a.index]) for a in alarms)
     meters = ("m0", "m3")
@@ -289,3 +295,44 @@ def test_with_few_meters_the_arrivals_are_looked_at_again_until_decisive() -> No
         bare = decide(bare.look_again, resume=bare.look_again, provisional=False)
     assert (bare.pipe, bare.time, bare.position) == (step.pipe, step.time, step.position)
     assert bare.posterior is not None and bare.region == step.region
+
+
+def test_at_high_rates_the_arrivals_are_looked_at_every_few_readings() -> None:
+    # at 100 Hz a look every reading would fit the whole network 100 times a second: the looks
+    # come every look_interval (5 readings), each on a reading, and resumed as live they reach
+    # the same answer at the same look
+    from burstloc.localize.looks import LOOK_INTERVAL, look_interval
+
+    assert look_interval(0.2) == 0.2 and look_interval(0.05) == 0.05
+    assert look_interval(0.01) == pytest.approx(5 * 0.01)
+    assert look_interval(0.004) == pytest.approx(12 * 0.004)  # 48 ms, on a reading
+    dt = 0.01
+    arrival = _two_meter_arrival()
+    t, readings, alarms = _two_meter_burst(dt, until=20.0)
+    cal = replace(_calibration(dt), arrival_decision_delay=0.1)
+    first = min(float(t[a.index]) for a in alarms)
+    meters = ("m0", "m3")
+
+    def decide(until: float, resume: float | None = None) -> Decision:
+        n = int(np.searchsorted(t, until + 1e-9, side="right"))
+        seen = [a for a in alarms if a.index < n]
+        return rank_alarms(
+            "arrival", {"arrival": arrival}, meters, t[:n], readings[:n], seen, cal,
+            "instantaneous", resume=resume, provisional=False,
+        )  # fmt: skip
+
+    decision = decide(float(t[-1]))
+    assert decision.pipe == "p12" and decision.look_again is None
+    step = decide(first + 0.1)
+    looks = [step.time]
+    while step.look_again is not None:
+        assert step.look_again == pytest.approx(looks[-1] + LOOK_INTERVAL)
+        step = decide(step.look_again, resume=step.look_again)
+        looks.append(step.time)
+    assert step.pipe == decision.pipe
+    assert step.time == pytest.approx(decision.time, abs=1e-9)  # the same reading
+    assert step.position == decision.position
+    gaps = np.diff(looks)
+    assert len(looks) > 2 and np.allclose(gaps, LOOK_INTERVAL)
+    # every look on a reading
+    assert all(np.min(np.abs(t - x)) < 1e-9 for x in looks)
