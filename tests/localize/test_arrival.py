@@ -171,7 +171,7 @@ def test_horizon_spans_the_reachable_meters_only() -> None:
 
 
 def test_silence_counts_where_the_front_is_at_least_an_alarmed_meters() -> None:
-    from burstloc.localize.arrival import silence_counts
+    from burstloc.localize.windows import silence_counts
 
     fronts = np.array(
         [
@@ -241,7 +241,7 @@ def test_fit_windows_finds_the_least_squares_burst_time() -> None:
     """Each point's burst time is the least of its squared window misfit (checked against a
     fine scan of the objective), alarms and silent meters alike; a point that explains no
     alarm is not placed and misfits nothing."""
-    from burstloc.localize.arrival import fit_windows, window_misfit
+    from burstloc.localize.windows import fit_windows, window_misfit
 
     rng = np.random.default_rng(7)
     points, meters, alarmed, dt = 60, 12, 5, 0.01

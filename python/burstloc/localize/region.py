@@ -50,7 +50,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from burstloc.exceptions import ConfigError, InputError
-from burstloc.localize.arrival import ArrivalLocalizer, fit_windows, window_misfit
+from burstloc.localize.arrival import ArrivalLocalizer
 from burstloc.localize.evidence import BurstEvidence, Ranking
 from burstloc.localize.fused import SIGNATURE_FLOOR, FusedLocalizer
 from burstloc.localize.signature import rank_drop
@@ -60,6 +60,7 @@ from burstloc.localize.timing_error import (
     timing_scale,
     widened_scale,
 )
+from burstloc.localize.windows import fit_windows, window_misfit
 
 __all__ = [
     "DROP_MODEL_ERROR",

@@ -181,7 +181,7 @@ def wave_fronts(
     product of the shares along the path, the end node's own share of a front coming from ``p``
     included. Friction, demands, fronts along other paths and the reflections that follow are
     left out: this is the *shape* the arrival localizer compares between meters, not a head in
-    metres (:func:`burstloc.localize.arrival.silence_counts`). ``stretch``: pipes of their own
+    metres (:func:`burstloc.localize.windows.silence_counts`). ``stretch``: pipes of their own
     wave speed (:func:`length_graph`); the first front then takes the quickest path.
     """
     graph = length_graph(wn, stretch)
