@@ -22,13 +22,11 @@ from __future__ import annotations
 import argparse
 import json
 import random
-import sys
 import tempfile
 from pathlib import Path
 
-from bench_ltown import meter_file, pipe_names
+from bench_ltown import sensors_and_pipes
 from bench_ltown_accuracy import burstloc, rows
-from bench_scale import ltown
 
 CONFIGS = ("exact", "exact, learnt", "wrong", "wrong, learnt")
 
@@ -70,12 +68,7 @@ def main() -> None:
     args = parser.parse_args()
     with tempfile.TemporaryDirectory(prefix="bench-known-events-") as tmp:
         directory = Path(tmp)
-        network = ltown(directory)
-        if network is None:
-            sys.exit("L-TOWN is missing: run `make networks` (it keeps the epyt wheel)")
-        meters = meter_file(network, directory)
-        names = pipe_names(network)
-        random.Random(11).shuffle(names)
+        network, meters, names = sensors_and_pipes(directory, 11)
         chosen, rest = names[: args.pipes], sorted(names[args.pipes :])
         known = random.Random(5).sample(rest, 3)
         events = _known_events(network, meters, known, directory, args.interval, args.burst_flow)

@@ -32,8 +32,8 @@ NETWORK = ROOT / "networks" / "paper15.inp"
 def batch_rule(setup: Any, times: np.ndarray, values: np.ndarray, detector: str) -> str | None:
     """The pipe the batch rule names (the bank over every reading, then ``rank_alarms``)."""
     from burstloc.exceptions import InputError
-    from burstloc.localize.config import calibrated_bank
     from burstloc.localize.decide import rank_alarms
+    from burstloc.localize.interval import calibrated_bank
 
     cal = setup.config.for_interval(0.2)
     bank = calibrated_bank(detector, len(setup.meters), cal)
@@ -42,7 +42,14 @@ def batch_rule(setup: Any, times: np.ndarray, values: np.ndarray, detector: str)
         return None
     try:
         decision = rank_alarms(
-            "fused", setup.localizers, setup.meters, times, values, alarms, cal, "instantaneous"
+            "fused",
+            setup.localizers_at(0.2),
+            setup.meters,
+            times,
+            values,
+            alarms,
+            cal,
+            "instantaneous",
         )
     except InputError:
         return None

@@ -143,6 +143,18 @@ def pipe_names(network: Path) -> list[str]:
     return list(pipe_names(load_network(network)))
 
 
+def sensors_and_pipes(directory: Path, seed: int) -> tuple[Path, Path, list[str]]:
+    """L-TOWN extracted into ``directory``, a meter file of BattLeDIM's 33 sensors beside it,
+    and its pipes shuffled with ``seed``; exits naming ``make networks`` when L-TOWN is
+    missing."""
+    network = ltown(directory)
+    if network is None:
+        sys.exit("L-TOWN is missing: run `make networks` (it keeps the epyt wheel)")
+    names = pipe_names(network)
+    random.Random(seed).shuffle(names)
+    return network, meter_file(network, directory), names
+
+
 def meter_file(network: Path, directory: Path) -> Path:
     from burstloc.inp import network_hash
     from burstloc.sim.placement.methods import MeterSet

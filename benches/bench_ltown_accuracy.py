@@ -30,15 +30,13 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import random
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
 from typing import Any
 
-from bench_ltown import meter_file, pipe_names
-from bench_scale import ltown
+from bench_ltown import sensors_and_pipes
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -110,12 +108,7 @@ def main() -> None:
     args = parser.parse_args()
     with tempfile.TemporaryDirectory(prefix="bench-ltown-accuracy-") as tmp:
         directory = Path(tmp)
-        network = ltown(directory)
-        if network is None:
-            sys.exit("L-TOWN is missing: run `make networks` (it keeps the epyt wheel)")
-        meters = meter_file(network, directory)
-        names = pipe_names(network)
-        random.Random(args.seed).shuffle(names)
+        network, meters, names = sensors_and_pipes(directory, args.seed)
         chosen = names[: args.pipes]
         intervals = [f"{s:g}" for s in args.intervals]
         config = args.config

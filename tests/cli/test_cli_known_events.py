@@ -66,6 +66,29 @@ def test_a_wave_speed_15_percent_off_is_learnt_back(
     assert any(v != 0.0 for v in offsets.values()) and all(abs(v) < 0.1 for v in offsets.values())
 
 
+def test_fronts_heard_slower_than_the_wave_leave_the_wave_speed_to_learn(
+    paper15: Path, known: Path
+) -> None:
+    from dataclasses import replace
+
+    from burstloc.experiments.calibrate import calibrate
+    from burstloc.experiments.known_events import event_arrivals, read_known_events
+    from burstloc.network import read_network
+
+    network = read_network(paper15)
+    plain = calibrate(network, capture_intervals=[0.2])
+    slower = replace(plain, intervals=(replace(plain.intervals[0], front_factor=0.8),))
+    events = read_known_events(known / "events.json", network)
+    for seen, timed in zip(
+        event_arrivals(events, network, plain),
+        event_arrivals(events, network, slower),
+        strict=True,
+    ):
+        assert seen.onsets == timed.onsets and seen.onsets
+        for meter, metres in seen.distances.items():
+            assert timed.distances[meter] == pytest.approx(metres / 0.8)
+
+
 @pytest.mark.parametrize(
     ("entry", "words"),
     [

@@ -18,7 +18,8 @@ from burstloc.experiments.calibrate import calibrate
 from burstloc.live.monitor import BurstMonitor
 from burstloc.live.monitor_state import monitor_state, restore_monitor
 from burstloc.localize.arrival import ArrivalLocalizer
-from burstloc.localize.config import Calibration, calibrated_bank
+from burstloc.localize.config import Calibration
+from burstloc.localize.interval import calibrated_bank
 from burstloc.readings import Step
 
 METERS = ("N3", "8", "6")

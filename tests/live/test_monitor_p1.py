@@ -22,7 +22,7 @@ from burstloc.experiments import paper
 from burstloc.experiments.calibrate import calibrate
 from burstloc.experiments.harness import Clock, capture_readings, monitor_answer
 from burstloc.live.monitor import BurstMonitor
-from burstloc.localize.config import calibrated_bank
+from burstloc.localize.interval import calibrated_bank
 from burstloc.sim.scenarios.scenario import burst_scenarios
 from burstloc.sim.scenarios.sensors import SensorModel
 from burstloc.sim.transient.tsnet import simulate_burst

@@ -15,7 +15,8 @@ import pytest
 from burstloc import _core
 from burstloc.exceptions import ConfigError
 from burstloc.experiments.calibrate import calibrate
-from burstloc.localize.config import CALIBRATION_FORMAT, Calibration, calibrated_bank
+from burstloc.localize.config import CALIBRATION_FORMAT, Calibration
+from burstloc.localize.interval import calibrated_bank
 
 
 @pytest.fixture(scope="module")

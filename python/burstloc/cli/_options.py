@@ -11,6 +11,7 @@ from burstloc.constants import BURST_FLOW, BURST_SHARE, WAVE_SPEED
 from burstloc.exceptions import ConfigError, NetworkError
 
 if TYPE_CHECKING:
+    from burstloc.experiments.paper import ScenarioConfig
     from burstloc.network import NetworkSource
     from burstloc.sim.scenarios.cache import DiskCache
     from burstloc.sim.signatures.burst_size import BurstFlow
@@ -35,6 +36,7 @@ __all__ = [
     "check_run_options",
     "meters_of",
     "run_of",
+    "scenario_of",
     "time_step_of",
     "wave_speeds_of",
 ]
@@ -204,6 +206,35 @@ def burst_size_of(
             raise ConfigError(f"--burst-share must be a percentage in (0, 100], got {share}")
         return None, BurstFlow(share=share / 100.0)
     return (None, None) if paper else (None, DEFAULT_BURST)
+
+
+def scenario_of(
+    args: argparse.Namespace, *, paper: bool = False
+) -> tuple[ScenarioConfig, BurstFlow | None]:
+    """The bursts' scenario from ``--position``, ``--min-pipe-length``, ``--solver`` (where the
+    command has them) and the burst size (:func:`burst_size_of`): ``(scenario, flow)``, the
+    flow ``None`` where a coefficient sizes the bursts.
+
+    Raises:
+        ConfigError: a position outside (0, 1), a bad burst size.
+    """
+    from dataclasses import replace
+
+    from burstloc.experiments.paper import SCENARIO
+
+    scenario = SCENARIO
+    if args.position is not None:
+        if not 0.0 < args.position < 1.0:
+            raise ConfigError(f"--position must be strictly between 0 and 1, got {args.position}")
+        scenario = replace(scenario, position=args.position)
+    if args.min_pipe_length is not None:
+        scenario = replace(scenario, min_pipe_length=args.min_pipe_length)
+    if getattr(args, "solver", None) is not None:
+        scenario = replace(scenario, solver=args.solver)
+    coeff, flow = burst_size_of(args, paper=paper)
+    if coeff is not None:
+        scenario = replace(scenario, burst_coeff=coeff)
+    return scenario, flow
 
 
 def add_run_options(parser: argparse.ArgumentParser, *, cache: bool = True) -> None:

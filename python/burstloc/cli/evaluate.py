@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 import math
-from dataclasses import fields, replace
+from dataclasses import fields
 from typing import TYPE_CHECKING, Any
 
 from burstloc._atomic import check_output
@@ -18,11 +18,11 @@ from burstloc.cli._options import (
     add_solver_option,
     add_time_step_option,
     add_wave_speeds_option,
-    burst_size_of,
     cache_of,
     check_run_options,
     meters_of,
     run_of,
+    scenario_of,
     time_step_of,
     wave_speeds_of,
 )
@@ -207,7 +207,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Handle ``burstloc evaluate``."""
-    from burstloc.experiments import paper, report
+    from burstloc.experiments import report
     from burstloc.experiments.evaluate import evaluate
     from burstloc.experiments.runs import plan_runs
     from burstloc.network import read_network
@@ -240,19 +240,9 @@ def run(args: argparse.Namespace) -> int:
         if meters is None or set(meters) == set(config.meters):
             meters = config.meters  # the meters it was calibrated for, in its order
     cache = cache_of(args)
-    scenario = paper.SCENARIO
-    if args.position is not None:
-        if not 0.0 < args.position < 1.0:
-            raise ConfigError(f"--position must be strictly between 0 and 1, got {args.position}")
-        scenario = replace(scenario, position=args.position)
-    if args.min_pipe_length is not None:
-        scenario = replace(scenario, min_pipe_length=args.min_pipe_length)
-    scenario = replace(scenario, solver=args.solver)
     # the paper's experiment keeps the paper's burst; every other run a utility's (a share of
     # the demand)
-    coeff, flow = burst_size_of(args, paper="paper" in args.localizer)
-    if coeff is not None:
-        scenario = replace(scenario, burst_coeff=coeff)
+    scenario, flow = scenario_of(args, paper="paper" in args.localizer)
     if args.noise is not None and not (math.isfinite(args.noise) and args.noise >= 0):
         raise ConfigError(f"--noise must be a number of metres >= 0, got {args.noise}")
     if args.noise_seed < 0:

@@ -73,12 +73,8 @@ from burstloc.constants import (
 )
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.inp import check_meters
-from burstloc.localize.config import (
-    MAX_CAPTURE_INTERVAL,
-    MAX_METERS,
-    Calibration,
-    IntervalCalibration,
-)
+from burstloc.localize.config import MAX_METERS, Calibration
+from burstloc.localize.interval import MAX_CAPTURE_INTERVAL, IntervalCalibration
 from burstloc.localize.onset import FINEST_STEP_INTERVAL
 from burstloc.wave_speeds import WaveSpeeds, stretch_of
 

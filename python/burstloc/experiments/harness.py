@@ -308,6 +308,18 @@ class RankingSetup:
     config: Calibration
     localizers: RankingLocalizers
     network: Network
+    _at: dict[float, RankingLocalizers] = field(default_factory=dict, repr=False)
+
+    def localizers_at(self, capture_interval: float) -> RankingLocalizers:
+        """The localizers as the monitor builds them at ``capture_interval``: the model's paths
+        timed at the fronts' speed there (:meth:`Calibration.model_at`); :attr:`localizers`
+        where that is the wave speed itself."""
+        model = self.config.model_at(capture_interval)
+        if model is self.config.model:
+            return self.localizers
+        if capture_interval not in self._at:
+            self._at[capture_interval] = RankingLocalizers.from_model(model)
+        return self._at[capture_interval]
 
     @classmethod
     def build(
@@ -383,7 +395,7 @@ def rank_attempts(
             detector=detector,
             localizer=name,
             meter_model=meter_model,  # type: ignore[arg-type]
-            localizers=setup.localizers,
+            localizers=setup.localizers_at(capture_interval),
         )
         early, decision = monitor_answer(monitor, times, values)
         out[name] = Attempt(result.pipe, offset, burst_start, decision=decision, early=early)

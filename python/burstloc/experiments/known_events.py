@@ -36,8 +36,9 @@ from burstloc.exceptions import ConfigError, StreamError
 from burstloc.experiments.position import NetworkDistance, PipePoint
 from burstloc.live.feeds import StepFeed
 from burstloc.live.parse import BadReading, parse_lines
-from burstloc.localize.config import Calibration, calibrated_bank
+from burstloc.localize.config import Calibration
 from burstloc.localize.evidence import IndexedAlarm, evidence_from_alarms
+from burstloc.localize.interval import calibrated_bank
 from burstloc.localize.travel_fit import EventArrivals
 from burstloc.network import Network
 from burstloc.readings import Reading, Step, timestamp_seconds
@@ -234,7 +235,9 @@ def event_arrivals(
     detector: str = "cusum",
 ) -> list[EventArrivals]:
     """What the meters heard of each event (module docstring); each feed's capture interval is
-    the calibrated one its readings' spacing matches.
+    the calibrated one its readings' spacing matches. Where the fronts are heard slower than
+    the wave at that interval (its ``front_factor``), the distances are divided by it: the fit
+    then finds the wave's own speed, and the calibrated factors still hold.
 
     Raises:
         ConfigError: a readings file that cannot be read as a feed, readings at no calibrated
@@ -246,11 +249,14 @@ def event_arrivals(
     distance = NetworkDistance(network.model, stretch)
     for e in events:
         onsets, interval = _onsets(e, config, detector)
+        # at the speed the fronts are heard at this interval, so that the fit gives the wave's
+        factor = config.for_interval(interval).front_factor
+        paths = _distances(e, network, distance, config.meters)
         found.append(
             EventArrivals(
                 name=e.name,
                 time=e.time,
-                distances=_distances(e, network, distance, config.meters),
+                distances={m: d / factor for m, d in paths.items()},
                 onsets=onsets,
                 capture_interval=interval,
                 time_known=e.time_known,

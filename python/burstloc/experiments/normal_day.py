@@ -48,7 +48,7 @@ def normal_operation(
         network,
         setup.config,
         capture_interval=capture_interval,
-        localizers=setup.localizers,
+        localizers=setup.localizers_at(capture_interval),
         classify=config,
     )
     steps = (Step(float(t), v) for t, v in zip(times, values, strict=True))

@@ -135,7 +135,7 @@ def _ranked_alarms(ev: Evaluation, r: RunResult, pipe: str) -> dict[str, float]:
     """Each alarmed meter's first alarm (the change's start time) in a ranking localizer's run
     at phase 0: the readings and calibrated bank of that run, again."""
     from burstloc.experiments.harness import readings_at_offset
-    from burstloc.localize.config import calibrated_bank
+    from burstloc.localize.interval import calibrated_bank
 
     setup = ev.setup
     if setup is None:

@@ -28,8 +28,8 @@ from burstloc.constants import (
 )
 from burstloc.exceptions import ConfigError
 from burstloc.experiments import paper
-from burstloc.localize.config import MAX_CAPTURE_INTERVAL, MAX_LOCALIZATION_INTERVAL
 from burstloc.localize.detection import DetectorConfig, Mode
+from burstloc.localize.interval import MAX_CAPTURE_INTERVAL, MAX_LOCALIZATION_INTERVAL
 
 __all__ = [
     "PAPER_OPTIONS",

@@ -48,9 +48,9 @@ from burstloc.localize.classify import (
     Operation,
     classify_alarms,
 )
-from burstloc.localize.config import calibrated_bank
 from burstloc.localize.corroborate import CORROBORATE, corroborated_at, corroboration_deadline
 from burstloc.localize.decide import decision_time, rank_alarms
+from burstloc.localize.interval import calibrated_bank
 from burstloc.localize.signature import SignatureLocalizer
 from burstloc.network import NetworkSource, as_network
 from burstloc.sim.events.operations import EventScenario
@@ -97,14 +97,15 @@ def classify_result(
     alarms = calibrated_bank("cusum", len(setup.meters), cal).run(np.ascontiguousarray(values))
     if not alarms:
         return Outcome("quiet")
-    by = corroboration_deadline("fused", setup.localizers, alarms, times, cal)
+    localizers = setup.localizers_at(capture_interval)
+    by = corroboration_deadline("fused", localizers, alarms, times, cal)
     corroborated = corroborated_at(alarms, times, CORROBORATE, by)
     if corroborated is None:
         return Outcome("quiet")
     try:
         decision = rank_alarms(
             "fused",
-            setup.localizers,
+            localizers,
             setup.meters,
             times,
             values,

@@ -61,7 +61,7 @@ from burstloc.live.decision import LiveDecision
 from burstloc.live.observe import LiveObserver
 from burstloc.live.subset import SubsetLocalizers
 from burstloc.localize.classify import ClassifierConfig, EventClassifier, Operation, classify_alarms
-from burstloc.localize.config import Calibration, calibrated_bank
+from burstloc.localize.config import Calibration
 from burstloc.localize.corroborate import CORROBORATE, corroborated_at, corroboration_deadline
 from burstloc.localize.decide import (
     Decision,
@@ -74,6 +74,7 @@ from burstloc.localize.decide import (
     rank_alarms,
 )
 from burstloc.localize.evidence import IndexedAlarm, Localizer
+from burstloc.localize.interval import calibrated_bank
 from burstloc.network import NetworkSource
 from burstloc.readings import Step
 
@@ -164,9 +165,10 @@ class BurstMonitor:
         self.localizer = localizer
         self.meter_model: MeterModel = meter_model
         self.bank = calibrated_bank(detector, len(self.meters), self.calibration)
-        self._subsets = SubsetLocalizers(config.model) if localizers is None else None
+        model = config.model_at(capture_interval)  # paths timed at the fronts' speed there
+        self._subsets = SubsetLocalizers(model) if localizers is None else None
         self.localizers: Mapping[str, Localizer] = (
-            RankingLocalizers.from_model(config.model) if localizers is None else dict(localizers)
+            RankingLocalizers.from_model(model) if localizers is None else dict(localizers)
         )
         self._fused = fused_of(self.localizers)
         if localizer not in self.localizers:

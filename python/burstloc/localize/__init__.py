@@ -12,7 +12,9 @@ On the live path: nothing here runs a hydraulic model or imports the simulator.
 * :mod:`~burstloc.localize.model`: the stored localization model (what the ranking localizers
   need of the network, computed offline by :mod:`burstloc.sim.model.prepare`);
 * :mod:`~burstloc.localize.config`: the stored configuration (calibrated detector settings and
-  the model) that ``burstloc calibrate`` writes and the monitor reads;
+  the model) that ``burstloc calibrate`` writes and the monitor reads, one
+  :class:`~burstloc.localize.interval.IntervalCalibration` per capture interval
+  (:mod:`~burstloc.localize.interval`: thresholds, delays, the speed fronts are heard at);
 * :mod:`~burstloc.localize.decide`: the localizers built from a model, when a ranking localizer
   answers, and what (a :class:`~burstloc.localize.decide.Decision`);
 * :mod:`~burstloc.localize.corroborate`: how many meters make a burst, and until when.

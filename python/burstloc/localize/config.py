@@ -26,17 +26,15 @@ import math
 import os
 import re
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from burstloc import _core
 from burstloc._atomic import write_json, write_json_npz
 from burstloc._validate import (
     FieldError,
     Fields,
     attributes,
-    check_count,
     check_names,
     check_number,
     check_string,
@@ -46,10 +44,14 @@ from burstloc._validate import (
 )
 from burstloc.exceptions import ConfigError
 from burstloc.inp import check_meters, junction_names_in_file
+from burstloc.localize.interval import (
+    IntervalCalibration,
+    levels,
+)
 from burstloc.localize.model import LocalizationModel
 from burstloc.network import Network, NetworkSource, identify
 
-__all__ = ["CALIBRATION_FORMAT", "Calibration", "IntervalCalibration", "calibrated_bank"]
+__all__ = ["CALIBRATION_FORMAT", "Calibration"]
 
 CALIBRATION_FORMAT = "burstloc-calibration/2"
 """Format tag of a configuration file (2: with the localization model)."""
@@ -59,123 +61,8 @@ _EARLIER_FORMATS = frozenset({"burstloc-calibration/1"})
 #: Limits every configuration is checked against on load and at construction.
 MAX_METERS = 10_000
 MAX_INTERVALS = 64
-#: Capture intervals (s) in ``(0, MAX_CAPTURE_INTERVAL]``: a transient needs readings this often.
-MAX_CAPTURE_INTERVAL = 3600.0
-#: New readings per localization window (the Shewhart reference window is twice this).
-MAX_LOCALIZATION_INTERVAL = 100_000
-#: Thresholds, drifts, noise levels (m) and the Shewhart multiplier are at most this.
-MAX_LEVEL = 1e6
-#: Decision delays (s) are at most a day.
-MAX_DELAY = 86_400.0
 MAX_FALSE_ALARM_RATE = 1e6
 _HASH = re.compile(r"sha256:[0-9a-f]{64}")
-
-
-def _levels(values: Any, field: str, meters: Sequence[str], *, positive: bool) -> dict[str, float]:
-    """One finite level (m) per meter: exactly the keys ``meters``, each in range."""
-    if not isinstance(values, Mapping):
-        raise FieldError(field, f"must be an object of one value per meter, got {values!r}")
-    if set(values) != set(meters):
-        missing = sorted(set(meters) - set(values))
-        extra = sorted(set(values) - set(meters))
-        raise FieldError(field, f"must have one value per meter (missing {missing}, extra {extra})")
-    return {
-        m: check_number(values[m], f"{field}.{m}", low=0, low_open=positive, high=MAX_LEVEL)
-        for m in meters
-    }
-
-
-@dataclass(frozen=True)
-class IntervalCalibration:
-    """Settings for one capture interval (thresholds per meter, in metres)."""
-
-    capture_interval: float
-    localization_interval: int
-    cusum_threshold: Mapping[str, float]
-    cusum_drift: Mapping[str, float]
-    shewhart_threshold: Mapping[str, float]
-    shewhart_sigma: float
-    decision_delay: float
-    arrival_decision_delay: float
-
-    def __post_init__(self) -> None:
-        """Check every field (a FieldError names it by its JSON name)."""
-        meters = tuple(self.cusum_threshold) if isinstance(self.cusum_threshold, Mapping) else ()
-        checked = {
-            "capture_interval": check_number(
-                self.capture_interval,
-                "capture_interval",
-                low=0,
-                low_open=True,
-                high=MAX_CAPTURE_INTERVAL,
-            ),
-            "localization_interval": check_count(
-                self.localization_interval, "localization_interval", high=MAX_LOCALIZATION_INTERVAL
-            ),
-            "cusum_threshold": _levels(
-                self.cusum_threshold, "cusum.threshold", meters, positive=True
-            ),
-            "cusum_drift": _levels(self.cusum_drift, "cusum.drift", meters, positive=False),
-            "shewhart_threshold": _levels(
-                self.shewhart_threshold, "shewhart.threshold", meters, positive=True
-            ),
-            "shewhart_sigma": check_number(
-                self.shewhart_sigma, "shewhart.sigma", low=0, low_open=True, high=MAX_LEVEL
-            ),
-            "decision_delay": check_number(
-                self.decision_delay, "decision_delay_s", low=0, high=MAX_DELAY
-            ),
-            "arrival_decision_delay": check_number(
-                self.arrival_decision_delay, "arrival_decision_delay_s", low=0, high=MAX_DELAY
-            ),
-        }
-        for name, value in checked.items():
-            object.__setattr__(self, name, value)
-
-    def uniform(self, detector: str) -> dict[str, float]:
-        """One parameter set for a whole detector bank (the largest per-meter thresholds)."""
-        if detector == "cusum":
-            return {
-                "threshold": max(self.cusum_threshold.values()),
-                "drift": max(self.cusum_drift.values()),
-            }
-        if detector == "shewhart":
-            return {
-                "threshold": max(self.shewhart_threshold.values()),
-                "sigma": self.shewhart_sigma,
-            }
-        raise ConfigError(f"unknown detector {detector!r}; use 'cusum' or 'shewhart'")
-
-    def to_json(self) -> dict[str, Any]:
-        """JSON-ready dictionary."""
-        return {
-            **attributes(self, "capture_interval", "localization_interval"),
-            "cusum": {"threshold": dict(self.cusum_threshold), "drift": dict(self.cusum_drift)},
-            "shewhart": {"threshold": dict(self.shewhart_threshold), "sigma": self.shewhart_sigma},
-            "decision_delay_s": self.decision_delay,
-            "arrival_decision_delay_s": self.arrival_decision_delay,
-        }
-
-    @classmethod
-    def from_json(
-        cls, data: Mapping[str, Any] | Fields, source: str = "configuration"
-    ) -> IntervalCalibration:
-        """Inverse of :meth:`to_json`; every field is checked (ConfigError naming ``source``
-        and the field)."""
-        fields = data if isinstance(data, Fields) else Fields(data, source)
-        cusum, shewhart = fields.obj("cusum"), fields.obj("shewhart")
-        return fields.build(
-            cls,
-            ("capture_interval", "localization_interval"),
-            {
-                "decision_delay": "decision_delay_s",
-                "arrival_decision_delay": "arrival_decision_delay_s",
-            },
-            cusum_threshold=cusum.get("threshold"),
-            cusum_drift=cusum.get("drift"),
-            shewhart_threshold=shewhart.get("threshold"),
-            shewhart_sigma=shewhart.get("sigma"),
-        )
 
 
 @dataclass(frozen=True)
@@ -209,7 +96,7 @@ class Calibration:
         object.__setattr__(self, "meters", meters)
         self.model.check(self.network_hash, meters)
         object.__setattr__(
-            self, "noise_sigma", _levels(self.noise_sigma, "noise_sigma", meters, positive=False)
+            self, "noise_sigma", levels(self.noise_sigma, "noise_sigma", meters, positive=False)
         )
         object.__setattr__(
             self,
@@ -251,6 +138,20 @@ class Calibration:
         raise ConfigError(
             f"configuration {self.name!r} has no calibration for a {capture_interval:g} s "
             f"capture interval (it has {have} s); run `burstloc calibrate` for it"
+        )
+
+    def model_at(self, capture_interval: float) -> LocalizationModel:
+        """The localization model as the arrival localizer reads it at ``capture_interval``:
+        its paths timed at the fronts' speed there (:attr:`IntervalCalibration.front_factor`
+        times the model's wave speed), its travel-time tolerance at least the fronts' scatter
+        (:attr:`IntervalCalibration.front_tolerance`)."""
+        item = self.for_interval(capture_interval)
+        model = self.model
+        tolerance = max(model.wave_speed_tolerance, item.front_tolerance)
+        if item.front_factor == 1.0 and tolerance == model.wave_speed_tolerance:
+            return model
+        return replace(
+            model, wave_speed=model.wave_speed * item.front_factor, wave_speed_tolerance=tolerance
         )
 
     def check(self, network: NetworkSource, meters: Sequence[str] | None = None) -> None:
@@ -306,6 +207,12 @@ class Calibration:
                 f"{span(item.cusum_threshold)} (drift {span(item.cusum_drift)}), Shewhart "
                 f"threshold {span(item.shewhart_threshold)}; localization every "
                 f"{item.localization_interval} readings"
+                + (
+                    f"; fronts heard at {item.front_factor * self.model.wave_speed:.0f} m/s "
+                    f"(scatter {item.front_tolerance:.1%})"
+                    if item.front_factor != 1.0
+                    else ""
+                )
             )
         per_day = self.false_alarm_rate * 24 * meters
         lines.append(
@@ -390,26 +297,3 @@ class Calibration:
         if network is not None:
             config.check(network, meters)
         return config
-
-
-def calibrated_bank(
-    kind: str, channels: int, calibration: IntervalCalibration
-) -> _core.DetectorBank:
-    """A :class:`burstloc.DetectorBank` of ``kind`` with one interval's calibrated settings
-    (:meth:`IntervalCalibration.uniform`; Shewhart reference window 2N).
-
-    Raises:
-        ConfigError: unknown detector kind.
-    """
-    params = calibration.uniform(kind)
-    if kind == "cusum":
-        return _core.DetectorBank(
-            "cusum", channels, threshold=params["threshold"], drift=params["drift"]
-        )
-    return _core.DetectorBank(
-        "shewhart",
-        channels,
-        threshold=params["threshold"],
-        sigma=params["sigma"],
-        window=2 * calibration.localization_interval,
-    )

@@ -27,7 +27,7 @@ from burstloc.localize.decide import decision_time, fused_of, horizon_of
 from burstloc.localize.evidence import Localizer
 
 if TYPE_CHECKING:
-    from burstloc.localize.config import IntervalCalibration
+    from burstloc.localize.interval import IntervalCalibration
 
 __all__ = ["CORROBORATE", "corroborated_at", "corroboration_deadline"]
 

@@ -66,7 +66,7 @@ from burstloc.localize.region import drop_fit, region_posterior
 from burstloc.localize.signature import SignatureLocalizer
 
 if TYPE_CHECKING:
-    from burstloc.localize.config import IntervalCalibration
+    from burstloc.localize.interval import IntervalCalibration
     from burstloc.localize.model import LocalizationModel
 
 # Decision and json_time (burstloc.localize.answer), arrival_horizon, horizon_of, early_time and

@@ -29,7 +29,7 @@ from burstloc.localize.fused import FusedLocalizer, decisive
 from burstloc.localize.region import region_posterior
 
 if TYPE_CHECKING:
-    from burstloc.localize.config import IntervalCalibration
+    from burstloc.localize.interval import IntervalCalibration
 
 __all__ = [
     "LOOK_INTERVAL",

@@ -1,0 +1,222 @@
+"""The speed at which the detectors hear a burst's front, per capture interval, from simulated
+bursts.
+
+A burst's front loses height at every junction it passes. A meter's detector hears it once
+the change has grown past its threshold: near the burst at once, far from it a few readings
+late, the later the coarser the readings and the weaker the front. The arrival localizer,
+timing paths at the pipes' wave speed, then reads the far meters' lateness as distance and
+places bursts towards the near meters. Regressed within each burst (its time unknown), the
+alarm starts of L-TOWN's 33 BattLeDIM sensors at 0.05 s lag by about 0.15 s per km: a front
+heard at about 1 020 m/s where the wave runs at 1 200 m/s.
+
+:func:`fit_front_speeds` measures that speed on the network itself, without data: it simulates
+bursts on ``bursts`` pipes drawn with ``seed`` (the calibrated meters, their calibrated noise,
+the network's own transient model), runs the calibrated detector bank of each capture interval
+over the readings as the monitor does, and fits the travel times of every burst's arrivals
+(:func:`burstloc.localize.travel_fit.fit_travel_times`, each burst's time fitted, no clock
+offsets). The fitted speed over the model's wave speed is that interval's
+:attr:`~burstloc.localize.interval.IntervalCalibration.front_factor`, the arrivals' scatter
+around it (a share of each travel time) its ``front_tolerance``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from burstloc.exceptions import ConfigError, SimulationError
+from burstloc.experiments.harness import Clock, capture_readings
+from burstloc.experiments.paper import SCENARIO, ScenarioConfig
+from burstloc.experiments.position import NetworkDistance, true_point, wave_travel
+from burstloc.localize.config import Calibration
+from burstloc.localize.evidence import evidence_from_alarms
+from burstloc.localize.interval import calibrated_bank
+from burstloc.localize.travel_fit import EventArrivals, TravelFit, fit_travel_times
+from burstloc.network import Network, closed_pipes, pipe_names
+
+__all__ = ["DEFAULT_FRONT_BURSTS", "FrontFit", "fit_front_speeds", "with_front_speeds"]
+
+#: Bursts simulated by default: enough arrivals (bursts x meters) for a slope good to a few %.
+DEFAULT_FRONT_BURSTS = 24
+
+
+@dataclass(frozen=True)
+class FrontFit:
+    """What the simulated bursts showed at one capture interval: the ``fit`` of their arrivals
+    and how many of the ``bursts`` the meters heard (at least two meters each)."""
+
+    capture_interval: float
+    fit: TravelFit
+    bursts: int
+    heard: int
+
+    def factor(self, wave_speed: float) -> float:
+        """The front's speed over ``wave_speed`` (the model's)."""
+        return self.fit.wave_speed / wave_speed
+
+
+def _pipes(network: Network, count: int, seed: int) -> list[str]:
+    """``count`` open pipes drawn with ``seed`` (all of them where there are fewer)."""
+    closed = set(closed_pipes(network.model))
+    open_pipes = sorted(p for p in pipe_names(network.model) if p not in closed)
+    if not open_pipes:
+        raise ConfigError(f"{network.path}: no open pipe to simulate a burst on")
+    rng = np.random.default_rng(seed)
+    chosen = rng.choice(len(open_pipes), size=min(count, len(open_pipes)), replace=False)
+    return [open_pipes[i] for i in sorted(chosen)]
+
+
+def _arrivals(
+    result: Any,
+    config: Calibration,
+    capture_interval: float,
+    distances: dict[str, float],
+    detector: str,
+    seed: int,
+) -> EventArrivals:
+    """One burst's arrivals at ``capture_interval``: each meter's first alarm start at or after
+    the burst, the calibrated bank run over noisy readings as the monitor runs it."""
+    from burstloc.sim.scenarios.sensors import SensorModel
+
+    cal = config.for_interval(capture_interval)
+    meters = list(config.meters)
+    clock = Clock.at_offset(capture_interval, 0.0, 2 * cal.localization_interval)
+    sensor = SensorModel(meters=tuple(meters), seed=seed, meter_sigma=dict(config.noise_sigma))
+    times, values = capture_readings(
+        result, clock, meters=meters, sensor=sensor, noise_key=f"front/{result.pipe}"
+    )
+    burst = float(result.metadata["burst_start"])
+    alarms = [
+        a
+        for a in calibrated_bank(detector, len(meters), cal).run(np.ascontiguousarray(values))
+        if times[max(int(a.start), 0)] + capture_interval >= burst
+    ]
+    onsets: dict[str, float] = {}
+    if alarms:
+        heard = evidence_from_alarms(
+            meters, times, values, alarms, capture_interval=capture_interval
+        )
+        onsets = {meter: float(alarm.start) for meter, alarm in heard.alarms.items()}
+    return EventArrivals(
+        name=f"burst on {result.pipe}",
+        time=burst,
+        distances=distances,
+        onsets=onsets,
+        capture_interval=capture_interval,
+        time_known=False,
+    )
+
+
+def fit_front_speeds(
+    network: Network,
+    config: Calibration,
+    *,
+    bursts: int = DEFAULT_FRONT_BURSTS,
+    seed: int = 0,
+    scenario: ScenarioConfig = SCENARIO,
+    burst_flow: Any = None,
+    detector: str = "cusum",
+    workers: int | None = None,
+    cache: Any = False,
+    progress: bool = False,
+) -> list[FrontFit]:
+    """The front's speed at each of ``config``'s capture intervals (module docstring).
+
+    ``bursts`` pipes drawn with ``seed`` burst as ``scenario`` says (its ``min_pipe_length``:
+    the transient-ready model), sized by ``burst_flow`` (m³/s or a
+    :class:`~burstloc.sim.signatures.burst_size.BurstFlow`; ``None``: the scenario's
+    coefficient); simulated over ``workers`` processes, through ``cache`` (default none).
+
+    Raises:
+        ConfigError: ``bursts`` < 2, or the bursts' arrivals cannot tell a speed at some
+            interval (fewer than three arrivals at different distances: the meters heard
+            nothing, or the network is too small).
+        SimulationError: a burst could not be simulated.
+    """
+    from burstloc.sim.scenarios.scenario import burst_scenarios
+    from burstloc.sim.signatures.burst_size import sized_scenarios
+    from burstloc.sim.transient import tsnet as simulate
+    from burstloc.sim.transient.time_step import with_capture_time_step
+
+    if not isinstance(bursts, int) or bursts < 2:
+        raise ConfigError(f"the front's speed needs at least 2 simulated bursts, got {bursts!r}")
+    config.check(network)
+    model = config.model
+    intervals = [item.capture_interval for item in config.intervals]
+    longest = max(
+        2 * item.localization_interval * item.capture_interval for item in config.intervals
+    )
+    params: dict[str, Any] = scenario.parameters()
+    travel = wave_travel(network.model, float(params["wave_speed"]))
+    params["duration"] = float(math.ceil(scenario.burst_start + travel + longest + 1.0))
+    scenarios = burst_scenarios(network, _pipes(network, bursts, seed), **params)
+    scenarios = with_capture_time_step(scenarios, min(intervals))
+    scenarios, _ = sized_scenarios(scenarios, burst_flow, network)
+    stretch = {p.pipe: p.stretch for p in model.pipes if p.stretch != 1.0}
+    distance = NetworkDistance(network.model, stretch)
+    events: dict[float, list[EventArrivals]] = {dt: [] for dt in intervals}
+
+    def arrivals(_: Any, result: Any) -> Any:
+        point = true_point(result, network.model)
+        distances = {m: distance.to_node(point, m) for m in config.meters}
+        for dt in intervals:
+            events[dt].append(_arrivals(result, config, dt, distances, detector, seed))
+        return replace(result, time=result.time[:1].copy(), heads=result.heads[:1].copy())
+
+    report = simulate.simulate_many(
+        scenarios, cache=cache, workers=workers, progress=progress, shrink=arrivals
+    )
+    if report.failures:
+        raise SimulationError("; ".join(report.failure_lines()))
+    fits = []
+    for dt in intervals:
+        heard = sum(len(e.onsets) >= 2 for e in events[dt])
+        try:
+            fit = fit_travel_times(
+                events[dt],
+                config.meters,
+                wave_speed=model.wave_speed,
+                wave_speed_tolerance=model.wave_speed_tolerance,
+                clock_tolerance=0.0,
+            )
+        except ConfigError as exc:
+            raise ConfigError(
+                f"the front's speed at {dt:g} s cannot be fitted from {len(events[dt])} "
+                f"simulated bursts ({heard} heard by two meters or more): {exc}"
+            ) from None
+        fits.append(FrontFit(dt, fit, len(events[dt]), heard))
+    return fits
+
+
+def with_front_speeds(config: Calibration, fits: Sequence[FrontFit]) -> Calibration:
+    """``config`` with each fitted interval's front factor, recorded in its provenance."""
+    model_speed = config.model.wave_speed
+    by = {f.capture_interval: f for f in fits}
+    intervals = tuple(
+        replace(
+            item,
+            front_factor=by[item.capture_interval].factor(model_speed),
+            front_tolerance=by[item.capture_interval].fit.wave_speed_tolerance,
+        )
+        if item.capture_interval in by
+        else item
+        for item in config.intervals
+    )
+    provenance = {
+        **config.provenance,
+        "front_speeds": {
+            f"{f.capture_interval:g}": {
+                "speed": round(f.fit.wave_speed, 1),
+                "bursts": f.bursts,
+                "heard": f.heard,
+                "arrivals": f.fit.arrivals,
+                "tolerance": round(f.fit.wave_speed_tolerance, 4),
+            }
+            for f in fits
+        },
+    }
+    return replace(config, intervals=intervals, provenance=provenance)
