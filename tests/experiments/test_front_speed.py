@@ -41,14 +41,26 @@ def test_the_fit_finds_the_speed_the_bursts_travel_at(
     for f in fits:
         assert f.bursts == 6 and f.heard == 6 and f.fit.arrivals >= 60
         assert low <= f.fit.wave_speed <= high, (f.capture_interval, f.fit.wave_speed)
-        assert f.factor(1200.0) == pytest.approx(f.fit.wave_speed / 1200.0)
+        assert f.factor(1200.0) == pytest.approx(min(1.0, f.fit.wave_speed / 1200.0))
     fitted = with_front_speeds(config, fits)
     for f, item in zip(fits, fitted.intervals, strict=True):
-        assert item.front_factor == pytest.approx(f.fit.wave_speed / 1200.0)
+        assert item.front_factor == pytest.approx(min(1.0, f.fit.wave_speed / 1200.0))
         assert item.front_tolerance == f.fit.wave_speed_tolerance > 0
-        assert fitted.model_at(f.capture_interval).wave_speed == pytest.approx(f.fit.wave_speed)
+        assert fitted.model_at(f.capture_interval).wave_speed == pytest.approx(
+            1200.0 * item.front_factor
+        )
     assert fitted.provenance["front_speeds"]["0.2"]["bursts"] == 6
     assert fitted.model is config.model  # the model keeps the wave's own speed
+
+
+def test_a_fit_faster_than_the_wave_leaves_the_wave_speed(network: Network) -> None:
+    # two meters far apart: one difference of arrivals per burst, which the paths' shapes decide
+    two = calibrate(network, capture_intervals=[0.2], noise_sigma=0.01, meters=["1", "8"])
+    (fit,) = fit_front_speeds(network, two, bursts=8, seed=1, workers=1)
+    assert fit.fit.wave_speed > 1200.0 and fit.factor(1200.0) == 1.0
+    fitted = with_front_speeds(two, [fit])
+    assert fitted.intervals[0].front_factor == 1.0
+    assert fitted.model_at(0.2).wave_speed == 1200.0
 
 
 def test_too_few_bursts_are_refused(network: Network, config: Calibration) -> None:

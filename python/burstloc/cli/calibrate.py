@@ -194,7 +194,13 @@ def _fronts(args: argparse.Namespace, network: Network, config: Calibration) -> 
     for f in fits:
         print(
             f"fronts at {f.capture_interval:g} s: heard at {f.fit.wave_speed:.0f} m/s "
-            f"({f.factor(speed):.3f} x {speed:.0f} m/s) over {f.fit.arrivals} arrivals of "
+            f"({f.fit.wave_speed / speed:.3f} x {speed:.0f} m/s"
+            + (
+                "; no faster than the wave: the paths keep its speed"
+                if f.factor(speed) == 1
+                else ""
+            )
+            + f") over {f.fit.arrivals} arrivals of "
             f"{f.heard}/{f.bursts} bursts ({f.fit.dropped} dropped), travel-time spread "
             f"{f.fit.wave_speed_tolerance:.1%}"
         )

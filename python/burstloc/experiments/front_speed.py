@@ -14,7 +14,8 @@ bursts on ``bursts`` pipes drawn with ``seed`` (the calibrated meters, their cal
 the network's own transient model), runs the calibrated detector bank of each capture interval
 over the readings as the monitor does, and fits the travel times of every burst's arrivals
 (:func:`burstloc.localize.travel_fit.fit_travel_times`, each burst's time fitted, no clock
-offsets). The fitted speed over the model's wave speed is that interval's
+offsets). The fitted speed over the model's wave speed (at most 1: a fit faster than the wave,
+as two meters far apart can give, leaves the wave's speed) is that interval's
 :attr:`~burstloc.localize.interval.IntervalCalibration.front_factor`, the arrivals' scatter
 around it (a share of each travel time) its ``front_tolerance``.
 """
@@ -55,8 +56,10 @@ class FrontFit:
     heard: int
 
     def factor(self, wave_speed: float) -> float:
-        """The front's speed over ``wave_speed`` (the model's)."""
-        return self.fit.wave_speed / wave_speed
+        """The front's speed over ``wave_speed`` (the model's), at most 1: no detector hears a
+        front before the wave brings it, so a fit faster than the wave (two meters a burst, whose
+        one difference the paths' shapes decide) leaves the wave's speed."""
+        return min(1.0, self.fit.wave_speed / wave_speed)
 
 
 def _pipes(network: Network, count: int, seed: int) -> list[str]:
