@@ -201,7 +201,7 @@ def _fronts(args: argparse.Namespace, network: Network, config: Calibration) -> 
                 else ""
             )
             + f") over {f.fit.arrivals} arrivals of "
-            f"{f.heard}/{f.bursts} bursts ({f.fit.dropped} dropped), travel-time spread "
+            f"{f.heard}/{f.bursts} bursts ({f.fit.dropped} dropped), scatter "
             f"{f.fit.wave_speed_tolerance:.1%}"
         )
     return with_front_speeds(config, fits)

@@ -143,16 +143,11 @@ class Calibration:
     def model_at(self, capture_interval: float) -> LocalizationModel:
         """The localization model as the arrival localizer reads it at ``capture_interval``:
         its paths timed at the fronts' speed there (:attr:`IntervalCalibration.front_factor`
-        times the model's wave speed), its travel-time tolerance at least the fronts' scatter
-        (:attr:`IntervalCalibration.front_tolerance`)."""
-        item = self.for_interval(capture_interval)
-        model = self.model
-        tolerance = max(model.wave_speed_tolerance, item.front_tolerance)
-        if item.front_factor == 1.0 and tolerance == model.wave_speed_tolerance:
-            return model
-        return replace(
-            model, wave_speed=model.wave_speed * item.front_factor, wave_speed_tolerance=tolerance
-        )
+        times the model's wave speed)."""
+        factor = self.for_interval(capture_interval).front_factor
+        if factor == 1.0:
+            return self.model
+        return replace(self.model, wave_speed=self.model.wave_speed * factor)
 
     def check(self, network: NetworkSource, meters: Sequence[str] | None = None) -> None:
         """Refuse (ConfigError) to be used with another network or another set of meters, or
@@ -208,8 +203,7 @@ class Calibration:
                 f"threshold {span(item.shewhart_threshold)}; localization every "
                 f"{item.localization_interval} readings"
                 + (
-                    f"; fronts heard at {item.front_factor * self.model.wave_speed:.0f} m/s "
-                    f"(scatter {item.front_tolerance:.1%})"
+                    f"; fronts heard at {item.front_factor * self.model.wave_speed:.0f} m/s"
                     if item.front_factor != 1.0
                     else ""
                 )

@@ -64,10 +64,7 @@ class IntervalCalibration:
     only once it has grown past a threshold, later the farther it has gone, so at coarse
     intervals it seems slower than the wave (:mod:`burstloc.experiments.front_speed` fits it
     from simulated bursts); the arrival localizer times paths at that speed
-    (:meth:`~burstloc.localize.config.Calibration.model_at`). ``front_tolerance``: how far
-    the fronts' arrivals scatter around that speed, as a share of each travel time (0: not
-    measured); the search regions take it where it exceeds the model's stated
-    ``wave_speed_tolerance``."""
+    (:meth:`~burstloc.localize.config.Calibration.model_at`)."""
 
     capture_interval: float
     localization_interval: int
@@ -78,7 +75,6 @@ class IntervalCalibration:
     decision_delay: float
     arrival_decision_delay: float
     front_factor: float = 1.0
-    front_tolerance: float = 0.0
 
     def __post_init__(self) -> None:
         """Check every field (a FieldError names it by its JSON name)."""
@@ -113,9 +109,6 @@ class IntervalCalibration:
             "front_factor": check_number(
                 self.front_factor, "front_speed_factor", low=0.05, high=2.0
             ),
-            "front_tolerance": check_number(
-                self.front_tolerance, "front_speed_tolerance", low=0, high=1
-            ),
         }
         for name, value in checked.items():
             object.__setattr__(self, name, value)
@@ -143,7 +136,6 @@ class IntervalCalibration:
             "decision_delay_s": self.decision_delay,
             "arrival_decision_delay_s": self.arrival_decision_delay,
             "front_speed_factor": self.front_factor,
-            "front_speed_tolerance": self.front_tolerance,
         }
 
     @classmethod
@@ -166,7 +158,6 @@ class IntervalCalibration:
             shewhart_threshold=shewhart.get("threshold"),
             shewhart_sigma=shewhart.get("sigma"),
             front_factor=fields.data.get("front_speed_factor", 1.0),
-            front_tolerance=fields.data.get("front_speed_tolerance", 0.0),
         )
 
 
