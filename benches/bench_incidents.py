@@ -16,7 +16,11 @@ Usage: ``.venv/bin/python benches/bench_incidents.py [--writes N] [--incidents N
 2. **The page's list of 10 000 incidents**: ``GET /incidents.json`` over HTTP from the page's
    server (every incident, open first), median and slowest of ``--runs``, beside the query alone
    (:meth:`IncidentStore.incidents`) and the page's poll when nothing changed
-   (``?after=VERSION``). Target: <= 1 s.
+   (``?after=VERSION``). Target: <= 1 s. Then what ``/metrics`` asks of the same store at each
+   scrape, the old way and the new, alternated, ``--runs`` times: the open incidents' gauge
+   (every open incident read, then counted: ``len(store.incidents(open_only=True))``; counted by
+   the database: :meth:`IncidentStore.open_count`), and the store's whole share of a scrape (that
+   gauge and the meters' outcomes, which read every incident), each as old / new.
 3. **The monitor with the store on and off**: a feed of ``--bursts`` simulated bursts on
    paper15 (a real TSNet burst, repeated), one by one through a fresh live loop, ``--runs``
    times each way, alternated: no observer; the recorder on SQLite; on PostgreSQL (each
@@ -152,6 +156,31 @@ def page_listing(store: Any, runs: int) -> dict[str, list[float]]:
         out["rows"] = [float(len(doc["incidents"]))]
     finally:
         server.stop()
+    return out
+
+
+def scrape_reads(store: Any, runs: int) -> dict[str, list[float]]:
+    """s per read of ``store`` that ``/metrics`` makes at each scrape (``burstloc monitor``'s
+    wiring), the old way and the new, alternated: the open incidents' gauge alone, and with the
+    meters' outcomes."""
+    from burstloc.incidents.outcomes import meter_outcomes
+
+    def old_gauge() -> int:
+        return len(store.incidents(open_only=True))
+
+    reads: dict[str, Callable[[], Any]] = {
+        "gauge, old": old_gauge,
+        "gauge, new": store.open_count,
+        "scrape, old": lambda: (old_gauge(), meter_outcomes(store.incidents())),
+        "scrape, new": lambda: (store.open_count(), meter_outcomes(store.incidents())),
+    }
+    assert old_gauge() == store.open_count()
+    out: dict[str, list[float]] = {name: [] for name in reads}
+    for k in range(runs):
+        for name in reads if k % 2 == 0 else reversed(list(reads)):
+            t = time.perf_counter()
+            reads[name]()
+            out[name].append(time.perf_counter() - t)
     return out
 
 
@@ -306,6 +335,10 @@ def main() -> None:
                 store = make()
                 fill(store, args.incidents)
                 got = page_listing(store, args.runs)
+                scrape = {
+                    k: statistics.median(v) for k, v in scrape_reads(store, args.runs).items()
+                }
+                opened = store.open_count()
                 store.close()
                 route, query = statistics.median(got["route"]), statistics.median(got["query"])
                 print(
@@ -313,6 +346,16 @@ def main() -> None:
                     f"{max(got['route']):.3f} ({int(got['rows'][0])} rows) | the query alone "
                     f"{query:.3f} (x{query / route:.2f} of the route) | unchanged poll "
                     f"{statistics.median(got['poll']) * 1000:.1f} ms"
+                )
+                gauge, whole = (
+                    (scrape[f"{what}, old"], scrape[f"{what}, new"]) for what in ("gauge", "scrape")
+                )
+                print(
+                    f"   {'':12s} /metrics ({opened} open): the open gauge old "
+                    f"{gauge[0] * 1000:.1f} ms, new {gauge[1] * 1000:.2f} ms (old / new "
+                    f"x{gauge[0] / gauge[1]:.0f}) |"
+                    f" with the meters' outcomes old {whole[0] * 1000:.1f} ms, new "
+                    f"{whole[1] * 1000:.1f} ms (x{whole[0] / whole[1]:.2f})"
                 )
         if "3" not in args.sections:
             return

@@ -1,18 +1,20 @@
 """burstloc.incidents.kept: the readings around each alarm, held on the monitor's thread,
-handed on once claimed and complete, written as a feed the monitor (and calibration) reads; and
+handed on once claimed and complete, written as a feed the monitor (and calibration) reads, in
+pieces, every value exactly; and
 through the recorder, the readings of a real burst kept on its incident, on SQLite and
 PostgreSQL."""
 
 from __future__ import annotations
 
 import io
+import struct
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from burstloc.incidents import IncidentStore
+from burstloc.incidents import IncidentStore, kept
 from burstloc.incidents.kept import AFTER, BEFORE, CAPTURES, Capture, ReadingsKeeper, write_feed
 from burstloc.incidents.recorder import Recorder
 from burstloc.live.monitor import BurstMonitor
@@ -114,6 +116,49 @@ def test_the_feed_file_is_what_the_monitor_reads_without_the_filled_values(
     assert [(r.timestamp, r.meter, r.value) for r in read] == [
         (1.0, "M1", 50.0), (1.0, "M2", 40.0), (1.2, "M1", 49.123456789), (1.4, "M2", 39.0),
     ]  # fmt: skip
+
+
+def test_a_long_capture_is_written_in_chunks_every_value_read_back_exactly(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(kept, "CHUNK", 40)  # 13 steps of 3 meters a piece: 16 pieces
+    rng = np.random.default_rng(11)
+    meters = ("N2", "J-17", "meter 3")
+    sent = np.round(40.0 + 30.0 * rng.random((200, 3)), 4)  # as meters send them
+    sent[::7, 1] = 40.0 + rng.random(29)  # full doubles, every digit
+    sent[5] = [-0.0, -12.5, 1e-9]
+    sent[6] = [np.nan, np.inf, 2.0**60 + 2048.0]
+    steps = [
+        Step(round(1_800_000_000.0 + k / 250, 3), sent[k], ("N2",) if k % 50 == 3 else ())
+        for k in range(200)
+    ]
+    capture = Capture(steps[40].timestamp, steps[-1].timestamp, steps, [], complete=True)
+    capture.key = "alarm:long"
+    path = Path(write_feed(capture, meters, tmp_path).path)
+    lines = path.read_text(encoding="utf-8").splitlines()
+    with path.open(encoding="utf-8") as text:  # each value to the bit (-0.0 keeps its sign)
+        read = [(r.timestamp, r.meter, struct.pack("<d", r.value)) for r in parse_lines(text)]
+    wanted = [
+        (s.timestamp, m, struct.pack("<d", v))
+        for s in steps
+        for m, v in zip(meters, s.values.tolist(), strict=True)
+        if m not in s.filled and np.isfinite(v)
+    ]
+    assert read == wanted and len(lines) == 1 + len(wanted)  # in order, none twice
+    assert (steps[5].timestamp, "N2", struct.pack("<d", -0.0)) in read
+    # a reading as sent is written as repr writes it (the file is the same as before)
+    assert lines[1] == f"{steps[0].timestamp!r},N2,{sent[0, 0]!r}"
+    assert lines[3] == f"{steps[0].timestamp!r},meter 3,{sent[0, 2]!r}"
+
+
+def test_a_step_without_one_value_per_meter_is_refused_and_no_file_is_left(
+    tmp_path: Path,
+) -> None:
+    steps = [Step(1.0, np.array([50.0, 40.0])), Step(1.2, np.array([49.0]))]
+    capture = Capture(1.0, 1.2, steps, [(1.0, 0.8)], complete=True, key="alarm:1.000000")
+    with pytest.raises(ValueError, match="a step with 1 values for 2 meters"):
+        write_feed(capture, METERS, tmp_path / "readings")
+    assert list((tmp_path / "readings").iterdir()) == []
 
 
 def test_a_real_bursts_readings_are_kept_on_its_incident(

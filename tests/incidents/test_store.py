@@ -212,6 +212,34 @@ def test_listing_puts_open_incidents_first_newest_first(store: IncidentStore) ->
     assert store.version() == max(h["id"] for i in ids for h in store.get(i)["history"])
 
 
+def test_the_open_count_is_the_open_listings_length_through_the_life_cycle(
+    store: IncidentStore,
+) -> None:
+    def counted() -> tuple[int, int]:
+        return store.open_count(), len(store.incidents(open_only=True))
+
+    assert counted() == (0, 0)
+    ids = [_burst(store, 100.0 * k, at=1e9 + k) for k in range(1, 6)]
+    (fault,) = store.take([meter_fault("N8", "silent", True, 1e9, 10.0)])
+    assert counted() == (6, 6)
+    store.acknowledge(ids[0], "ann", "cli")
+    store.dispatch(ids[0], "ann", "cli")
+    store.acknowledge(ids[1], "ann", "cli")
+    store.shelves.shelve(ids[2], 3600.0, by="ann", via="cli", reason="hydrant flushing")
+    store.shelves.shelve(fault, 60.0, by="ann", via="cli", reason="radio link down")
+    assert counted() == (6, 6)  # acknowledged, dispatched and shelved incidents are open
+    store.close_incident(ids[1], "bob", "cli", Outcome.found(412.5, -33.0))
+    store.acknowledge(ids[2], "bob", "cli")  # a shelved incident, closed
+    store.close_incident(ids[2], "bob", "cli", Outcome.false_alarm())
+    assert counted() == (4, 4)
+    store.clock.now += 120.0  # type: ignore[attr-defined]  # the fault's shelving ran out
+    assert store.shelves.expire() == 1
+    store.acknowledge(fault, "bob", "cli")
+    store.close_incident(fault, "bob", "cli", Outcome.false_alarm())
+    assert counted() == (3, 3)
+    assert {r["id"] for r in store.incidents(open_only=True)} == {ids[0], ids[3], ids[4]}
+
+
 def test_a_meter_fault_is_one_incident_while_open(store: IncidentStore) -> None:
     (incident,) = store.take([meter_fault("N8", "silent", True, 1e9, 10.0)])
     assert store.take([meter_fault("N8", "silent", True, 1e9 + 1, 11.0)]) == [0]

@@ -251,7 +251,7 @@ def _serve(
         from burstloc.incidents.outcomes import meter_outcomes
 
         store = recorder.store
-        metrics.incidents_open = lambda: len(store.incidents(open_only=True))
+        metrics.incidents_open = store.open_count
         metrics.meter_outcomes = lambda: meter_outcomes(store.incidents())
         metrics.webhooks = sender
     saved = None if state is None else state.load()

@@ -1,6 +1,8 @@
-"""Incidents written out for other tools: CSV (one row per incident; ``alarmed``: the meters
-whose alarms made it, space-separated; ``readings``: the feed file kept around its alarm) or
-JSON (every incident with its latest record and its history)."""
+"""Incidents written out for other tools: CSV (one row per incident; wall-clock times in ISO
+8601 UTC; ``alarmed``: the meters whose alarms made it, space-separated; ``readings``: the feed
+file kept around its alarm; ``shelved_until``, ``shelved_by``, ``shelved_reason``: its shelving
+in force, empty when it is not shelved) or JSON (every incident with its latest record and its
+history; wall-clock times as seconds since the epoch)."""
 
 from __future__ import annotations
 
@@ -20,7 +22,7 @@ FORMATS = ("csv", "json")
 CSV_COLUMNS = (
     "id", "kind", "state", "detected_at", "updated_at", "closed_at", "reading_time", "pipe",
     "meter", "summary", "outcome", "found_x", "found_y", "acknowledged_by", "dispatched_by",
-    "closed_by", "notes", "alarmed", "readings",
+    "closed_by", "notes", "alarmed", "readings", "shelved_until", "shelved_by", "shelved_reason",
 )  # fmt: skip
 
 
@@ -65,6 +67,7 @@ def export(store: IncidentStore, form: str) -> str:
             "detected_at": iso(row["detected_at"]),
             "updated_at": iso(row["updated_at"]),
             "closed_at": iso(row["closed_at"]),
+            "shelved_until": iso(row["shelved_until"]),
             "acknowledged_by": _by(history, "acknowledged"),
             "dispatched_by": _by(history, "dispatched"),
             "closed_by": _by(history, "closed"),

@@ -83,6 +83,13 @@ def _listed(mapping: Any) -> dict[str, Any]:
     return doc
 
 
+def _is_open() -> Any:
+    """The condition an open incident's row meets (any state but closed)."""
+    from burstloc.incidents.schema import incidents as t
+
+    return t.c.state != CLOSED
+
+
 def _history_row(r: Any) -> dict[str, Any]:
     return {
         "id": r.id, "at": r.at, "by": r.by, "via": r.via, "action": r.action, "state": r.state,
@@ -326,11 +333,21 @@ class IncidentStore:
             closed, t.c.detected_at.desc(), t.c.id.desc()
         )
         if open_only:
-            query = query.where(t.c.state != CLOSED)
+            query = query.where(_is_open())
         if limit is not None:
             query = query.limit(limit)
         with self._read() as connection:
             return [_listed(row._mapping) for row in connection.execute(query)]
+
+    def open_count(self) -> int:
+        """How many incidents are open (those :meth:`incidents` lists with ``open_only``,
+        shelved ones included: a shelving never changes whether an incident is open), counted
+        by the database (``/metrics`` asks at every scrape)."""
+        from sqlalchemy import func, select
+
+        query = select(func.count()).where(_is_open())
+        with self._read() as connection:
+            return int(connection.execute(query).scalar_one())
 
     def get(self, incident: int) -> dict[str, Any]:
         """One incident with its latest record (parsed) and its history, oldest first.
