@@ -147,8 +147,8 @@ def test_a_long_capture_is_written_in_chunks_every_value_read_back_exactly(
     assert read == wanted and len(lines) == 1 + len(wanted)  # in order, none twice
     assert (steps[5].timestamp, "N2", struct.pack("<d", -0.0)) in read
     # a reading as sent is written as repr writes it (the file is the same as before)
-    assert lines[1] == f"{steps[0].timestamp!r},N2,{sent[0, 0]!r}"
-    assert lines[3] == f"{steps[0].timestamp!r},meter 3,{sent[0, 2]!r}"
+    assert lines[1] == f"{float(steps[0].timestamp)!r},N2,{float(sent[0, 0])!r}"
+    assert lines[3] == f"{float(steps[0].timestamp)!r},meter 3,{float(sent[0, 2])!r}"
 
 
 def test_a_step_without_one_value_per_meter_is_refused_and_no_file_is_left(
