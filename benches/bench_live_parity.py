@@ -70,7 +70,8 @@ def main() -> None:
     from burstloc import network as netmod
     from burstloc.experiments import paper
     from burstloc.experiments.calibrate import calibrate
-    from burstloc.experiments.harness import Clock, RankingSetup, capture_readings, first_decision
+    from burstloc.experiments.harness import Clock, capture_readings
+    from burstloc.experiments.ranking import RankingSetup, first_decision
     from burstloc.live.monitor import BurstMonitor
     from burstloc.sim.scenarios.cache import DiskCache
     from burstloc.sim.scenarios.scenario import burst_scenarios

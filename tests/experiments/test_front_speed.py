@@ -15,7 +15,7 @@ from burstloc.exceptions import ConfigError
 from burstloc.experiments import paper
 from burstloc.experiments.calibrate import calibrate
 from burstloc.experiments.front_speed import fit_front_speeds, with_front_speeds
-from burstloc.experiments.harness import RankingSetup
+from burstloc.experiments.ranking import RankingSetup
 from burstloc.live.monitor import BurstMonitor
 from burstloc.localize.config import Calibration
 from burstloc.network import Network, read_network

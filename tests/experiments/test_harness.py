@@ -15,14 +15,12 @@ from burstloc.experiments.evaluate import RunResult, evaluate
 from burstloc.experiments.harness import (
     Attempt,
     Clock,
-    RankingSetup,
     Tally,
     capture_readings,
     locate_burst,
-    locate_ranked,
-    rank_attempts,
     readings_at_offset,
 )
+from burstloc.experiments.ranking import RankingSetup, locate_ranked, rank_attempts
 from burstloc.experiments.runs import RunSpec
 from burstloc.localize.detection import DetectorConfig, Mode
 from burstloc.sim.scenarios.scenario import ScenarioResult

@@ -15,7 +15,8 @@ from pathlib import Path
 import pytest
 
 from burstloc.experiments.calibrate import calibrate
-from burstloc.experiments.harness import Clock, capture_readings, monitor_answer
+from burstloc.experiments.harness import Clock, capture_readings
+from burstloc.experiments.ranking import monitor_answer
 from burstloc.live.monitor import BurstMonitor
 from burstloc.sim.scenarios.scenario import burst_scenarios
 from burstloc.sim.scenarios.sensors import SensorModel

@@ -20,7 +20,8 @@ import pytest
 
 from burstloc.experiments import paper
 from burstloc.experiments.calibrate import calibrate
-from burstloc.experiments.harness import Clock, capture_readings, monitor_answer
+from burstloc.experiments.harness import Clock, capture_readings
+from burstloc.experiments.ranking import monitor_answer
 from burstloc.live.monitor import BurstMonitor
 from burstloc.localize.interval import calibrated_bank
 from burstloc.sim.scenarios.scenario import burst_scenarios

@@ -194,7 +194,7 @@ def test_evaluate_localizes_with_the_configurations_own_signatures() -> None:
     # before, evaluate --config recomputed the localization model from the network file (its
     # exact signatures) instead of reading the configuration's, as the monitor does
     from burstloc.experiments.calibrate import calibrate
-    from burstloc.experiments.harness import RankingSetup
+    from burstloc.experiments.ranking import RankingSetup
 
     meters = ["N4", "N7", "5"]
     config = calibrate(PAPER15, capture_intervals=[0.2], meters=meters, signatures="linear")

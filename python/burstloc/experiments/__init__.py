@@ -6,7 +6,8 @@ library imports it but :mod:`burstloc.cli`.
 * :mod:`~burstloc.experiments.paper`: the paper's tables and scenario;
 * :mod:`~burstloc.experiments.runs`: the runs of an evaluation (detector, interval, localizer);
 * :mod:`~burstloc.experiments.harness`: the one harness both experiments score through
-  (captured readings, the localizers' attempts, the tally);
+  (captured readings, the localizers' attempts, the tally), and
+  :mod:`~burstloc.experiments.ranking`: the ranking localizers scored through the live monitor;
 * :mod:`~burstloc.experiments.evaluate`: burst every pipe, replay, localize, score;
 * :mod:`~burstloc.experiments.event_set`, :mod:`~burstloc.experiments.specificity`: the
   non-burst events operated on a network, and bursts and those events together (how often a

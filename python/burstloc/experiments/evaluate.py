@@ -47,18 +47,13 @@ from typing import TYPE_CHECKING, Any
 
 from burstloc.exceptions import ConfigError
 from burstloc.experiments import paper
-from burstloc.experiments.harness import (
-    Attempt,
-    RankingSetup,
-    locate_burst,
-    rank_attempts,
-    readings_at_offset,
-)
+from burstloc.experiments.harness import Attempt, locate_burst, readings_at_offset
 from burstloc.experiments.outcome import Evaluation, RunResult
 from burstloc.experiments.position import (
     PositionScorer,
     wave_travel,
 )
+from burstloc.experiments.ranking import RankingSetup, rank_attempts
 from burstloc.experiments.region_score import score_regions
 from burstloc.experiments.runs import (
     RunSpec,
@@ -383,7 +378,7 @@ def _score(
 ) -> dict[RunSpec, dict[str, list[Attempt]]]:
     """Every run's attempts, ``[spec][pipe][k]``. Ranking runs that differ only in their
     localizer see the same readings, captured once per attempt and fed to each localizer's
-    monitor (:func:`burstloc.experiments.harness.rank_attempts`)."""
+    monitor (:func:`burstloc.experiments.ranking.rank_attempts`)."""
     scored: dict[RunSpec, dict[str, list[Attempt]]] = {}
     for spec in runs:
         if spec in scored:

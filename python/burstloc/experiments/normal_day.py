@@ -10,7 +10,7 @@ from __future__ import annotations
 from typing import Any
 
 from burstloc.experiments.calibrate import DEFAULT_NOISE_SIGMA
-from burstloc.experiments.harness import RankingSetup
+from burstloc.experiments.ranking import RankingSetup
 from burstloc.localize.classify import ClassifierConfig
 from burstloc.network import NetworkSource
 

@@ -9,8 +9,9 @@ from typing import TYPE_CHECKING, Any
 
 from burstloc.constants import CAPTURE_INTERVALS
 from burstloc.experiments import paper
-from burstloc.experiments.harness import Attempt, RankingSetup, Tally
+from burstloc.experiments.harness import Attempt, Tally
 from burstloc.experiments.position import PipePoint, PositionErrors, PositionOutcome
+from burstloc.experiments.ranking import RankingSetup
 from burstloc.experiments.region_score import RegionOutcome, RegionScores
 from burstloc.experiments.runs import RunSpec
 

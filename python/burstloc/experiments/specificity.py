@@ -40,7 +40,8 @@ import numpy as np
 from burstloc.exceptions import InputError, SimulationError, SimulatorMissingError
 from burstloc.experiments.calibrate import DEFAULT_NOISE_SIGMA
 from burstloc.experiments.event_set import asset_nodes, default_events
-from burstloc.experiments.harness import Clock, RankingSetup, capture_readings
+from burstloc.experiments.harness import Clock, capture_readings
+from burstloc.experiments.ranking import RankingSetup
 from burstloc.localize.classify import (
     CLASSES,
     ClassifierConfig,

@@ -52,7 +52,8 @@ from burstloc.experiments.grid import (
     StudySettings,
     point_scenarios,
 )
-from burstloc.experiments.harness import Clock, RankingSetup, Tally, capture_readings, rank_attempts
+from burstloc.experiments.harness import Clock, Tally, capture_readings
+from burstloc.experiments.ranking import RankingSetup, rank_attempts
 
 __all__ = [
     "run_study",
