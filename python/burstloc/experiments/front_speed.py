@@ -33,10 +33,10 @@ import numpy as np
 
 from burstloc.exceptions import ConfigError, SimulationError
 from burstloc.experiments.harness import Clock, capture_readings
+from burstloc.experiments.known_events import onsets_after
 from burstloc.experiments.paper import SCENARIO, ScenarioConfig
 from burstloc.experiments.position import NetworkDistance, true_point, wave_travel
 from burstloc.localize.config import Calibration
-from burstloc.localize.evidence import evidence_from_alarms
 from burstloc.localize.interval import calibrated_bank
 from burstloc.localize.travel_fit import EventArrivals, TravelFit, fit_travel_times
 from burstloc.network import Network, closed_pipes, pipe_names
@@ -95,17 +95,8 @@ def _arrivals(
         result, clock, meters=meters, sensor=sensor, noise_key=f"front/{result.pipe}"
     )
     burst = float(result.metadata["burst_start"])
-    alarms = [
-        a
-        for a in calibrated_bank(detector, len(meters), cal).run(np.ascontiguousarray(values))
-        if times[max(int(a.start), 0)] + capture_interval >= burst
-    ]
-    onsets: dict[str, float] = {}
-    if alarms:
-        heard = evidence_from_alarms(
-            meters, times, values, alarms, capture_interval=capture_interval
-        )
-        onsets = {meter: float(alarm.start) for meter, alarm in heard.alarms.items()}
+    alarms = calibrated_bank(detector, len(meters), cal).run(np.ascontiguousarray(values))
+    onsets = onsets_after(meters, (times, values), alarms, burst, capture_interval)
     return EventArrivals(
         name=f"burst on {result.pipe}",
         time=burst,

@@ -43,7 +43,7 @@ from burstloc.localize.travel_fit import EventArrivals
 from burstloc.network import Network
 from burstloc.readings import Reading, Step, timestamp_seconds
 
-__all__ = ["KnownEvent", "event_arrivals", "read_known_events"]
+__all__ = ["KnownEvent", "event_arrivals", "onsets_after", "read_known_events"]
 
 
 @dataclass(frozen=True)
@@ -193,18 +193,15 @@ def _onsets(
     feed = StepFeed(meters, period=capture_interval)
     times: list[float] = []
     rows: list[np.ndarray] = []
-    alarms: list[IndexedAlarm] = []  # those that start at or after the event
+    alarms: list[IndexedAlarm] = []
 
     def run(steps: list[Step]) -> None:
         for step in steps:
             times.append(float(step.timestamp))
             rows.append(np.asarray(step.values, dtype=np.float64))
             for alarm in bank.step(rows[-1]):
-                start = max(int(alarm.start), 0)
-                if times[start] + capture_interval >= event.time:
-                    index = len(times) - 1
-                    channel = int(alarm.channel or 0)
-                    alarms.append(IndexedAlarm(channel, index, start, float(alarm.amplitude)))
+                start, channel = max(int(alarm.start), 0), int(alarm.channel or 0)
+                alarms.append(IndexedAlarm(channel, len(times) - 1, start, float(alarm.amplitude)))
 
     try:
         for reading in readings:
@@ -217,15 +214,28 @@ def _onsets(
             f"known event {event.name!r}: its readings must start before the event "
             f"(at {event.time:g} s) so that the detectors know the level before it"
         )
-    if not alarms:
-        return {}, capture_interval
-    heard = (
-        evidence_from_alarms(  # each meter's first, its start as the monitor's localizers read it
-            meters, np.asarray(times), np.asarray(rows), alarms, capture_interval=capture_interval
-        )
-    )
-    onsets = {meter: alarm.start for meter, alarm in heard.alarms.items()}
-    return onsets, capture_interval
+    readings_seen = (np.asarray(times), np.asarray(rows))
+    return onsets_after(
+        meters, readings_seen, alarms, event.time, capture_interval
+    ), capture_interval
+
+
+def onsets_after(
+    meters: Sequence[str],
+    readings: tuple[np.ndarray, np.ndarray],
+    alarms: Sequence[Any],
+    time: float,
+    capture_interval: float,
+) -> dict[str, float]:
+    """Each meter's first alarm start (s) at or after ``time``, as the monitor's localizers
+    read it (:func:`~burstloc.localize.evidence.evidence_from_alarms`), from a bank's
+    ``alarms`` over ``readings`` ``(times, values)``; ``{}`` where none starts then."""
+    times, values = readings
+    kept = [a for a in alarms if times[max(int(a.start), 0)] + capture_interval >= time]
+    if not kept:
+        return {}
+    heard = evidence_from_alarms(meters, times, values, kept, capture_interval=capture_interval)
+    return {meter: float(alarm.start) for meter, alarm in heard.alarms.items()}
 
 
 def event_arrivals(
