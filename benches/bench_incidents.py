@@ -19,8 +19,11 @@ Usage: ``.venv/bin/python benches/bench_incidents.py [--writes N] [--incidents N
    (``?after=VERSION``). Target: <= 1 s. Then what ``/metrics`` asks of the same store at each
    scrape, the old way and the new, alternated, ``--runs`` times: the open incidents' gauge
    (every open incident read, then counted: ``len(store.incidents(open_only=True))``; counted by
-   the database: :meth:`IncidentStore.open_count`), and the store's whole share of a scrape (that
-   gauge and the meters' outcomes, which read every incident), each as old / new.
+   the database: :meth:`IncidentStore.open_count`); the meters' false-alarm gauges (every
+   incident read, then :func:`~burstloc.incidents.outcomes.meter_outcomes`; counted by the
+   database: :meth:`IncidentStore.meter_counts`, checked equal); and the store's whole share of
+   a scrape (the open gauge counted by the database, with the meters' gauges old and new), each
+   as old / new. ``--sections 2 --no-page`` times only ``/metrics``.
 3. **The monitor with the store on and off**: a feed of ``--bursts`` simulated bursts on
    paper15 (a real TSNet burst, repeated), one by one through a fresh live loop, ``--runs``
    times each way, alternated: no observer; the recorder on SQLite; on PostgreSQL (each
@@ -161,20 +164,26 @@ def page_listing(store: Any, runs: int) -> dict[str, list[float]]:
 
 def scrape_reads(store: Any, runs: int) -> dict[str, list[float]]:
     """s per read of ``store`` that ``/metrics`` makes at each scrape (``burstloc monitor``'s
-    wiring), the old way and the new, alternated: the open incidents' gauge alone, and with the
-    meters' outcomes."""
+    wiring), the old way and the new, alternated: the open incidents' gauge, the meters'
+    false-alarm gauges, and both (the store's whole share of a scrape)."""
     from burstloc.incidents.outcomes import meter_outcomes
 
     def old_gauge() -> int:
         return len(store.incidents(open_only=True))
 
+    def old_meters() -> list[Any]:
+        return [m.counts() for m in meter_outcomes(store.incidents())]
+
     reads: dict[str, Callable[[], Any]] = {
         "gauge, old": old_gauge,
         "gauge, new": store.open_count,
-        "scrape, old": lambda: (old_gauge(), meter_outcomes(store.incidents())),
-        "scrape, new": lambda: (store.open_count(), meter_outcomes(store.incidents())),
+        "meters, old": old_meters,
+        "meters, new": store.meter_counts,
+        "scrape, old": lambda: (store.open_count(), old_meters()),  # as before this change
+        "scrape, new": lambda: (store.open_count(), store.meter_counts()),
     }
     assert old_gauge() == store.open_count()
+    assert old_meters() == store.meter_counts()
     out: dict[str, list[float]] = {name: [] for name in reads}
     for k in range(runs):
         for name in reads if k % 2 == 0 else reversed(list(reads)):
@@ -277,6 +286,9 @@ def main() -> None:
     parser.add_argument("--bursts", type=int, default=6)
     parser.add_argument("--no-postgresql", action="store_true")
     parser.add_argument("--sections", default="123", help="which parts to run, e.g. 13")
+    parser.add_argument(
+        "--no-page", action="store_true", help="section 2: only what /metrics asks of the store"
+    )
     args = parser.parse_args()
     from burstloc.incidents import IncidentStore
 
@@ -334,28 +346,28 @@ def main() -> None:
             for name, make in stores.items():
                 store = make()
                 fill(store, args.incidents)
-                got = page_listing(store, args.runs)
+                got = None if args.no_page else page_listing(store, args.runs)
                 scrape = {
                     k: statistics.median(v) for k, v in scrape_reads(store, args.runs).items()
                 }
-                opened = store.open_count()
+                opened, meters = store.open_count(), len(store.meter_counts())
                 store.close()
-                route, query = statistics.median(got["route"]), statistics.median(got["query"])
+                if got is not None:
+                    route, query = (statistics.median(got[k]) for k in ("route", "query"))
+                    print(
+                        f"   {name:12s} GET /incidents.json median {route:.3f} slowest "
+                        f"{max(got['route']):.3f} ({int(got['rows'][0])} rows) | the query "
+                        f"alone {query:.3f} (x{query / route:.2f} of the route) | unchanged "
+                        f"poll {statistics.median(got['poll']) * 1000:.1f} ms"
+                    )
+                parts = []
+                for what, label in [("gauge", "the open gauge"), ("meters", "the meters' gauges"),
+                                    ("scrape", "the whole")]:  # fmt: skip
+                    old, new = scrape[f"{what}, old"] * 1000, scrape[f"{what}, new"] * 1000
+                    parts.append(f"{label} old {old:.1f} ms, new {new:.2f} ms (x{old / new:.1f})")
                 print(
-                    f"   {name:12s} GET /incidents.json median {route:.3f} slowest "
-                    f"{max(got['route']):.3f} ({int(got['rows'][0])} rows) | the query alone "
-                    f"{query:.3f} (x{query / route:.2f} of the route) | unchanged poll "
-                    f"{statistics.median(got['poll']) * 1000:.1f} ms"
-                )
-                gauge, whole = (
-                    (scrape[f"{what}, old"], scrape[f"{what}, new"]) for what in ("gauge", "scrape")
-                )
-                print(
-                    f"   {'':12s} /metrics ({opened} open): the open gauge old "
-                    f"{gauge[0] * 1000:.1f} ms, new {gauge[1] * 1000:.2f} ms (old / new "
-                    f"x{gauge[0] / gauge[1]:.0f}) |"
-                    f" with the meters' outcomes old {whole[0] * 1000:.1f} ms, new "
-                    f"{whole[1] * 1000:.1f} ms (x{whole[0] / whole[1]:.2f})"
+                    f"   {name if got is None else '':12s} /metrics ({opened} open, {meters} "
+                    "meters): " + " | ".join(parts)
                 )
         if "3" not in args.sections:
             return

@@ -22,8 +22,13 @@ RECORD = {
 }  # fmt: skip
 
 
-def _alarm(store: IncidentStore, first: float, alarmed: list[str]) -> int:
-    item = from_record({**RECORD, "first_alarm": first, "alarmed": alarmed}, 1e9 + first)
+def _alarm(
+    store: IncidentStore, first: float, alarmed: list[str] | None, kind: str = "decision"
+) -> int:
+    """The incident of an alarm first at ``first`` (a record of type ``kind``) naming
+    ``alarmed`` (``None``: a record without them)."""
+    record = {**RECORD, "type": kind, "first_alarm": first, "alarmed": alarmed}
+    item = from_record(record, 1e9 + first)
     assert item is not None
     (incident,) = store.take([item])
     return incident

@@ -247,12 +247,10 @@ def _serve(
     from burstloc.cli import _service
 
     metrics = _service.attach(args, web, loop, link)
-    if metrics is not None and recorder is not None:  # the incident store's open incidents
-        from burstloc.incidents.outcomes import meter_outcomes
-
+    if metrics is not None and recorder is not None:  # the incident store's counts
         store = recorder.store
         metrics.incidents_open = store.open_count
-        metrics.meter_outcomes = lambda: meter_outcomes(store.incidents())
+        metrics.meter_counts = store.meter_counts
         metrics.webhooks = sender
     saved = None if state is None else state.load()
     if saved is not None:

@@ -11,6 +11,8 @@ outcome, operators' notes), kept in SQLite (the default) or PostgreSQL.
 * :mod:`~burstloc.incidents.engine`: the address and the connection (SQLite set up for durability);
 * :mod:`~burstloc.incidents.store`: the store (SQLAlchemy Core; durable commits);
 * :mod:`~burstloc.incidents.writing`: the monitor's news as SQL, statements built once;
+* :mod:`~burstloc.incidents.counts`: each meter's incidents counted by the database (its
+  ``incident_meters`` rows, written with the incident);
 * :mod:`~burstloc.incidents.recorder`: the monitor's observer, writing on a thread of its own;
 * :mod:`~burstloc.incidents.kept`: the readings around each alarm, kept beside the store;
 * :mod:`~burstloc.incidents.outcomes`: what closed incidents teach (false alarms per meter,

@@ -11,7 +11,7 @@ from typing import Any
 
 from burstloc.incidents.errors import IncidentStoreError
 
-__all__ = ["BUSY_TIMEOUT", "beside_state", "make_engine", "store_url"]
+__all__ = ["BUSY_TIMEOUT", "beside_state", "fsync_size", "make_engine", "store_url"]
 
 #: Seconds a writer waits for another's lock (SQLite) or a connection (PostgreSQL).
 BUSY_TIMEOUT = 30.0
@@ -76,6 +76,20 @@ def make_engine(url: str) -> Any:
     return create_engine(
         url, pool_pre_ping=True, connect_args={"connect_timeout": int(BUSY_TIMEOUT)}
     )
+
+
+def fsync_size(path: str) -> int:
+    """``path`` on disk (nothing when it does not exist); its size in bytes (SQLite's log, put
+    on disk by :meth:`IncidentStore.sync <burstloc.incidents.store.IncidentStore.sync>`)."""
+    try:
+        fd = os.open(path, os.O_RDONLY)
+    except FileNotFoundError:
+        return 0
+    try:
+        os.fsync(fd)
+        return os.fstat(fd).st_size
+    finally:
+        os.close(fd)
 
 
 def beside_state(state: str) -> str:

@@ -1,7 +1,9 @@
 """What closed incidents teach: false alarms per meter, and bursts found as known events.
 
-* :func:`meter_outcomes`: per meter, the incidents its alarms made (an alarm's ``alarmed``
-  meters, from its latest record) and which of them were closed as false alarms or found;
+* :func:`meter_outcomes`: per meter, the incidents its alarms made (:func:`alarmed_meters`: an
+  alarm's ``alarmed`` meters, from its latest record) and which of them were closed as false
+  alarms or found; :class:`MeterCounts`, the same counted (the store counts them in SQL for
+  ``/metrics``: :meth:`~burstloc.incidents.store.IncidentStore.meter_counts`);
 * :func:`known_events`: each incident closed as *found* as an entry of a known-events file
   (:mod:`burstloc.experiments.known_events`, which ``burstloc calibrate --known-events``
   reads): the found point snapped to the nearest pipe of the network's drawing
@@ -26,10 +28,43 @@ from typing import Any
 from burstloc.incidents.lifecycle import FALSE_ALARM, FOUND
 from burstloc.layout import Layout
 
-__all__ = ["SNAP_WITHIN", "MeterOutcomes", "known_events", "meter_outcomes"]
+__all__ = [
+    "SNAP_WITHIN",
+    "MeterCounts",
+    "MeterOutcomes",
+    "alarmed_meters",
+    "known_events",
+    "meter_outcomes",
+    "rank",
+]
 
 #: How far (the network's coordinates) a found point may lie from the nearest pipe's drawing.
 SNAP_WITHIN = 50.0
+
+
+def alarmed_meters(alarmed: Iterable[str] | None) -> list[str]:
+    """The meters whose alarms made an incident, each once, in order: its ``alarmed`` (the
+    meters its latest record names; ``None``, not an alarm's: none). The one definition of an
+    incident a meter's alarms made, for :func:`meter_outcomes` and for the store's
+    ``incident_meters`` rows (:mod:`burstloc.incidents.counts`)."""
+    return list(dict.fromkeys(alarmed or ()))
+
+
+@dataclass(frozen=True)
+class MeterCounts:
+    """One meter's alarms counted: the incidents they made (``alarmed``), those closed as
+    ``false_alarms`` and those ``found``."""
+
+    meter: str
+    alarmed: int
+    false_alarms: int
+    found: int
+
+
+def rank(meter: str, false_alarms: int) -> tuple[int, str]:
+    """The sort key of every listing of meters: most false alarms first, then by name (in
+    Python: a database's collation may order names otherwise)."""
+    return -false_alarms, meter
 
 
 @dataclass
@@ -51,20 +86,23 @@ class MeterOutcomes:
             "found_incidents": self.found,
         }  # fmt: skip
 
+    def counts(self) -> MeterCounts:
+        """The counts of the lists."""
+        return MeterCounts(self.meter, len(self.incidents), len(self.false_alarms), len(self.found))
+
 
 def meter_outcomes(rows: Iterable[dict[str, Any]]) -> list[MeterOutcomes]:
-    """Per meter that alarmed, its incidents and their outcomes (most false alarms first,
-    then by meter name)."""
+    """Per meter that alarmed, its incidents and their outcomes (:func:`rank`'s order)."""
     meters: dict[str, MeterOutcomes] = {}
     for row in sorted(rows, key=lambda r: r["id"]):
-        for meter in row.get("alarmed") or ():
+        for meter in alarmed_meters(row.get("alarmed")):
             doc = meters.setdefault(meter, MeterOutcomes(meter))
             doc.incidents.append(row["id"])
             if row["outcome"] == FALSE_ALARM:
                 doc.false_alarms.append(row["id"])
             elif row["outcome"] == FOUND:
                 doc.found.append(row["id"])
-    return sorted(meters.values(), key=lambda m: (-len(m.false_alarms), m.meter))
+    return sorted(meters.values(), key=lambda m: rank(m.meter, len(m.false_alarms)))
 
 
 def known_events(

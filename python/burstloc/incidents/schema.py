@@ -1,5 +1,5 @@
-"""The incident store's tables (SQLAlchemy Core): one row per incident, one per history entry,
-one per webhook alert and URL.
+"""The incident store's tables (SQLAlchemy Core): one row per incident, one per meter whose
+alarms made it, one per history entry, one per webhook alert and URL, one per meter's shelving.
 
 The schema is created and changed only by the migrations in ``migrations/versions/``
 (:mod:`burstloc.incidents.migrate`); these tables describe the newest revision, for the
@@ -23,7 +23,7 @@ from sqlalchemy import (
     Text,
 )
 
-__all__ = ["alerts", "history", "incidents", "metadata", "meter_shelves"]
+__all__ = ["alerts", "history", "incident_meters", "incidents", "metadata", "meter_shelves"]
 
 metadata = MetaData()
 
@@ -61,6 +61,18 @@ incidents = Table(
     Index("ix_incidents_key", "key"),
     Index("ix_incidents_state_detected", "state", "detected_at"),
     Index("ix_incidents_shelved", "shelved_until"),
+)
+
+#: One row per incident and meter whose alarms made it: the ``alarmed`` column's meters
+#: (:func:`~burstloc.incidents.outcomes.alarmed_meters`), replaced with it in the same
+#: transaction, so that the database counts each meter's incidents
+#: (:mod:`burstloc.incidents.counts`).
+incident_meters = Table(
+    "incident_meters",
+    metadata,
+    Column("incident_id", Integer, ForeignKey("incidents.id"), primary_key=True),
+    Column("meter", Text, primary_key=True),
+    Index("ix_incident_meters_meter", "meter", "incident_id"),  # covers the count's scan
 )
 
 #: One row per change: who did what when, and the state after it.

@@ -29,19 +29,19 @@ never wait for writers.
 from __future__ import annotations
 
 import json
-import os
 import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from typing import TYPE_CHECKING, Any
 
 from burstloc.exceptions import InputError
-from burstloc.incidents.engine import make_engine, store_url
+from burstloc.incidents.engine import fsync_size, make_engine, store_url
 from burstloc.incidents.errors import IncidentStoreError, UnknownIncidentError
 from burstloc.incidents.intake import MONITOR, Kept, Observed
 from burstloc.incidents.lifecycle import CLOSED, DONE, Outcome, next_state
 
 if TYPE_CHECKING:
+    from burstloc.incidents.outcomes import MeterCounts
     from burstloc.incidents.writing import OnNew
 
 __all__ = ["CHECKPOINT_BYTES", "MONITOR", "MONITOR_SYNC", "SYNC_EVERY", "IncidentStore"]
@@ -60,19 +60,6 @@ _LISTED = (
     "summary", "active", "outcome", "found_x", "found_y", "closed_at", "alarmed", "readings",
     "onset", "shelved_until", "shelved_by", "shelved_reason",
 )  # fmt: skip
-
-
-def _fsync(path: str) -> int:
-    """``path`` on disk (nothing when it does not exist); its size in bytes."""
-    try:
-        fd = os.open(path, os.O_RDONLY)
-    except FileNotFoundError:
-        return 0
-    try:
-        os.fsync(fd)
-        return os.fstat(fd).st_size
-    finally:
-        os.close(fd)
 
 
 def _listed(mapping: Any) -> dict[str, Any]:
@@ -242,7 +229,7 @@ class IncidentStore:
         if self.engine.dialect.name == "sqlite":
             with self._errors("sync"), self.engine.connect() as connection:
                 database = connection.exec_driver_sql("PRAGMA database_list").first()[2]
-                if _fsync(database + "-wal") >= CHECKPOINT_BYTES:
+                if fsync_size(database + "-wal") >= CHECKPOINT_BYTES:
                     connection.exec_driver_sql("PRAGMA wal_checkpoint(PASSIVE)")
         self._synced = time.monotonic()
         self._durable(True)
@@ -348,6 +335,15 @@ class IncidentStore:
         query = select(func.count()).where(_is_open())
         with self._read() as connection:
             return int(connection.execute(query).scalar_one())
+
+    def meter_counts(self) -> list[MeterCounts]:
+        """Per meter that alarmed, how many incidents its alarms made and how many of them were
+        closed as false alarms and found, counted by the database (``/metrics`` asks at every
+        scrape; :mod:`burstloc.incidents.counts`)."""
+        from burstloc.incidents.counts import meter_counts
+
+        with self._read() as connection:
+            return meter_counts(connection)
 
     def get(self, incident: int) -> dict[str, Any]:
         """One incident with its latest record (parsed) and its history, oldest first.

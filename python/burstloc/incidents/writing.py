@@ -17,6 +17,7 @@ from typing import Any
 from sqlalchemy import bindparam, select
 
 from burstloc.exceptions import InputError
+from burstloc.incidents.counts import keep_alarmed
 from burstloc.incidents.intake import MONITOR, Kept, Observed
 from burstloc.incidents.lifecycle import CLOSED, DETECTED
 from burstloc.incidents.schema import history as h
@@ -110,6 +111,7 @@ def take_one(connection: Any, item: Observed | Kept, on_new: OnNew | None = None
         "alarmed": item.alarmed_json(),
     }  # fmt: skip
     _update(connection, row.id, row.state, "answered", item, record, columns)
+    keep_alarmed(connection, row.id, item.alarmed)
     return int(row.id)
 
 
@@ -131,6 +133,7 @@ def _insert(connection: Any, item: Observed, record: str | None, on_new: OnNew |
         },
     )  # fmt: skip
     incident = int(result.inserted_primary_key[0])
+    keep_alarmed(connection, incident, item.alarmed, new=True)
     add_history(
         connection, incident, item.at, MONITOR, MONITOR, "detected", DETECTED, item.summary, record
     )

@@ -52,8 +52,8 @@ name                                         type      what
                                                        store: :attr:`MonitorMetrics.incidents_open`)
 ``burstloc_meter_false_alarms``              gauge     per ``meter``: incidents its alarms made
                                                        that were closed as false alarms (only
-                                                       with an incident store:
-                                                       :attr:`MonitorMetrics.meter_outcomes`)
+                                                       with an incident store, which counts
+                                                       them: :attr:`MonitorMetrics.meter_counts`)
 ``burstloc_meter_alarmed_incidents``         gauge     per ``meter``: incidents its alarms made
 ``burstloc_webhook_pending``                 gauge     webhook alerts due and not yet delivered
                                                        (only with ``--webhook``:
@@ -76,7 +76,7 @@ from typing import TYPE_CHECKING, Any
 from burstloc.live.timing import HistogramSnapshot, RecordTimer
 
 if TYPE_CHECKING:
-    from burstloc.incidents.outcomes import MeterOutcomes
+    from burstloc.incidents.outcomes import MeterCounts
 
 __all__ = ["CONTENT_TYPE", "MonitorMetrics"]
 
@@ -101,9 +101,10 @@ class MonitorMetrics:
     info: dict[str, str] = field(default_factory=dict)
     #: How many incidents are open (set by an incident store; ``None``: the gauge is absent).
     incidents_open: Callable[[], int] | None = None
-    #: Per meter, its alarms' incidents and their outcomes (set with an incident store:
-    #: :func:`burstloc.incidents.outcomes.meter_outcomes`; ``None``: the gauges are absent).
-    meter_outcomes: Callable[[], list[MeterOutcomes]] | None = None
+    #: Per meter, its alarms' incidents and their outcomes counted (set with an incident store:
+    #: :meth:`~burstloc.incidents.store.IncidentStore.meter_counts`; ``None``: the gauges are
+    #: absent).
+    meter_counts: Callable[[], list[MeterCounts]] | None = None
     #: The webhook alerts' sender (:class:`~burstloc.incidents.alerts.sender.WebhookSender`;
     #: ``None``: the ``burstloc_webhook_*`` metrics are absent).
     webhooks: Any = None
@@ -216,8 +217,8 @@ class MonitorMetrics:
         yield reloads
         if self.incidents_open is not None:
             yield gauge("burstloc_incidents_open", "open incidents", self.incidents_open())
-        if self.meter_outcomes is not None:
-            yield from _outcomes(meters, self.meter_outcomes())
+        if self.meter_counts is not None:
+            yield from _outcomes(meters, self.meter_counts())
         if self.webhooks is not None:
             yield from _webhooks(self.webhooks)
 
@@ -243,7 +244,7 @@ class MonitorMetrics:
             )
 
 
-def _outcomes(meters: list[str], outcomes: list[MeterOutcomes]) -> Iterator[Any]:
+def _outcomes(meters: list[str], outcomes: list[MeterCounts]) -> Iterator[Any]:
     """The per-meter outcome gauges: every configured meter (0 when it never alarmed), and any
     other meter the store names."""
     from prometheus_client.core import GaugeMetricFamily
@@ -260,8 +261,8 @@ def _outcomes(meters: list[str], outcomes: list[MeterOutcomes]) -> Iterator[Any]
     )
     for name in names:
         doc = known.get(name)
-        false.add_metric([name], 0 if doc is None else len(doc.false_alarms))
-        alarmed.add_metric([name], 0 if doc is None else len(doc.incidents))
+        false.add_metric([name], 0 if doc is None else doc.false_alarms)
+        alarmed.add_metric([name], 0 if doc is None else doc.alarmed)
     yield false
     yield alarmed
 
