@@ -55,6 +55,8 @@ from burstloc.localize.evidence import BurstEvidence, Ranking
 from burstloc.localize.fused import SIGNATURE_FLOOR, FusedLocalizer
 from burstloc.localize.signature import rank_drop
 from burstloc.localize.timing_error import (
+    OUTLIER,
+    alarm_weakness,
     misfit_scale,
     timing_penalty,
     timing_scale,
@@ -297,18 +299,25 @@ def _arrival_penalty(
     arrival: ArrivalLocalizer, grid: RegionGrid, evidence: BurstEvidence
 ) -> NDArray[np.float64]:
     """Each grid point's timing penalty (module docstring), ``inf`` where it explains no
-    alarm; the timing error widened to what the alarms' misfits at the best point show when
-    that is more than the stated one (:func:`misfit_scale`)."""
+    alarm; a weak alarm's timing error wider and its outlier chance larger
+    (:func:`~burstloc.localize.timing_error.alarm_weakness`; a silence's as stated);
+    the timing error widened to what the alarms' misfits at the best point show when that is
+    more than the stated one (:func:`misfit_scale`, each misfit over its alarm's widening)."""
     lo, hi, _, count = arrival.windows(grid.dist[:, None, :], evidence, grid.rows)
     lo, hi = lo[:, 0, :], hi[:, 0, :]
     says = np.isfinite(lo)
     alarmed, silent = arrival.columns(evidence)
-    scale = timing_scale(
+    stated_scale = timing_scale(
         evidence.capture_interval,
         grid.dist[:, alarmed + silent] / arrival.wave_speed,
         arrival.wave_speed_tolerance,
         arrival.clock_tolerance,
     )
+    widening, outlier = np.ones(says.shape[1]), np.full(says.shape[1], OUTLIER)
+    widening[:count], outlier[:count] = alarm_weakness(
+        evidence, [arrival.meters[j] for j in alarmed]
+    )
+    scale = np.asarray(stated_scale, dtype=np.float64) * widening
     horizon = max(arrival.horizon, 10 * evidence.capture_interval)
     gap, placed = fit_windows(lo, hi, count, evidence.capture_interval)
     cap = np.full(says.shape[1], np.inf)
@@ -316,9 +325,9 @@ def _arrival_penalty(
     starts = [evidence.alarms[m].start for m in arrival.meters if m in evidence.alarms]
     anchors = np.argsort(starts, kind="stable")[:ANCHORS].tolist()
 
-    def penalty(scale: NDArray[np.float64] | float) -> NDArray[np.float64]:
+    def penalty(scale: NDArray[np.float64]) -> NDArray[np.float64]:
         def total(miss: NDArray[np.float64]) -> NDArray[np.float64]:
-            pen = np.minimum(timing_penalty(miss, scale, horizon), cap)
+            pen = np.minimum(timing_penalty(miss, scale, horizon, outlier), cap)
             return np.asarray(np.sum(np.where(says, pen, 0.0), axis=1), dtype=np.float64)
 
         best = total(gap)
@@ -332,12 +341,12 @@ def _arrival_penalty(
     if not np.isfinite(first).any():
         return first
     at = int(np.argmin(first))
-    shown, dof = misfit_scale(gap[at, :count][says[at, :count]])
-    stated = float(np.mean(np.broadcast_to(scale, gap.shape)[at, :count]))
+    shown, dof = misfit_scale((gap[at, :count] / widening[:count])[says[at, :count]])
+    stated = float(np.mean(np.broadcast_to(stated_scale, gap.shape)[at, :count]))
     widened = widened_scale(stated, shown, dof)
     if widened <= stated:
         return first
-    return penalty(np.asarray(scale, dtype=np.float64) * (widened / stated))
+    return penalty(scale * (widened / stated))
 
 
 def posterior(
