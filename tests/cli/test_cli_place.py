@@ -122,6 +122,37 @@ def test_place_compare_evaluates_every_method(
         assert row[5].endswith(" m |")  # every located burst has a position error
 
 
+def test_place_compare_places_simulates_and_localizes_at_the_wave_speed_given(
+    tiny: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import burstloc.experiments.placements as placements
+    import burstloc.experiments.ranking as ranking
+
+    seen: dict[str, list[float]] = {"placed": [], "simulated": [], "calibrated": []}
+    place, evaluate, calibrate = placements.place_meters, placements.evaluate, ranking.calibrate
+
+    def placing(*args: object, **kw: object) -> object:
+        seen["placed"].append(float(kw["wave_speed"]))  # type: ignore[arg-type]
+        return place(*args, **kw)  # type: ignore[arg-type]
+
+    def evaluating(*args: object, **kw: object) -> object:
+        seen["simulated"].append(kw["scenario"].wave_speed)  # type: ignore[attr-defined]
+        return evaluate(*args, **kw)  # type: ignore[arg-type]
+
+    def calibrating(*args: object, **kw: object) -> object:
+        config = calibrate(*args, **kw)  # type: ignore[arg-type]
+        seen["calibrated"].append(config.model.wave_speed)
+        return config
+
+    monkeypatch.setattr(placements, "place_meters", placing)
+    monkeypatch.setattr(placements, "evaluate", evaluating)
+    monkeypatch.setattr(ranking, "calibrate", calibrating)
+    argv = ["place", str(tiny), "--meters", "2", "--compare", "--phases", "1", "--quiet"]
+    assert main([*argv, "--wave-speed", "600", "--workers", "1"]) == 0
+    assert "| coverage |" in capsys.readouterr().out
+    assert seen["placed"] == seen["simulated"] == seen["calibrated"] == [600.0] * 3
+
+
 def _scores(out: str, what: str) -> tuple[int, int, int]:
     """The expected ambiguous main, median and searchable share printed for ``what``."""
     found = re.search(

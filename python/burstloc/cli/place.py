@@ -195,6 +195,7 @@ def run(args: argparse.Namespace) -> int:
             position=args.position,
             **run_of(args),
             wave_speeds=wave_speeds,
+            wave_speed=args.wave_speed,
         )
         print(format_comparison(rows), end="")
     return 0

@@ -231,7 +231,9 @@ def evaluate(
             junctions = list(first.junctions)
             metered = inp.check_meters(meters, junctions, path) if meters else junctions
             intervals = sorted({spec.capture_interval for spec in ranked})
-            setup = RankingSetup.build(read, metered, intervals, config, wave_speeds)
+            setup = RankingSetup.build(
+                read, metered, intervals, config, wave_speeds, float(params["wave_speed"])
+            )
         scoring.update(setup=setup, sensors=_sensors(noise, noise_seed, setup))
         heard_by = None if setup is None else setup.meters
         scoring["hear"] = Hearing(truth or TruthPerturbation(), wn, heard_by)

@@ -40,6 +40,7 @@ def compare_placements(
     scheduler: str | None = None,
     progress: bool = False,
     wave_speeds: WaveSpeeds | None = None,
+    wave_speed: float | None = None,
 ) -> list[dict[str, Any]]:
     """Place ``count`` meters by each of ``methods`` and evaluate each placement.
 
@@ -47,7 +48,9 @@ def compare_placements(
     once and cached, shared by the methods); the meters are calibrated for each placement
     (no hand tuning) and scored by ``burstloc evaluate``'s harness at ``capture_interval``.
     ``wave_speeds``: pipes of their own wave speed, the others at the scenario's: the meters
-    are placed, the bursts simulated and the localizers calibrated with them.
+    are placed, the bursts simulated and the localizers calibrated with them. ``wave_speed``
+    (m/s, default the scenario's): the other pipes', for the placement, the bursts and the
+    localizers alike.
 
     Returns:
         One row per method and localizer: ``method``, ``meters`` (the junctions), ``localizer``,
@@ -57,6 +60,8 @@ def compare_placements(
         localizers=localizers, detectors=(detector,), capture_intervals=(capture_interval,)
     )
     scenario = replace(paper.SCENARIO, position=position)
+    if wave_speed is not None:
+        scenario = replace(scenario, wave_speed=wave_speed)
     read = as_network(network)
     rows: list[dict[str, Any]] = []
     for method in methods:

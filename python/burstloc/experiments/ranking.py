@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from burstloc.constants import MeterModel
+from burstloc.constants import WAVE_SPEED, MeterModel
 from burstloc.exceptions import InputError
 from burstloc.experiments.calibrate import calibrate
 from burstloc.experiments.harness import Attempt, Readings, readings_at_offset
@@ -73,14 +73,16 @@ class RankingSetup:
         capture_intervals: Sequence[float],
         config: Calibration | None = None,
         wave_speeds: WaveSpeeds | None = None,
+        wave_speed: float = WAVE_SPEED,
     ) -> RankingSetup:
         """Localizers for ``meters`` of ``network`` and a calibration covering the intervals.
 
         The localizers are the calibration's own localization model (``config.model``, what the
         monitor reads: its signatures as ``calibrate`` computed them). Without ``config`` the
         network is calibrated here
-        (:func:`burstloc.experiments.calibrate.calibrate` with its defaults and
-        ``wave_speeds``). A ``config`` for
+        (:func:`burstloc.experiments.calibrate.calibrate` with its defaults, ``wave_speed``
+        (m/s, the pipes' without one of their own in ``wave_speeds``) and ``wave_speeds``: the
+        simulated bursts' own). A ``config`` for
         another network or other meters is refused by name
         (:meth:`burstloc.experiments.calibrate.Calibration.check`), as is one without an
         interval.
@@ -88,7 +90,11 @@ class RankingSetup:
         read = as_network(network)
         if config is None:
             config = calibrate(
-                read, capture_intervals=capture_intervals, meters=meters, wave_speeds=wave_speeds
+                read,
+                capture_intervals=capture_intervals,
+                meters=meters,
+                wave_speed=wave_speed,
+                wave_speeds=wave_speeds,
             )
         else:
             config.check(read, meters)
