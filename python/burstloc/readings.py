@@ -30,6 +30,7 @@ __all__ = [
     "Window",
     "format_timestamp",
     "parse_start_time",
+    "robust_sigma",
     "timestamp_seconds",
 ]
 
@@ -160,3 +161,11 @@ def format_timestamp(seconds: float, start: datetime | None = None) -> str:
     spec = "microseconds" if when.microsecond % 1000 else "milliseconds"
     text = when.isoformat(timespec=spec)
     return text[:-6] + "Z" if when.utcoffset() == timedelta(0) else text
+
+
+def robust_sigma(readings: npt.ArrayLike) -> npt.NDArray[np.float64]:
+    """Each column's noise level in ``readings`` (rows in time): the median absolute deviation
+    of its first differences over ``0.6745 sqrt(2)``, so a slow drift of the level cancels."""
+    diffs = np.diff(np.asarray(readings, dtype=np.float64), axis=0)
+    mad = np.median(np.abs(diffs - np.median(diffs, axis=0)), axis=0)
+    return np.asarray(mad / (0.6745 * math.sqrt(2.0)), dtype=np.float64)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 
+from revisions import migrate
 from test_outcomes import RECORD, _alarm, _close
 
 from burstloc.incidents import IncidentStore, Outcome
@@ -115,14 +116,11 @@ def test_alarmed_meters_are_each_meter_once_in_order() -> None:
 
 
 def test_migration_0005_fills_in_the_meters_of_incidents_stored_before(target: str) -> None:
-    from alembic import command
     from sqlalchemy import inspect, text
 
     from burstloc.incidents.engine import make_engine, store_url
-    from burstloc.incidents.migrate import _config
 
     engine = make_engine(store_url(target))
-    config = _config()
     stored = [  # (alarmed, outcome)
         (["J1", "J3"], "false-alarm"),
         (["J3", "J4", "J3"], "found"),
@@ -132,9 +130,7 @@ def test_migration_0005_fills_in_the_meters_of_incidents_stored_before(target: s
         ({"not": "a list"}, None),
     ]
     with engine.connect().execution_options(burstloc_write=True) as connection:
-        with connection.begin():
-            config.attributes["connection"] = connection
-            command.upgrade(config, "0004")  # a store as the burstloc before this one made it
+        migrate(connection, "0004")  # a store as the burstloc before this one made it
         with connection.begin():
             for k, (alarmed, outcome) in enumerate(stored):
                 connection.execute(
@@ -158,8 +154,6 @@ def test_migration_0005_fills_in_the_meters_of_incidents_stored_before(target: s
     finally:
         store.close()
     with engine.connect().execution_options(burstloc_write=True) as connection:
-        with connection.begin():
-            config.attributes["connection"] = connection
-            command.downgrade(config, "0004")
+        migrate(connection, "0004", down=True)
         assert "incident_meters" not in inspect(connection).get_table_names()
     engine.dispose()

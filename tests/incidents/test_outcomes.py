@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from revisions import migrate
 
 from burstloc.incidents import IncidentStore, Outcome
 from burstloc.incidents.intake import Kept, from_record
@@ -91,18 +92,13 @@ def test_kept_readings_go_to_the_newest_incident_of_their_key(target: str) -> No
 def test_migration_0003_fills_in_the_alarmed_meters_of_records_stored_before(
     target: str,
 ) -> None:
-    from alembic import command
     from sqlalchemy import text
 
     from burstloc.incidents.engine import make_engine, store_url
-    from burstloc.incidents.migrate import _config
 
     engine = make_engine(store_url(target))
-    config = _config()
     with engine.connect().execution_options(burstloc_write=True) as connection:
-        with connection.begin():
-            config.attributes["connection"] = connection
-            command.upgrade(config, "0002")  # a store as the burstloc before this one made it
+        migrate(connection, "0002")  # a store as the burstloc before this one made it
         with connection.begin():
             for key, record in [("alarm:1", json.dumps(RECORD)), ("meter:J2:silent", None)]:
                 connection.execute(

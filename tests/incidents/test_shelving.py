@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from revisions import migrate
 from sqlalchemy import select
 
 from burstloc.exceptions import InputError
@@ -313,18 +314,13 @@ def test_a_shelving_survives_reopening_the_store(target: str, wall: Clock) -> An
 
 
 def test_migration_0004_upgrades_a_store_of_0003_and_goes_back(target: str, wall: Clock) -> None:
-    from alembic import command
     from sqlalchemy import inspect, text
 
     from burstloc.incidents.engine import make_engine, store_url
-    from burstloc.incidents.migrate import _config
 
     engine = make_engine(store_url(target))
-    config = _config()
     with engine.connect().execution_options(burstloc_write=True) as connection:
-        with connection.begin():
-            config.attributes["connection"] = connection
-            command.upgrade(config, "0003")  # a store as the burstloc before this one made it
+        migrate(connection, "0003")  # a store as the burstloc before this one made it
         with connection.begin():
             connection.execute(
                 text(
@@ -343,9 +339,7 @@ def test_migration_0004_upgrades_a_store_of_0003_and_goes_back(target: str, wall
     finally:
         store.close()
     with engine.connect().execution_options(burstloc_write=True) as connection:
-        with connection.begin():
-            config.attributes["connection"] = connection
-            command.downgrade(config, "0003")
+        migrate(connection, "0003", down=True)
         columns = {c["name"] for c in inspect(connection).get_columns("incidents")}
         assert "shelved_until" not in columns and "alarmed" in columns
         assert "meter_shelves" not in inspect(connection).get_table_names()

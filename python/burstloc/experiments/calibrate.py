@@ -76,6 +76,7 @@ from burstloc.inp import check_meters
 from burstloc.localize.config import MAX_METERS, Calibration
 from burstloc.localize.interval import MAX_CAPTURE_INTERVAL, IntervalCalibration
 from burstloc.localize.onset import FINEST_STEP_INTERVAL
+from burstloc.readings import robust_sigma
 from burstloc.wave_speeds import WaveSpeeds, stretch_of
 
 if TYPE_CHECKING:
@@ -139,13 +140,6 @@ class Baseline:
         object.__setattr__(self, "meters", tuple(self.meters))
         object.__setattr__(self, "times", t)
         object.__setattr__(self, "readings", r)
-
-
-def robust_sigma(readings: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Per-meter noise estimate from first differences (robust to a slow drift of the level)."""
-    diffs = np.diff(np.asarray(readings, dtype=np.float64), axis=0)
-    mad = np.median(np.abs(diffs - np.median(diffs, axis=0)), axis=0)
-    return np.asarray(mad / (0.6745 * math.sqrt(2.0)))
 
 
 def check_baseline(baseline: Baseline) -> NDArray[np.float64]:

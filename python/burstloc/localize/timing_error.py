@@ -35,6 +35,7 @@ from numpy.typing import NDArray
 
 from burstloc.localize.evidence import BurstEvidence
 from burstloc.localize.onset import FINEST_STEP_INTERVAL
+from burstloc.readings import robust_sigma
 
 __all__ = [
     "BASELINE_READINGS",
@@ -141,8 +142,8 @@ def baseline_noise(
     times: NDArray[np.float64], values: NDArray[np.float64], onset: float
 ) -> NDArray[np.float64]:
     """Each column's noise level (m) in ``values`` (readings at ``times``) before ``onset``:
-    the robust spread of successive differences (a slow trend cancels) over the last
-    :data:`BASELINE_READINGS` readings at or before it, over the square root of two; ``nan``
+    :func:`~burstloc.readings.robust_sigma` of the last :data:`BASELINE_READINGS` readings at
+    or before it (a slow trend cancels); ``nan``
     for every column with fewer than :data:`MIN_BASELINE` such readings."""
     t = np.asarray(times, dtype=np.float64)
     y = np.asarray(values, dtype=np.float64)
@@ -150,9 +151,7 @@ def baseline_noise(
     base = y[max(0, end - BASELINE_READINGS) : end]
     if base.shape[0] < MIN_BASELINE:
         return np.full(y.shape[1], np.nan)
-    d = np.diff(base, axis=0)
-    mad = np.median(np.abs(d - np.median(d, axis=0)), axis=0)
-    return np.asarray(1.4826 * mad / math.sqrt(2.0), dtype=np.float64)
+    return robust_sigma(base)
 
 
 def alarm_strengths(
