@@ -8,8 +8,9 @@ Usage: ``.venv/bin/python benches/bench_incident_crash.py [--moments 200] [--see
 incidents through the monitor's recorder and acknowledges them, telling each record once it is
 committed; it is killed (SIGKILL) at a random moment, ``--moments`` times, each child carrying
 on in the store the last one left; then every record any child reported is checked to be in
-the store (and SQLite's integrity check to pass). Prints, per store, the records and
-acknowledgements reported and checked and the seconds it took; exits 1 if one is missing.
+the store, every incident's meter rows to be its alarmed meters (and SQLite's integrity check
+to pass). Prints, per store, the records and acknowledgements reported and checked and the
+seconds it took; exits 1 if one is missing.
 """
 
 from __future__ import annotations

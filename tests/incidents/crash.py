@@ -1,7 +1,8 @@
 """Kill -9 at random moments: a child process keeps incidents (through the monitor's recorder
 and its writer thread) and acknowledges them (as an operator does), telling on stdout each
 record once it is committed; the parent kills it at a random moment, again and again, then
-checks that every record a child reported as committed is in the store.
+checks that every record a child reported as committed is in the store, and that every stored
+incident's meter rows (``incident_meters``) are its alarmed meters.
 
 ``python crash.py TARGET RUN`` is the child (RUN keeps its alarms apart from the other runs');
 :func:`crash` is the parent (the test and ``benches/bench_incident_crash.py``).
@@ -16,6 +17,7 @@ import sys
 import threading
 import time
 from dataclasses import dataclass, field
+from typing import Any
 
 
 def child(target: str, run: int) -> None:
@@ -47,6 +49,7 @@ def child(target: str, run: int) -> None:
                 "first_alarm": float(first),
                 "time": first + 1.5,
                 "pipes": [{"pipe": f"P{k % 25}", "score": 0.0}],
+                "alarmed": [f"M{k % 7}", f"M{(k + 3) % 7}"],
             }
         )
         if k % 3 == 0:
@@ -131,6 +134,7 @@ def crash(target: str, moments: int, seed: int = 0) -> Reported:
             keys = {r.key: r.id for r in connection.execute(select(t.c.key, t.c.id))}
         for key, incident in reported.records.items():
             assert keys.get(key) == incident, f"record {key} (incident {incident}) lost"
+        _check_meters(store, rows)
         for incident, name in reported.acks.items():
             assert rows[incident]["state"] == "acknowledged", f"incident {incident} not acked"
             acks = [h for h in histories[incident] if h["action"] == "acknowledged"]
@@ -138,6 +142,26 @@ def crash(target: str, moments: int, seed: int = 0) -> Reported:
     finally:
         store.close()
     return reported
+
+
+def _check_meters(store: Any, incidents: dict[int, dict[str, Any]]) -> None:
+    """Every incident's ``incident_meters`` rows are its ``alarmed`` meters: written in the
+    incident's transaction, so no kill leaves one without the other."""
+    from sqlalchemy import select
+
+    from burstloc.incidents.schema import incident_meters as im
+
+    rows: dict[int, set[str]] = {}
+    with store.engine.connect() as connection:
+        for incident, meter in connection.execute(select(im.c.incident_id, im.c.meter)):
+            rows.setdefault(incident, set()).add(meter)
+    for incident, row in incidents.items():
+        alarmed = row["alarmed"]
+        assert alarmed, f"incident {incident} kept without its alarmed meters"
+        assert rows.get(incident, set()) == set(alarmed), (
+            f"incident {incident}: meter rows {sorted(rows.get(incident, ()))} are not its "
+            f"alarmed meters {alarmed}"
+        )
 
 
 if __name__ == "__main__":
