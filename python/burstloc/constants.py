@@ -29,6 +29,7 @@ __all__ = [
     "HYBRID_SIGNATURES_UP_TO",
     "LOCALIZERS",
     "MAX_SAMPLE",
+    "MAX_TIMING_FACTOR",
     "METER_MODELS",
     "PRESSURE_NOISE",
     "RANKING_LOCALIZERS",
@@ -82,6 +83,11 @@ CLOCK_TOLERANCE = 0.0
 """Uncertainty (s, one standard deviation) of each meter's clock: GPS-disciplined loggers are
 within a millisecond, NTP-synchronised ones a few milliseconds (``burstloc calibrate
 --clock-tolerance``)."""
+
+MAX_TIMING_FACTOR = 10.0
+"""Most the search regions' timing error is widened by at one capture interval, over the stated
+one (:mod:`burstloc.experiments.region_spread` fits it on simulated bursts): beyond it the
+arrivals say little, and a fit that asks for more says the model is wrong."""
 
 SCENARIO_DURATION = 220.0
 """Simulated seconds of a burst scenario: the burst at 10 s plus the signature's decision delay

@@ -14,7 +14,7 @@ from burstloc.cli import main
 from burstloc.exceptions import ConfigError
 from burstloc.experiments import paper
 from burstloc.experiments.calibrate import calibrate
-from burstloc.experiments.front_speed import fit_front_speeds, with_front_speeds
+from burstloc.experiments.front_speed import simulate_front_bursts, speeds_of, with_front_speeds
 from burstloc.experiments.ranking import RankingSetup
 from burstloc.live.monitor import BurstMonitor
 from burstloc.localize.config import Calibration
@@ -36,7 +36,8 @@ def test_the_fit_finds_the_speed_the_bursts_travel_at(
     network: Network, config: Calibration, truth: float, low: float, high: float
 ) -> None:
     scenario = replace(paper.SCENARIO, wave_speed=truth)  # the model assumes 1 200 m/s
-    fits = fit_front_speeds(network, config, bursts=6, seed=1, scenario=scenario, workers=1)
+    heard = simulate_front_bursts(network, config, bursts=6, seed=1, scenario=scenario, workers=1)
+    fits = speeds_of(config, heard)
     assert [f.capture_interval for f in fits] == [0.01, 0.2]
     for f in fits:
         assert f.bursts == 6 and f.heard == 6 and f.fit.arrivals >= 60
@@ -55,7 +56,7 @@ def test_the_fit_finds_the_speed_the_bursts_travel_at(
 def test_a_fit_faster_than_the_wave_leaves_the_wave_speed(network: Network) -> None:
     # two meters far apart: one difference of arrivals per burst, which the paths' shapes decide
     two = calibrate(network, capture_intervals=[0.2], noise_sigma=0.01, meters=["1", "8"])
-    (fit,) = fit_front_speeds(network, two, bursts=8, seed=1, workers=1)
+    (fit,) = speeds_of(two, simulate_front_bursts(network, two, bursts=8, seed=1, workers=1))
     assert fit.fit.wave_speed > 1200.0 and fit.factor(1200.0) == 1.0
     fitted = with_front_speeds(two, [fit])
     assert fitted.intervals[0].front_factor == 1.0
@@ -64,7 +65,7 @@ def test_a_fit_faster_than_the_wave_leaves_the_wave_speed(network: Network) -> N
 
 def test_too_few_bursts_are_refused(network: Network, config: Calibration) -> None:
     with pytest.raises(ConfigError, match="at least 2 simulated bursts"):
-        fit_front_speeds(network, config, bursts=1)
+        simulate_front_bursts(network, config, bursts=1)
 
 
 def _slower(config: Calibration, factor: float) -> Calibration:
@@ -121,5 +122,10 @@ def test_calibrate_fits_the_fronts_and_known_events_still_find_the_wave(
     assert config.for_interval(0.2).front_factor == pytest.approx(float(found.group(2)), abs=1e-3)
     assert config.provenance["front_speeds"]["0.2"]["bursts"] == 4
     assert "fronts heard at" in said
+    # the regions' timing error fitted on the same bursts, printed and stored
+    spread = re.search(r"regions at 0.2 s: timing error x([\d.]+), the 95% regions holding", said)
+    assert spread is not None, said
+    assert config.for_interval(0.2).timing_factor == float(spread.group(1))
+    assert config.provenance["region_timing"]["0.2"]["bursts"] == 4
     assert main([*args, "--front-bursts", "1"]) == 2
     assert "at least 2 simulated bursts" in capsys.readouterr().err

@@ -105,7 +105,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "gone: at 0.05 s and coarser the meters hear bursts' fronts travel slower than the "
         "wave (about 1 020 m/s on L-TOWN where the wave runs at 1 200 m/s). --front-bursts "
         "measures that speed at each capture interval on bursts simulated here on the "
-        "network's own transient model, and the arrival localizer times paths at it.",
+        "network's own transient model, and the arrival localizer times paths at it. On the "
+        "same bursts it checks the search regions: where more bursts fall outside the 95 % "
+        "regions than chance explains, their timing error is widened until they hold.",
     )
     add_number(
         fronts,  # type: ignore[arg-type]
@@ -177,11 +179,13 @@ def run(args: argparse.Namespace) -> int:
 
 def _fronts(args: argparse.Namespace, network: Network, config: Calibration) -> Calibration:
     """``config`` with the speed its meters hear bursts' fronts at, per capture interval, fitted
-    on ``--front-bursts`` simulated bursts; what was fitted printed."""
-    from burstloc.experiments.front_speed import fit_front_speeds, with_front_speeds
+    on ``--front-bursts`` simulated bursts, and the timing error its search regions need there
+    to hold what they state on those bursts; what was fitted printed."""
+    from burstloc.experiments.front_speed import simulate_front_bursts, speeds_of, with_front_speeds
+    from burstloc.experiments.region_spread import fit_timing_factors, with_timing_factors
 
     scenario, flow = scenario_of(args)
-    fits = fit_front_speeds(
+    bursts = simulate_front_bursts(
         network,
         config,
         bursts=args.front_bursts,
@@ -190,6 +194,7 @@ def _fronts(args: argparse.Namespace, network: Network, config: Calibration) -> 
         burst_flow=flow,
         workers=args.workers,
     )
+    fits = speeds_of(config, bursts)
     speed = config.model.wave_speed
     for f in fits:
         print(
@@ -204,7 +209,15 @@ def _fronts(args: argparse.Namespace, network: Network, config: Calibration) -> 
             f"{f.heard}/{f.bursts} bursts ({f.fit.dropped} dropped), scatter "
             f"{f.fit.wave_speed_tolerance:.1%}"
         )
-    return with_front_speeds(config, fits)
+    config = with_front_speeds(config, fits)
+    spreads = fit_timing_factors(config, bursts)
+    for g in spreads:
+        print(
+            f"regions at {g.capture_interval:g} s: timing error x{g.factor:g}, the "
+            f"{g.confidence:.0%} regions holding {g.held(g.factor)}/{g.placed} of the bursts the "
+            f"arrivals placed ({g.held(1.0)} at x1; {g.bursts} simulated)"
+        )
+    return with_timing_factors(config, spreads)
 
 
 def _learn(args: argparse.Namespace, network: Network, config: Calibration) -> Calibration:

@@ -9,10 +9,11 @@ places bursts towards the near meters. Regressed within each burst (its time unk
 alarm starts of L-TOWN's 33 BattLeDIM sensors at 0.05 s lag by about 0.15 s per km: a front
 heard at about 1 020 m/s where the wave runs at 1 200 m/s.
 
-:func:`fit_front_speeds` measures that speed on the network itself, without data: it simulates
-bursts on ``bursts`` pipes drawn with ``seed`` (the calibrated meters, their calibrated noise,
-the network's own transient model), runs the calibrated detector bank of each capture interval
-over the readings as the monitor does, and fits the travel times of every burst's arrivals
+:func:`simulate_front_bursts` and :func:`speeds_of` measure that speed on the network itself,
+without data: the first simulates bursts on ``bursts`` pipes drawn with ``seed`` (the
+calibrated meters, their calibrated noise, the network's own transient model) and runs the
+calibrated detector bank of each capture interval over the readings as the monitor does; the
+second fits the travel times of every burst's arrivals
 (:func:`burstloc.localize.travel_fit.fit_travel_times`, each burst's time fitted, no clock
 offsets). The fitted speed over the model's wave speed (at most 1: a fit faster than the wave,
 as two meters far apart can give, leaves the wave's speed) is that interval's
@@ -25,26 +26,49 @@ search regions already widen to the misfits each burst shows, and on L-TOWN's 20
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from burstloc.exceptions import ConfigError, SimulationError
 from burstloc.experiments.harness import Clock, capture_readings
 from burstloc.experiments.known_events import onsets_after
 from burstloc.experiments.paper import SCENARIO, ScenarioConfig
-from burstloc.experiments.position import NetworkDistance, true_point, wave_travel
+from burstloc.experiments.position import NetworkDistance, PipePoint, true_point, wave_travel
 from burstloc.localize.config import Calibration
 from burstloc.localize.interval import calibrated_bank
 from burstloc.localize.travel_fit import EventArrivals, TravelFit, fit_travel_times
 from burstloc.network import Network, closed_pipes, pipe_names
 
-__all__ = ["DEFAULT_FRONT_BURSTS", "FrontFit", "fit_front_speeds", "with_front_speeds"]
+__all__ = [
+    "DEFAULT_FRONT_BURSTS",
+    "FrontBurst",
+    "FrontFit",
+    "simulate_front_bursts",
+    "speeds_of",
+    "with_front_speeds",
+]
 
 #: Bursts simulated by default: enough arrivals (bursts x meters) for a slope good to a few %.
 DEFAULT_FRONT_BURSTS = 24
+
+
+@dataclass(frozen=True)
+class FrontBurst:
+    """One simulated burst as the meters read it at one capture interval: its ``truth`` (the
+    burst point, on a pipe of ``length`` m), the noisy readings ``(times, values)`` of the
+    calibrated meters, the calibrated bank's ``alarms`` from the burst on, and its
+    ``arrivals`` (each meter's first alarm start, with its distance from the burst)."""
+
+    truth: PipePoint
+    length: float
+    times: NDArray[np.float64]
+    values: NDArray[np.float64]
+    alarms: tuple[Any, ...]
+    arrivals: EventArrivals
 
 
 @dataclass(frozen=True)
@@ -75,16 +99,17 @@ def _pipes(network: Network, count: int, seed: int) -> list[str]:
     return [open_pipes[i] for i in sorted(chosen)]
 
 
-def _arrivals(
+def _heard(
     result: Any,
     config: Calibration,
     capture_interval: float,
+    truth: tuple[PipePoint, float],
     distances: dict[str, float],
     detector: str,
     seed: int,
-) -> EventArrivals:
-    """One burst's arrivals at ``capture_interval``: each meter's first alarm start at or after
-    the burst, the calibrated bank run over noisy readings as the monitor runs it."""
+) -> FrontBurst:
+    """One burst at ``capture_interval``: the calibrated bank run over noisy readings as the
+    monitor runs it, its alarms from the burst on, each meter's first alarm start."""
     from burstloc.sim.scenarios.sensors import SensorModel
 
     cal = config.for_interval(capture_interval)
@@ -97,7 +122,7 @@ def _arrivals(
     burst = float(result.metadata["burst_start"])
     alarms = calibrated_bank(detector, len(meters), cal).run(np.ascontiguousarray(values))
     onsets = onsets_after(meters, (times, values), alarms, burst, capture_interval)
-    return EventArrivals(
+    arrivals = EventArrivals(
         name=f"burst on {result.pipe}",
         time=burst,
         distances=distances,
@@ -105,9 +130,11 @@ def _arrivals(
         capture_interval=capture_interval,
         time_known=False,
     )
+    after = tuple(a for a in alarms if times[int(a.index)] >= burst)  # noise before: dismissed
+    return FrontBurst(truth[0], truth[1], times, values, after, arrivals)
 
 
-def fit_front_speeds(
+def simulate_front_bursts(
     network: Network,
     config: Calibration,
     *,
@@ -119,8 +146,8 @@ def fit_front_speeds(
     workers: int | None = None,
     cache: Any = False,
     progress: bool = False,
-) -> list[FrontFit]:
-    """The front's speed at each of ``config``'s capture intervals (module docstring).
+) -> dict[float, list[FrontBurst]]:
+    """What the calibrated meters hear of simulated bursts, per capture interval of ``config``.
 
     ``bursts`` pipes drawn with ``seed`` burst as ``scenario`` says (its ``min_pipe_length``:
     the transient-ready model), sized by ``burst_flow`` (m³/s or a
@@ -128,9 +155,7 @@ def fit_front_speeds(
     coefficient); simulated over ``workers`` processes, through ``cache`` (default none).
 
     Raises:
-        ConfigError: ``bursts`` < 2, or the bursts' arrivals cannot tell a speed at some
-            interval (fewer than three arrivals at different distances: the meters heard
-            nothing, or the network is too small).
+        ConfigError: ``bursts`` < 2 (a speed needs two bursts' arrivals at least).
         SimulationError: a burst could not be simulated.
     """
     from burstloc.sim.scenarios.scenario import burst_scenarios
@@ -154,13 +179,14 @@ def fit_front_speeds(
     scenarios, _ = sized_scenarios(scenarios, burst_flow, network)
     stretch = {p.pipe: p.stretch for p in model.pipes if p.stretch != 1.0}
     distance = NetworkDistance(network.model, stretch)
-    events: dict[float, list[EventArrivals]] = {dt: [] for dt in intervals}
+    events: dict[float, list[FrontBurst]] = {dt: [] for dt in intervals}
 
     def arrivals(_: Any, result: Any) -> Any:
         point = true_point(result, network.model)
+        truth = (point, float(network.model.get_link(result.pipe).length))
         distances = {m: distance.to_node(point, m) for m in config.meters}
         for dt in intervals:
-            events[dt].append(_arrivals(result, config, dt, distances, detector, seed))
+            events[dt].append(_heard(result, config, dt, truth, distances, detector, seed))
         return replace(result, time=result.time[:1].copy(), heads=result.heads[:1].copy())
 
     report = simulate.simulate_many(
@@ -168,12 +194,25 @@ def fit_front_speeds(
     )
     if report.failures:
         raise SimulationError("; ".join(report.failure_lines()))
+    return events
+
+
+def speeds_of(config: Calibration, bursts: Mapping[float, Sequence[FrontBurst]]) -> list[FrontFit]:
+    """The front's speed fitted on each capture interval's simulated ``bursts``.
+
+    Raises:
+        ConfigError: the bursts' arrivals cannot tell a speed at some interval (fewer than three
+            arrivals at different distances: the meters heard nothing, or the network is too
+            small).
+    """
+    model = config.model
     fits = []
-    for dt in intervals:
-        heard = sum(len(e.onsets) >= 2 for e in events[dt])
+    for dt, heard_at in bursts.items():
+        events = [b.arrivals for b in heard_at]
+        heard = sum(len(e.onsets) >= 2 for e in events)
         try:
             fit = fit_travel_times(
-                events[dt],
+                events,
                 config.meters,
                 wave_speed=model.wave_speed,
                 wave_speed_tolerance=model.wave_speed_tolerance,
@@ -181,28 +220,18 @@ def fit_front_speeds(
             )
         except ConfigError as exc:
             raise ConfigError(
-                f"the front's speed at {dt:g} s cannot be fitted from {len(events[dt])} "
+                f"the front's speed at {dt:g} s cannot be fitted from {len(events)} "
                 f"simulated bursts ({heard} heard by two meters or more): {exc}"
             ) from None
-        fits.append(FrontFit(dt, fit, len(events[dt]), heard))
+        fits.append(FrontFit(dt, fit, len(events), heard))
     return fits
 
 
 def with_front_speeds(config: Calibration, fits: Sequence[FrontFit]) -> Calibration:
     """``config`` with each fitted interval's front factor, recorded in its provenance."""
     model_speed = config.model.wave_speed
-    by = {f.capture_interval: f for f in fits}
-    intervals = tuple(
-        replace(
-            item,
-            front_factor=by[item.capture_interval].factor(model_speed),
-        )
-        if item.capture_interval in by
-        else item
-        for item in config.intervals
-    )
+    changes = {f.capture_interval: {"front_factor": f.factor(model_speed)} for f in fits}
     provenance = {
-        **config.provenance,
         "front_speeds": {
             f"{f.capture_interval:g}": {
                 "speed": round(f.fit.wave_speed, 1),
@@ -214,4 +243,4 @@ def with_front_speeds(config: Calibration, fits: Sequence[FrontFit]) -> Calibrat
             for f in fits
         },
     }
-    return replace(config, intervals=intervals, provenance=provenance)
+    return config.with_fitted(changes, provenance)

@@ -163,6 +163,7 @@ class ArrivalLocalizer:
         wave_speed_tolerance: float = WAVE_SPEED_TOLERANCE,
         clock_tolerance: float = CLOCK_TOLERANCE,
         clock_offsets: Mapping[str, float] | None = None,
+        timing_factor: float = 1.0,
     ) -> None:
         if not (math.isfinite(wave_speed) and wave_speed > 0):
             raise ConfigError(f"wave_speed must be > 0 m/s, got {wave_speed}")
@@ -175,6 +176,11 @@ class ArrivalLocalizer:
         error grows with the path: :func:`burstloc.localize.timing_error.timing_scale`)."""
         self.clock_tolerance = float(clock_tolerance)
         """Uncertainty (s) of each meter's clock."""
+        if not (math.isfinite(timing_factor) and timing_factor >= 1):
+            raise ConfigError(f"timing_factor must be >= 1, got {timing_factor}")
+        self.timing_factor = float(timing_factor)
+        """The search regions' timing error over the stated one, as simulated bursts showed it
+        at this capture interval (:mod:`burstloc.experiments.region_spread`)."""
         pos = np.array(sorted(set(float(x) for x in positions)), dtype=np.float64)
         if pos.size == 0 or np.any(pos < 0) or np.any(pos > 1):
             raise ConfigError("positions must be fractions in [0, 1] (at least one)")

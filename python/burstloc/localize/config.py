@@ -129,6 +129,19 @@ class Calibration:
         if not isinstance(self.provenance, Mapping):
             raise FieldError("provenance", f"must be an object, got {self.provenance!r}")
 
+    def with_fitted(
+        self, changes: Mapping[float, Mapping[str, Any]], provenance: Mapping[str, Any]
+    ) -> Calibration:
+        """This configuration with each capture interval of ``changes`` given those fields (a
+        fit's results) and ``provenance`` added to its own."""
+        intervals = tuple(
+            replace(item, **changes[item.capture_interval])
+            if item.capture_interval in changes
+            else item
+            for item in self.intervals
+        )
+        return replace(self, intervals=intervals, provenance={**self.provenance, **provenance})
+
     def for_interval(self, capture_interval: float) -> IntervalCalibration:
         """The settings calibrated for ``capture_interval`` (ConfigError if there are none)."""
         for item in self.intervals:
@@ -143,11 +156,16 @@ class Calibration:
     def model_at(self, capture_interval: float) -> LocalizationModel:
         """The localization model as the arrival localizer reads it at ``capture_interval``:
         its paths timed at the fronts' speed there (:attr:`IntervalCalibration.front_factor`
-        times the model's wave speed)."""
-        factor = self.for_interval(capture_interval).front_factor
-        if factor == 1.0:
+        times the model's wave speed), its regions' timing error that interval's
+        (:attr:`IntervalCalibration.timing_factor`)."""
+        item = self.for_interval(capture_interval)
+        if item.front_factor == 1.0 and item.timing_factor == self.model.timing_factor:
             return self.model
-        return replace(self.model, wave_speed=self.model.wave_speed * factor)
+        return replace(
+            self.model,
+            wave_speed=self.model.wave_speed * item.front_factor,
+            timing_factor=item.timing_factor,
+        )
 
     def check(self, network: NetworkSource, meters: Sequence[str] | None = None) -> None:
         """Refuse (ConfigError) to be used with another network or another set of meters, or
@@ -205,6 +223,11 @@ class Calibration:
                 + (
                     f"; fronts heard at {item.front_factor * self.model.wave_speed:.0f} m/s"
                     if item.front_factor != 1.0
+                    else ""
+                )
+                + (
+                    f"; regions' timing error x{item.timing_factor:.2f}"
+                    if item.timing_factor != 1.0
                     else ""
                 )
             )

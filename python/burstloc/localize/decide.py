@@ -53,6 +53,7 @@ from burstloc.localize.center import named_point
 from burstloc.localize.evidence import BurstEvidence, Localizer, Ranking, evidence_at
 from burstloc.localize.fused import FusedLocalizer, quantisation_margin
 from burstloc.localize.looks import (
+    arrival_evidence,
     arrival_first,
     arrival_horizon,
     early_answer,
@@ -110,6 +111,7 @@ class RankingLocalizers(Mapping[str, Localizer]):
             wave_speed_tolerance=model.wave_speed_tolerance,
             clock_tolerance=model.clock_tolerance,
             clock_offsets=model.clock_offsets,
+            timing_factor=model.timing_factor,
         )
         signature = SignatureLocalizer(model.signature_sets)
         return cls(arrival, signature, FusedLocalizer(arrival, signature))
@@ -211,12 +213,7 @@ def rank_alarms(
     def evidence(decided: float) -> BurstEvidence:
         return evidence_at(decided, meters, times, readings, alarms, calibration, meter_model)
 
-    def arrivals(decided: float) -> BurstEvidence:  # every alarm up to a later look counts
-        window = max(calibration.arrival_decision_delay, decided - first)
-        return evidence_at(
-            decided, meters, times, readings, alarms, calibration, meter_model, alarm_window=window
-        )
-
+    arrivals = arrival_evidence(meters, times, readings, alarms, calibration, meter_model, first)
     decided = decision_time(localizer, alarms, times, calibration, fused)
     arrival = chosen if isinstance(chosen, ArrivalLocalizer) else None
     if localizer == "fused" and fused is not None and arrival_first(localizer, calibration, fused):

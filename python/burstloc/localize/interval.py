@@ -19,6 +19,7 @@ from burstloc._validate import (
     check_count,
     check_number,
 )
+from burstloc.constants import MAX_TIMING_FACTOR
 from burstloc.exceptions import ConfigError
 
 __all__ = [
@@ -64,7 +65,10 @@ class IntervalCalibration:
     only once it has grown past a threshold, later the farther it has gone, so at coarse
     intervals it seems slower than the wave (:mod:`burstloc.experiments.front_speed` fits it
     from simulated bursts); the arrival localizer times paths at that speed
-    (:meth:`~burstloc.localize.config.Calibration.model_at`)."""
+    (:meth:`~burstloc.localize.config.Calibration.model_at`). ``timing_factor``: the search
+    regions' timing error over the stated one at this interval (at least 1), so that their
+    stated probability holds on bursts simulated on the network
+    (:mod:`burstloc.experiments.region_spread`)."""
 
     capture_interval: float
     localization_interval: int
@@ -75,6 +79,7 @@ class IntervalCalibration:
     decision_delay: float
     arrival_decision_delay: float
     front_factor: float = 1.0
+    timing_factor: float = 1.0
 
     def __post_init__(self) -> None:
         """Check every field (a FieldError names it by its JSON name)."""
@@ -109,6 +114,9 @@ class IntervalCalibration:
             "front_factor": check_number(
                 self.front_factor, "front_speed_factor", low=0.05, high=2.0
             ),
+            "timing_factor": check_number(
+                self.timing_factor, "region_timing_factor", low=1.0, high=MAX_TIMING_FACTOR
+            ),
         }
         for name, value in checked.items():
             object.__setattr__(self, name, value)
@@ -136,6 +144,7 @@ class IntervalCalibration:
             "decision_delay_s": self.decision_delay,
             "arrival_decision_delay_s": self.arrival_decision_delay,
             "front_speed_factor": self.front_factor,
+            "region_timing_factor": self.timing_factor,
         }
 
     @classmethod
@@ -158,6 +167,7 @@ class IntervalCalibration:
             shewhart_threshold=shewhart.get("threshold"),
             shewhart_sigma=shewhart.get("sigma"),
             front_factor=fields.data.get("front_speed_factor", 1.0),
+            timing_factor=fields.data.get("region_timing_factor", 1.0),
         )
 
 

@@ -34,6 +34,7 @@ if TYPE_CHECKING:
 __all__ = [
     "LOOK_INTERVAL",
     "Look",
+    "arrival_evidence",
     "arrival_first",
     "arrival_horizon",
     "early_answer",
@@ -64,6 +65,28 @@ def first_and_onset(alarms: Sequence[Any], times: np.ndarray) -> tuple[float, fl
     first = min(float(times[a.index]) for a in alarms)
     onset = min(float(times[a.start if a.start < a.index else max(a.index - 1, 0)]) for a in alarms)
     return first, onset
+
+
+def arrival_evidence(
+    meters: Sequence[str],
+    times: np.ndarray,
+    readings: np.ndarray,
+    alarms: Sequence[Any],
+    calibration: IntervalCalibration,
+    meter_model: MeterModel,
+    first: float,
+) -> Callable[[float], BurstEvidence]:
+    """The evidence of a look at the arrivals at a reading time: every alarm from the first
+    alarm's reading time ``first`` up to the look counts (at least the calibrated
+    ``arrival_decision_delay`` of them)."""
+
+    def at(decided: float) -> BurstEvidence:
+        window = max(calibration.arrival_decision_delay, decided - first)
+        return evidence_at(
+            decided, meters, times, readings, alarms, calibration, meter_model, alarm_window=window
+        )
+
+    return at
 
 
 def arrival_first(
@@ -184,13 +207,7 @@ def early_answer(
         raise InputError("no alarm: nothing to decide")
     first, _ = first_and_onset(alarms, times)
     last = float(times[-1])
-
-    def arrivals(decided: float) -> BurstEvidence:  # every alarm up to a later look counts
-        window = max(calibration.arrival_decision_delay, decided - first)
-        return evidence_at(
-            decided, meters, times, readings, alarms, calibration, meter_model, alarm_window=window
-        )
-
+    arrivals = arrival_evidence(meters, times, readings, alarms, calibration, meter_model, first)
     start = first + calibration.arrival_decision_delay
     if resume is not None:
         start = max(start, resume)

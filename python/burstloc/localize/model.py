@@ -28,7 +28,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from burstloc._validate import FieldError, check_names, check_number
-from burstloc.constants import CLOCK_TOLERANCE, WAVE_SPEED, WAVE_SPEED_TOLERANCE
+from burstloc.constants import (
+    CLOCK_TOLERANCE,
+    MAX_TIMING_FACTOR,
+    WAVE_SPEED,
+    WAVE_SPEED_TOLERANCE,
+)
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.localize.arrival import PipeGeometry
 from burstloc.localize.signature import SignatureSet
@@ -71,6 +76,10 @@ class LocalizationModel:
     ``clock_offsets[meter]``: how late (s) each meter hears a wave, its clock and its sensor
     together, as known events showed (:mod:`burstloc.localize.travel_fit`); ``None``: not known
     (every meter on time).
+    ``timing_factor``: the search regions' timing error over the stated one at one capture
+    interval; not stored with the model: set per interval by
+    :meth:`~burstloc.localize.config.Calibration.model_at` from
+    :attr:`~burstloc.localize.interval.IntervalCalibration.timing_factor`.
 
     Raises:
         ConfigError: the parts do not fit together (a pipe end without distances, signatures of
@@ -87,6 +96,7 @@ class LocalizationModel:
     wave_speed_tolerance: float = WAVE_SPEED_TOLERANCE
     clock_tolerance: float = CLOCK_TOLERANCE
     clock_offsets: Mapping[str, float] | None = None
+    timing_factor: float = 1.0
 
     def __post_init__(self) -> None:
         meters = check_names(self.meters, "meters", high=MAX_METERS)
@@ -98,6 +108,7 @@ class LocalizationModel:
         check_number(self.wave_speed, "wave_speed", low=0, low_open=True, high=MAX_WAVE_SPEED)
         check_number(self.wave_speed_tolerance, "wave_speed_tolerance", low=0, high=1)
         check_number(self.clock_tolerance, "clock_tolerance_s", low=0, high=60)
+        check_number(self.timing_factor, "timing_factor", low=1, high=MAX_TIMING_FACTOR)
         if len(self.signature_sets) > MAX_SIGNATURE_SETS:
             raise FieldError("signature_sets", f"must hold at most {MAX_SIGNATURE_SETS} sets")
         distances: dict[str, NDArray[np.float64]] = {}
@@ -128,6 +139,7 @@ class LocalizationModel:
         object.__setattr__(self, "wave_speed", float(self.wave_speed))
         object.__setattr__(self, "wave_speed_tolerance", float(self.wave_speed_tolerance))
         object.__setattr__(self, "clock_tolerance", float(self.clock_tolerance))
+        object.__setattr__(self, "timing_factor", float(self.timing_factor))
         if self.fronts is not None:
             object.__setattr__(self, "fronts", self._checked_fronts(self.fronts))
         if self.clock_offsets is not None:

@@ -296,13 +296,14 @@ class Posterior:
 
 
 def _arrival_penalty(
-    arrival: ArrivalLocalizer, grid: RegionGrid, evidence: BurstEvidence
+    arrival: ArrivalLocalizer, grid: RegionGrid, evidence: BurstEvidence, timing_factor: float
 ) -> NDArray[np.float64]:
     """Each grid point's timing penalty (module docstring), ``inf`` where it explains no
     alarm; a weak alarm's timing error wider and its outlier chance larger
-    (:func:`~burstloc.localize.timing_error.alarm_weakness`; a silence's as stated);
-    the timing error widened to what the alarms' misfits at the best point show when that is
-    more than the stated one (:func:`misfit_scale`, each misfit over its alarm's widening)."""
+    (:func:`~burstloc.localize.timing_error.alarm_weakness`; a silence's as stated), every
+    one ``timing_factor`` times the stated; the timing error widened to what the alarms'
+    misfits at the best point show when that is more than the stated one
+    (:func:`misfit_scale`, each misfit over its alarm's widening)."""
     lo, hi, _, count = arrival.windows(grid.dist[:, None, :], evidence, grid.rows)
     lo, hi = lo[:, 0, :], hi[:, 0, :]
     says = np.isfinite(lo)
@@ -317,7 +318,7 @@ def _arrival_penalty(
     widening[:count], outlier[:count] = alarm_weakness(
         evidence, [arrival.meters[j] for j in alarmed]
     )
-    scale = np.asarray(stated_scale, dtype=np.float64) * widening
+    scale = np.asarray(stated_scale, dtype=np.float64) * (widening * timing_factor)
     horizon = max(arrival.horizon, 10 * evidence.capture_interval)
     gap, placed = fit_windows(lo, hi, count, evidence.capture_interval)
     cap = np.full(says.shape[1], np.inf)
@@ -342,7 +343,7 @@ def _arrival_penalty(
         return first
     at = int(np.argmin(first))
     shown, dof = misfit_scale((gap[at, :count] / widening[:count])[says[at, :count]])
-    stated = float(np.mean(np.broadcast_to(stated_scale, gap.shape)[at, :count]))
+    stated = timing_factor * float(np.mean(np.broadcast_to(stated_scale, gap.shape)[at, :count]))
     widened = widened_scale(stated, shown, dof)
     if widened <= stated:
         return first
@@ -355,10 +356,12 @@ def posterior(
     *,
     drop: DropFit | None = None,
     grid: RegionGrid | None = None,
+    timing_factor: float | None = None,
 ) -> Posterior:
     """The posterior over ``grid``'s points (default :func:`grid_of`) from the arrivals of
     ``evidence`` (``None``: none) and the lasting ``drop`` (``None``: not yet settled); see the
-    module docstring.
+    module docstring. ``timing_factor``: the timing error over the stated one (default the
+    localizer's :attr:`~burstloc.localize.arrival.ArrivalLocalizer.timing_factor`).
 
     Raises:
         InputError: neither evidence is given, or no alarmed meter is one of the model's.
@@ -368,7 +371,8 @@ def posterior(
     if evidence is None and drop is None:
         raise InputError("a search region needs arrivals or a lasting drop")
     if evidence is not None:
-        loglik = loglik - _arrival_penalty(arrival, grid, evidence)
+        factor = arrival.timing_factor if timing_factor is None else float(timing_factor)
+        loglik = loglik - _arrival_penalty(arrival, grid, evidence, factor)
     if drop is not None:
         per_pipe = drop.loglik([p.pipe for p in arrival.pipes])
         loglik = loglik + per_pipe[grid.pipe]
