@@ -71,3 +71,8 @@ def test_phase_offsets_and_required_duration() -> None:
         phase_offsets(spec, 2, "day")
     ten = RunSpec(CUSUM, 10.0, 10)
     assert required_duration(ten, 10.0) == 220.0  # the paper's coarsest run, whatever the phase
+    # the arrival localizer looks until its horizon after the first alarm: a network whose wave
+    # travels 6 s (L-TOWN's bound) needs more than 2 x 5 readings at 0.2 s after the burst
+    arrival = RunSpec(CUSUM, 0.2, 5, localizer="arrival")
+    assert required_duration(arrival, 10.0) == pytest.approx(12.2)
+    assert required_duration(arrival, 10.0, travel=6.0) == pytest.approx(22.4)

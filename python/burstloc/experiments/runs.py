@@ -295,9 +295,14 @@ def required_duration(spec: RunSpec, burst_start: float, travel: float = 0.0) ->
     the clock phase and for TSNet's grid, which ends up to one time step short of the duration.
     The signature and fused localizers answer ``SIGNATURE_DECISION_DELAY`` after the onset the
     meters see, which is up to ``travel`` seconds (the wave's longest travel to a meter) after
-    the burst.
+    the burst. The arrival localizer looks at the arrivals until its horizon after the first
+    alarm (the wave's travel from the first meter it reaches to the last): the first alarm up
+    to ``travel`` after the burst, the horizon up to ``travel`` after it (fronts heard slower
+    than the wave included: ``travel`` bounds twice any path), so ``2 x travel``.
     """
     need = burst_start + (2 * spec.localization_interval + 1) * spec.capture_interval
+    if spec.localizer == "arrival":
+        need = max(need, burst_start + 2 * travel + 2 * spec.capture_interval)
     if spec.localizer in ("signature", "fused"):
         need = max(
             need, burst_start + travel + SIGNATURE_DECISION_DELAY + 2 * spec.capture_interval
