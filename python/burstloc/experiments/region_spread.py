@@ -60,13 +60,9 @@ more bursts than :func:`allowed_misses`."""
 def allowed_misses(bursts: int, confidence: float, samples: float = SAMPLES) -> int:
     """The most of ``bursts`` that regions holding each burst with probability ``confidence``
     leave outside in a share ``samples`` of samples (the binomial quantile)."""
-    miss = 1.0 - confidence
-    total = 0.0
-    for k in range(bursts + 1):
-        total += math.comb(bursts, k) * miss**k * confidence ** (bursts - k)
-        if total >= samples - 1e-12:
-            return k
-    return bursts
+    from scipy.stats import binom
+
+    return int(binom.ppf(samples, bursts, 1.0 - confidence))
 
 
 @dataclass(frozen=True)
