@@ -164,8 +164,9 @@ def start_alerts(
 ) -> Any:
     """The started :class:`~burstloc.incidents.alerts.sender.WebhookSender` of ``--webhook``
     (``None`` without it), its outbox attached to the recorder's store. Its clock is the
-    monitor's: the feed's reading time when a file is replayed (``--readings FILE``), else the
-    wall clock. ``web``: the page's server (the alerts link to it), or ``None``.
+    monitor's: the feed's reading time when a file is replayed (``--readings FILE``; the loop
+    then waits for the alerts due, :mod:`burstloc.incidents.alerts.pacing`), else the wall
+    clock. ``web``: the page's server (the alerts link to it), or ``None``.
 
     Raises:
         ConfigError: no place for the dead-letter file.
@@ -194,8 +195,17 @@ def start_alerts(
         source=f"burstloc {__version__}",
     )
     outbox.attach()
-    sender = WebhookSender(outbox, lambda text: say(f"burstloc monitor: {text}")).start()
+
+    def told(text: str) -> None:
+        say(f"burstloc monitor: {text}")
+
+    sender = WebhookSender(outbox, told).start()
     recorder.committed = lambda batch, changed: sender.wake()
+    if replay:  # the alerts follow the file's clock, not the machine's speed
+        from burstloc.incidents.alerts.pacing import ReplayPacing
+        from burstloc.live.observe import fan_out
+
+        loop.observer = fan_out(loop.observer, ReplayPacing(recorder, sender, clock, told))
     print(
         f"burstloc monitor: webhook alerts to {len(settings.urls)} URL(s); given up to "
         f"{settings.dead_letter}",

@@ -90,6 +90,10 @@ class Recorder(LiveObserver):
         self.queue: queue.Queue[Any] = queue.Queue(maxsize=size)
         #: Items dropped because the queue was full; items stored; failed writes (retried).
         self.dropped = self.stored = self.failures = 0
+        #: Items put on the queue (the monitor's thread) and items taken and stored or left
+        #: behind (the writer's): :meth:`flush` waits until the second reaches the first.
+        self.queued = self.handled = 0
+        self._handled = threading.Condition()
         self._said_drop = 0.0
         self._faults: dict[tuple[str, str], bool] = {}  # (meter, fault) -> active
         self._implausible: dict[str, tuple[int, float | None]] = {}  # count, reading time
@@ -102,6 +106,7 @@ class Recorder(LiveObserver):
     def _put(self, item: Observed | Capture) -> None:
         try:
             self.queue.put_nowait(item)
+            self.queued += 1
         except queue.Full:
             self.dropped += 1
             now = time.monotonic()
@@ -166,6 +171,7 @@ class Recorder(LiveObserver):
     def _run(self) -> None:
         delay = RETRY[0]
         batch: list[Any] = []
+        taken = 0  # the queue's items in ``batch``
         while True:
             if not batch:
                 try:  # records not on disk yet (SQLite): synced after a quiet second
@@ -187,6 +193,7 @@ class Recorder(LiveObserver):
                         stop = True
                         break
                     batch.append(more)
+                taken = len(batch)
             else:
                 stop = False
             batch = self._written(batch)
@@ -201,6 +208,7 @@ class Recorder(LiveObserver):
                         changed = self.store.take(batch)
                     except IncidentStoreError:
                         self.say(f"{len(batch) + self.queue.qsize()} incident records not stored")
+                        self._handle(self.queued - self.handled)
                         return
                 else:
                     delay = min(2 * delay, RETRY[1])
@@ -210,11 +218,25 @@ class Recorder(LiveObserver):
             if self.committed is not None:
                 self.committed(batch, changed)
             batch = []
+            self._handle(taken)
             if self.store.sync_due():  # busy: on disk once a second all the same
                 self._sync("incidents not synced to disk, tried again later")
             if stop:
                 self._sync_last()
                 return
+
+    def _handle(self, count: int) -> None:
+        with self._handled:
+            self.handled += count
+            self._handled.notify_all()
+
+    def flush(self, timeout: float = 10.0) -> bool:
+        """Wait until everything queued so far is stored (``False`` if it was not within
+        ``timeout`` s: the store is down, or behind). A replayed file's alerts follow its clock
+        with it (:mod:`burstloc.incidents.alerts.pacing`); the live monitor never waits."""
+        target = self.queued
+        with self._handled:
+            return self._handled.wait_for(lambda: self.handled >= target, timeout)
 
     def _written(self, batch: list[Any]) -> list[Observed | Kept]:
         """``batch`` with each capture written to its feed file (a file that cannot be written

@@ -6,7 +6,9 @@ decision, every record the loop emits (decision, transient, event, health) and, 
 periodic check, offered the current health record (:meth:`LiveObserver.tick`, a callable it
 calls only when it wants one: building the record costs more than a step). The methods must
 return at once: an observer hands the news on (a bounded queue, a latest-state snapshot) and
-never makes the monitor wait. The base class ignores everything.
+never makes the monitor wait (the one exception: a replayed file's webhook alerts,
+:mod:`burstloc.incidents.alerts.pacing`, hold the replay to the file's clock). The base class
+ignores everything.
 """
 
 from __future__ import annotations

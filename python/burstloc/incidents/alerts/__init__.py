@@ -8,11 +8,13 @@ down for hours and monitors that restart.
 * :mod:`~burstloc.incidents.alerts.outbox`: the durable outbox, a table of the incident store
   written in the transaction that opens the incident;
 * :mod:`~burstloc.incidents.alerts.sender`: the threads that deliver it, with retries and a
-  dead-letter file.
+  dead-letter file;
+* :mod:`~burstloc.incidents.alerts.pacing`: a replayed file's alerts held to the file's clock.
 
 This package imports the incident store's modules and the standard library (HTTP by
-:mod:`urllib`); SQLAlchemy only with :mod:`~burstloc.incidents.alerts.outbox` and
-:mod:`~burstloc.incidents.alerts.sender`, which are imported once a store is open.
+:mod:`urllib`); SQLAlchemy only with :mod:`~burstloc.incidents.alerts.outbox`,
+:mod:`~burstloc.incidents.alerts.sender` and :mod:`~burstloc.incidents.alerts.pacing`, which
+are imported once a store is open.
 """
 
 from __future__ import annotations

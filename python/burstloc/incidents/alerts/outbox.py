@@ -69,6 +69,8 @@ _DUE = (
     .where(a.c.status == "waiting", a.c.url == bindparam("url"), a.c.due_at <= bindparam("now"))
     .order_by(a.c.due_at, a.c.id)
 )
+#: The earliest time a URL's waiting escalations are due.
+_WAITING = select(func.min(a.c.next_at)).where(a.c.url == bindparam("url"), a.c.status == "waiting")
 #: The held escalations of incidents no longer shelved.
 _BACK = (
     select(a.c.id.label("alert"), t.c.state)
@@ -164,6 +166,16 @@ class Outbox:
         """``url``'s first pending alert (a row), ``None`` when none."""
         with self.store.read() as connection:
             return connection.execute(_HEAD, {"url": url}).first()
+
+    def next_due(self, url: str) -> float | None:
+        """When ``url``'s next alert is due on the alerts' clock: its queue head's next attempt
+        or its first waiting escalation, the earlier (``None``: neither; held ones wait for the
+        wall clock)."""
+        with self.store.read() as connection:
+            head = connection.execute(_HEAD, {"url": url}).first()
+            waiting = connection.execute(_WAITING, {"url": url}).scalar()
+        due = [float(t) for t in (None if head is None else head.next_at, waiting) if t is not None]
+        return min(due) if due else None
 
     def delivered(self, alert: int, attempts: int) -> None:
         """``alert`` was answered with a 2xx."""

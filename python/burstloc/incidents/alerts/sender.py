@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import http.client
 import json
+import math
 import os
 import threading
 import time
@@ -91,6 +92,12 @@ class WebhookSender:
         """Make every thread pass now (the clock moved, an alert was written)."""
         for lane in self._lanes:
             lane.wake.set()
+
+    @property
+    def next_due(self) -> float:
+        """When the next alert is due on the alerts' clock, as the threads' last passes found
+        it: ``-inf`` before a URL's first pass with a time, ``inf`` when nothing is due."""
+        return min(lane.next_due for lane in self._lanes)
 
     def settle(self, timeout: float = 60.0) -> bool:
         """Wait until every thread has finished a pass begun after this call (tests: after
@@ -189,6 +196,8 @@ class _Lane:
         self.passed = threading.Condition()
         self.begun = self.done = 0
         self.failing = False
+        #: The URL's next alert on the alerts' clock after the last pass (see ``next_due``).
+        self.next_due = -math.inf
         self.thread = threading.Thread(target=self.run, name="burstloc-webhook", daemon=True)
 
     def run(self) -> None:
@@ -212,11 +221,19 @@ class _Lane:
             self.wake.clear()
 
     def one_pass(self) -> None:
-        """Promote what is due, then deliver the queue's head while it goes through."""
-        sender, outbox, settings = self.sender, self.sender.outbox, self.sender.settings
-        now = outbox.clock()
+        """Promote what is due, then deliver the queue's head while it goes through; then note
+        when the next alert is due."""
+        now = self.sender.outbox.clock()
         if now is None:
             return  # a replay before its first reading: no time yet
+        self.deliver(now)
+        due = self.sender.outbox.next_due(self.url)
+        self.next_due = math.inf if due is None else due
+
+    def deliver(self, now: float) -> None:
+        """Promote what is due by ``now``, then deliver the queue's head while it goes
+        through."""
+        sender, outbox, settings = self.sender, self.sender.outbox, self.sender.settings
         outbox.promote(self.url, now)
         while (row := outbox.head(self.url)) is not None and row.next_at <= now:
             attempts = row.attempts + 1
