@@ -265,7 +265,9 @@ def _serve(
         items: Iterator[Any] = _from_broker(link, flags)
     else:
         idle = min(max(args.save_every, 0.05), 1.0)
-        items = _from_file(args.readings, flags, idle, loop.timestamps)
+        # as rows of what each read gives, unless paced reading by reading
+        columns = None if args.replay_speed is not None else loop.monitor.meters
+        items = _from_file(args.readings, flags, idle, loop.timestamps, columns)
         if args.replay_speed is not None:
             from burstloc.live.replay import paced
 
@@ -305,30 +307,44 @@ def _from_broker(link: Any, flags: dict[str, bool]) -> Iterator[Any]:
         yield f"message {number}", payload  # the loop parses it as one row
 
 
-def _from_file(path: str, flags: dict[str, bool], idle: float, form: Any) -> Iterator[Any]:
-    """``(where, item)`` per CSV line of ``path`` (``-``: stdin) and ``None`` after ``idle``
-    seconds without input (the loop then saves its state and checks silence while it waits);
-    ``form``: the feed's timestamp form (:class:`~burstloc.live.parse.TimestampForm`)."""
+def _from_file(
+    path: str, flags: dict[str, bool], idle: float, form: Any, meters: Any = None
+) -> Iterator[Any]:
+    """The items of the CSV lines of ``path`` (``-``: stdin) and ``None`` after ``idle`` seconds
+    without input (the loop then saves its state and checks silence while it waits); ``form``:
+    the feed's timestamp form (:class:`~burstloc.live.parse.TimestampForm`). With ``meters``
+    (the configuration's), the lines of each read as one ``(where, row)`` over them
+    (:func:`~burstloc.live.lines.rows_of_lines`: each report names its line), else ``(where,
+    item)`` per line."""
+    from burstloc.live.lines import rows_of_lines
     from burstloc.live.parse import BadReading, parse_line
 
     try:
         source = sys.stdin.buffer if path == "-" else open(path, "rb")  # noqa: SIM115
     except OSError as exc:
         raise InputError(f"cannot read readings {path!r}: {exc.strerror}") from exc
+    columns = None if meters is None else {m: j for j, m in enumerate(meters)}
     number = 0
     try:
-        for line in _raw_lines(source, flags, idle):
-            if line is None:
+        for lines in _raw_lines(source, flags, idle):
+            if lines is None:
                 yield None
                 continue
-            number += 1
-            where = f"line {number}"
-            if len(line) > _LONGEST:
-                yield where, BadReading(where, f"line longer than {_LONGEST} bytes")
+            if columns is not None:
+                row = rows_of_lines(lines, number + 1, columns, form, _LONGEST)
+                if row.size:
+                    yield f"lines {number + 1}-{number + len(lines)}", row
+                number += len(lines)
                 continue
-            item = parse_line(line, where, form)
-            if item is not None:
-                yield where, item
+            for line in lines:
+                number += 1
+                where = f"line {number}"
+                if len(line) > _LONGEST:
+                    yield where, BadReading(where, f"line longer than {_LONGEST} bytes")
+                    continue
+                item = parse_line(line, where, form)
+                if item is not None:
+                    yield where, item
     finally:
         if source is not sys.stdin.buffer:
             source.close()
@@ -338,10 +354,11 @@ _LONGEST = 1 << 16  # bytes in one CSV line; a longer one is bad input, not a re
 _CHUNK = 1 << 16
 
 
-def _raw_lines(source: Any, flags: dict[str, bool], idle: float) -> Iterator[bytes | None]:
-    """Lines of ``source`` as bytes, read unbuffered from its file descriptor so that a pipe
-    with nothing to read gives ``None`` every ``idle`` seconds instead of blocking; an
-    overlong line is cut short (the caller reports it) and the rest of it skipped."""
+def _raw_lines(source: Any, flags: dict[str, bool], idle: float) -> Iterator[list[bytes] | None]:
+    """The lines of ``source`` as bytes, those of each read together, read unbuffered from its
+    file descriptor so that a pipe with nothing to read gives ``None`` every ``idle`` seconds
+    instead of blocking; an overlong line is cut short (the caller reports it) and the rest of
+    it skipped."""
     fd = source.fileno()
     pending = b""
     skipping = False
@@ -358,18 +375,18 @@ def _raw_lines(source: Any, flags: dict[str, bool], idle: float) -> Iterator[byt
             break
         pending += data
         *complete, pending = pending.split(b"\n")
-        for line in complete:
-            if skipping:
-                skipping = False
-                continue
-            yield line
+        if skipping and complete:
+            skipping = False
+            complete = complete[1:]
         if len(pending) > _LONGEST and not skipping:
-            yield pending[: _LONGEST + 1]
+            complete.append(pending[: _LONGEST + 1])
             pending, skipping = b"", True
         elif skipping:
             pending = b""
+        if complete:
+            yield complete
     if pending and not skipping and not flags["stop"]:
-        yield pending
+        yield [pending]
 
 
 def _readable(fd: int, timeout: float) -> bool:

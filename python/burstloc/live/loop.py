@@ -22,6 +22,7 @@ saved every ``save_every`` seconds (wall clock) and by :meth:`LiveLoop.save`.
 from __future__ import annotations
 
 import bisect
+import dataclasses
 import math
 import time
 from collections.abc import Callable, Iterable
@@ -40,7 +41,7 @@ from burstloc.readings import Reading, Step
 __all__ = ["LiveLoop", "Reporter"]
 
 Record = dict[str, Any]
-Item = Reading | BadReading | tuple[str, Reading | BadReading | bytes] | None
+Item = Reading | BadReading | tuple[str, Reading | BadReading | bytes | Row] | None
 
 
 def _position(item: tuple[int, BadReading]) -> int:
@@ -167,6 +168,13 @@ class LiveLoop:
         the decision)."""
         self._feed_row(parse_row(payload, where, self._columns, self.timestamps), where)
 
+    def feed_row(self, row: Row, where: str) -> None:
+        """A parsed row over the configuration's meters (a file's lines,
+        :func:`~burstloc.live.lines.rows_of_lines`, or a message, as :meth:`feed_payload`
+        parses it), as its items fed one by one; reports name each item's line when the row
+        has them, else ``where``."""
+        self._feed_row(row, where)
+
     def _feed_row(self, row: Row, where: str) -> None:
         """The items of ``row`` in order, as one by one: the periodic check (:meth:`tick`)
         follows every ``len(meters)``-th item when it is an admitted reading, so the row is
@@ -189,6 +197,11 @@ class LiveLoop:
     ) -> None:
         """Items of ``row`` up to position ``end``: its readings ``part`` and ``bad`` items."""
         meters = self.monitor.meters
+        lines = row.lines
+
+        def at(position: int) -> str:  # what a report names: the item's line, or the payload
+            return where if lines is None else f"line {lines[position]}"
+
         events: list[tuple[int, int, str, str]] = []  # (position, order, kind, message)
         for position, item in bad:
             self.health.bad(item)
@@ -204,7 +217,8 @@ class LiveLoop:
             events.append((position, 0, "clock-offset", message))
         for position, before, after in ok.moved:
             message = (
-                f"{where}: the feed's clock moved by {(after - before) / 86_400.0:+.4g} days "
+                f"{at(position)}: the feed's clock moved by "
+                f"{(after - before) / 86_400.0:+.4g} days "
                 f"(t = {before:.12g} s to {after:.12g} s): readings of most meters agree; the "
                 "readings far from the clock before them were skipped"
             )
@@ -217,9 +231,11 @@ class LiveLoop:
             events.append((position, 0, "replay", message))
         for position, j, refused in ok.refused:
             if refused is None:
-                message = f"{where}: meter {meters[j]!r} is off the clock; reading held back"
+                message = f"{at(position)}: meter {meters[j]!r} is off the clock; reading held back"
                 events.append((position, 1, "clock", message))
             else:
+                if lines is not None:
+                    refused = dataclasses.replace(refused, where=at(position))
                 events.append((position, 1, "bad-input", f"bad reading skipped: {refused}"))
         if events:
             events.sort()
@@ -229,25 +245,26 @@ class LiveLoop:
             and (self._items + end + 1) % len(meters) == 0
         )
         if ok.positions:
-            self._segment(ok, where, events, end if tick else None)
+            self._segment(ok, at, events, end if tick else None)
         self._report_until(events, end + 1)
 
     def _segment(
         self,
         ok: AdmittedRow,
-        where: str,
+        at: Callable[[int], str],
         events: list[tuple[int, int, str, str]],
         tick: int | None,
     ) -> None:
         """Admitted readings to the step feed and their steps to the monitor, reports in the
-        order of the items; then the periodic check after position ``tick``."""
+        order of the items (``at(position)`` names an item); then the periodic check after
+        position ``tick``."""
         columns = ok.columns
         steps, late = self.stream.push_admitted(ok.times, columns, ok.values)
         if late:
             for k in late:
                 meter = self.monitor.meters[columns[k]]
                 self.health.late(meter)
-                message = f"{where}: late reading from meter {meter!r} dropped"
+                message = f"{at(ok.positions[k])}: late reading from meter {meter!r} dropped"
                 events.append((ok.positions[k], 2, "late", message))
             events.sort()
         for position, step in steps:
@@ -327,14 +344,17 @@ class LiveLoop:
         self._tick()
 
     def run(self, items: Iterable[Item]) -> None:
-        """Feed every item, or ``(where, item)`` pair (an item: a reading, a bad reading, or a
-        message's payload as bytes; ``None``: an idle tick), then :meth:`finish`."""
+        """Feed every item, or ``(where, item)`` pair (an item: a reading, a bad reading, a
+        message's payload as bytes, or a parsed row; ``None``: an idle tick), then
+        :meth:`finish`."""
         for item in items:
             if item is None:
                 self._tick()
             elif isinstance(item, tuple):
                 where, what = item
-                if isinstance(what, bytes):
+                if isinstance(what, Row):
+                    self.feed_row(what, where)
+                elif isinstance(what, bytes):
                     self.feed_payload(what, where)
                 else:
                     self.feed(what, where)

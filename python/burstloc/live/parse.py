@@ -284,7 +284,9 @@ def unknown_meter(where: str, meter: str) -> BadReading:
 class Row(NamedTuple):
     """The readings of one payload as parallel lists: their ``positions`` among the payload's
     items, ``times``, meter ``columns`` and ``values``; the ``bad`` items as (position, bad
-    reading); ``size``, the number of items (readings and bad ones)."""
+    reading); ``size``, the number of items (readings and bad ones); ``lines``, each item's line
+    number when the row is a file's lines (:mod:`burstloc.live.lines`: reports name the line),
+    else ``None`` (reports name the payload)."""
 
     positions: list[int]
     times: list[float]
@@ -292,6 +294,7 @@ class Row(NamedTuple):
     values: list[float]
     bad: list[tuple[int, BadReading]]
     size: int
+    lines: list[int] | None = None
 
 
 def parse_row(
