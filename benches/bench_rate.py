@@ -29,9 +29,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import subprocess
-import sys
 import tempfile
 import time
 from collections.abc import Callable
@@ -39,22 +36,12 @@ from pathlib import Path
 from typing import Any
 
 from bench_ltown import sensors_and_pipes
+from bench_ltown_accuracy import burstloc
 
-REPO = Path(__file__).resolve().parents[1]
 SIGMA = 0.01
 FLOW = 2.04
 MIN_PIPE = 24.0
 READ = 1 << 16  # bytes the monitor reads from a file at a time
-
-
-def burstloc(args: list[str]) -> None:
-    """``burstloc ARGS`` with the sources in place; exits with its message on failure."""
-    env = {**os.environ, "PYTHONPATH": str(REPO / "python")}
-    done = subprocess.run(
-        [sys.executable, "-m", "burstloc", *args], env=env, capture_output=True, text=True
-    )
-    if done.returncode != 0:
-        sys.exit(f"burstloc {args[0]} failed (exit {done.returncode}): {done.stderr[-2000:]}")
 
 
 def feed_of(network: Path, meters: Path, work: Path, dt: float, seconds: float, pipe: str) -> Path:

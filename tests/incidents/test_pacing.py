@@ -54,7 +54,7 @@ def test_a_replay_delivers_retries_and_escalations_when_its_clock_reaches_them(
         )
         outbox = Outbox(store, settings, clock=lambda: clock["now"])
         outbox.attach()
-        webhooks = WebhookSender(outbox, said.append).start()
+        webhooks = WebhookSender(outbox, said.append, paced=True).start()
         recorder = Recorder(store, said.append, committed=lambda b, c: webhooks.wake())
         pacing = ReplayPacing(recorder, webhooks, lambda: clock["now"], said.append)
         try:

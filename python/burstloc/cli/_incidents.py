@@ -199,7 +199,7 @@ def start_alerts(
     def told(text: str) -> None:
         say(f"burstloc monitor: {text}")
 
-    sender = WebhookSender(outbox, told).start()
+    sender = WebhookSender(outbox, told, paced=replay).start()
     recorder.committed = lambda batch, changed: sender.wake()
     if replay:  # the alerts follow the file's clock, not the machine's speed
         from burstloc.incidents.alerts.pacing import ReplayPacing

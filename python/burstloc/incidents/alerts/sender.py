@@ -69,8 +69,11 @@ class WebhookSender:
     """Delivers ``outbox``'s alerts (module docstring); ``say`` tells the operator (stderr).
     :meth:`start` starts the threads, :meth:`close` stops them."""
 
-    def __init__(self, outbox: Outbox, say: Callable[[str], None]) -> None:
+    def __init__(self, outbox: Outbox, say: Callable[[str], None], *, paced: bool = False) -> None:
         self.outbox = outbox
+        #: Whether each pass notes when the next alert is due (:attr:`next_due`: a replay
+        #: paced by :mod:`~burstloc.incidents.alerts.pacing`; nothing else reads it).
+        self.paced = paced
         self.settings = outbox.settings
         self.say = say
         #: Counters since the start (read by /metrics): 2xx answers, failed attempts, given up.
@@ -96,7 +99,8 @@ class WebhookSender:
     @property
     def next_due(self) -> float:
         """When the next alert is due on the alerts' clock, as the threads' last passes found
-        it: ``-inf`` before a URL's first pass with a time, ``inf`` when nothing is due."""
+        it (``paced`` senders only): ``-inf`` before a URL's first pass with a time, ``inf`` when
+        nothing is due."""
         return min(lane.next_due for lane in self._lanes)
 
     def settle(self, timeout: float = 60.0) -> bool:
@@ -227,8 +231,9 @@ class _Lane:
         if now is None:
             return  # a replay before its first reading: no time yet
         self.deliver(now)
-        due = self.sender.outbox.next_due(self.url)
-        self.next_due = math.inf if due is None else due
+        if self.sender.paced:
+            due = self.sender.outbox.next_due(self.url)
+            self.next_due = math.inf if due is None else due
 
     def deliver(self, now: float) -> None:
         """Promote what is due by ``now``, then deliver the queue's head while it goes
