@@ -2,8 +2,8 @@
 10 000 incidents costs, and what keeping incidents costs the monitor.
 
 Usage: ``.venv/bin/python benches/bench_incidents.py [--writes N] [--incidents N] [--runs N]
-[--no-postgresql]`` (needs the incidents, web and sim extras; PostgreSQL's server binaries,
-``scripts/install-postgresql.sh``, for its columns). In one process:
+[--no-postgresql] [--sections 123] [--one-process]`` (needs the incidents, web and sim extras;
+PostgreSQL's server binaries, ``scripts/install-postgresql.sh``, for its columns):
 
 1. **Write latency**: one incident kept (one transaction: the incident and its history row,
    :meth:`IncidentStore.take`) and one acknowledgement (:meth:`IncidentStore.act`), ``--writes``
@@ -30,7 +30,11 @@ Usage: ``.venv/bin/python benches/bench_incidents.py [--writes N] [--incidents N
    keeping the readings around every alarm in a directory beside it, as the monitor does). Decisions
    per second of wall time and readings/s (median), and the decision latency (wall time from the
    reading that completes a decision to its record, median), each as a ratio to the loop
-   without the store. Target: within 5 %.
+   without the store. Target: within 5 %. Each run is a fresh Python process (the feed and the
+   configuration read from files made once): in one process, what a run leaves behind (its
+   store's engine, the allocator's heap) weighs on the runs after it, and the loop without the
+   store differed from itself by 9-15 % (``--one-process`` runs them the old way, for that
+   comparison).
 """
 
 from __future__ import annotations
@@ -40,6 +44,7 @@ import gc
 import json
 import os
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
@@ -250,31 +255,95 @@ def burst_feed(config: Any, bursts: int) -> list[Any]:
     ]
 
 
-def on_and_off(
-    config: Any, readings: list[Any], runs: int, stores: dict[str, Callable[[], Any]]
-) -> dict[str, list[Run]]:
+def one_run(config: Any, readings: list[Any], store: Any) -> Run:
+    """One run of the loop, with the recorder on ``store`` (``None``: without it), keeping the
+    readings around each alarm in a directory beside it, as the monitor does."""
     from burstloc.incidents.recorder import Recorder
 
+    with tempfile.TemporaryDirectory(prefix="bench-readings-") as kept:
+        recorder = (
+            None
+            if store is None
+            else Recorder(store, print, meters=config.meters, readings=Path(kept))
+        )
+        gc.collect()  # each run from the same start: opening a store leaves garbage
+        got = monitor_run(config, readings, recorder)
+        if recorder is not None:
+            recorder.close()
+            assert recorder.dropped == 0
+            store.close()
+    return got
+
+
+def save_feed(readings: list[Any], path: Path) -> None:
+    """The feed's readings in ``path`` (NumPy arrays: times, meter names, values)."""
+    import numpy as np
+
+    np.savez(
+        path,
+        t=np.array([r.timestamp for r in readings]),
+        meter=np.array([r.meter for r in readings]),
+        value=np.array([r.value for r in readings]),
+    )
+
+
+def load_feed(path: Path) -> list[Any]:
+    """The readings :func:`save_feed` wrote."""
+    import numpy as np
+
+    from burstloc.readings import Reading
+
+    with np.load(path) as f:
+        return [
+            Reading(float(t), str(m), float(v))
+            for t, m, v in zip(f["t"], f["meter"], f["value"], strict=True)
+        ]
+
+
+def child(config_path: str, feed_path: str, store_url: str | None) -> None:
+    """``--child``: one run in this fresh process; its :data:`Run` printed as JSON."""
+    from burstloc.incidents import IncidentStore
+    from burstloc.localize.config import Calibration
+
+    config = Calibration.load(config_path)
+    readings = load_feed(Path(feed_path))
+    store = None if store_url is None else IncidentStore.open(store_url)
+    print(json.dumps(one_run(config, readings, store)))
+
+
+def on_and_off(
+    config: Any,
+    readings: list[Any],
+    runs: int,
+    stores: dict[str, Callable[[], Any]],
+    folder: Path,
+    one_process: bool,
+) -> dict[str, list[Run]]:
     # "off, again": the same loop without the store a second time, alternated with the others:
     # its ratio to "off" is what the machine's noise alone makes of a ratio
     setups = ["off", "off, again", *stores]
     results: dict[str, list[Run]] = {s: [] for s in setups}
+    config_path, feed_path = folder / "config.json", folder / "feed.npz"
+    if not one_process:
+        config.save(config_path)
+        save_feed(readings, feed_path)
     for k in range(runs):
         for setup in setups if k % 2 == 0 else setups[::-1]:
-            store = None if setup.startswith("off") else stores[setup]()
-            with tempfile.TemporaryDirectory(prefix="bench-readings-") as kept:
-                # as the monitor runs it: the readings around each alarm kept beside the store
-                recorder = (
-                    None
-                    if store is None
-                    else Recorder(store, print, meters=config.meters, readings=Path(kept))
-                )
-                gc.collect()  # each run from the same start: opening a store leaves garbage
-                results[setup].append(monitor_run(config, readings, recorder))
-                if recorder is not None:
-                    recorder.close()
-                    assert recorder.dropped == 0
-                    store.close()
+            if one_process:
+                store = None if setup.startswith("off") else stores[setup]()
+                results[setup].append(one_run(config, readings, store))
+                continue
+            url = None
+            if not setup.startswith("off"):
+                made = stores[setup]()  # a fresh database (migrated), left to the child
+                url = made.url
+                made.close()
+            command = [sys.executable, __file__, "--child", str(config_path), str(feed_path)]
+            done = subprocess.run(
+                [*command, *([] if url is None else [url])],
+                capture_output=True, text=True, check=True,
+            )  # fmt: skip
+            results[setup].append(tuple(json.loads(done.stdout.splitlines()[-1])))  # type: ignore[arg-type]
     return results
 
 
@@ -289,7 +358,14 @@ def main() -> None:
     parser.add_argument(
         "--no-page", action="store_true", help="section 2: only what /metrics asks of the store"
     )
+    parser.add_argument(
+        "--one-process", action="store_true", help="section 3: every run in this process"
+    )
+    parser.add_argument("--child", nargs="+", help=argparse.SUPPRESS)  # CONFIG FEED [STORE]
     args = parser.parse_args()
+    if args.child:
+        child(args.child[0], args.child[1], args.child[2] if len(args.child) > 2 else None)
+        return
     from burstloc.incidents import IncidentStore
 
     with tempfile.TemporaryDirectory() as tmp, ExitStack() as stack:
@@ -375,7 +451,7 @@ def main() -> None:
 
         config = calibrate(PAPER15, capture_intervals=(0.2,), noise_sigma=0.01, meters=METERS)
         readings = burst_feed(config, args.bursts)
-        results = on_and_off(config, readings, args.runs, stores)
+        results = on_and_off(config, readings, args.runs, stores, folder, args.one_process)
         off = results["off"]
         base_d = statistics.median(r[0] for r in off)
         base_r = statistics.median(r[1] for r in off)
@@ -383,7 +459,7 @@ def main() -> None:
         base_c = statistics.median(r[4] for r in off)
         print(
             f"3. the monitor, {len(readings)} readings, {off[0][3]} decisions, {args.runs} runs "
-            "each way (medians)"
+            f"each way (medians), {'in one process' if args.one_process else 'each fresh'}"
         )
         for setup, got in results.items():
             d = statistics.median(r[0] for r in got)
