@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from burstloc.localize.evidence import IndexedAlarm, evidence_from_alarms
-from burstloc.localize.onset import FINEST_STEP_INTERVAL, _fit, hinge_onset
+from burstloc.localize.onset import FITTED_INTERVAL, _fit, hinge_onset
 
 
 def _front(dt: float, onset: float, seed: int) -> tuple[np.ndarray, np.ndarray]:
@@ -40,15 +40,15 @@ def test_no_hinge_the_wrong_way_or_from_too_few_readings() -> None:
 
 
 def test_evidence_centres_a_fine_alarms_window_on_the_fitted_change() -> None:
-    for dt, fitted in ((0.004, True), (0.05, False)):
-        assert (dt <= FINEST_STEP_INTERVAL) is fitted
+    for dt, fitted in ((0.004, True), (0.05, True), (0.2, False)):
+        assert (dt <= FITTED_INTERVAL) is fitted
         t, y = _front(dt, 1.0, 1)
         index, start = int(np.searchsorted(t, 1.25)), int(np.searchsorted(t, 0.85))
         alarm = IndexedAlarm(channel=0, index=index, start=start, amplitude=-0.3)
         evidence = evidence_from_alarms(("m",), t, y[:, None], [alarm], capture_interval=dt)
         began = evidence.alarms["m"].start
         if fitted:  # the window [start, start + dt] holds the fitted change, mid-window
-            assert began + 0.5 * dt == pytest.approx(1.0, abs=0.02)
+            assert began + 0.5 * dt == pytest.approx(1.0, abs=0.02 if dt < 0.02 else 0.05)
         else:  # the detector's own start
             assert began == t[start]
 

@@ -295,7 +295,7 @@ def evidence_from_alarms(
     each meter keeps its first alarm raised within ``alarm_window`` seconds of it (default: up to
     the decision time); ``onset`` is the earliest start among them. Readings and alarms after
     ``decision_time`` are ignored (default: all readings). At capture intervals up to
-    :data:`~burstloc.localize.onset.FINEST_STEP_INTERVAL` a start is the change point fitted
+    :data:`~burstloc.localize.onset.FITTED_INTERVAL` a start is the change point fitted
     to the readings less half an interval (:func:`~burstloc.localize.onset.change_start`), so
     that the interval an alarm's start allows is centred on it.
     """

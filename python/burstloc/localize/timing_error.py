@@ -19,8 +19,9 @@ over 15 at 0.2 s (0.24 against 0.13 s) and 2 times at 0.05 s, and at 0.2 s one i
 more than half a second off, against one in fifty. So an alarm below :data:`STRONG_ALARM` noise
 levels has its timing error widened by ``STRONG_ALARM / strength`` and its outlier chance
 raised by the square of that (:func:`weak_alarms`, :func:`alarm_weakness`). Not at 0.02 s and
-finer, where a change's start is fitted to the readings (:mod:`burstloc.localize.onset`) and an
-alarm's amplitude is the height of the front's ramp when it was raised: there, on the same
+finer, where a front spans ten readings or more, its start is fitted to the readings
+(:mod:`burstloc.localize.onset`) and an alarm's amplitude is the height of the front's ramp when
+it was raised: there, on the same
 L-TOWN pipes, it grew the median 95 % region from 467 to 663 m and held no more. Numpy only: on
 the live path (:mod:`burstloc.localize.region` uses them).
 """
@@ -206,8 +207,8 @@ def alarm_weakness(
     """:func:`weak_alarms` of the alarms of ``meters`` in ``evidence``, each one's strength its
     amplitude over its meter's noise before the burst (:func:`baseline_noise` of the evidence's
     readings before its onset); every alarm as strong at capture intervals up to
-    :data:`~burstloc.localize.onset.FINEST_STEP_INTERVAL`, where a change's start is fitted to
-    the readings, not the CUSUM's, and an alarm's amplitude is the front's ramp so far."""
+    :data:`~burstloc.localize.onset.FINEST_STEP_INTERVAL`, where an alarm is raised on the
+    front's ramp: its amplitude is the ramp so far, not the change's size."""
     if evidence.capture_interval <= FINEST_STEP_INTERVAL:
         return weak_alarms(np.full(len(meters), np.inf))
     noise = baseline_noise(
