@@ -31,10 +31,9 @@ PostgreSQL's server binaries, ``scripts/install-postgresql.sh``, for its columns
    per second of wall time and readings/s (median), and the decision latency (wall time from the
    reading that completes a decision to its record, median), each as a ratio to the loop
    without the store. Target: within 5 %. Each run is a fresh Python process (the feed and the
-   configuration read from files made once): in one process, what a run leaves behind (its
-   store's engine, the allocator's heap) weighs on the runs after it, and the loop without the
-   store differed from itself by 9-15 % (``--one-process`` runs them the old way, for that
-   comparison).
+   configuration read from files made once), so that no run inherits another's state;
+   ``--one-process`` runs them all in this process, warm (a fresh process replays about a
+   quarter slower and its runs scatter more: benches/README.md).
 """
 
 from __future__ import annotations
