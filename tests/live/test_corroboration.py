@@ -19,6 +19,7 @@ from burstloc.live.monitor import BurstMonitor
 from burstloc.live.monitor_state import monitor_state, restore_monitor
 from burstloc.localize.arrival import ArrivalLocalizer
 from burstloc.localize.config import Calibration
+from burstloc.localize.decide import arrival_horizon
 from burstloc.localize.interval import calibrated_bank
 from burstloc.readings import Step
 
@@ -47,10 +48,13 @@ def _first_alarms(config: Calibration, steps: list[Step]) -> list[float]:
 
 
 def _horizon(monitor: BurstMonitor) -> float:
-    """Seconds after the first alarm by which a burst's wave has reached every meter."""
+    """Seconds after the first alarm by which a burst's wave has reached every meter (at the
+    slowest stated wave speed) and its alarms have been raised."""
     arrival = monitor.localizers["arrival"]
     assert isinstance(arrival, ArrivalLocalizer)
-    return arrival.horizon
+    horizon = arrival_horizon(arrival, monitor.calibration)
+    assert horizon > arrival.horizon + 2 * monitor.calibration.capture_interval
+    return horizon
 
 
 def test_a_second_meter_after_the_first_look_corroborates_the_burst(

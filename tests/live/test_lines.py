@@ -191,15 +191,17 @@ def test_the_cli_reads_a_file_whole_in_a_pipe_s_pieces_and_paced_alike(
     assert '"pipe": "C"' in whole[0] and "late reading from meter" in whole[1]
     assert whole == piped  # a pipe's pieces cut lines anywhere: the same rows' answers
     assert whole[1] == paced[1]  # every report, in order, naming the same lines
-    # records alike; the health inside a decision is taken after the read's readings up to
-    # the next periodic check (line by line: after the reading that completed the decision)
+    # records alike; the health inside a decision (or an early, transient record) is taken
+    # after the read's readings up to the next periodic check (line by line: after the reading
+    # that completed the decision)
     assert _records(whole[0]) == _records(paced[0])
 
 
 def _records(stdout: str) -> list[dict[str, Any]]:
     records = [json.loads(line) for line in stdout.splitlines()]
     return [
-        {k: v for k, v in r.items() if r["type"] != "decision" or k != "health"} for r in records
+        {k: v for k, v in r.items() if r["type"] not in ("decision", "transient") or k != "health"}
+        for r in records
     ]
 
 

@@ -13,6 +13,7 @@ from burstloc.localize.corroborate import corroborated_at, corroboration_deadlin
 from burstloc.localize.decide import RankingLocalizers, arrival_horizon, decision_time
 from burstloc.localize.evidence import IndexedAlarm
 from burstloc.localize.fused import FusedLocalizer
+from burstloc.localize.looks import ALARM_LAG
 from line_network import line_arrival, line_calibration, line_signature
 
 TIMES = np.round(np.arange(0.0, 30.0, 0.5), 9)
@@ -48,8 +49,8 @@ def test_the_deadline_is_the_later_of_the_decision_time_and_the_arrival_horizon(
     by = corroboration_deadline("arrival", localizers, alarms, TIMES, early)
     assert by == pytest.approx(10.0 + arrival_horizon(arrival, early)) and by > due
     # a first look after the horizon, or the signature's decision time: the decision time
-    late = line_calibration(0.5, arrival_decision_delay=2.0)
-    assert corroboration_deadline("arrival", localizers, alarms, TIMES, late) == 12.0
+    late = line_calibration(0.5, arrival_decision_delay=4.0)
+    assert corroboration_deadline("arrival", localizers, alarms, TIMES, late) == 14.0
     signature_due = decision_time("signature", alarms, TIMES, early)
     assert corroboration_deadline("signature", localizers, alarms, TIMES, early) == signature_due
     # without an arrival localizer, the calibrated first look stands for the horizon
@@ -60,3 +61,23 @@ def test_the_deadline_is_the_later_of_the_decision_time_and_the_arrival_horizon(
     ) == pytest.approx(100.0)
     with pytest.raises(InputError, match="no alarm"):
         corroboration_deadline("arrival", localizers, [], TIMES, early)
+
+
+def test_the_horizon_allows_for_the_slowest_stated_wave_and_the_alarms_lag() -> None:
+    arrival = line_arrival()
+    assert arrival.horizon == pytest.approx(1.4)  # the farthest meters' spread at the wave speed
+    tolerance = arrival.wave_speed_tolerance
+    assert tolerance > 0
+    for dt in (0.01, 0.5):
+        calibration = line_calibration(dt, arrival_decision_delay=dt)
+        expected = 1.4 / (1.0 - tolerance) + ALARM_LAG * dt
+        assert arrival_horizon(arrival, calibration) == pytest.approx(expected)
+    # the second meter's alarm raised two readings after the bare spread still corroborates
+    signature = line_signature(np.eye(3, 4))
+    localizers = RankingLocalizers(arrival, signature, FusedLocalizer(arrival, signature))
+    calibration = line_calibration(0.5, arrival_decision_delay=0.5)
+    alarms = [_at(10.0, 0), _at(12.0, 2)]  # 2.0 s apart: more than 1.4 s, within 1.4 + 2 x 0.5
+    by = corroboration_deadline("arrival", localizers, alarms, TIMES, calibration)
+    assert 11.4 < 12.0 <= by
+    assert corroborated_at(alarms, TIMES, 2, by) == 12.0
+    assert corroborated_at(alarms, TIMES, 2, 10.0 + arrival.horizon) is None  # the bare spread

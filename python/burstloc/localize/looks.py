@@ -32,6 +32,7 @@ if TYPE_CHECKING:
     from burstloc.localize.interval import IntervalCalibration
 
 __all__ = [
+    "ALARM_LAG",
     "LOOK_INTERVAL",
     "Look",
     "arrival_evidence",
@@ -97,12 +98,22 @@ def arrival_first(
     )
 
 
+ALARM_LAG = 2
+"""Readings from a front's arrival at a meter to its alarm, allowed for in the horizon: the
+reading within which the front arrives and the next. Without them an alarm raised just past
+the bare travel time was dismissed with the first meter's (paper15, 2 meters, 5 phases of pipe
+17's burst: corroborated instead by the first meter's later ringing, and located 1.4 km off)."""
+
+
 def arrival_horizon(arrival: ArrivalLocalizer, calibration: IntervalCalibration) -> float:
     """Seconds after the first alarm of the last look at the arrivals: the arrival localizer's
     :attr:`~burstloc.localize.arrival.ArrivalLocalizer.horizon` (by then a burst's wave has
-    reached every meter it will reach), at least the calibrated first look
-    (``arrival_decision_delay``)."""
-    return max(calibration.arrival_decision_delay, arrival.horizon)
+    reached every meter it will reach) at the slowest speed its tolerance states, plus
+    :data:`ALARM_LAG` readings (the last meter's alarm is raised after its wave arrives), at
+    least the calibrated first look (``arrival_decision_delay``)."""
+    spread = arrival.horizon / max(1.0 - arrival.wave_speed_tolerance, 1e-9)
+    lag = ALARM_LAG * calibration.capture_interval
+    return max(calibration.arrival_decision_delay, spread + lag)
 
 
 def horizon_of(localizers: Mapping[str, Localizer], calibration: IntervalCalibration) -> float:
