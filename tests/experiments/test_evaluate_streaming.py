@@ -1,7 +1,8 @@
 """``evaluate(..., keep_heads=False)`` scores each burst as its simulation arrives and keeps only
 its first time step: the same evaluation (every run's JSON) as holding every burst's heads, for
 the paper's rules and a ranking localizer (both meter models, two clock phases, several pipes),
-from fresh simulations and from the cache."""
+from fresh simulations and from the cache. With meters and no run of the paper's rules, the
+simulations record the meters' heads only, and the evaluation is again the same."""
 
 from __future__ import annotations
 
@@ -28,6 +29,12 @@ RUNS = [
         meter_model="interval-averaged",
     ),
 ]
+
+
+def options(config: Any, **more: Any) -> dict[str, Any]:
+    """What these evaluations share: three pipes, two phases, nothing cached; and ``more``."""
+    shared = {"pipes": ["B", "C", "A"], "phases": 2, "scenario": SHORT, "config": config}
+    return {**shared, "cache": False, "progress": False, **more}
 
 
 def run(tiny: Path, config: Any, cache: Any, keep_heads: bool) -> Any:
@@ -63,19 +70,31 @@ def test_streaming_gives_the_same_evaluation(
         assert {k: v for k, v in result.metadata.items() if k not in timing} == same
 
 
+def test_with_meters_only_their_heads_are_simulated_and_scored_the_same(tiny: Path) -> None:
+    from burstloc.experiments.calibrate import calibrate
+
+    meters = ["J4", "J2", "J3"]
+    config = calibrate(tiny, capture_intervals=(0.2,), noise_sigma=0.01, meters=meters)
+    kwargs = options(config, workers=1, meters=meters)
+    ranked = RUNS[1:]  # the paper's rules read every junction
+    held = evaluate(tiny, ranked, keep_heads=True, **kwargs)
+    streamed = evaluate(tiny, ranked, keep_heads=False, **kwargs)
+    assert streamed.to_json() == held.to_json()
+    for pipe, result in streamed.results.items():
+        assert held.results[pipe].junctions == ["J1", "J2", "J3", "J4"]
+        assert result.junctions == ["J4", "J2", "J3"]
+        assert result.metadata["recorded"] == ["J4", "J2", "J3"]
+        assert (result.heads[0] == held.results[pipe].heads[0, [3, 1, 2]]).all()
+    # with the paper's rules every junction is simulated
+    both = evaluate(tiny, RUNS, keep_heads=False, **kwargs)
+    assert all(len(r.junctions) == 4 for r in both.results.values())
+
+
 def test_a_dask_cluster_gives_the_same_evaluation_as_local_processes(
     tiny: Path, tiny_config: Any, dask_scheduler: str
 ) -> None:
     # each burst simulated on the cluster's workers, scored here as it arrives
-    kwargs: dict[str, Any] = {
-        "pipes": ["B", "C", "A"],
-        "phases": 2,
-        "scenario": SHORT,
-        "config": tiny_config,
-        "cache": False,
-        "progress": False,
-        "keep_heads": False,
-    }
+    kwargs = options(tiny_config, keep_heads=False)
     local = evaluate(tiny, RUNS, workers=2, **kwargs)
     cluster = evaluate(tiny, RUNS, scheduler=dask_scheduler, **kwargs)
     assert cluster.to_json() == local.to_json()

@@ -3,8 +3,9 @@
 A :class:`BurstScenario` names a network file, a pipe and where along it the burst opens, when
 it starts, how long it takes to open fully and how large it ends (TSNet's emitter
 coefficient). A :class:`ScenarioResult` holds the pressure head of every *original* junction
-(the meters; the burst junction is left out) on the simulator's time grid, with the scenario's
-metadata; it saves to and loads from NPZ files. :mod:`burstloc.sim.transient.tsnet` simulates them.
+(the meters; the burst junction is left out), or of those the scenario's ``recorded`` names,
+on the simulator's time grid, with the scenario's metadata; it saves to and loads from NPZ
+files. :mod:`burstloc.sim.transient.tsnet` simulates them.
 The defaults (see ``networks/README.md`` for the reasoning):
 
 ========================  =========  ==================================================
@@ -30,6 +31,7 @@ import json
 import math
 import os
 import re
+from collections import Counter
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
@@ -41,7 +43,7 @@ from numpy.typing import NDArray
 from burstloc import inp
 from burstloc._atomic import write_npz
 from burstloc.constants import SCENARIO_DURATION, WAVE_SPEED
-from burstloc.exceptions import ConfigError
+from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.network import Network, NetworkSource
 from burstloc.sim.scenarios import capture
 from burstloc.sim.scenarios.cache import network_cache_key
@@ -118,6 +120,23 @@ def _number(name: str, value: Any) -> float:
     return number
 
 
+def _junction_names(names: Any) -> tuple[str, ...]:
+    """``recorded`` as a tuple of distinct, non-empty junction names.
+
+    Raises:
+        ConfigError: not a non-empty sequence of distinct non-empty strings (named).
+    """
+    if isinstance(names, str) or not isinstance(names, (list, tuple)) or not names:
+        raise ConfigError(f"recorded must be a non-empty list of junction names, got {names!r}")
+    bad = [n for n in names if not isinstance(n, str) or not n]
+    if bad:
+        raise ConfigError(f"recorded must name junctions by non-empty strings, got {bad[0]!r}")
+    twice = sorted(n for n, count in Counter(names).items() if count > 1)
+    if twice:
+        raise ConfigError(f"recorded names junction(s) more than once: {', '.join(twice)}")
+    return tuple(names)
+
+
 @dataclass(frozen=True)
 class BurstScenario:
     """One burst: where, when, how large, and how to simulate it.
@@ -155,6 +174,11 @@ class BurstScenario:
             :class:`~burstloc.sim.scenarios.perturb.TruthPerturbation` simulates a perturbed
             truth (per-pipe wave speeds and roughness; only that part is kept: clock offsets
             and a silent meter are applied when the meters read the result).
+        recorded: ``None`` (default): the result holds the head of every original junction; a
+            tuple of junction names (e.g. the meters): only theirs, in that order. A whole
+            network's heads at a fine step are hundreds of MB per burst (L-TOWN at 5 ms: 190
+            MB); its 33 meters', 8 MB. The steady start is then checked at those junctions;
+            negative pressure is still reported wherever the solver found it.
 
     Raises:
         ConfigError: a parameter is out of range (the message names it and its value).
@@ -175,6 +199,7 @@ class BurstScenario:
     solver: str = "vectorized"
     truth: TruthPerturbation | None = None
     wave_speeds: WaveSpeeds | None = None
+    recorded: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
         def put(name: str, value: Any) -> None:
@@ -225,14 +250,16 @@ class BurstScenario:
             if not isinstance(self.truth, TruthPerturbation):
                 raise ConfigError(f"truth must be a TruthPerturbation, got {self.truth!r}")
             put("truth", self.truth.simulated())
+        if self.recorded is not None:
+            put("recorded", _junction_names(self.recorded))
 
     def parameters(self) -> dict[str, Any]:
         """Every field except the network path (the cache hashes the file's bytes instead).
 
-        The default friction model, ``min_pipe_length=None``, the ``"tsnet"`` solver and
-        ``truth=None`` are left out, so scenarios cached before those fields existed keep their
-        keys (TSNet's results); a perturbed truth is keyed by its simulated part, wave speeds
-        per pipe by their values.
+        The default friction model, ``min_pipe_length=None``, the ``"tsnet"`` solver,
+        ``truth=None`` and ``recorded=None`` are left out, so scenarios cached before those
+        fields existed keep their keys (TSNet's results); a perturbed truth is keyed by its
+        simulated part, wave speeds per pipe by their values.
         """
         params = asdict(self)
         del params["network"]
@@ -244,11 +271,33 @@ class BurstScenario:
             del params["solver"]
         if params["truth"] is None:
             del params["truth"]
+        if params["recorded"] is None:
+            del params["recorded"]
+        else:
+            params["recorded"] = list(params["recorded"])
         if self.wave_speeds is None:
             del params["wave_speeds"]
         else:  # keyed by the speeds, not by the file they came from
             params["wave_speeds"] = self.wave_speeds.to_json()
         return params
+
+    def recorded_junctions(self, junctions: Sequence[str]) -> list[str]:
+        """The junctions whose heads the result holds: ``recorded``, or every one of
+        ``junctions`` (the network's original junctions).
+
+        Raises:
+            NetworkError: ``recorded`` names a node that is not one of ``junctions``.
+        """
+        if self.recorded is None:
+            return list(junctions)
+        known = set(junctions)
+        unknown = [n for n in self.recorded if n not in known]
+        if unknown:
+            raise NetworkError(
+                f"recorded names {len(unknown)} node(s) that are not junctions of "
+                f"{self.network}: {', '.join(unknown[:5])}{', ...' if len(unknown) > 5 else ''}"
+            )
+        return list(self.recorded)
 
     def cache_key(self) -> str:
         """The scenario's content-addressed cache key.

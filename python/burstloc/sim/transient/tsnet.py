@@ -155,7 +155,7 @@ def _simulate(scenario: BurstScenario) -> ScenarioResult:
         check_steady_state(wn, steady.state, scenario.network)
         flows = steady.state.flows
         true_start, true_end = network.pipe_endpoints(steady.graph, scenario.pipe)
-        meters = network.junction_names(wn)
+        meters = scenario.recorded_junctions(network.junction_names(wn))
         model, pipe, position, shortened = kept.transient_model(scenario)
         split = network.split_pipe(model, pipe, position)  # a copy: the truth may perturb it
         truth, aliases = scenario.truth, {split.second_pipe: pipe}
@@ -290,6 +290,8 @@ def run_transient(
     solved = getattr(tm, "burstloc_heads", None)  # burstloc's solvers: the meters come first
     if solved is not None and solved[1][: len(meters)] == list(meters):
         heads = solved[0][:, : len(meters)]  # a view: no copy of the largest array
+        if 2 * len(meters) < solved[0].shape[1]:  # a copy, so that the matrix can go
+            heads = np.ascontiguousarray(heads)
     else:
         heads = np.column_stack([np.asarray(tm.get_node(j).head, np.float64) for j in meters])
     elevation = np.array([wn.get_node(j).elevation for j in meters], dtype=np.float64)
