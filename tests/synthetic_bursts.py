@@ -8,7 +8,7 @@ from __future__ import annotations
 import networkx as nx
 import numpy as np
 
-from burstloc.sim.scenarios.scenario import ScenarioResult
+from burstloc.sim.scenarios.result import ScenarioResult
 
 #: The junctions of :func:`synthetic` and :func:`small_graph` (fed from reservoir R1).
 METERS = ("A", "B", "C")

@@ -352,7 +352,7 @@ def test_a_burst_sized_by_its_flow(
     paper15: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     from burstloc.network import load_network
-    from burstloc.sim.scenarios.scenario import ScenarioResult
+    from burstloc.sim.scenarios.result import ScenarioResult
 
     out = tmp_path / "out"
     args = ["simulate", paper15, "--pipe", "P7", "--duration", "11", "--out", out, "--quiet"]

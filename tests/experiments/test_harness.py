@@ -23,7 +23,7 @@ from burstloc.experiments.harness import (
 from burstloc.experiments.ranking import RankingSetup, locate_ranked, rank_attempts
 from burstloc.experiments.runs import RunSpec
 from burstloc.localize.detection import DetectorConfig, Mode
-from burstloc.sim.scenarios.scenario import ScenarioResult
+from burstloc.sim.scenarios.result import ScenarioResult
 from burstloc.sim.scenarios.sensors import SensorModel
 from synthetic_bursts import small_graph, synthetic
 

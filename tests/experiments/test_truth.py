@@ -12,7 +12,8 @@ from burstloc.experiments.harness import Clock, capture_readings
 from burstloc.experiments.truth import Hearing
 from burstloc.network import load_network
 from burstloc.sim.scenarios.perturb import TruthPerturbation, clock_offsets
-from burstloc.sim.scenarios.scenario import BurstScenario, ScenarioResult
+from burstloc.sim.scenarios.result import ScenarioResult
+from burstloc.sim.scenarios.scenario import BurstScenario
 from burstloc.sim.transient.tsnet import simulate_burst
 
 

@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from burstloc import network
-from burstloc.sim.scenarios.scenario import BurstScenario, ScenarioResult
+from burstloc.sim.scenarios.result import ScenarioResult
+from burstloc.sim.scenarios.scenario import BurstScenario
 from burstloc.sim.transient.steady import STEADY_TOLERANCE
 from burstloc.sim.transient.tsnet import simulate_burst
 

@@ -13,7 +13,7 @@ from burstloc.cli import main
 from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.sim.events.operations import EventScenario, event_output_path, simulate_event
 from burstloc.sim.scenarios.cache import DiskCache
-from burstloc.sim.scenarios.scenario import ScenarioResult
+from burstloc.sim.scenarios.result import ScenarioResult
 
 ASSETS = Path(__file__).resolve().parents[2] / "networks" / "paper15_assets.inp"
 SHORT = {"start": 0.5, "duration": 4.0}

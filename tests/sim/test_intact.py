@@ -16,7 +16,8 @@ import pytest
 
 from burstloc import _diagnostics
 from burstloc._diagnostics import capture_diagnostics, recording
-from burstloc.sim.scenarios.scenario import BurstScenario, ScenarioResult
+from burstloc.sim.scenarios.result import ScenarioResult
+from burstloc.sim.scenarios.scenario import BurstScenario
 from burstloc.sim.transient import intact, tsnet
 from burstloc.sim.transient.time_step import capture_time_step, expected_time_step
 from burstloc.sim.transient.tsnet import simulate_burst

@@ -22,7 +22,8 @@ import pytest
 
 from burstloc.exceptions import ConfigError
 from burstloc.sim.events.operations import EventScenario, simulate_event
-from burstloc.sim.scenarios.scenario import BurstScenario, ScenarioResult
+from burstloc.sim.scenarios.result import ScenarioResult
+from burstloc.sim.scenarios.scenario import BurstScenario
 from burstloc.sim.transient.moc_layout import dot_order
 from burstloc.sim.transient.tsnet import simulate_burst
 

@@ -29,7 +29,8 @@ from test_moc import EVENTS  # the same events the NumPy loop is checked on agai
 from burstloc import InputError
 from burstloc._core import moc_run
 from burstloc.sim.events.operations import EventScenario, simulate_event
-from burstloc.sim.scenarios.scenario import BurstScenario, ScenarioResult
+from burstloc.sim.scenarios.result import ScenarioResult
+from burstloc.sim.scenarios.scenario import BurstScenario
 from burstloc.sim.transient.tsnet import simulate_burst
 
 NETWORKS = Path(__file__).resolve().parents[2] / "networks"

@@ -17,7 +17,8 @@ from burstloc.sim.scenarios.perturb import (
     shift_clocks,
     silence,
 )
-from burstloc.sim.scenarios.scenario import BurstScenario, ScenarioResult
+from burstloc.sim.scenarios.result import ScenarioResult
+from burstloc.sim.scenarios.scenario import BurstScenario
 from burstloc.sim.transient.tsnet import simulate_burst
 
 SHORT = {"burst_start": 0.5, "duration": 3.0}

@@ -13,7 +13,8 @@ from burstloc.localize.arrival import ArrivalLocalizer
 from burstloc.localize.model import LocalizationModel
 from burstloc.network import load_network
 from burstloc.sim.model.prepare import arrival_geometry, arrival_localizer, prepare_model
-from burstloc.sim.scenarios.scenario import BurstScenario, ScenarioResult
+from burstloc.sim.scenarios.result import ScenarioResult
+from burstloc.sim.scenarios.scenario import BurstScenario
 from burstloc.sim.transient.tsnet import simulate_burst
 from burstloc.wave_speeds import WaveSpeeds
 

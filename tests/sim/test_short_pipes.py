@@ -17,7 +17,8 @@ import numpy as np
 import pytest
 
 from burstloc.exceptions import ConfigError
-from burstloc.sim.scenarios.scenario import BurstScenario, ScenarioResult
+from burstloc.sim.scenarios.result import ScenarioResult
+from burstloc.sim.scenarios.scenario import BurstScenario
 from burstloc.sim.transient.time_step import expected_time_step
 from burstloc.sim.transient.tsnet import simulate_burst
 from connector_network import CONNECTOR_INP

@@ -17,12 +17,8 @@ from hypothesis import strategies as st
 from burstloc import inp, network
 from burstloc.exceptions import ConfigError, NetworkError, SimulationError
 from burstloc.sim.scenarios.cache import DiskCache
-from burstloc.sim.scenarios.scenario import (
-    BurstScenario,
-    ScenarioResult,
-    burst_scenarios,
-    output_path,
-)
+from burstloc.sim.scenarios.result import ScenarioResult, output_path
+from burstloc.sim.scenarios.scenario import BurstScenario, burst_scenarios
 from burstloc.sim.transient.time_step import expected_time_step
 from burstloc.sim.transient.tsnet import simulate_burst, simulate_many
 from burstloc.wave_speeds import WaveSpeeds

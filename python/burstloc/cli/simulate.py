@@ -149,6 +149,7 @@ def run(args: argparse.Namespace) -> int:
     from burstloc.experiments.paper import SCENARIO
     from burstloc.network import as_network
     from burstloc.sim.scenarios import scenario
+    from burstloc.sim.scenarios.result import output_path
     from burstloc.sim.transient.time_step import with_capture_time_step
     from burstloc.sim.transient.tsnet import simulate_many
 
@@ -200,7 +201,7 @@ def run(args: argparse.Namespace) -> int:
         result = with_size(result, size_of[result.pipe], flow)
         if args.capture_interval is not None:
             result = result.resample(args.capture_interval, args.capture_phase)
-        result.save(scenario.output_path(args.out, result))
+        result.save(output_path(args.out, result))
         written += 1
         _write_feed(args, result, start)
     print(f"wrote {written} scenario file(s) to {args.out}")

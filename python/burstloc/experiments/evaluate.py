@@ -67,7 +67,7 @@ from burstloc.sim.scenarios.perturb import TruthPerturbation
 if TYPE_CHECKING:
     from burstloc.localize.config import Calibration
     from burstloc.network import NetworkSource
-    from burstloc.sim.scenarios.scenario import ScenarioResult
+    from burstloc.sim.scenarios.result import ScenarioResult
     from burstloc.sim.scenarios.sensors import SensorModel
     from burstloc.sim.signatures.burst_size import BurstFlow
     from burstloc.wave_speeds import WaveSpeeds

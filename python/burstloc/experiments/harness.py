@@ -5,7 +5,7 @@
 apart:
 
 1. :func:`capture_readings` turns a simulated burst
-(:class:`burstloc.sim.scenarios.scenario.ScenarioResult`)
+(:class:`burstloc.sim.scenarios.result.ScenarioResult`)
    into what meters report: the chosen meters' columns, captured under a meter model on a
    :class:`Clock` (its phase, and the readings of the initial steady state that precede the
    simulated span, a live meter's history), with optional sensor noise;
@@ -53,7 +53,7 @@ from burstloc.sim.scenarios.capture import capture
 if TYPE_CHECKING:
     import networkx as nx
 
-    from burstloc.sim.scenarios.scenario import ScenarioResult
+    from burstloc.sim.scenarios.result import ScenarioResult
     from burstloc.sim.scenarios.sensors import SensorModel
 
 __all__ = [

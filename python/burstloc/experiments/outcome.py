@@ -16,7 +16,7 @@ from burstloc.experiments.region_score import RegionOutcome, RegionScores
 from burstloc.experiments.runs import RunSpec
 
 if TYPE_CHECKING:
-    from burstloc.sim.scenarios.scenario import ScenarioResult
+    from burstloc.sim.scenarios.result import ScenarioResult
 
 __all__ = ["Evaluation", "RunResult"]
 

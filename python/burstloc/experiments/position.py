@@ -30,7 +30,7 @@ if TYPE_CHECKING:
 
     from burstloc.experiments.harness import Attempt
     from burstloc.localize.arrival import PipePosition
-    from burstloc.sim.scenarios.scenario import ScenarioResult
+    from burstloc.sim.scenarios.result import ScenarioResult
 
 __all__ = [
     "NetworkDistance",

@@ -30,7 +30,7 @@ from burstloc.network import Network, NetworkSource, as_network
 from burstloc.readings import Step
 
 if TYPE_CHECKING:
-    from burstloc.sim.scenarios.scenario import ScenarioResult
+    from burstloc.sim.scenarios.result import ScenarioResult
     from burstloc.wave_speeds import WaveSpeeds
 
 __all__ = [

@@ -55,7 +55,7 @@ from burstloc.localize.interval import calibrated_bank
 from burstloc.localize.signature import SignatureLocalizer
 from burstloc.network import NetworkSource, as_network
 from burstloc.sim.events.operations import EventScenario
-from burstloc.sim.scenarios.scenario import ScenarioResult
+from burstloc.sim.scenarios.result import ScenarioResult
 
 __all__ = [
     "ANSWERS",

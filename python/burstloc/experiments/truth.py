@@ -24,7 +24,7 @@ from burstloc.sim.scenarios.perturb import TruthPerturbation, clock_offsets, shi
 if TYPE_CHECKING:
     from wntr.network import WaterNetworkModel
 
-    from burstloc.sim.scenarios.scenario import ScenarioResult
+    from burstloc.sim.scenarios.result import ScenarioResult
 
 __all__ = ["Hearing", "check_truth"]
 

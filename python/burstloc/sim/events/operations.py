@@ -18,7 +18,7 @@ on an asset of the network file:
 ==================  ========  ==========================================================
 
 ``operation_time`` tells a fast operation (1 s, the default) from a slow one (tens of
-seconds). The result is a :class:`~burstloc.sim.scenarios.scenario.ScenarioResult` (the meters'
+seconds). The result is a :class:`~burstloc.sim.scenarios.result.ScenarioResult` (the meters'
 pressure
 heads; metadata ``kind``, ``asset``, ``asset_nodes``, no ``pipe``), cached like a burst
 (namespace :data:`SCHEMA`) and saved as NPZ. TSNet's valve opening and pump start need the
@@ -40,12 +40,8 @@ from burstloc._diagnostics import capture_diagnostics
 from burstloc.constants import SCENARIO_DURATION, WAVE_SPEED
 from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.sim.scenarios.cache import DiskCache, network_cache_key
-from burstloc.sim.scenarios.scenario import (
-    DEFAULT_BURST_START,
-    FRICTION_MODELS,
-    ScenarioResult,
-    check_solver,
-)
+from burstloc.sim.scenarios.result import ScenarioResult
+from burstloc.sim.scenarios.scenario import DEFAULT_BURST_START, FRICTION_MODELS, check_solver
 from burstloc.sim.transient.tsnet import (
     TransientSettings,
     cached,

@@ -23,7 +23,7 @@ from pathlib import Path
 from burstloc._atomic import write_text
 from burstloc.exceptions import ConfigError
 from burstloc.readings import CSV_HEADER, format_timestamp
-from burstloc.sim.scenarios.scenario import ScenarioResult
+from burstloc.sim.scenarios.result import ScenarioResult
 from burstloc.sim.scenarios.sensors import SensorModel
 
 __all__ = ["feed_text", "write_feed"]

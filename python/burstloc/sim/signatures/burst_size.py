@@ -30,7 +30,8 @@ import numpy as np
 from burstloc.constants import BURST_FLOW, BURST_SHARE
 from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.network import Network
-from burstloc.sim.scenarios.scenario import BurstScenario, ScenarioResult
+from burstloc.sim.scenarios.result import ScenarioResult
+from burstloc.sim.scenarios.scenario import BurstScenario
 
 __all__ = [
     "DEFAULT_BURST",

@@ -37,7 +37,8 @@ from burstloc.constants import PRESSURE_NOISE
 from burstloc.exceptions import ConfigError, NetworkError, SimulationError
 from burstloc.sim.scenarios.cache import DiskCache, file_sha256, package_versions
 from burstloc.sim.scenarios.perturb import perturb_model
-from burstloc.sim.scenarios.scenario import SCHEMA, BurstScenario, ScenarioResult
+from burstloc.sim.scenarios.result import ScenarioResult
+from burstloc.sim.scenarios.scenario import SCHEMA, BurstScenario
 from burstloc.sim.scenarios.sweep import SweepReport, sweep
 from burstloc.sim.transient import _tsnet_compat, moc
 from burstloc.sim.transient._tsnet_results import results_by_name
