@@ -137,6 +137,7 @@ test-rust:
 	cargo test -p cpd-core
 	cargo test -p cpd-core --no-default-features
 	cargo test -p moc-core
+	cargo test -p feed-text
 
 test-python:
 	$(BIN)/python -m pytest -q

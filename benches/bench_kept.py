@@ -1,5 +1,6 @@
 """The readings kept around an alarm (``burstloc monitor --db``): what writing one capture's feed
-file costs the monitor's thread, the Python loop it replaced beside the NumPy text of now.
+file costs the monitor's thread: a Python loop (the first way) beside the text made in Rust
+without the GIL of now.
 
 Usage: ``.venv/bin/python benches/bench_kept.py [--meters N] [--rate HZ] [--runs N]
 [--longest-runs N]`` (needs nothing beyond the package). In one process, for captures of
@@ -18,14 +19,17 @@ the slow path of the text), epoch timestamps to the millisecond and 0.1 % of the
 Each capture is written by ``write_feed`` on a writer thread, as the recorder does, with the
 text made the old way (a Python loop: one ``repr`` and one f-string per reading, every line
 joined at the end; the code of ``kept.py`` before this benchmark) and the new way
-(:func:`burstloc.incidents.kept.feed_bytes`), alternated, ``--runs`` times (``--longest-runs``
+(:func:`burstloc.incidents.kept.feed_bytes`: ``burstloc._core.feed_lines`` per piece of
+:data:`~burstloc.incidents.kept.CHUNK` readings, which holds the GIL only to read its steps),
+alternated, ``--runs`` times (``--longest-runs``
 for the longest: 10-20 s each the old way). Beside it the main thread runs a busy Python loop
 that records the longest gap between its iterations: how long the write held it up. Printed per
 case: that longest stall (median and worst of the runs) each way and the ratio old / new, the
 busy loop alone for as long (the machine's own stalls: the floor), the write's wall time and its
 thread's CPU time each way, and the busy loop's iterations per second beside the write as a share
 of its rate alone. The typical capture's two files are read back with
-:func:`burstloc.live.parse.parse_lines` and must hold the same readings.
+:func:`burstloc.live.parse.parse_lines` and must hold the same readings; whether they are the
+same bytes (every number as ``repr`` writes it) is printed.
 """
 
 from __future__ import annotations
@@ -167,10 +171,11 @@ def case(name: str, held: Any, meters: list[str], runs: int, check: bool) -> Non
         if check:
             same = same_readings(files["old"], files["new"])
             assert same == lines
+            identical = files["old"].read_bytes() == files["new"].read_bytes()
     idle_rate = statistics.median(r[1] for r in got["idle"])
     stall = {w: [1000 * r[0] for r in got[w]] for w in got}
     print(f"{name}: {len(held.steps)} steps, {lines} readings, {size:.1f} MB, {runs} runs")
-    for way, label in (("old", "old (Python loop)"), ("new", "new (NumPy text)")):
+    for way, label in (("old", "old (Python loop)"), ("new", "new (Rust text)")):
         wall = statistics.median(r[2] for r in got[way])
         cpu = statistics.median(r[3] for r in got[way])
         share = statistics.median(r[1] for r in got[way]) / idle_rate
@@ -187,7 +192,9 @@ def case(name: str, held: Any, meters: list[str], runs: int, check: bool) -> Non
     cpu_ratio = statistics.median(r[3] for r in got["old"]) / statistics.median(
         r[3] for r in got["new"]
     )
-    checked = ", the same readings read back" if check else ""
+    checked = ""
+    if check:
+        checked = ", the same readings read back" + (", the same bytes" if identical else "")
     print(f"   old / new: longest stall x{ratio:.1f}, write CPU x{cpu_ratio:.1f}{checked}")
 
 

@@ -1,10 +1,13 @@
 """Type stubs for ``burstloc._core``, the Rust extension module (crates/cpd-py)."""
 
+from collections.abc import Iterable, Sequence
 from typing import Any, Final, Literal, final
 
 import numpy as np
 import numpy.typing as npt
 from typing_extensions import Self
+
+from burstloc.readings import Step
 
 __all__ = [
     "Alarm",
@@ -16,6 +19,7 @@ __all__ = [
     "__version__",
     "detect_cusum",
     "detect_shewhart",
+    "feed_lines",
     "moc_run",
 ]
 
@@ -28,7 +32,8 @@ class ConfigError(ValueError):
     """A detector was configured with an invalid parameter."""
 
 class InputError(ValueError):
-    """A detector was fed invalid input; its state is unchanged."""
+    """A detector was fed invalid input; its state is unchanged (also: steps of readings that
+    do not fit their meters)."""
 
 @final
 class Alarm:
@@ -151,6 +156,11 @@ def detect_shewhart(
     x: _FloatArray, sigma: float, threshold: float
 ) -> tuple[_IndexArray, _FloatArray]:
     """The paper's Algorithm 2 over the whole of ``x``."""
+
+def feed_lines(steps: Iterable[Step], meters: Sequence[str]) -> bytes:
+    """The lines ``timestamp,meter,value`` of ``steps`` (columns ``meters``), every number as
+    ``repr`` writes it, filled values and values that are not finite left out; made without the
+    GIL (``burstloc.incidents.kept``)."""
 
 _UIntArray = npt.NDArray[np.uint64]
 

@@ -7,7 +7,8 @@ Every error is a typed subclass of a built-in exception, so callers can catch pr
 * :class:`InputError` (``ValueError``): a detector was fed bad input (a NaN, infinite or
   out-of-range sample, beyond +-1e100; a wrong dtype, shape or channel count; a snapshot holding
   a state no detector reaches); the message names the sample index, channel, argument or state
-  field. The detector's state is left unchanged.
+  field. The detector's state is left unchanged. Also raised for steps of readings whose feed
+  file cannot be written (a step without one value per meter, a timestamp that is not finite).
 * :class:`StreamError` (``InputError``): bad or out-of-order readings in a live stream.
 * :class:`NetworkError` (``ValueError``): an unknown node or pipe, or a malformed INP file
   (with the file and line).

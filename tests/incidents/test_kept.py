@@ -1,12 +1,13 @@
 """burstloc.incidents.kept: the readings around each alarm, held on the monitor's thread,
 handed on once claimed and complete, written as a feed the monitor (and calibration) reads, in
-pieces, every value exactly; and
-through the recorder, the readings of a real burst kept on its incident, on SQLite and
-PostgreSQL."""
+pieces, every number as ``repr`` writes it (``burstloc._core.feed_lines``), steps that do not
+fit their meters refused by type; and through the recorder, the readings of a real burst kept
+on its incident, on SQLite and PostgreSQL."""
 
 from __future__ import annotations
 
 import io
+import math
 import struct
 import sys
 from pathlib import Path
@@ -14,6 +15,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from burstloc._core import feed_lines
+from burstloc.exceptions import InputError
 from burstloc.incidents import IncidentStore, kept
 from burstloc.incidents.kept import AFTER, BEFORE, CAPTURES, Capture, ReadingsKeeper, write_feed
 from burstloc.incidents.recorder import Recorder
@@ -156,9 +159,60 @@ def test_a_step_without_one_value_per_meter_is_refused_and_no_file_is_left(
 ) -> None:
     steps = [Step(1.0, np.array([50.0, 40.0])), Step(1.2, np.array([49.0]))]
     capture = Capture(1.0, 1.2, steps, [(1.0, 0.8)], complete=True, key="alarm:1.000000")
-    with pytest.raises(ValueError, match="a step with 1 values for 2 meters"):
+    with pytest.raises(InputError, match="a step with 1 values for 2 meters"):
         write_feed(capture, METERS, tmp_path / "readings")
     assert list((tmp_path / "readings").iterdir()) == []
+
+
+def test_every_number_is_written_as_repr_writes_it() -> None:
+    rng = np.random.default_rng(5)
+    drawn = rng.integers(0, 2**64 - 1, 60_000, dtype=np.uint64).view(np.float64)  # any bits
+    sent = np.round(40.0 + 30.0 * rng.random(20_000), 4)  # as meters send them
+    tens = [10.0**k for k in range(-20, 24)]
+    edges = [0.0, 5e-324, 2.2250738585072014e-308, 1.7976931348623157e308, 0.1 + 0.2]
+    edges += [2.0**53, 2.0**53 + 2, 1e-4, 1e-5, 1e16, 9999999999999998.0, 2.0**60 + 2048.0]
+    edges += tens + [float(np.nextafter(t, 0.0)) for t in tens]
+    edges += [float(np.nextafter(t, np.inf)) for t in tens]
+    edges += [2.0**k for k in range(-1074, 1024, 7)]
+    values = np.concatenate([drawn, sent, edges, -np.array(edges)])
+    values = values[np.isfinite(values)].tolist()
+    steps = [Step(v, np.array([v])) for v in values]  # each a timestamp too
+    lines = feed_lines(steps, ["m"]).decode("ascii").splitlines()
+    assert lines == [f"{v!r},m,{v!r}" for v in values]
+    assert "-0.0,m,-0.0" in lines and "1e+16,m,1e+16" in lines and "1e-05,m,1e-05" in lines
+
+
+def test_values_are_read_from_any_array_or_list_of_numbers() -> None:
+    meters = ["a", "b", "c"]
+    columns = np.array([[1.5, 0.0], [2.5, 0.0], [-3.25, 0.0]])
+    forms = [
+        np.array([1.5, 2.5, -3.25]),
+        columns[:, 0],  # not contiguous
+        np.array([1.5, 2.5, -3.25], dtype=np.float32),
+        [1.5, 2.5, -3.25],
+        (1.5, 2.5, -3.25),
+    ]
+    for values in forms:
+        got = feed_lines([Step(0.2, values, ("b", "not a meter"))], meters)  # type: ignore[arg-type]
+        assert got == b"0.2,a,1.5\n0.2,c,-3.25\n"
+    assert feed_lines([Step(7.0, np.array([1, 2, 3]))], meters) == (
+        b"7.0,a,1.0\n7.0,b,2.0\n7.0,c,3.0\n"
+    )
+    assert feed_lines([], meters) == b""
+
+
+def test_steps_that_do_not_fit_their_meters_are_refused_by_type() -> None:
+    two = np.array([1.0, 2.0])
+    with pytest.raises(InputError, match="a step with 3 values for 2 meters"):
+        feed_lines([Step(1.0, two), Step(1.2, np.zeros(3))], METERS)
+    with pytest.raises(InputError, match=r"steps\[1\] has no timestamp"):
+        feed_lines([Step(1.0, two), (1.2, two)], METERS)  # type: ignore[list-item]
+    with pytest.raises(InputError, match="step 1 has a timestamp that is not a finite number"):
+        feed_lines([Step(1.0, two), Step(math.inf, two)], METERS)
+    with pytest.raises(InputError, match=r"steps\[0\]\.values must be numbers"):
+        feed_lines([Step(1.0, "ab")], METERS)  # type: ignore[arg-type]
+    with pytest.raises(TypeError):
+        feed_lines([Step(1.0, two)], "M1")  # a str is not a list of meters
 
 
 def test_a_real_bursts_readings_are_kept_on_its_incident(

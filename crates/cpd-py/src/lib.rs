@@ -11,6 +11,7 @@ mod bank;
 mod batch;
 mod detectors;
 mod errors;
+mod feed;
 mod moc;
 mod state;
 
@@ -33,6 +34,8 @@ mod core_module {
     use crate::detectors::{PyCusum, PyShewhart};
     #[pymodule_export]
     use crate::errors::{ConfigError, InputError};
+    #[pymodule_export]
+    use crate::feed::feed_lines;
     #[pymodule_export]
     use crate::moc::moc_run;
 

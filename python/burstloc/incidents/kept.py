@@ -13,12 +13,14 @@ Nothing here waits: the recorder's writer thread writes a handed capture (:func:
 a feed file (CSV ``timestamp,meter,value``, as ``burstloc monitor --readings`` reads it; filled
 values left out) into the readings directory beside the store (:func:`readings_dir`),
 atomically, and the store records the file and the onset on the incident
-(:class:`~burstloc.incidents.intake.Kept`). The file's text is made by NumPy, about
-:data:`CHUNK` readings at a time (:mod:`burstloc._floattext`: every value exactly, the text
-``repr`` gives a reading as meters send it), so that the writer thread leaves the GIL to the
-monitor's thread: a longest capture (33 meters at 250 Hz, :data:`LONGEST` s) is 5 million lines,
-and the same lines written by a Python loop held the monitor up for a quarter of a second at a
-time (``benches/bench_kept.py``).
+(:class:`~burstloc.incidents.intake.Kept`). The file's text is made in Rust, about
+:data:`CHUNK` readings per call (``burstloc._core.feed_lines``: every number as ``repr`` writes
+it, so it reads back exactly), which holds the GIL only to read the steps and makes the text
+without it, so that the writer thread leaves the GIL to the monitor's thread: a longest capture
+(33 meters at 250 Hz, :data:`LONGEST` s) is 5 million lines, and the same lines written by a
+Python loop held the monitor up for a quarter of a second at a time; made by NumPy, whose every
+operation gives the GIL up and takes it back, they still slowed the monitor's loop by a few per
+cent (``benches/bench_kept.py``, ``benches/bench_incidents.py``).
 """
 
 from __future__ import annotations
@@ -30,9 +32,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
 
-import numpy as np
-
-from burstloc._floattext import Texts, float_text, joined, text_rows
+from burstloc._core import feed_lines
 from burstloc.incidents.intake import Kept
 from burstloc.readings import CSV_HEADER, Step
 
@@ -58,7 +58,9 @@ AFTER = 30.0
 LONGEST = 600.0
 #: Unclaimed captures kept (a record may claim one after it is complete).
 CAPTURES = 4
-#: Readings a feed file's text is made of at a time (:func:`feed_bytes`).
+#: Readings a feed file's text is made of per call (:func:`feed_bytes`): each call holds the GIL
+#: while it reads its steps (about half a millisecond for 32 768 readings), then makes their text
+#: without it.
 CHUNK = 1 << 15
 #: Seconds within which an alarm's reading time and a record's ``first_alarm`` agree (records
 #: write times to the microsecond).
@@ -190,34 +192,13 @@ def write_feed(capture: Capture, meters: Sequence[str], directory: Path) -> Kept
 def feed_bytes(steps: Sequence[Step], meters: Sequence[str]) -> Iterator[bytes]:
     """The feed file of ``steps`` (columns ``meters``) in pieces of about :data:`CHUNK`
     readings: the header, then ``timestamp,meter,value`` per reading (filled values and values
-    that are not finite left out), each number's text reading back to it exactly.
+    that are not finite left out), each number as ``repr`` writes it (it reads back exactly).
 
     Raises:
-        ValueError: a step without one value per meter.
+        InputError: a step without one value per meter (a :class:`ValueError`).
     """
     yield (",".join(CSV_HEADER) + "\n").encode("utf-8")
-    names = text_rows([f",{m},".encode() for m in meters])
-    newline = np.full((CHUNK + len(meters), 1), ord("\n"), np.uint8)
-    column = {m: j for j, m in enumerate(meters)}
-    every = max(1, CHUNK // max(1, len(meters)))
+    names = list(meters)
+    every = max(1, CHUNK // max(1, len(names)))
     for start in range(0, len(steps), every):
-        some = steps[start : start + every]
-        counts = {len(s.values) for s in some}
-        if counts != {len(meters)}:
-            wrong = min(counts - {len(meters)})
-            raise ValueError(f"a step with {wrong} values for {len(meters)} meters")
-        values = np.array([s.values for s in some], dtype=np.float64)
-        keep = np.isfinite(values)
-        for i, step in enumerate(some):
-            for meter in step.filled:
-                if meter in column:
-                    keep[i, column[meter]] = False
-        rows, cols = np.nonzero(keep)
-        stamps = float_text(np.array([s.timestamp for s in some], dtype=np.float64))
-        fields: list[Texts] = [
-            (stamps[0][rows], stamps[1][rows]),
-            (names[0][cols], names[1][cols]),
-            float_text(values[rows, cols]),
-            (newline[: rows.shape[0]], np.ones(rows.shape[0], np.int64)),
-        ]
-        yield joined(fields)
+        yield feed_lines(steps[start : start + every], names)
