@@ -19,8 +19,8 @@ it, so it reads back exactly), which holds the GIL only to read the steps and ma
 without it, so that the writer thread leaves the GIL to the monitor's thread: a longest capture
 (33 meters at 250 Hz, :data:`LONGEST` s) is 5 million lines, and the same lines written by a
 Python loop held the monitor up for a quarter of a second at a time; made by NumPy, whose every
-operation gives the GIL up and takes it back, they still slowed the monitor's loop by a few per
-cent (``benches/bench_kept.py``, ``benches/bench_incidents.py``).
+operation gives the GIL up and takes it back, they cost the writer four to five times the CPU
+(``benches/bench_kept.py``).
 """
 
 from __future__ import annotations
