@@ -13,7 +13,7 @@ from burstloc.localize.corroborate import corroborated_at, corroboration_deadlin
 from burstloc.localize.decide import RankingLocalizers, arrival_horizon, decision_time
 from burstloc.localize.evidence import IndexedAlarm
 from burstloc.localize.fused import FusedLocalizer
-from burstloc.localize.looks import ALARM_LAG
+from burstloc.localize.looks import ALARM_LAG, ALARM_LAG_SECONDS
 from line_network import line_arrival, line_calibration, line_signature
 
 TIMES = np.round(np.arange(0.0, 30.0, 0.5), 9)
@@ -68,16 +68,20 @@ def test_the_horizon_allows_for_the_slowest_stated_wave_and_the_alarms_lag() -> 
     assert arrival.horizon == pytest.approx(1.4)  # the farthest meters' spread at the wave speed
     tolerance = arrival.wave_speed_tolerance
     assert tolerance > 0
-    for dt in (0.01, 0.5):
+    spread = 1.4 / (1.0 - tolerance)
+    # two readings up to the lag's bound in seconds; one reading at coarse intervals
+    assert pytest.approx(0.2 * ALARM_LAG) == ALARM_LAG_SECONDS
+    for dt, lag in ((0.01, 0.02), (0.2, 0.4), (0.3, 0.4), (0.5, 0.5), (2.0, 2.0)):
         calibration = line_calibration(dt, arrival_decision_delay=dt)
-        expected = 1.4 / (1.0 - tolerance) + ALARM_LAG * dt
-        assert arrival_horizon(arrival, calibration) == pytest.approx(expected)
+        assert arrival_horizon(arrival, calibration) == pytest.approx(spread + lag), dt
     # the second meter's alarm raised two readings after the bare spread still corroborates
     signature = line_signature(np.eye(3, 4))
     localizers = RankingLocalizers(arrival, signature, FusedLocalizer(arrival, signature))
-    calibration = line_calibration(0.5, arrival_decision_delay=0.5)
-    alarms = [_at(10.0, 0), _at(12.0, 2)]  # 2.0 s apart: more than 1.4 s, within 1.4 + 2 x 0.5
-    by = corroboration_deadline("arrival", localizers, alarms, TIMES, calibration)
-    assert 11.4 < 12.0 <= by
-    assert corroborated_at(alarms, TIMES, 2, by) == 12.0
-    assert corroborated_at(alarms, TIMES, 2, 10.0 + arrival.horizon) is None  # the bare spread
+    calibration = line_calibration(0.2, arrival_decision_delay=0.2)
+    times = np.round(np.arange(0.0, 30.0, 0.2), 9)
+    first, second = 50, 59  # 10.0 s and 11.8 s: more than 1.47 s apart, within 1.47 + 2 x 0.2
+    alarms = [IndexedAlarm(0, first, first - 1, -1.0), IndexedAlarm(2, second, second - 1, -1.0)]
+    by = corroboration_deadline("arrival", localizers, alarms, times, calibration)
+    assert 10.0 + spread < 11.8 <= by
+    assert corroborated_at(alarms, times, 2, by) == pytest.approx(11.8)
+    assert corroborated_at(alarms, times, 2, 10.0 + spread) is None  # the bare spread

@@ -33,6 +33,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "ALARM_LAG",
+    "ALARM_LAG_SECONDS",
     "LOOK_INTERVAL",
     "Look",
     "arrival_evidence",
@@ -102,17 +103,26 @@ ALARM_LAG = 2
 """Readings from a front's arrival at a meter to its alarm, allowed for in the horizon: the
 reading within which the front arrives and the next. Without them an alarm raised just past
 the bare travel time was dismissed with the first meter's (paper15, 2 meters, 5 phases of pipe
-17's burst: corroborated instead by the first meter's later ringing, and located 1.4 km off)."""
+17's burst: corroborated instead by the first meter's later ringing, and located 1.4 km off).
+At most :data:`ALARM_LAG_SECONDS`, and never less than one reading."""
+
+ALARM_LAG_SECONDS = 0.4
+"""Longest lag (s) :data:`ALARM_LAG` readings may add when a reading is shorter than that: at
+coarse intervals (1-10 s) a front arrives whole within one reading and its alarm is raised at
+that reading, so one reading is allowed; two would hold every first answer back by a reading
+more (at 2 s, 2 s per answer)."""
 
 
 def arrival_horizon(arrival: ArrivalLocalizer, calibration: IntervalCalibration) -> float:
     """Seconds after the first alarm of the last look at the arrivals: the arrival localizer's
     :attr:`~burstloc.localize.arrival.ArrivalLocalizer.horizon` (by then a burst's wave has
     reached every meter it will reach) at the slowest speed its tolerance states, plus
-    :data:`ALARM_LAG` readings (the last meter's alarm is raised after its wave arrives), at
-    least the calibrated first look (``arrival_decision_delay``)."""
+    :data:`ALARM_LAG` readings (the last meter's alarm is raised after its wave arrives; at most
+    :data:`ALARM_LAG_SECONDS` but one reading at least), at least the calibrated first look
+    (``arrival_decision_delay``)."""
     spread = arrival.horizon / max(1.0 - arrival.wave_speed_tolerance, 1e-9)
-    lag = ALARM_LAG * calibration.capture_interval
+    interval = calibration.capture_interval
+    lag = max(interval, min(ALARM_LAG * interval, ALARM_LAG_SECONDS))
     return max(calibration.arrival_decision_delay, spread + lag)
 
 
