@@ -18,7 +18,7 @@ from burstloc import _diagnostics
 from burstloc._diagnostics import capture_diagnostics, recording
 from burstloc.sim.scenarios.result import ScenarioResult
 from burstloc.sim.scenarios.scenario import BurstScenario
-from burstloc.sim.transient import intact, tsnet
+from burstloc.sim.transient import intact, tsnet_run
 from burstloc.sim.transient.time_step import capture_time_step, expected_time_step
 from burstloc.sim.transient.tsnet import simulate_burst
 from conftest import write_tiny
@@ -125,7 +125,7 @@ def test_the_initializer_reads_by_name_the_numbers_pandas_gives(
 ) -> None:
     scenario = BurstScenario(paper15, "7", solver=solver, **SHORT)
     by_name = simulate_burst(scenario, cache=False)
-    monkeypatch.setattr(tsnet, "results_by_name", contextlib.nullcontext)
+    monkeypatch.setattr(tsnet_run, "results_by_name", contextlib.nullcontext)
     through_pandas = simulate_burst(scenario, cache=False)
     assert by_name.heads.tobytes() == through_pandas.heads.tobytes()
     assert comparable(by_name) == comparable(through_pandas)

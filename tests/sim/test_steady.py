@@ -10,7 +10,7 @@ import pytest
 
 from burstloc.exceptions import SimulationError, UnsteadyStartError
 from burstloc.sim.scenarios.scenario import BurstScenario
-from burstloc.sim.transient import tsnet
+from burstloc.sim.transient import tsnet_run
 from burstloc.sim.transient.steady import STEADY_TOLERANCE, check_steady_start, steady_start
 from burstloc.sim.transient.tsnet import simulate_burst
 
@@ -86,7 +86,7 @@ def test_an_unsteady_network_is_refused_naming_the_junction(
     inp.write_text(ACTIVE_VALVE_INP, encoding="utf-8")
     scenario = BurstScenario(inp, "B", burst_start=1.0, duration=1.5)
     assert simulate_burst(scenario, cache=False).metadata["steady_start"]["max_movement_m"] < 0.01
-    monkeypatch.setattr(tsnet, "hold_valves", lambda tm: [])  # TSNet's own model of the valve
+    monkeypatch.setattr(tsnet_run, "hold_valves", lambda tm: [])  # TSNet's own model of the valve
     with pytest.raises(UnsteadyStartError) as caught:
         simulate_burst(scenario, cache=False)
     error = caught.value

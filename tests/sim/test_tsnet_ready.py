@@ -19,12 +19,7 @@ from burstloc.exceptions import SimulationError
 from burstloc.sim.scenarios.scenario import BurstScenario
 from burstloc.sim.transient.steady import STEADY_TOLERANCE, steady_start
 from burstloc.sim.transient.time_step import expected_time_step
-from burstloc.sim.transient.tsnet import (
-    TransientSettings,
-    isolated_run,
-    run_transient,
-    simulate_burst,
-)
+from burstloc.sim.transient.tsnet import simulate_burst
 from burstloc.sim.transient.tsnet_ready import (
     Connector,
     SupplyBoundary,
@@ -32,6 +27,7 @@ from burstloc.sim.transient.tsnet_ready import (
     prepare_for_tsnet,
     supply_junctions,
 )
+from burstloc.sim.transient.tsnet_run import TransientSettings, isolated_run, run_transient
 from conftest import REPO
 
 #: A pump from a reservoir into J1, where pipes A and B branch; a five-point pump curve

@@ -8,7 +8,8 @@ library imports it but :mod:`burstloc.cli`.
 * :mod:`~burstloc.experiments.harness`: the one harness both experiments score through
   (captured readings, the localizers' attempts, the tally), and
   :mod:`~burstloc.experiments.ranking`: the ranking localizers scored through the live monitor;
-* :mod:`~burstloc.experiments.evaluate`: burst every pipe, replay, localize, score;
+* :mod:`~burstloc.experiments.evaluate`: burst every pipe, replay, localize, score (every
+  run's attempts: :mod:`~burstloc.experiments.scoring`);
 * :mod:`~burstloc.experiments.event_set`, :mod:`~burstloc.experiments.specificity`: the
   non-burst events operated on a network, and bursts and those events together (how often a
   non-burst is reported as a burst; the classifier's calibration);

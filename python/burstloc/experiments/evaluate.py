@@ -13,14 +13,15 @@ For a network and one or more runs (detector x capture interval x parameters x m
 3. a prediction is correct when it names the burst pipe; accuracy = correct / pipes (eq. 4).
 
 Every attempt is captured, decided and counted by :mod:`burstloc.experiments.harness`, the same
-code ``burstloc study`` scores with.
+code ``burstloc study`` scores with; :mod:`burstloc.experiments.scoring` runs them.
 
 **Phases.** Phase ``k`` of ``N`` starts the capture clock, and with it the window grid, ``k / N``
 of one capture interval (``phase_span="capture"``, the default) or of one localization window,
 ``interval x capture interval`` (``phase_span="window"``: every alignment of the windows to the
-burst), earlier relative to the burst (:func:`readings_at_offset`). Accuracy is reported at
-phase 0 (the per-pipe tables) and as mean, min and max over the phases. The time to localize
-is the decision time (the timestamp of the newest reading of the deciding window) minus the
+burst), earlier relative to the burst
+(:func:`~burstloc.experiments.harness.readings_at_offset`). Accuracy is reported at phase 0
+(the per-pipe tables) and as mean, min and max over the phases. The time to localize is the
+decision time (the timestamp of the newest reading of the deciding window) minus the
 burst start; its median is taken over every located attempt, all phases.
 
 **Localizers.** ``RunSpec.localizer`` is ``"paper"`` (the rules above, the default) or one of
@@ -47,20 +48,20 @@ from typing import TYPE_CHECKING, Any
 
 from burstloc.exceptions import ConfigError
 from burstloc.experiments import paper
-from burstloc.experiments.harness import Attempt, locate_burst, readings_at_offset
+from burstloc.experiments.harness import Attempt
 from burstloc.experiments.outcome import Evaluation, RunResult
 from burstloc.experiments.position import (
     PositionScorer,
     wave_travel,
 )
-from burstloc.experiments.ranking import RankingSetup, rank_attempts
+from burstloc.experiments.ranking import RankingSetup
 from burstloc.experiments.region_score import score_regions
 from burstloc.experiments.runs import (
     RunSpec,
     phase_offsets,
-    readings_after,
     required_duration,
 )
+from burstloc.experiments.scoring import check_results, score_runs
 from burstloc.experiments.truth import Hearing, check_truth
 from burstloc.sim.scenarios.perturb import TruthPerturbation
 
@@ -248,10 +249,10 @@ def evaluate(
 
     def score_and_drop(scenario: Any, result: ScenarioResult) -> ScenarioResult:
         """Streaming: check and score one burst as it arrives; keep its first step only."""
-        _check_results(runs, [result], phases, phase_span)
+        check_results(runs, [result], phases, phase_span)
         if not scoring:
             prepare(result)
-        scored = _score(
+        scored = score_runs(
             runs,
             {result.pipe: scoring["hear"](result)},
             [result.pipe],
@@ -282,7 +283,7 @@ def evaluate(
         raise SimulationError("; ".join(report.failure_lines()))
     results = {s.pipe: r for s, r in zip(scenarios, report.results, strict=True) if r is not None}
     if keep_heads:
-        _check_results(runs, list(results.values()), phases, phase_span)
+        check_results(runs, list(results.values()), phases, phase_span)
 
     warnings += [w for r in results.values() if (w := r.negative_pressure()) is not None]
     endpoints = {p: r.true_endpoints for p, r in results.items()}
@@ -294,7 +295,7 @@ def evaluate(
     hear = scoring["hear"]
     if keep_heads:
         heard = {p: hear(r) for p, r in results.items()}
-        attempts = _score(runs, heard, chosen, graph, setup, phases, phase_span, sensors)
+        attempts = score_runs(runs, heard, chosen, graph, setup, phases, phase_span, sensors)
     else:  # scored as they arrived; in the order of the pipes
         attempts = {spec: {p: streamed[p][spec] for p in chosen} for spec in runs}
     if hear.truth.silent_meter is not None:
@@ -319,37 +320,6 @@ def evaluate(
     )
 
 
-def _check_results(
-    runs: Sequence[RunSpec], results: Sequence[ScenarioResult], phases: int, phase_span: str
-) -> None:
-    """Refuse results that cannot provide every run: a capture interval finer than their
-    time step, too few readings after the burst.
-
-    Raises:
-        ConfigError: naming the run.
-    """
-    dt = max(r.time_step for r in results)
-    for spec in runs:
-        if spec.capture_interval < dt * (1 - 1e-9):
-            raise ConfigError(
-                f"capture interval {spec.capture_interval:g} s is finer than the simulation "
-                f"time step {dt:.4g} s: the scenario cannot provide it"
-            )
-    shortest = min(results, key=lambda r: float(r.time[-1]))
-    for spec in runs:
-        for offset in phase_offsets(spec, phases, phase_span):
-            # the ticks alone: one meter's column (every junction's is a copy of the heads)
-            times, _ = readings_at_offset(shortest, spec, offset, list(shortest.junctions)[:1])
-            n = readings_after(times, float(shortest.metadata["burst_start"]))
-            if n < 2 * spec.localization_interval:
-                raise ConfigError(
-                    f"run {spec.detector.kind} at {spec.capture_interval:g} s gets only {n} "
-                    f"readings after the burst at clock offset {offset:g} s (the simulation "
-                    f"ends at {float(shortest.time[-1]):g} s); it needs "
-                    f"2 x {spec.localization_interval}"
-                )
-
-
 def _sensors(
     noise: float | None, seed: int, setup: RankingSetup | None
 ) -> dict[str, SensorModel | None]:
@@ -372,64 +342,3 @@ def _noise_record(noise: float | None, setup: RankingSetup | None) -> dict[str, 
         return {"paper": noise, "ranking": noise}
     ranking = None if setup is None else dict(setup.config.noise_sigma)
     return {"paper": 0.0, "ranking": ranking}
-
-
-def _score(
-    runs: Sequence[RunSpec],
-    results: dict[str, ScenarioResult],
-    pipes: Sequence[str],
-    graph: Any,
-    setup: RankingSetup | None,
-    phases: int,
-    phase_span: str,
-    sensors: dict[str, SensorModel | None],
-) -> dict[RunSpec, dict[str, list[Attempt]]]:
-    """Every run's attempts, ``[spec][pipe][k]``. Ranking runs that differ only in their
-    localizer see the same readings, captured once per attempt and fed to each localizer's
-    monitor (:func:`burstloc.experiments.ranking.rank_attempts`)."""
-    scored: dict[RunSpec, dict[str, list[Attempt]]] = {}
-    for spec in runs:
-        if spec in scored:
-            continue
-        offsets = phase_offsets(spec, phases, phase_span)
-        if setup is None or spec.localizer == "paper":
-            sensor = sensors["paper"]
-            scored[spec] = {
-                p: [locate_burst(results[p], graph, spec, o, sensor=sensor) for o in offsets]
-                for p in pipes
-            }
-            continue
-        key = _readings_key(spec)
-        group = [s for s in runs if s.localizer != "paper" and _readings_key(s) == key]
-        names = [s.localizer for s in group]
-        by_name: dict[str, dict[str, list[Attempt]]] = {n: {p: [] for p in pipes} for n in names}
-        for p in pipes:
-            for o in offsets:
-                ranked = rank_attempts(
-                    results[p],
-                    readings_at_offset(
-                        results[p], spec, o, setup.meters, sensor=sensors["ranking"]
-                    ),
-                    setup,
-                    detector=spec.detector.kind,
-                    capture_interval=spec.capture_interval,
-                    localizers=names,
-                    meter_model=spec.meter_model,
-                    offset=o,
-                )
-                for name, attempt in ranked.items():
-                    by_name[name][p].append(attempt)
-        for s in group:
-            scored[s] = by_name[s.localizer]
-    return scored
-
-
-def _readings_key(spec: RunSpec) -> tuple[Any, ...]:
-    """What a ranking run's readings and bank depend on (all but its localizer)."""
-    return (
-        spec.detector.kind,
-        spec.capture_interval,
-        spec.localization_interval,
-        spec.mode,
-        spec.meter_model,
-    )

@@ -42,14 +42,9 @@ from burstloc.exceptions import ConfigError, NetworkError
 from burstloc.sim.scenarios.cache import DiskCache, network_cache_key
 from burstloc.sim.scenarios.result import ScenarioResult
 from burstloc.sim.scenarios.scenario import DEFAULT_BURST_START, FRICTION_MODELS, check_solver
-from burstloc.sim.transient.tsnet import (
-    TransientSettings,
-    cached,
-    isolated_run,
-    run_transient,
-    scenario_result,
-)
+from burstloc.sim.transient.tsnet import cached, scenario_result
 from burstloc.sim.transient.tsnet_ready import prepare_for_tsnet
+from burstloc.sim.transient.tsnet_run import TransientSettings, isolated_run, run_transient
 from burstloc.wave_speeds import WaveSpeeds
 
 __all__ = ["EVENT_KINDS", "SCHEMA", "EventScenario", "event_output_path", "simulate_event"]

@@ -1,7 +1,8 @@
 """The transient solver: a burst's pressure waves through the network, TSNet's model.
 
-:mod:`~burstloc.sim.transient.tsnet` is the driver (:func:`simulate_burst`,
-:func:`simulate_many`); :mod:`~burstloc.sim.transient.tsnet_ready` makes the network what
+:mod:`~burstloc.sim.transient.tsnet` is the burst driver (:func:`simulate_burst`,
+:func:`simulate_many`) and :mod:`~burstloc.sim.transient.tsnet_run` one TSNet run (bursts and
+operations alike); :mod:`~burstloc.sim.transient.tsnet_ready` makes the network what
 TSNet can take (closed pipes out, connectors at pumps and valves) and
 :mod:`~burstloc.sim.transient.tsnet_elements` its pumps and valves;
 :mod:`~burstloc.sim.transient.intact` keeps per process what does not depend on the burst
