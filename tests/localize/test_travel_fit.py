@@ -13,7 +13,7 @@ from burstloc.exceptions import ConfigError
 from burstloc.localize.arrival import ArrivalLocalizer
 from burstloc.localize.evidence import BurstEvidence, MeterAlarm
 from burstloc.localize.model import LocalizationModel
-from burstloc.localize.travel_fit import EventArrivals, fit_travel_times
+from burstloc.localize.travel_fit import EventArrivals, fit_travel_times, robust_slowness
 
 METERS = tuple(f"m{k}" for k in range(8))
 
@@ -69,6 +69,37 @@ def test_bursts_found_later_teach_the_speed_from_their_arrivals_differences() ->
     # an event of unknown time heard at one distance says nothing; the others still speak
     lone = replace(found[0], name="lone", onsets={"m0": found[0].onsets["m0"]})
     assert fit_travel_times([*found, lone], METERS, **options).arrivals == fit.arrivals
+
+
+def test_an_event_heard_late_at_most_meters_does_not_move_the_speed() -> None:
+    # two events heard on time; a third whose front most meters missed, heard a larger wave
+    # 0.4-7 s later (as L-TOWN's meters heard a 10 L/s burst on p8 at 0.05 s)
+    events = _events(1100.0, {}, 0.05, count=3, seed=7)
+    rng = np.random.default_rng(1)
+    late = {m: t + float(rng.uniform(0.4, 7.0)) for m, t in list(events[2].onsets.items())[2:]}
+    events[2] = replace(events[2], onsets={**events[2].onsets, **late})
+    options = {"wave_speed": 1200.0, "wave_speed_tolerance": 0.05, "clock_tolerance": 0.0}
+    fit = fit_travel_times(events, METERS, **options)
+    assert fit.wave_speed == pytest.approx(1100.0, rel=0.03)
+    assert fit.dropped >= len(late) and fit.arrivals >= 2 * len(METERS)
+    assert fit.wave_speed_tolerance < 0.05  # what is left is the readings' rounding
+    on_time = fit_travel_times(events[:2], METERS, **options)
+    assert fit.wave_speed == pytest.approx(on_time.wave_speed, rel=0.01)
+    # the same when its time is not known (a burst found later)
+    found = [replace(e, time=min(e.onsets.values()), time_known=False) for e in events]
+    assert fit_travel_times(found, METERS, **options).wave_speed == pytest.approx(1100, rel=0.03)
+
+
+def test_the_robust_start_is_the_median_slope_within_events() -> None:
+    distance = np.array([100.0, 200.0, 300.0, 100.0, 400.0])
+    travel = np.array([0.1, 0.2, 5.0, 0.1, 0.4])  # one late arrival
+    event = np.array([0, 0, 0, 1, 1])
+    unknown, known, equal = np.zeros(5, dtype=bool), np.ones(5, dtype=bool), np.ones(5)
+    assert robust_slowness(travel, distance, event, unknown, equal) == pytest.approx(0.001)
+    # a known time adds each arrival's slope from the event itself
+    assert robust_slowness(travel, distance, event, known, equal) == pytest.approx(0.001)
+    one = np.zeros(1, dtype=bool)
+    assert math.isnan(robust_slowness(travel[:1], distance[:1], event[:1], one, equal[:1]))
 
 
 def test_clock_offsets_are_fitted_within_their_tolerance() -> None:
