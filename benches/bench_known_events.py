@@ -1,16 +1,18 @@
 """Known events on L-TOWN: does calibrating on three of them bring a wrong model back?
 
-Usage: ``.venv/bin/python benches/bench_known_events.py [--pipes N] [--phases K]
-[--interval S] [--wrong-speed A] [--burst-flow Q] [--workers W]``. L-TOWN is extracted from the
-pinned epyt wheel (``make networks``) into a temporary directory; BattLeDIM's 33 sensors are the
+Usage: ``.venv/bin/python benches/bench_known_events.py [--pipes N] [--phases K] [--interval S]
+[--wrong-speed A] [--burst-flow Q] [--workers W] [--truth --truth-...]``. L-TOWN is extracted from
+the pinned epyt wheel (``make networks``) into a temporary directory; BattLeDIM's 33 sensors are the
 meters. Three *known events* (bursts of ``Q`` L/s, default 5, on three pipes drawn with seed 5
 outside the evaluated ones, at 10 s) are simulated as the meters would send them (``burstloc
-simulate --feed``, ``S`` s readings, default 0.05, 1 cm of noise) and listed in a known-events
-file. Four configurations are calibrated for the 33 sensors: the simulation's wave speed
-(1 200 m/s) and a wrong one (``A``, default 1 020 m/s: 15 % slow), each as it is and learnt
-from the known events (``burstloc calibrate --known-events``). Each is evaluated on the same
-``N`` pipes (default 20, seed 11, as ``bench_ltown_accuracy.py`` draws them) x ``K`` phases
-(default 2), ``Q`` L/s bursts, the fused and arrival localizers, CUSUM, the 30 m model.
+simulate --feed``, ``S`` s readings, default 0.05, 1 cm of noise) and listed in a known-events file.
+Four configurations are calibrated for the 33 sensors: the simulation's wave speed (1 200 m/s) and a
+wrong one (``A``, default 1 020 m/s: 15 % slow), each as it is and learnt from the known events
+(``burstloc calibrate --known-events``). Each is evaluated on the same ``N`` pipes (default 20, seed
+11, as ``bench_ltown_accuracy.py`` draws them) x ``K`` phases (default 2), ``Q`` L/s bursts, the
+fused and arrival localizers, CUSUM, the 30 m model. ``--truth --truth-...`` (last): the known
+events and the evaluated bursts simulated on a perturbed truth (``burstloc simulate``'s and
+``evaluate``'s ``--truth-*`` options) while every configuration keeps the model.
 
 Printed per configuration and localizer: the wave speed it assumes, the 95 % region's coverage
 and median length, the named point within 300 m, the mean distance; then the ratios measured in
@@ -32,7 +34,13 @@ CONFIGS = ("exact", "exact, learnt", "wrong", "wrong, learnt")
 
 
 def _known_events(
-    network: Path, meters: Path, pipes: list[str], directory: Path, interval: float, flow: float
+    network: Path,
+    meters: Path,
+    pipes: list[str],
+    directory: Path,
+    interval: float,
+    flow: float,
+    truth: list[str],
 ) -> Path:
     """Simulate the known events' feeds and write the known-events file."""
     events = []
@@ -44,6 +52,7 @@ def _known_events(
                 *("--capture-interval", f"{interval:g}", "--noise", "0.01", "--seed", str(k)),
                 *("--meters", str(meters), "--feed", str(feed), "--out", str(directory / "sims")),
                 *("--min-pipe-length", "30", "--burst-flow", f"{flow:g}"),
+                *truth,
             ]
         )
         events.append(
@@ -65,13 +74,22 @@ def main() -> None:
     parser.add_argument(
         "--only", nargs="+", choices=CONFIGS, default=CONFIGS, help="configurations to evaluate"
     )
+    parser.add_argument(
+        "--truth",
+        nargs=argparse.REMAINDER,
+        default=[],
+        help="the rest: `burstloc evaluate`'s --truth-* options, for the known events and the "
+        "evaluated bursts alike (e.g. --truth --truth-wave-speed-spread 0.15)",
+    )
     args = parser.parse_args()
     with tempfile.TemporaryDirectory(prefix="bench-known-events-") as tmp:
         directory = Path(tmp)
         network, meters, names = sensors_and_pipes(directory, 11)
         chosen, rest = names[: args.pipes], sorted(names[args.pipes :])
         known = random.Random(5).sample(rest, 3)
-        events = _known_events(network, meters, known, directory, args.interval, args.burst_flow)
+        events = _known_events(
+            network, meters, known, directory, args.interval, args.burst_flow, args.truth
+        )
         table = []
         for label in args.only:
             speed = args.wrong_speed if label.startswith("wrong") else 1200.0
@@ -91,7 +109,8 @@ def main() -> None:
                     *("--detector", "cusum", "--capture-interval", f"{args.interval:g}"),
                     *("--phases", str(args.phases), "--min-pipe-length", "30"),
                     *("--workers", str(args.workers), "--quiet", "--json", str(out)),
-                    *("--burst-flow", f"{args.burst_flow:g}", "--pipes", *chosen),
+                    *("--burst-flow", f"{args.burst_flow:g}", *args.truth),
+                    *("--pipes", *chosen),
                 ]
             )
             table += [
@@ -101,6 +120,7 @@ def main() -> None:
         f"\nL-TOWN, BattLeDIM's 33 sensors, {args.interval:g} s readings: known events on "
         f"{', '.join(known)}; {len(chosen)} pipes x {args.phases} phases, "
         f"{args.burst_flow:g} L/s bursts"
+        + (f"; the truth perturbed: {' '.join(args.truth)}" if args.truth else "")
     )
     print("configuration   speed  localizer | 95% held  region  <=300m   mean")
     for r in table:

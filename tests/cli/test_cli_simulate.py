@@ -317,15 +317,22 @@ def test_a_network_epanet_solves_only_demand_driven_is_simulated_so_and_said(
     assert f"pipe 'B' of {network} split at 0.5 pressure-driven" in recorded[1]
 
 
-def test_a_feed_carries_the_configurations_meters_or_the_ones_given(
-    paper15: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def _four_meters(paper15: Path, tmp_path: Path) -> tuple[list[str], Path, list[str | Path]]:
+    """Four meters of paper15, a configuration calibrated for them at 0.2 s, and the start of a
+    ``simulate`` command line bursting P7 for 14 s, read at 0.2 s."""
     from burstloc.experiments.calibrate import calibrate
 
     meters = ["N4", "N7", "1", "8"]
     config = calibrate(paper15, capture_intervals=(0.2,), meters=meters).save(tmp_path / "c.json")
-    args = ["simulate", paper15, "--pipe", "P7", "--duration", "14", "--capture-interval", "0.2"]
-    args += ["--out", tmp_path / "out", "--quiet"]
+    args: list[str | Path] = ["simulate", paper15, "--pipe", "P7", "--duration", "14"]
+    return meters, config, [*args, "--capture-interval", "0.2", "--quiet"]
+
+
+def test_a_feed_carries_the_configurations_meters_or_the_ones_given(
+    paper15: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    meters, config, args = _four_meters(paper15, tmp_path)
+    args += ["--out", tmp_path / "out"]
     every, mine, two = tmp_path / "every.csv", tmp_path / "mine.csv", tmp_path / "two.csv"
     assert _run(*args, "--feed", every) == 0
     assert f"wrote {15 * 70} readings of every junction to {every}" in capsys.readouterr().out
@@ -415,3 +422,44 @@ def test_a_burst_the_network_cannot_feed_is_said(
     assert "the burst point on pipe B" in err and "B_B" not in err
     assert _run(*args, "--burst-flow", "1", "--no-cache") == 0  # 1 L/s: fed
     assert "negative pressure" not in capsys.readouterr().err
+
+
+def test_a_feed_from_a_perturbed_truth_shifts_the_clocks_and_silences_the_nearest_meter(
+    paper15: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    meters, config, args = _four_meters(paper15, tmp_path)
+    args += ["--config", config]
+    plain, truth = tmp_path / "plain.csv", tmp_path / "truth.csv"
+    assert _run(*args, "--out", tmp_path / "a", "--feed", plain) == 0
+    perturbed = ["--truth-clock-offset", "0.05", "--truth-silent-meter", "2", "--truth-seed", "4"]
+    assert _run(*args, "--out", tmp_path / "b", "--feed", truth, *perturbed) == 0
+    assert "truth perturbed: meter clocks off by N(0, (50 ms)²)" in capsys.readouterr().out
+
+    def readings(path: Path) -> dict[str, dict[float, float]]:
+        found: dict[str, dict[float, float]] = {}
+        for line in path.read_text().splitlines()[1:]:
+            t, m, v = line.split(",")
+            found.setdefault(m, {})[float(t)] = float(v)
+        return found
+
+    was, now = readings(plain), readings(truth)
+    assert set(now) == set(meters)
+    silent = [m for m in meters if len(now[m]) < len(was[m])]
+    assert len(silent) == 1  # the meter nearest the burst sends nothing from 2 s after it
+    assert max(now[silent[0]]) == pytest.approx(11.8) and len(was[silent[0]]) == 70
+    # before the burst the heads are steady: a shifted clock reads the same; after, not
+    before = [abs(now[m][t] - was[m][t]) for m in meters for t in now[m] if t < 9.8]
+    after = [abs(now[m][t] - was[m][t]) for m in meters for t in now[m] if t > 10.0]
+    assert max(before) < 0.002 < max(after)
+    # the scenario file is the simulation, not the meters: the same in both runs
+    (a,) = (tmp_path / "a").glob("*.npz")
+    (b,) = (tmp_path / "b").glob("*.npz")
+    assert np.array_equal(np.load(a)["heads"], np.load(b)["heads"])
+    done = _monitor(paper15, config, truth)
+    assert done.returncode == 0, done.stderr
+    decisions = [json.loads(line) for line in done.stdout.splitlines()]
+    assert [d["type"] for d in decisions] == ["decision"]
+    # an operation's simulation has no perturbed truth
+    event = ["simulate", paper15, "--event", "demand-step", "--asset", "N4", "--quiet"]
+    assert _run(*event, "--out", tmp_path / "c", "--truth-clock-offset", "0.01") == 2
+    assert "--truth-* options apply to bursts only" in capsys.readouterr().err

@@ -1,4 +1,5 @@
-"""``burstloc evaluate``'s options for a perturbed truth (:mod:`burstloc.sim.scenarios.perturb`)."""
+"""``burstloc evaluate``'s and ``simulate``'s options for a perturbed truth
+(:mod:`burstloc.sim.scenarios.perturb`)."""
 
 from __future__ import annotations
 
@@ -10,13 +11,16 @@ from burstloc.sim.scenarios.perturb import TruthPerturbation
 __all__ = ["add_truth_options", "truth_of"]
 
 
-def add_truth_options(parser: argparse.ArgumentParser) -> None:
+def add_truth_options(parser: argparse.ArgumentParser, description: str | None = None) -> None:
     """Add the ``--truth-*`` options: the truth the meters hear simulated on a perturbed copy
-    of the network, while the localizers keep the model."""
+    of the network, while the localizers keep the model (``description``: the group's, for a
+    command other than ``evaluate``)."""
     group = parser.add_argument_group(
         "perturbed truth",
-        "simulate what the meters hear on a perturbed copy of the network while the localizers "
-        "keep the model (all off by default): does the 95 % search region keep its coverage?",
+        description
+        or "simulate what the meters hear on a perturbed copy of the network while the "
+        "localizers keep the model (all off by default): does the 95 % search region keep its "
+        "coverage?",
     )
     group.add_argument(
         "--truth-wave-speed-spread",

@@ -29,6 +29,7 @@ from burstloc.cli._options import (
     run_of,
     wave_speeds_of,
 )
+from burstloc.cli._truth import add_truth_options, truth_of
 from burstloc.constants import SCENARIO_DURATION
 from burstloc.exceptions import ConfigError
 
@@ -141,6 +142,11 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     add_run_options(parser)
     parser.set_defaults(handler=run)
+    add_truth_options(
+        parser,
+        "simulate the burst on a perturbed copy of the network; the clock offsets and the "
+        "silent meter act on the --feed, the meters' readings (all off by default)",
+    )
     return parser
 
 
@@ -159,6 +165,7 @@ def run(args: argparse.Namespace) -> int:
     args.feed_meters = _feed_meters(args)
     if args.event is not None:
         return _event(args, start)
+    truth = truth_of(args)
     coeff, flow = burst_size_of(args)
     network = as_network(args.network)  # read once, here at the edge
     scenarios = scenario.burst_scenarios(
@@ -177,6 +184,15 @@ def run(args: argparse.Namespace) -> int:
     )
     if args.capture_interval is not None:  # a step fine enough for the readings asked for
         scenarios = with_capture_time_step(scenarios, args.capture_interval)
+    hearing = None
+    if truth is not None:
+        from dataclasses import replace
+
+        from burstloc.experiments.truth import Hearing
+
+        print(f"truth perturbed: {truth.describe()}", flush=True)
+        scenarios = [replace(s, truth=truth) for s in scenarios]
+        hearing = Hearing(truth, network.model, args.feed_meters)
     from burstloc.sim.signatures.burst_size import describe_sizes, sized_scenarios, with_size
 
     scenarios, sizes = sized_scenarios(scenarios, flow, network)
@@ -199,11 +215,14 @@ def run(args: argparse.Namespace) -> int:
         if negative is not None:
             print(f"burstloc: warning: {negative}", file=sys.stderr)
         result = with_size(result, size_of[result.pipe], flow)
+        heard = result if hearing is None or args.feed is None else hearing(result)
         if args.capture_interval is not None:
             result = result.resample(args.capture_interval, args.capture_phase)
+            if heard is not result:
+                heard = heard.resample(args.capture_interval, args.capture_phase)
         result.save(output_path(args.out, result))
         written += 1
-        _write_feed(args, result, start)
+        _write_feed(args, heard, start)
     print(f"wrote {written} scenario file(s) to {args.out}")
     for line in report.failure_lines():
         print(f"burstloc: failed: {line}", file=sys.stderr)
@@ -275,6 +294,8 @@ def _event(args: argparse.Namespace, start: datetime | None) -> int:
 
     if args.asset is None:
         raise ConfigError(f"--event {args.event} needs --asset (the valve, pump or junction)")
+    if truth_of(args) is not None:
+        raise ConfigError("--truth-* options apply to bursts only, not to --event")
     for option, value in (
         ("--min-pipe-length", args.min_pipe_length),
         ("--burst-flow", args.burst_flow),

@@ -7,14 +7,16 @@ the meters given: a utility's own meters only). ``timestamp`` is
 seconds from the simulation's start, or with a start time the ISO 8601 time (its UTC offset
 kept; ``Z`` for UTC); ``value`` is the pressure head in metres (0.1 mm), with seeded Gaussian
 noise when asked (:class:`burstloc.sim.scenarios.sensors.SensorModel`: the same seed and pipe, the
-same
-noise). ``burstloc monitor --readings FILE`` reads it as it is.
+same noise). A reading that is NaN (a meter silent under a perturbed truth,
+:func:`burstloc.sim.scenarios.perturb.silence`) is not written: the meter sent nothing.
+``burstloc monitor --readings FILE`` reads it as it is.
 
 Pure NumPy: no simulator import.
 """
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Sequence
 from datetime import datetime
@@ -63,7 +65,11 @@ def feed_text(
     lines = [",".join(CSV_HEADER)]
     for t, row in zip(result.time.tolist(), values.tolist(), strict=True):
         stamp = format_timestamp(t, start)
-        lines.extend(f"{stamp},{m},{value:.4f}" for m, value in zip(meters, row, strict=True))
+        lines.extend(
+            f"{stamp},{m},{value:.4f}"
+            for m, value in zip(meters, row, strict=True)
+            if math.isfinite(value)  # NaN: a silent meter sends nothing
+        )
     return "\n".join(lines) + "\n"
 
 
