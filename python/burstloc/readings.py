@@ -55,7 +55,8 @@ class Step:
     """A complete time step: one value per meter, in the stream's meter order.
 
     ``filled`` names the meters whose value was filled by the ``"hold"`` missing policy (empty
-    for a step every meter reported).
+    for a step every meter reported). A monitor keeps ``values`` (a float64 array) as it is,
+    without a copy: the array is not written after the step is made.
     """
 
     timestamp: float

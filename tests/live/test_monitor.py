@@ -252,6 +252,26 @@ def test_bad_steps_are_refused_by_name_and_leave_the_monitor_as_it_was(
     assert rest_fed
 
 
+def test_the_monitor_keeps_a_step_s_values_and_never_writes_them(
+    tiny: Path, config: Calibration, batch
+) -> None:
+    """The step's own array is read, not copied (module ``live.history``) and not written: a
+    value filled for an excluded meter is filled in a copy, and the caller's array keeps its
+    NaN; what the monitor decides is what it decides from copies."""
+    steps = _steps(batch.results["B"], batch.runs[0].spec)
+    gap = [
+        Step(s.timestamp, np.where(np.arange(s.values.size) == 1, np.nan, s.values)) for s in steps
+    ]
+    kept = BurstMonitor(tiny, config, capture_interval=0.2, localizer="arrival")
+    copied = BurstMonitor(tiny, config, capture_interval=0.2, localizer="arrival")
+    for m in (kept, copied):
+        m.exclude(kept.meters[1])
+    from_kept = [d.to_json() for d in kept.run(gap)]
+    from_copies = [d.to_json() for d in copied.run(Step(s.timestamp, s.values.copy()) for s in gap)]
+    assert all(np.isnan(s.values[1]) for s in gap)
+    assert from_kept == from_copies and from_kept
+
+
 def test_configuration_checks(tiny: Path, config: Calibration, tmp_path: Path) -> None:
     other = write_tiny(tmp_path / "other.inp", head=70.0)
     with pytest.raises(ConfigError, match=r"calibrated for network .*tiny\.inp"):

@@ -52,12 +52,14 @@ import math
 from collections import deque
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 
 from burstloc.constants import MAX_SAMPLE, METER_MODELS, RANKING_LOCALIZERS, MeterModel
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.live.decision import LiveDecision
+from burstloc.live.history import RowHistory
 from burstloc.live.observe import LiveObserver
 from burstloc.live.subset import SubsetLocalizers
 from burstloc.localize.classify import ClassifierConfig, EventClassifier, Operation, classify_alarms
@@ -90,6 +92,18 @@ HISTORY_BEFORE_ONSET = 60.0
 #: hold-off.
 QUIET_WINDOW = 30.0
 QUIET_FACTOR = 1.3
+
+
+def _own_row(values: Any) -> np.ndarray:
+    """A step's values as a float64 vector: the step's own array when it is one, kept as it is
+    and never written (:meth:`BurstMonitor.push` copies it before filling a value). Not copied
+    because NumPy 1.x lets go of the GIL for every array copy, however small: a copy at every
+    step hands the GIL over at every step, and a thread beside the loop that waits for it (the
+    incident store's writer) then wakes at each hand-over and rarely gets it, at a cost to the
+    loop's own CPU time of about a tenth (``benches/bench_incidents.py``, section 3)."""
+    if type(values) is np.ndarray and values.dtype == np.float64:
+        return values
+    return np.array(values, dtype=np.float64)
 
 
 class BurstMonitor:
@@ -189,7 +203,7 @@ class BurstMonitor:
         span = HISTORY_BEFORE_ONSET + cal.decision_delay + cal.arrival_decision_delay
         steps = math.ceil(span / cal.capture_interval) + 2 * cal.localization_interval + 2
         self._times: deque[float] = deque(maxlen=steps)
-        self._values: deque[np.ndarray] = deque(maxlen=steps)
+        self._values = RowHistory(steps, len(self.meters))
         self._fill = self.steady.copy()  # last value of each meter (filled values replace NaN)
         self._seen = 0  # steps fed to the bank since it last started afresh
         self._steps = 0  # steps fed in all
@@ -254,7 +268,7 @@ class BurstMonitor:
                 f"got {type(step).__name__}"
             )
         t = float(step.timestamp)
-        values = np.array(step.values, dtype=np.float64)
+        values = _own_row(step.values)
         if values.shape != (len(self.meters),):
             raise InputError(
                 f"step at t = {t:g} s has {values.size} values for {len(self.meters)} meters"
@@ -270,6 +284,7 @@ class BurstMonitor:
                     raise InputError(
                         f"{kind} reading {values[j]} from meter {self.meters[j]!r} at t = {t:g} s"
                     )
+            values = values.copy()  # the step's own array is never written
             values[bad] = self._fill[bad]
         if self._times and t <= self._times[-1]:
             raise InputError(
@@ -351,7 +366,7 @@ class BurstMonitor:
         w = self._quiet_steps
         if len(self._values) <= w:
             return False
-        recent = np.array([self._values[-k] for k in range(w + 1, 0, -1)])
+        recent = self._values.last(w + 1)
         rms = np.sqrt(np.mean(np.diff(recent, axis=0) ** 2, axis=0))
         quiet = rms <= QUIET_FACTOR * math.sqrt(2.0) * self._noise
         return all(q or m in self.excluded for q, m in zip(quiet, self.meters, strict=True))
@@ -378,7 +393,7 @@ class BurstMonitor:
         """``(times, readings, alarms, meters, localizers)`` of the meters taking part (those
         not excluded, with their own localizers when some are)."""
         times = np.fromiter(self._times, dtype=np.float64)
-        readings = np.array(self._values)
+        readings = self._values.array()
         alarms = self._shifted(times.size)
         meters, localizers = self.meters, self.localizers
         part = [j for j, m in enumerate(self.meters) if m not in self.excluded]

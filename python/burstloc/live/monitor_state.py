@@ -14,6 +14,7 @@ import numpy as np
 
 from burstloc import _core
 from burstloc.exceptions import ConfigError
+from burstloc.live.history import RowHistory
 from burstloc.localize.evidence import IndexedAlarm
 
 if TYPE_CHECKING:
@@ -28,7 +29,7 @@ def monitor_state(monitor: BurstMonitor) -> dict[str, Any]:
     return {
         "bank": base64.b64encode(m.bank.snapshot()).decode("ascii"),
         "times": list(m._times),
-        "values": [v.tolist() for v in m._values],
+        "values": m._values.tolist(),
         "fill": m._fill.tolist(),
         "seen": m._seen,
         "steps": m._steps,
@@ -63,9 +64,9 @@ def restore_monitor(monitor: BurstMonitor, state: Mapping[str, Any]) -> None:
         )
     m.bank = bank
     m._times = deque((float(t) for t in state["times"]), maxlen=m._times.maxlen)
-    m._values = deque(
-        (np.array(v, dtype=np.float64) for v in state["values"]), maxlen=m._values.maxlen
-    )
+    values = RowHistory(m._values.maxlen, m._values.width)
+    values.extend(state["values"])
+    m._values = values
     m._fill = np.array(state["fill"], dtype=np.float64)
     m._seen, m._steps = int(state["seen"]), int(state["steps"])
     m._alarms = [IndexedAlarm(int(c), int(i), int(s), float(a)) for c, i, s, a in state["alarms"]]
