@@ -145,8 +145,9 @@ def monitor_run(config: Any, readings: list[Any], observer: Any) -> tuple[float,
     """Readings/s through a fresh live loop (wall clock, and the loop thread's own CPU time),
     and the decision's latency (s, wall clock)."""
     from burstloc.live.health import Health, PlausibleRange
-    from burstloc.live.loop import LiveLoop, Reporter
+    from burstloc.live.loop import LiveLoop
     from burstloc.live.monitor import BurstMonitor
+    from burstloc.live.reporter import Reporter
 
     monitor = BurstMonitor(PAPER15, config, capture_interval=0.2)
     health = Health(

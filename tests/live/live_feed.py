@@ -8,9 +8,10 @@ from typing import Any
 import numpy as np
 
 from burstloc.live.health import Health, PlausibleRange
-from burstloc.live.loop import LiveLoop, Reporter
+from burstloc.live.loop import LiveLoop
 from burstloc.live.monitor import BurstMonitor
 from burstloc.live.parse import BadReading
+from burstloc.live.reporter import Reporter
 from burstloc.readings import Reading, Step
 
 

@@ -7,9 +7,9 @@ from pathlib import Path
 import pytest
 from live_feed import Collected
 
-from burstloc.live.loop import Reporter
 from burstloc.live.monitor import BurstMonitor
 from burstloc.live.parse import BadReading, parse_line
+from burstloc.live.reporter import Reporter
 from burstloc.live.state import StateFile, identity
 from burstloc.localize.config import Calibration
 from burstloc.readings import Reading

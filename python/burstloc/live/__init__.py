@@ -9,8 +9,10 @@
 * :mod:`~burstloc.live.decision`: a decision as the monitor reports it;
 * :mod:`~burstloc.live.monitor`: the detector bank, history and localizer over those steps,
   built from the stored configuration (no hydraulic model runs);
+* :mod:`~burstloc.live.history`: the monitor's recent readings, in one ring array;
 * :mod:`~burstloc.live.monitor_state`: the monitor's state across a restart;
 * :mod:`~burstloc.live.loop`: the loop that wires them and never stops on bad data;
+* :mod:`~burstloc.live.reporter`: its messages for the operator, rate-limited;
 * :mod:`~burstloc.live.state`: the saved state (atomic, versioned, bound to its setup);
 * :mod:`~burstloc.live.mqtt`: readings from a broker, decisions and health to it;
 * :mod:`~burstloc.live.paper_locator`: the paper's real-time loop (windows, detector, rules).

@@ -7,7 +7,8 @@
 * a :class:`~burstloc.live.parse.BadReading` (a timestamp in another form than the feed's
   included), an implausible reading, a reading from an unknown meter, a timestamp more than a
   day from the feed's clock (:data:`~burstloc.live.health.CLOCK_JUMP`), a step the monitor
-  refuses: counted, reported (rate-limited, :class:`Reporter`), skipped; the loop goes on;
+  refuses: counted, reported (rate-limited, :class:`~burstloc.live.reporter.Reporter`),
+  skipped; the loop goes on;
 * a meter that goes silent or comes back, a clock offset found and corrected: reported;
   the monitor and the stream exclude / include the meter;
 * a decision: emitted as a record (``"type": "decision"``, with the health at decision time;
@@ -35,10 +36,11 @@ from burstloc.live.monitor import BurstMonitor
 from burstloc.live.monitor_state import monitor_state, restore_monitor
 from burstloc.live.observe import LiveObserver
 from burstloc.live.parse import BadReading, Row, TimestampForm, parse_row, unknown_meter
+from burstloc.live.reporter import Reporter
 from burstloc.live.state import StateFile
 from burstloc.readings import Reading, Step
 
-__all__ = ["LiveLoop", "Reporter"]
+__all__ = ["LiveLoop"]
 
 Record = dict[str, Any]
 Item = Reading | BadReading | tuple[str, Reading | BadReading | bytes | Row] | None
@@ -53,43 +55,6 @@ def _finite(x: object) -> bool:
         return math.isfinite(x)  # type: ignore[arg-type]
     except TypeError:
         return False
-
-
-class Reporter:
-    """Rate-limited messages: per kind, at most ``burst`` messages per ``every`` seconds; the
-    number held back is told with the next message of that kind and by :meth:`close`."""
-
-    def __init__(
-        self, write: Callable[[str], None], *, burst: int = 5, every: float = 10.0
-    ) -> None:
-        self.write = write
-        self.burst = burst
-        self.every = every
-        self._window: dict[str, tuple[float, int]] = {}
-        self._held: dict[str, int] = {}
-        self.counts: dict[str, int] = {}
-
-    def __call__(self, kind: str, message: str) -> None:
-        """Report ``message`` of ``kind`` unless too many of that kind came lately."""
-        self.counts[kind] = self.counts.get(kind, 0) + 1
-        now = time.monotonic()
-        start, sent = self._window.get(kind, (now, 0))
-        if now - start >= self.every:
-            start, sent = now, 0
-        if sent >= self.burst:
-            self._held[kind] = self._held.get(kind, 0) + 1
-            self._window[kind] = (start, sent)
-            return
-        held = self._held.pop(kind, 0)
-        suffix = f" ({held} more {kind} messages not shown)" if held else ""
-        self.write(f"burstloc monitor: {message}{suffix}")
-        self._window[kind] = (start, sent + 1)
-
-    def close(self) -> None:
-        """Tell how many messages of each kind were held back and not yet told."""
-        for kind, held in sorted(self._held.items()):
-            self.write(f"burstloc monitor: {held} more {kind} messages not shown")
-        self._held.clear()
 
 
 class LiveLoop:
