@@ -18,9 +18,9 @@ from burstloc.experiments.report import (
     format_tables,
     write_csv,
     write_json,
-    write_study_report,
 )
 from burstloc.experiments.runs import RunSpec
+from burstloc.experiments.study_report import write_study_report
 from burstloc.localize.detection import DetectorConfig, Mode
 from conftest import PAPER15
 

@@ -13,8 +13,8 @@ import pytest
 from burstloc.cli import main
 from burstloc.exceptions import ConfigError
 from burstloc.experiments.grid import StudyPoint, StudySettings, study_grid
-from burstloc.experiments.report import write_study_report as write_report
 from burstloc.experiments.study import run_study
+from burstloc.experiments.study_report import write_study_report as write_report
 from burstloc.wave_speeds import WaveSpeeds
 
 

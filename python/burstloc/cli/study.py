@@ -25,8 +25,8 @@ from burstloc.constants import (
 )
 from burstloc.exceptions import ConfigError
 from burstloc.experiments.grid import DEFAULT_LEVELS, DEFAULT_NETWORKS, StudySettings, study_grid
-from burstloc.experiments.report import write_study_report as write_report
 from burstloc.experiments.study import run_study
+from burstloc.experiments.study_report import write_study_report as write_report
 from burstloc.inp import network_hash
 from burstloc.sim.placement.methods import PLACEMENT_METHODS, MeterSet
 

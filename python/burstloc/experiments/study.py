@@ -17,7 +17,7 @@ local/Dask executor of :mod:`burstloc.sim.scenarios.sweep`); the grid points are
 the
 same executor, one task per point, and through the same harness as ``burstloc evaluate``
 (:mod:`burstloc.experiments.harness`: capture, detector bank, localizers, tally).
-:func:`write_report` (:func:`burstloc.experiments.report.write_study_report`) writes
+:func:`write_report` (:func:`burstloc.experiments.study_report.write_study_report`) writes
 ``report.md``, ``results.json`` and PNG plots (top-1 accuracy vs capture interval per detector
 and localizer).
 
