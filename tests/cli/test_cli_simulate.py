@@ -427,8 +427,8 @@ def test_a_burst_the_network_cannot_feed_is_said(
 def test_a_feed_from_a_perturbed_truth_shifts_the_clocks_and_silences_the_nearest_meter(
     paper15: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    meters, config, args = _four_meters(paper15, tmp_path)
-    args += ["--config", config]
+    meters, config, bare = _four_meters(paper15, tmp_path)
+    args = [*bare, "--config", config]
     plain, truth = tmp_path / "plain.csv", tmp_path / "truth.csv"
     assert _run(*args, "--out", tmp_path / "a", "--feed", plain) == 0
     perturbed = ["--truth-clock-offset", "0.05", "--truth-silent-meter", "2", "--truth-seed", "4"]
@@ -459,6 +459,11 @@ def test_a_feed_from_a_perturbed_truth_shifts_the_clocks_and_silences_the_neares
     assert done.returncode == 0, done.stderr
     decisions = [json.loads(line) for line in done.stdout.splitlines()]
     assert [d["type"] for d in decisions] == ["decision"]
+    # the clocks and the silent meter act on the feed: without one they would act on nothing
+    assert _run(*bare, "--out", tmp_path / "d", *perturbed) == 2
+    err = capsys.readouterr().err
+    assert "--truth-clock-offset and --truth-silent-meter act on the meters' readings" in err
+    assert not (tmp_path / "d").exists() or not list((tmp_path / "d").glob("*.npz"))
     # an operation's simulation has no perturbed truth
     event = ["simulate", paper15, "--event", "demand-step", "--asset", "N4", "--quiet"]
     assert _run(*event, "--out", tmp_path / "c", "--truth-clock-offset", "0.01") == 2

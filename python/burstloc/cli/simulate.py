@@ -166,6 +166,20 @@ def run(args: argparse.Namespace) -> int:
     if args.event is not None:
         return _event(args, start)
     truth = truth_of(args)
+    if truth is not None and args.feed is None:
+        meters_only = [
+            option
+            for option, on in (
+                ("--truth-clock-offset", truth.clock_offset > 0),
+                ("--truth-silent-meter", truth.silent_meter is not None),
+            )
+            if on
+        ]
+        if meters_only:
+            raise ConfigError(
+                f"{' and '.join(meters_only)} act on the meters' readings: give --feed FILE "
+                "(the scenario files hold the simulation itself)"
+            )
     coeff, flow = burst_size_of(args)
     network = as_network(args.network)  # read once, here at the edge
     scenarios = scenario.burst_scenarios(
