@@ -245,6 +245,14 @@ def _relative(residual: np.ndarray, travel: np.ndarray, dt: np.ndarray) -> float
     return 1.4826 * float(np.median(excess))
 
 
+def _within(residual: np.ndarray, kept: np.ndarray, variance: np.ndarray) -> np.ndarray:
+    """The arrivals within :data:`OUTLIER_SIGMAS` spreads of the fit: the spread is the
+    median absolute residual of the ``kept`` ones (scaled to a normal's sigma), never below an
+    arrival's own timing error (``variance``, s²)."""
+    spread = np.maximum(1.4826 * float(np.median(np.abs(residual[kept]))), np.sqrt(variance))
+    return np.abs(residual) <= OUTLIER_SIGMAS * spread
+
+
 def fit_travel_times(
     events: Sequence[EventArrivals],
     meters: Sequence[str],
@@ -276,8 +284,7 @@ def fit_travel_times(
     if math.isfinite(start) and start > 0:  # the first pass weighs and trims from there
         slowness = start
         residual = _robust_residual(y, x, g, e < 0, start)
-        spread = np.maximum(1.4826 * float(np.median(np.abs(residual))), np.sqrt(variance))
-        trimmed = np.abs(residual) <= OUTLIER_SIGMAS * spread
+        trimmed = _within(residual, np.ones(y.size, dtype=bool), variance)
         if trimmed.sum() >= 3:
             keep = trimmed
     for _ in range(3):  # fit; weigh by what the fit leaves, drop the outliers; fit again
@@ -295,8 +302,7 @@ def fit_travel_times(
         shift = np.zeros(y.size)
         shift[e >= 0] = shifts[e[e >= 0]]
         residual = y - slowness * x - offsets[k] - shift
-        spread = np.maximum(1.4826 * float(np.median(np.abs(residual[keep]))), np.sqrt(variance))
-        keep = np.abs(residual) <= OUTLIER_SIGMAS * spread
+        keep = _within(residual, keep, variance)
         if keep.sum() < 3:
             raise ConfigError("the known events' arrivals disagree: fewer than three fit together")
         tolerance = max(_relative(residual[keep], slowness * x[keep], dt[keep]), 1e-3)
