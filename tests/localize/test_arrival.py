@@ -261,3 +261,38 @@ def test_fit_windows_finds_the_least_squares_burst_time() -> None:
         found = float((gap[i] ** 2).sum())
         assert found <= cost.min() + 1e-9
         assert found == pytest.approx(cost.min(), abs=1e-6)
+
+
+def test_an_alarm_on_a_rise_bounds_the_first_front_and_does_not_time_it() -> None:
+    """A burst's first front is a drop; a far meter whose first front was too weak to alarm on
+    alarms later on a rise (a reflection). Its alarm says only that the front came no later:
+    on the line m0 - m1 - m2 - m3, a burst 700 m along with m3's alarm 0.4 s late is placed
+    where it is when that alarm is a rise, and pulled away from m3 when it is a drop."""
+    from burstloc.localize.evidence import against_front
+    from line_network import line_arrival
+
+    loc = line_arrival()
+    where, dt = 700.0, 0.01
+    spots = {m: 600.0 * i for i, m in enumerate(loc.meters)}
+    arrivals = {m: 1.0013 + abs(where - x) / loc.wave_speed for m, x in spots.items()}
+    arrivals["m3"] += 0.4
+    rise = arrival_evidence(arrivals, dt, amplitudes={"m3": 0.08})
+    drop = arrival_evidence(arrivals, dt)
+    assert against_front(rise, list(loc.meters)).tolist() == [False, False, False, True]
+    assert not against_front(drop, list(loc.meters)).any()
+    bounded, timed = loc.position(rise, "p12"), loc.position(drop, "p12")
+    step = loc.wave_speed * dt
+    assert abs(bounded.metres - (where - 600.0)) <= step / 2 + 1.0
+    assert abs(timed.metres - (where - 600.0)) > 2 * step
+    # at a coarse interval a reading holds the front and what follows: a rise is timed as a drop
+    coarse = {m: 1.0013 + abs(where - x) / loc.wave_speed for m, x in spots.items()}
+    rise_coarse = arrival_evidence(coarse, 0.2, amplitudes={"m3": 0.08})
+    assert loc.position(rise_coarse, "p12") == loc.position(arrival_evidence(coarse, 0.2), "p12")
+    # the bound still counts: an alarm on a rise before the front could reach its meter misfits
+    early = dict(arrivals, m3=arrivals["m3"] - 0.4 - 0.3)
+    assert (
+        loc.misfit(arrival_evidence(early, dt, amplitudes={"m3": 0.08}))[
+            [p.pipe for p in loc.pipes].index("p12")
+        ]
+        > loc.misfit(rise)[[p.pipe for p in loc.pipes].index("p12")]
+    )

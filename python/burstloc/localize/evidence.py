@@ -36,6 +36,7 @@ __all__ = [
     "MeterAlarm",
     "RankedPipe",
     "Ranking",
+    "against_front",
     "evidence_at",
     "evidence_from_alarms",
 ]
@@ -362,3 +363,17 @@ def evidence_at(
         decision_time=decided,
         alarm_window=calibration.arrival_decision_delay if alarm_window is None else alarm_window,
     )
+
+
+def against_front(evidence: BurstEvidence, meters: Sequence[str]) -> NDArray[np.bool_]:
+    """Per meter of ``meters`` (all alarmed), whether its alarm's change has the sign opposite
+    to the first front's (the earliest alarm's; among alarms at one start, the largest's). A
+    burst's first front is a drop everywhere it arrives; a meter that alarmed on a rise heard
+    some later wave (a reflection) after a first front too weak to alarm on, so its alarm says
+    only that the first front came no later."""
+    alarms = [evidence.alarms[m] for m in meters]
+    if not alarms:
+        return np.zeros(0, dtype=np.bool_)
+    first = min(alarms, key=lambda a: (a.start, -abs(a.amplitude)))
+    sign = math.copysign(1.0, first.amplitude) if first.amplitude != 0 else 0.0
+    return np.array([a.amplitude * sign < 0 for a in alarms], dtype=np.bool_)
