@@ -272,9 +272,15 @@ INTERRUPTIBLE = ["--capture-interval", "1", "--json"]
 #: always simulating when the signal lands, however fast or loaded the machine is.
 _NEVER_ENDING_SIMULATION = """
 import os
+import signal
 import time
 
 import burstloc.sim.transient.tsnet as _tsnet
+
+# Ctrl-C as a terminal delivers it, also where the suite itself runs with SIGINT ignored (a job
+# a shell without job control starts in the background inherits that, and Python then raises no
+# KeyboardInterrupt): this process and its workers take it as Python does by default.
+signal.signal(signal.SIGINT, signal.default_int_handler)
 
 _simulate = _tsnet._simulate_uncached
 
