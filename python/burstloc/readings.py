@@ -31,6 +31,7 @@ __all__ = [
     "format_timestamp",
     "parse_start_time",
     "robust_sigma",
+    "step_values",
     "timestamp_seconds",
 ]
 
@@ -62,6 +63,19 @@ class Step:
     timestamp: float
     values: FloatArray
     filled: tuple[str, ...] = ()
+
+
+def step_values(step: Step) -> FloatArray:
+    """``step``'s values as a float64 vector: the step's own array when it is one, not copied
+    (the reader must not write it). NumPy 1.x lets go of the GIL for every array copy, however
+    small: a copy at every step of a live loop hands the GIL over at every step, and a thread
+    beside the loop that waits for it (the incident store's writer) then wakes at each
+    hand-over and rarely gets it, at a cost to the loop's own CPU time of about a tenth
+    (``benches/bench_incidents.py``, section 3)."""
+    values = step.values
+    if type(values) is np.ndarray and values.dtype == np.float64:
+        return values
+    return np.array(values, dtype=np.float64)
 
 
 @dataclass(frozen=True, slots=True, eq=False)

@@ -52,7 +52,6 @@ import math
 from collections import deque
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import replace
-from typing import Any
 
 import numpy as np
 
@@ -78,7 +77,7 @@ from burstloc.localize.decide import (
 from burstloc.localize.evidence import IndexedAlarm, Localizer
 from burstloc.localize.interval import calibrated_bank
 from burstloc.network import NetworkSource
-from burstloc.readings import Step
+from burstloc.readings import Step, step_values
 
 _Part = tuple[np.ndarray, np.ndarray, list[IndexedAlarm], tuple[str, ...], Mapping[str, Localizer]]
 
@@ -92,18 +91,6 @@ HISTORY_BEFORE_ONSET = 60.0
 #: hold-off.
 QUIET_WINDOW = 30.0
 QUIET_FACTOR = 1.3
-
-
-def _own_row(values: Any) -> np.ndarray:
-    """A step's values as a float64 vector: the step's own array when it is one, kept as it is
-    and never written (:meth:`BurstMonitor.push` copies it before filling a value). Not copied
-    because NumPy 1.x lets go of the GIL for every array copy, however small: a copy at every
-    step hands the GIL over at every step, and a thread beside the loop that waits for it (the
-    incident store's writer) then wakes at each hand-over and rarely gets it, at a cost to the
-    loop's own CPU time of about a tenth (``benches/bench_incidents.py``, section 3)."""
-    if type(values) is np.ndarray and values.dtype == np.float64:
-        return values
-    return np.array(values, dtype=np.float64)
 
 
 class BurstMonitor:
@@ -268,7 +255,7 @@ class BurstMonitor:
                 f"got {type(step).__name__}"
             )
         t = float(step.timestamp)
-        values = _own_row(step.values)
+        values = step_values(step)
         if values.shape != (len(self.meters),):
             raise InputError(
                 f"step at t = {t:g} s has {values.size} values for {len(self.meters)} meters"
