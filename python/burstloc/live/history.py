@@ -52,11 +52,6 @@ class RowHistory:
     def __len__(self) -> int:
         return self._count
 
-    @property
-    def maxlen(self) -> int:
-        """Rows kept at most (the oldest is dropped for each row past it)."""
-        return self.capacity
-
     def append(self, row: NDArray[np.float64]) -> None:
         """Keep a copy of ``row`` (``width`` values) as the newest row.
 

@@ -64,7 +64,7 @@ def restore_monitor(monitor: BurstMonitor, state: Mapping[str, Any]) -> None:
         )
     m.bank = bank
     m._times = deque((float(t) for t in state["times"]), maxlen=m._times.maxlen)
-    values = RowHistory(m._values.maxlen, m._values.width)
+    values = RowHistory(m._values.capacity, m._values.width)
     values.extend(state["values"])
     m._values = values
     m._fill = np.array(state["fill"], dtype=np.float64)
