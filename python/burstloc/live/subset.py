@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from collections import OrderedDict
 from collections.abc import Sequence
+from dataclasses import replace
 
 from burstloc.exceptions import ConfigError
 from burstloc.localize.decide import RankingLocalizers
@@ -29,15 +30,11 @@ def restricted_model(model: LocalizationModel, meters: Sequence[str]) -> Localiz
     if unknown or not meters:
         raise ConfigError(f"cannot restrict the localization model to meters {list(meters)}")
     cols = [model.meters.index(m) for m in meters]
-    return LocalizationModel(
-        network_hash=model.network_hash,
+    return replace(  # the rest as it is: wave speed, tolerances, timing factor, connectors
+        model,
         meters=tuple(meters),
-        pipes=model.pipes,
         node_distances={node: row[cols] for node, row in model.node_distances.items()},
         signature_sets=tuple(s.for_meters(meters) for s in model.signature_sets),
-        wave_speed=model.wave_speed,
-        wave_speed_tolerance=model.wave_speed_tolerance,
-        clock_tolerance=model.clock_tolerance,
         clock_offsets=(
             None
             if model.clock_offsets is None
