@@ -122,12 +122,12 @@ def main() -> None:
         f"{args.burst_flow:g} L/s bursts"
         + (f"; the truth perturbed: {' '.join(args.truth)}" if args.truth else "")
     )
-    print("configuration   speed  localizer | 95% held  region  <=300m   mean")
+    print("configuration   speed  localizer | 95% held  region  <=300m     mean")
     for r in table:
         print(
             f"{r['config']:<14} {r['speed']:6.0f}  {r['localizer']:<9} |     "
             f"{100 * (r['held'] or 0):3.0f}%  {r['length'] or 0:5.0f}m    "
-            f"{100 * (r['within_300'] or 0):3.0f}%  {r['mean']:5.0f}m"
+            f"{100 * (r['within_300'] or 0):3.0f}%  {r['mean']:7.1f}m"
         )
     by = {(r["config"], r["localizer"]): r for r in table}
     if set(args.only) != set(CONFIGS):

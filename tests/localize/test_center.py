@@ -83,3 +83,42 @@ def test_the_centre_lies_in_the_region_between_two_likely_places() -> None:
     assert center.position.pipe == "de"
     assert 125.0 <= center.position.metres <= 175.0  # the middle of the tail
     assert posterior.region().contains("de", "d", center.position.metres, 300.0)
+
+
+# Two zones joined by a valve (d-v, no length): the loop a-b-c-d and a tail v-x-y (200 m each).
+ZONES = [
+    *PIPES[:4],
+    PipeGeometry("vx", "v", "x", 200.0),
+    PipeGeometry("xy", "x", "y", 200.0),
+]
+VALVE = ("d", "v", 0.0)
+
+
+def _zoned(connectors: tuple[tuple[str, str, float], ...]) -> ArrivalLocalizer:
+    graph = nx.Graph()
+    for p in ZONES:
+        graph.add_edge(p.start, p.end, length=p.length)
+    graph.add_edge(VALVE[0], VALVE[1], length=0.0)  # the meters hear through the valve
+    meters = ["a", "y"]
+    lengths = {m: nx.single_source_dijkstra_path_length(graph, m, weight="length") for m in meters}
+    distances = {n: np.array([lengths[m][n] for m in meters]) for n in graph}
+    return ArrivalLocalizer(ZONES, meters, distances, connectors=connectors)
+
+
+@pytest.mark.parametrize("joined", [True, False])
+def test_mass_behind_a_valve_is_not_out_of_reach(joined: bool) -> None:
+    """85 % of the mass on ab, 15 % at the far end of the other zone (xy): the centre is on
+    the loop, whether the valve joins the zones (the network's connectors) or not (a model
+    stored without them: the other zone's mass counts as the farthest reached, never free).
+    Counted free, as it once was, the far zone's candidates paid for its 15 % only."""
+    arrival = _zoned((VALVE,) if joined else ())
+    grid = RegionGrid(arrival, step=25.0)
+    prob = np.full(len(grid), 1e-12)
+    ab, xy = np.flatnonzero(grid.pipe == 0), np.flatnonzero(grid.pipe == 5)
+    prob[ab] = 0.85 / ab.size
+    prob[xy] = 0.15 / xy.size
+    posterior = Posterior(grid, prob / prob.sum())
+    center = posterior_center(posterior, posterior.region(0.99), candidates=len(grid))
+    assert center.position.pipe in ("ab", "bc", "da")
+    if joined:  # the expected distance walks through the valve: finite, and less than 200 m
+        assert center.expected_distance < 200.0

@@ -186,3 +186,39 @@ def test_the_timing_tolerances_are_stored_checked_and_reach_the_arrival_localize
             _line_model(**{field: value})
     with pytest.raises(ConfigError, match="clock_tolerance"):
         _line_model(clock_tolerance=math.nan)
+
+
+def test_connectors_are_stored_checked_and_reach_the_arrival_localizer() -> None:
+    model = _line_model(connectors=[("m3", "x", 0.0)])
+    doc = json.loads(json.dumps(model.to_json()))
+    assert doc["connectors"] == [["m3", "x", 0.0]]
+    back = LocalizationModel.from_json(doc)
+    assert back == model and back != _line_model()
+    assert RankingLocalizers.from_model(back).arrival.connectors == (("m3", "x", 0.0),)
+    del doc["connectors"]  # a model stored before they were: the pipes alone
+    older = LocalizationModel.from_json(doc)
+    assert older.connectors is None
+    assert RankingLocalizers.from_model(older).arrival.connectors == ()
+    with pytest.raises(ConfigError, match=r"connectors\[0\] must be \[start node, end node"):
+        _line_model(connectors=[("m3", 5, 0.0)])
+    with pytest.raises(ConfigError, match=r"connectors\[1\]\.length"):
+        _line_model(connectors=[("m3", "x", 0.0), ("m0", "x", -1.0)])
+    broken = {**model.to_json(), "connectors": [["m3", "x"]]}
+    with pytest.raises(ConfigError, match=r"connectors\[0\]"):
+        LocalizationModel.from_json(broken)
+
+
+def test_a_model_restricted_to_fewer_meters_keeps_the_rest_as_it_was() -> None:
+    """The subset localizers (a meter silent) read the same timing factor, tolerances and
+    connectors as the whole model's."""
+    from burstloc.live.subset import restricted_model
+
+    model = _line_model(
+        connectors=[("m3", "x", 0.0)], timing_factor=2.5, wave_speed_tolerance=0.12,
+        clock_offsets={"m1": 0.01, "m2": -0.02},
+    )  # fmt: skip
+    fewer = restricted_model(model, ("m0", "m2", "m3"))
+    assert fewer.meters == ("m0", "m2", "m3")
+    assert fewer.timing_factor == 2.5 and fewer.wave_speed_tolerance == 0.12
+    assert fewer.connectors == model.connectors and fewer.clock_offsets == {"m2": -0.02}
+    np.testing.assert_array_equal(fewer.node_distances["m1"], [600.0, 600.0, 1200.0])

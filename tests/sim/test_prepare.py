@@ -16,6 +16,7 @@ from burstloc.network import load_network
 from burstloc.sim.model.prepare import (
     arrival_geometry,
     arrival_localizer,
+    connectors,
     length_graph,
     prepare_model,
     ranking_localizers,
@@ -157,3 +158,34 @@ def test_the_model_and_the_arrival_localizer_carry_the_fronts(
     built = RankingLocalizers.from_model(model).arrival
     direct = arrival_localizer(tiny_network, ["J4", "J2"])
     np.testing.assert_array_equal(built._fronts, direct._fronts)  # type: ignore[arg-type]
+
+
+def test_the_connectors_join_the_pipes_where_the_network_does(tmp_path: Path) -> None:
+    """A zone behind a pressure-reducing valve: the valve is the connector, at no length; the
+    pipes and the connectors join the pipes' end nodes as the whole network does (the pipes
+    alone leave the zone an island), and the model and the arrival localizer carry them."""
+    import networkx as nx
+
+    inp = tmp_path / "zones.inp"
+    inp.write_text(
+        "[JUNCTIONS]\n J1 0 1\n J2 0 1\n J3 0 1\n J4 0 2\n[RESERVOIRS]\n R1 80\n"
+        "[PIPES]\n A R1 J1 300 200 100 0 Open\n B J1 J2 300 200 100 0 Open\n"
+        " C J3 J4 300 200 100 0 Open\n"
+        "[VALVES]\n V J2 J3 200 PRV 40 0\n"
+        "[OPTIONS]\n Units LPS\n[END]\n"
+    )
+    wn = load_network(inp)
+    joined = connectors(wn)
+    assert joined == [("J2", "J3", 0.0)]
+
+    def parts(graph: nx.Graph) -> int:
+        return nx.number_connected_components(graph.subgraph({"R1", "J1", "J2", "J3", "J4"}))
+
+    pipes_only = nx.Graph([(wn.get_link(p).start_node_name, wn.get_link(p).end_node_name)
+                           for p in wn.pipe_name_list])  # fmt: skip
+    both = pipes_only.copy()
+    both.add_edges_from((u, v) for u, v, _ in joined)
+    assert parts(pipes_only) == 2 and parts(both) == parts(length_graph(wn)) == 1
+    assert arrival_localizer(inp, ["J1", "J4"]).connectors == (("J2", "J3", 0.0),)
+    model = prepare_model(inp, ["J1", "J4"], cache_dir=tmp_path / "cache")
+    assert model.connectors == (("J2", "J3", 0.0),)

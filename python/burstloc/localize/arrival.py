@@ -181,6 +181,7 @@ class ArrivalLocalizer:
         clock_tolerance: float = CLOCK_TOLERANCE,
         clock_offsets: Mapping[str, float] | None = None,
         timing_factor: float = 1.0,
+        connectors: Sequence[tuple[str, str, float]] = (),
     ) -> None:
         if not (math.isfinite(wave_speed) and wave_speed > 0):
             raise ConfigError(f"wave_speed must be > 0 m/s, got {wave_speed}")
@@ -213,6 +214,9 @@ class ArrivalLocalizer:
         if not np.all(np.isfinite(self.clock_offsets)):
             raise ConfigError("clock offsets must be finite numbers of seconds")
         self.pipes = tuple(pipes)
+        self.connectors = tuple(connectors)
+        """The network's other links joining the pipes, ``(start, end, length m)``: a crew's
+        paths (:class:`~burstloc.localize.model.LocalizationModel`)."""
         self.wave_speed = float(wave_speed)
         self.positions = pos
         self.amplitude_weight = float(amplitude_weight)

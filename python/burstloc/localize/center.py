@@ -9,9 +9,10 @@ that explain them is: the unit is the metre of main, not the pipe.
 
 :func:`posterior_center` takes the :data:`CANDIDATES` densest grid points of the posterior as
 candidates (each inside the search region, whose segments are the densest ones), measures the
-network distance from each to every point of the region along the candidate pipes (Dijkstra
-from the candidates' end nodes on the pipes' graph, built once per arrival localizer; each
-node's path lengths kept once found) and
+network distance from each to every point of the region along the candidate pipes and the
+links joining them (Dijkstra from the candidates' end nodes on that graph, built once per arrival
+localizer; each node's path lengths kept once found; a point no path reaches counts as the
+farthest one reached) and
 returns the candidate of least expected distance, as a position on its pipe (the segment's
 middle, within the region's stretch that holds it). Numpy and NetworkX only: on the live path.
 """
@@ -39,16 +40,19 @@ MAX_MASS_POINTS = 4000
 
 
 class _Paths:
-    """Path lengths along the candidate pipes of one arrival localizer (undirected, weighted by
-    length, the shortest of parallel pipes): from a node to every node, one Dijkstra per node
-    asked for, kept (a few kB each)."""
+    """Path lengths along the candidate pipes of one arrival localizer and the links joining
+    them (its ``connectors``: valves and pumps, at no length), undirected, weighted by length,
+    the shortest of parallel links: from a node to every node, one Dijkstra per node asked for,
+    kept (a few kB each). Without the connectors a network's zones behind valves and pumps
+    would be islands, and the mass of another zone out of every candidate's reach."""
 
     def __init__(self, arrival: ArrivalLocalizer) -> None:
         self.graph = nx.Graph()
-        for p in arrival.pipes:
-            known = self.graph.get_edge_data(p.start, p.end)
-            if known is None or known["length"] > p.length:
-                self.graph.add_edge(p.start, p.end, length=float(p.length))
+        links = [(p.start, p.end, p.length) for p in arrival.pipes]
+        for start, end, length in links + list(arrival.connectors):
+            known = self.graph.get_edge_data(start, end)
+            if known is None or known["length"] > length:
+                self.graph.add_edge(start, end, length=float(length))
         self.index = {n: i for i, n in enumerate(self.graph.nodes)}
         self.starts = np.array([self.index[p.start] for p in arrival.pipes], dtype=np.int64)
         """Each candidate pipe's start node, as an index into :meth:`from_node`'s arrays."""
@@ -122,16 +126,21 @@ def posterior_center(
             lengths_from[m_start] + m_off, lengths_from[m_end] + (m_len - m_off)
         )
     weights = prob[mass] / prob[mass].sum()
-    best_i, best_cost = int(tried[0]), np.inf
+    dists = []
     for i in tried.tolist():
         p = pipes[int(grid.pipe[i])]
         x = float(mid[i])
         dist = np.minimum(x + reach[p.start], (p.length - x) + reach[p.end])
         same = m_pipe == grid.pipe[i]
-        dist = np.where(same, np.minimum(dist, np.abs(m_off - x)), dist)
-        cost = float(np.sum(weights * np.where(np.isfinite(dist), dist, 0.0)))
-        if cost < best_cost:
-            best_i, best_cost = int(i), cost
+        dists.append(np.where(same, np.minimum(dist, np.abs(m_off - x)), dist))
+    table = np.array(dists)  # (candidates, mass points)
+    reached = np.isfinite(table)
+    # a point no path reaches (a zone the network's links do not join) is as far as the
+    # farthest point any candidate reaches: never free
+    far = float(table[reached].max()) if reached.any() else 0.0
+    costs = np.where(reached, table, far) @ weights
+    best = int(np.argmin(costs))
+    best_i, best_cost = int(tried[best]), float(costs[best])
     p = pipes[int(grid.pipe[best_i])]
     x = float(mid[best_i])
     low, high = float(grid.low[best_i]), float(grid.high[best_i])

@@ -112,6 +112,7 @@ class RankingLocalizers(Mapping[str, Localizer]):
             clock_tolerance=model.clock_tolerance,
             clock_offsets=model.clock_offsets,
             timing_factor=model.timing_factor,
+            connectors=model.connectors or (),
         )
         signature = SignatureLocalizer(model.signature_sets)
         return cls(arrival, signature, FusedLocalizer(arrival, signature))

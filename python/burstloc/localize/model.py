@@ -4,8 +4,9 @@ The arrival and signature localizers need facts about the network that only a hy
 gives: each pipe's end nodes in the steady-state flow direction and its length, the shortest path
 lengths from those end nodes to the meters, the wave front a burst on each pipe sends to each
 meter (relative: which silent meters should have heard it) and the burst signatures (steady-state
-head drops at the meters, per pipe and position). ``burstloc calibrate`` computes them once, offline
-(:func:`burstloc.sim.model.prepare.prepare_model`: WNTR and EPANET), and stores them in the
+head drops at the meters, per pipe and position), and the network's other links (valves, pumps)
+that join the pipes where a crew walks between them. ``burstloc calibrate`` computes them once,
+offline (:func:`burstloc.sim.model.prepare.prepare_model`: WNTR and EPANET), and stores them in the
 configuration it writes (:class:`burstloc.localize.config.Calibration`); the live monitor builds
 its localizers from the stored model
 (:meth:`burstloc.localize.decide.RankingLocalizers.from_model`) and never runs a hydraulic model.
@@ -13,8 +14,8 @@ its localizers from the stored model
 A model is bound to one network file (its SHA-256, :func:`burstloc.inp.network_hash`) and one
 ordered list of meters: :meth:`LocalizationModel.check` refuses, by name, a model for another
 network or other meters. The JSON document carries the format tag :data:`MODEL_FORMAT`; a
-distance to an unreachable meter is stored as ``null``; ``fronts`` may be absent (a model written
-before they were stored). Numpy only; on the live path.
+distance to an unreachable meter is stored as ``null``; ``fronts`` and ``connectors`` may be
+absent (a model written before they were stored). Numpy only; on the live path.
 """
 
 from __future__ import annotations
@@ -76,6 +77,10 @@ class LocalizationModel:
     ``clock_offsets[meter]``: how late (s) each meter hears a wave, its clock and its sensor
     together, as known events showed (:mod:`burstloc.localize.travel_fit`); ``None``: not known
     (every meter on time).
+    ``connectors``: the network's links that are not candidate pipes (valves, pumps), as
+    ``(start node, end node, length m)`` (0 for a valve or a pump): with the pipes, the paths a
+    crew walks from a named point to the burst (:mod:`burstloc.localize.center`); ``None`` (a
+    model stored without them): the pipes alone.
     ``timing_factor``: the search regions' timing error over the stated one at one capture
     interval; not stored with the model: set per interval by
     :meth:`~burstloc.localize.config.Calibration.model_at` from
@@ -97,6 +102,7 @@ class LocalizationModel:
     clock_tolerance: float = CLOCK_TOLERANCE
     clock_offsets: Mapping[str, float] | None = None
     timing_factor: float = 1.0
+    connectors: Sequence[tuple[str, str, float]] | None = None
 
     def __post_init__(self) -> None:
         meters = check_names(self.meters, "meters", high=MAX_METERS)
@@ -149,6 +155,27 @@ class LocalizationModel:
                     raise FieldError("clock_offsets_s", f"{meter!r} is not a meter of the model")
                 offsets[meter] = check_number(value, f"clock_offsets_s.{meter}", low=-60, high=60)
             object.__setattr__(self, "clock_offsets", offsets)
+        if self.connectors is not None:
+            object.__setattr__(self, "connectors", self._checked_connectors(self.connectors))
+
+    @staticmethod
+    def _checked_connectors(
+        connectors: Sequence[tuple[str, str, float]],
+    ) -> tuple[tuple[str, str, float], ...]:
+        """Each connector as ``(start, end, length)``: two node names, a length >= 0 (m)."""
+        if len(connectors) > MAX_PIPES:
+            raise FieldError("connectors", f"must hold at most {MAX_PIPES} links")
+        out = []
+        for i, item in enumerate(connectors):
+            if (
+                not isinstance(item, (tuple, list))
+                or len(item) != 3
+                or not all(isinstance(n, str) and n for n in item[:2])
+            ):
+                raise FieldError(f"connectors[{i}]", "must be [start node, end node, length]")
+            length = check_number(item[2], f"connectors[{i}].length", low=0, high=MAX_LENGTH)
+            out.append((item[0], item[1], float(length)))
+        return tuple(out)
 
     def _checked_fronts(
         self, fronts: Mapping[str, NDArray[np.float64]]
@@ -216,6 +243,11 @@ class LocalizationModel:
                 if self.fronts is None
                 else {"fronts": {p: [float(f) for f in row] for p, row in self.fronts.items()}}
             ),
+            **(
+                {}
+                if self.connectors is None
+                else {"connectors": [[u, v, length] for u, v, length in self.connectors]}
+            ),
         }
 
     @classmethod
@@ -258,6 +290,11 @@ class LocalizationModel:
                     else {
                         str(p): np.array(row, dtype=np.float64) for p, row in data["fronts"].items()
                     }
+                ),
+                connectors=(
+                    None
+                    if data.get("connectors") is None
+                    else [tuple(c) for c in data["connectors"]]
                 ),
             )
         except ConfigError:

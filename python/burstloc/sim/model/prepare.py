@@ -37,6 +37,7 @@ if TYPE_CHECKING:
 __all__ = [
     "arrival_geometry",
     "arrival_localizer",
+    "connectors",
     "length_graph",
     "pipe_geometry",
     "prepare_model",
@@ -118,6 +119,18 @@ def pipe_geometry(
             float(stretch.get(p, 1.0)),
         )
         for p in wn.pipe_name_list
+    ]
+
+
+def connectors(wn: WaterNetworkModel) -> list[tuple[str, str, float]]:
+    """The network's links that are not pipes (valves, pumps) as ``(start, end, 0.0)``: where
+    the pipes meet across them, at no length, as in :func:`length_graph`
+    (:attr:`burstloc.localize.model.LocalizationModel.connectors`)."""
+    pipes = set(wn.pipe_name_list)
+    return [
+        (str(link.start_node_name), str(link.end_node_name), 0.0)
+        for name, link in wn.links()
+        if name not in pipes
     ]
 
 
@@ -252,6 +265,7 @@ def arrival_localizer(
     stretch = stretch_of(wave_speeds, wn, wave_speed)
     pipes, node_distances = arrival_geometry(wn, meter_list, stretch)
     options.setdefault("fronts", wave_fronts(wn, meter_list, pipes, stretch))
+    options.setdefault("connectors", connectors(wn))
     return ArrivalLocalizer(
         pipes, meter_list, node_distances, wave_speed=wave_speed, positions=positions, **options
     )
@@ -299,6 +313,7 @@ def prepare_model(
         ),
         wave_speed=wave_speed,
         fronts=wave_fronts(model, meter_list, pipes, stretch),
+        connectors=connectors(model),
     )
 
 
