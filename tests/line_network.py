@@ -5,8 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from burstloc.localize.arrival import ArrivalLocalizer, PipeGeometry
+from burstloc.localize.arrival import ArrivalLocalizer
 from burstloc.localize.interval import IntervalCalibration
+from burstloc.localize.pipes import PipeGeometry
 from burstloc.localize.signature import SignatureLocalizer, SignatureSet
 
 METERS = ("m0", "m1", "m2", "m3")

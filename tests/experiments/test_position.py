@@ -21,8 +21,8 @@ from burstloc.experiments.position import (
     score_position,
 )
 from burstloc.experiments.runs import RunSpec
-from burstloc.localize.arrival import PipePosition
 from burstloc.localize.detection import DetectorConfig
+from burstloc.localize.pipes import PipePosition
 from burstloc.network import load_network
 
 SCHEMA = json.loads((Path(__file__).parents[1] / "evaluate_schema.json").read_text())

@@ -16,10 +16,11 @@ import pytest
 
 from alarm_evidence import arrival_evidence
 from burstloc.exceptions import ConfigError, InputError, NetworkError
-from burstloc.localize.arrival import ArrivalLocalizer, PipeGeometry
+from burstloc.localize.arrival import ArrivalLocalizer
 from burstloc.localize.evidence import (
     BurstEvidence,
 )
+from burstloc.localize.pipes import PipeGeometry
 from burstloc.network import load_network
 from burstloc.sim.model.prepare import arrival_localizer, length_graph
 

@@ -7,8 +7,9 @@ import networkx as nx
 import numpy as np
 import pytest
 
-from burstloc.localize.arrival import ArrivalLocalizer, PipeGeometry
+from burstloc.localize.arrival import ArrivalLocalizer
 from burstloc.localize.center import posterior_center
+from burstloc.localize.pipes import PipeGeometry
 from burstloc.localize.region import Posterior, RegionGrid
 
 # A loop with a tail: a-b-c-d-a (100 m sides) and d-e (300 m), one meter at a and one at e.

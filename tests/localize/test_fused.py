@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 
 from burstloc.exceptions import ConfigError, InputError
-from burstloc.localize.arrival import ArrivalLocalizer, PipeGeometry
+from burstloc.localize.arrival import ArrivalLocalizer
 from burstloc.localize.evidence import BurstEvidence, MeterAlarm, RankedPipe, Ranking
 from burstloc.localize.fused import FusedLocalizer, arrival_loglik, signature_loglik
+from burstloc.localize.pipes import PipeGeometry
 from line_network import METERS, WAVE, line_arrival, line_signature
 
 

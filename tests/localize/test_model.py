@@ -10,10 +10,10 @@ import pytest
 
 from burstloc.constants import CLOCK_TOLERANCE, WAVE_SPEED_TOLERANCE
 from burstloc.exceptions import ConfigError
-from burstloc.localize.arrival import PipeGeometry
 from burstloc.localize.decide import RankingLocalizers
 from burstloc.localize.evidence import BurstEvidence, MeterAlarm
 from burstloc.localize.model import MODEL_FORMAT, LocalizationModel
+from burstloc.localize.pipes import PipeGeometry
 from burstloc.localize.signature import SignatureSet
 from line_network import METERS, PIPES, WAVE, line_arrival, line_signature
 

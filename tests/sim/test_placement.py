@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from burstloc.exceptions import ConfigError, NetworkError
-from burstloc.localize.arrival import PipeGeometry
+from burstloc.localize.pipes import PipeGeometry
 from burstloc.localize.signature import SignatureSet
 from burstloc.sim.placement.methods import (
     METERS_FORMAT,

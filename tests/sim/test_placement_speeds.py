@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from burstloc.exceptions import ConfigError
-from burstloc.localize.arrival import PipeGeometry
+from burstloc.localize.pipes import PipeGeometry
 from burstloc.network import load_network, read_network
 from burstloc.sim.model.prepare import arrival_geometry
 from burstloc.sim.placement.arrival import arrival_separation

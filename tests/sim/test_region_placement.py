@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from burstloc.exceptions import ConfigError, NetworkError
-from burstloc.localize.arrival import PipeGeometry
+from burstloc.localize.pipes import PipeGeometry
 from burstloc.network import load_network
 from burstloc.sim.model.prepare import arrival_geometry
 from burstloc.sim.placement.methods import MeterSet, arrival_meters, meter_ambiguity, place_meters

@@ -1,7 +1,7 @@
 """Position errors in metres: where a burst really was, where it was placed, how far apart.
 
 The ranking localizers name a pipe and, from the arrival fit, a position on it
-(:class:`burstloc.localize.arrival.PipePosition`: metres from the pipe's flow-direction start
+(:class:`burstloc.localize.pipes.PipePosition`: metres from the pipe's flow-direction start
 node, with an interval). ``burstloc evaluate`` scores that position against the simulated burst's
 (:func:`true_point`: the scenario's fraction of the pipe from its INP start node) as a *network
 distance* (:class:`NetworkDistance`): the shortest path along the pipes between the two points,
@@ -29,7 +29,7 @@ if TYPE_CHECKING:
     from wntr.network import WaterNetworkModel
 
     from burstloc.experiments.harness import Attempt
-    from burstloc.localize.arrival import PipePosition
+    from burstloc.localize.pipes import PipePosition
     from burstloc.sim.scenarios.result import ScenarioResult
 
 __all__ = [
@@ -70,7 +70,7 @@ def true_point(result: ScenarioResult, wn: WaterNetworkModel) -> PipePoint:
 
 
 def estimated_point(position: PipePosition) -> PipePoint:
-    """The point a localizer's :class:`~burstloc.localize.arrival.PipePosition` names."""
+    """The point a localizer's :class:`~burstloc.localize.pipes.PipePosition` names."""
     return PipePoint(position.pipe, position.start, position.metres)
 
 

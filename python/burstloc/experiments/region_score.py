@@ -38,7 +38,7 @@ from burstloc.localize.region import REGION_LEVELS
 if TYPE_CHECKING:
     from burstloc.experiments.harness import Attempt
     from burstloc.experiments.position import PipePoint, PositionOutcome
-    from burstloc.localize.arrival import PipePosition
+    from burstloc.localize.pipes import PipePosition
 
 __all__ = [
     "NEAR",

@@ -7,7 +7,8 @@ On the live path: nothing here runs a hydraulic model or imports the simulator.
 * :mod:`~burstloc.localize.paper_rules` and :mod:`~burstloc.localize.detection`: the paper's
   rules over windows of readings;
 * :mod:`~burstloc.localize.arrival`, :mod:`~burstloc.localize.signature`,
-  :mod:`~burstloc.localize.fused`: the ranking localizers;
+  :mod:`~burstloc.localize.fused`: the ranking localizers; :mod:`~burstloc.localize.pipes`:
+  the candidate pipes and the points they name;
 * :mod:`~burstloc.localize.steady_level`: the estimators of a meter's new steady level;
 * :mod:`~burstloc.localize.model`: the stored localization model (what the ranking localizers
   need of the network, computed offline by :mod:`burstloc.sim.model.prepare`);

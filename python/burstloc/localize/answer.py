@@ -7,8 +7,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from burstloc.localize.arrival import PipePosition
 from burstloc.localize.evidence import Ranking
+from burstloc.localize.pipes import PipePosition
 from burstloc.localize.region import REGION_CONFIDENCE, Posterior, SearchRegion
 
 if TYPE_CHECKING:

@@ -49,8 +49,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -63,14 +61,13 @@ from burstloc.constants import (
 )
 from burstloc.exceptions import ConfigError, InputError
 from burstloc.localize.evidence import BurstEvidence, RankedPipe, Ranking, against_front
+from burstloc.localize.pipes import PipeGeometry, PipePosition
 from burstloc.localize.windows import fit_windows, silence_counts
 
 __all__ = [
     "POSITION_STEP",
     "RESOLVED_FRONT_INTERVAL",
     "ArrivalLocalizer",
-    "PipeGeometry",
-    "PipePosition",
     "position_tolerance",
 ]
 
@@ -82,24 +79,6 @@ front over three such readings."""
 DEFAULT_POSITIONS = CANDIDATE_POSITIONS
 """Candidate burst positions along each pipe
 (:data:`burstloc.localize.evidence.CANDIDATE_POSITIONS`)."""
-
-
-@dataclass(frozen=True)
-class PipeGeometry:
-    """A candidate pipe: its end nodes (``start``, ``end``, flow direction) and length (m);
-    ``stretch``: the metres of wave travel at the localizer's wave speed that one metre of it
-    takes (that speed over the pipe's own, :mod:`burstloc.wave_speeds`; 1 for a pipe at it)."""
-
-    pipe: str
-    start: str
-    end: str
-    length: float
-    stretch: float = 1.0
-
-    @property
-    def travel(self) -> float:
-        """The pipe's length in metres of wave travel at the localizer's wave speed."""
-        return self.length * self.stretch
 
 
 def position_tolerance(alarms: int) -> float:
@@ -116,32 +95,6 @@ def position_tolerance(alarms: int) -> float:
 POSITION_STEP = 1.0
 """Spacing (m) of the points tried along the named pipe when estimating the burst position (at
 least 50 and at most 2,000 points per pipe)."""
-
-
-@dataclass(frozen=True)
-class PipePosition:
-    """Where on a pipe the burst is: ``metres`` from its ``start`` node (the flow-direction start
-    node, as in the ranking), within ``[low, high]``; ``length`` is the pipe's length (m)."""
-
-    pipe: str
-    start: str
-    end: str
-    length: float
-    metres: float
-    low: float
-    high: float
-
-    def to_json(self) -> dict[str, Any]:
-        """JSON-ready record: ``pipe``, ``from`` (the start node), ``metres``, ``low``,
-        ``high``, ``length``."""
-        return {
-            "pipe": self.pipe,
-            "from": self.start,
-            "metres": self.metres,
-            "low": self.low,
-            "high": self.high,
-            "length": self.length,
-        }
 
 
 def _horizon(dist: NDArray[np.float64]) -> float:

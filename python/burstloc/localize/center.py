@@ -26,8 +26,9 @@ import networkx as nx
 import numpy as np
 from numpy.typing import NDArray
 
-from burstloc.localize.arrival import ArrivalLocalizer, PipePosition
+from burstloc.localize.arrival import ArrivalLocalizer
 from burstloc.localize.evidence import Ranking
+from burstloc.localize.pipes import PipePosition
 from burstloc.localize.region import REGION_CONFIDENCE, Posterior, SearchRegion
 
 __all__ = ["CANDIDATES", "CENTRE_SHARE", "Center", "named_point", "posterior_center"]

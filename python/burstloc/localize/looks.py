@@ -22,10 +22,11 @@ import numpy as np
 from burstloc.constants import MeterModel
 from burstloc.exceptions import InputError
 from burstloc.localize.answer import Decision
-from burstloc.localize.arrival import ArrivalLocalizer, PipePosition
+from burstloc.localize.arrival import ArrivalLocalizer
 from burstloc.localize.center import named_point
 from burstloc.localize.evidence import BurstEvidence, Localizer, Ranking, evidence_at
 from burstloc.localize.fused import FusedLocalizer, decisive
+from burstloc.localize.pipes import PipePosition
 from burstloc.localize.region import region_posterior
 
 if TYPE_CHECKING:

@@ -36,7 +36,7 @@ from burstloc.constants import (
     WAVE_SPEED_TOLERANCE,
 )
 from burstloc.exceptions import ConfigError, InputError
-from burstloc.localize.arrival import PipeGeometry
+from burstloc.localize.pipes import PipeGeometry
 from burstloc.localize.signature import SignatureSet
 
 __all__ = ["MODEL_FORMAT", "LocalizationModel"]
@@ -61,7 +61,7 @@ class LocalizationModel:
     """The network facts the ranking localizers need (module docstring).
 
     ``pipes``: every candidate pipe with its flow-direction end nodes, length (m) and stretch
-    (its wave travel per metre: :class:`~burstloc.localize.arrival.PipeGeometry`).
+    (its wave travel per metre: :class:`~burstloc.localize.pipes.PipeGeometry`).
     ``node_distances[node][j]``: shortest path length (m) along the pipes from ``node`` (an end
     node of a candidate pipe) to ``meters[j]`` (``inf`` when there is no path); where pipes have
     wave speeds of their own, in metres of wave travel at ``wave_speed`` (travel time times it).

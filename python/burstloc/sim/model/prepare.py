@@ -24,9 +24,10 @@ from numpy.typing import NDArray
 
 from burstloc.constants import CANDIDATE_POSITIONS, WAVE_SPEED
 from burstloc.inp import check_meters
-from burstloc.localize.arrival import ArrivalLocalizer, PipeGeometry
+from burstloc.localize.arrival import ArrivalLocalizer
 from burstloc.localize.decide import RankingLocalizers
 from burstloc.localize.model import LocalizationModel
+from burstloc.localize.pipes import PipeGeometry
 from burstloc.network import Network, NetworkSource, as_network, flow_direction_graph
 from burstloc.sim.signatures.compute import SignatureMethod, cached_signature_sets
 from burstloc.wave_speeds import WaveSpeeds, stretch_of

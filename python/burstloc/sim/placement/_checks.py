@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from burstloc.exceptions import ConfigError
-from burstloc.localize.arrival import PipeGeometry
+from burstloc.localize.pipes import PipeGeometry
 from burstloc.network import NetworkSource, as_network
 from burstloc.wave_speeds import WaveSpeeds, stretch_of
 

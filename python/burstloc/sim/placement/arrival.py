@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 
 from burstloc.constants import CANDIDATE_POSITIONS, WAVE_SPEED
 from burstloc.exceptions import ConfigError
-from burstloc.localize.arrival import PipeGeometry
+from burstloc.localize.pipes import PipeGeometry
 from burstloc.sim.placement._checks import check_meter_count, check_timing, kept_indices
 
 __all__ = ["ARRIVAL_POINTS", "MAX_EXACT", "arrival_meters", "arrival_separation"]

@@ -47,7 +47,8 @@ from numpy.typing import NDArray
 
 from burstloc.constants import WAVE_SPEED
 from burstloc.exceptions import ConfigError
-from burstloc.localize.arrival import ArrivalLocalizer, PipeGeometry
+from burstloc.localize.arrival import ArrivalLocalizer
+from burstloc.localize.pipes import PipeGeometry
 from burstloc.localize.region import GRID_STEP, RegionGrid
 from burstloc.sim.placement._checks import (
     check_meter_count,

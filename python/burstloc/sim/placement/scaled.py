@@ -43,7 +43,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from burstloc.exceptions import ConfigError
-from burstloc.localize.arrival import PipeGeometry
+from burstloc.localize.pipes import PipeGeometry
 from burstloc.sim.placement._checks import check_meter_count, kept_indices
 
 if TYPE_CHECKING:
