@@ -41,7 +41,7 @@ from burstloc.localize.evidence import IndexedAlarm, evidence_from_alarms
 from burstloc.localize.interval import calibrated_bank
 from burstloc.localize.travel_fit import EventArrivals
 from burstloc.network import Network
-from burstloc.readings import Reading, Step, timestamp_seconds
+from burstloc.readings import Reading, Step, step_values, timestamp_seconds
 
 __all__ = ["KnownEvent", "event_arrivals", "onsets_after", "read_known_events"]
 
@@ -198,7 +198,7 @@ def _onsets(
     def run(steps: list[Step]) -> None:
         for step in steps:
             times.append(float(step.timestamp))
-            rows.append(np.asarray(step.values, dtype=np.float64))
+            rows.append(step_values(step))
             for alarm in bank.step(rows[-1]):
                 start, channel = max(int(alarm.start), 0), int(alarm.channel or 0)
                 alarms.append(IndexedAlarm(channel, len(times) - 1, start, float(alarm.amplitude)))

@@ -49,7 +49,7 @@ from enum import Enum
 import numpy as np
 
 from burstloc.exceptions import ConfigError, StreamError
-from burstloc.readings import FloatArray, Item, Reading, Step
+from burstloc.readings import FloatArray, Item, Reading, Step, step_values
 
 __all__ = ["MissingPolicy", "StepFeed", "StreamStats"]
 
@@ -275,7 +275,7 @@ class StepFeed:
 
     def _push_step(self, step: Step) -> list[Step]:
         key = self._check_time(step.timestamp, "step")
-        values = np.asarray(step.values, dtype=np.float64)
+        values = step_values(step)
         if values.shape != (len(self.meters),):
             raise StreamError(
                 f"step at t={step.timestamp} has {values.size} values, expected "
