@@ -222,3 +222,28 @@ def test_a_model_restricted_to_fewer_meters_keeps_the_rest_as_it_was() -> None:
     assert fewer.timing_factor == 2.5 and fewer.wave_speed_tolerance == 0.12
     assert fewer.connectors == model.connectors and fewer.clock_offsets == {"m2": -0.02}
     np.testing.assert_array_equal(fewer.node_distances["m1"], [600.0, 600.0, 1200.0])
+
+
+def test_the_meters_taking_part_are_the_columns_and_alarms_of_those_not_excluded() -> None:
+    """A meter excluded (silent): its column and alarms leave, the others' alarms are
+    re-indexed to the columns that stay, and the subset's own localizers rank them."""
+    from burstloc.live.subset import SubsetLocalizers, taking_part
+    from burstloc.localize.evidence import IndexedAlarm
+
+    model = _line_model()
+    whole = RankingLocalizers.from_model(model)
+    subsets = SubsetLocalizers(model)
+    readings = np.arange(20.0).reshape(5, 4)
+    alarms = [IndexedAlarm(3, 4, 2, -0.5), IndexedAlarm(1, 3, 1, -0.4), IndexedAlarm(0, 4, 3, -0.2)]
+    got, moved, meters, localizers = taking_part(METERS, {"m1"}, whole, subsets, readings, alarms)
+    assert meters == ("m0", "m2", "m3")
+    np.testing.assert_array_equal(got, readings[:, [0, 2, 3]])
+    assert moved == [IndexedAlarm(2, 4, 2, -0.5), IndexedAlarm(0, 4, 3, -0.2)]
+    assert localizers is subsets.get(("m0", "m2", "m3"))
+    assert localizers["arrival"].meters == ("m0", "m2", "m3")
+    # every meter reporting, or no subsets to build from: all of them, as they are
+    for excluded, built in (set(), subsets), ({"m1"}, None):
+        got, moved, meters, localizers = taking_part(
+            METERS, excluded, whole, built, readings, alarms
+        )
+        assert meters == METERS and got is readings and moved == alarms and localizers is whole

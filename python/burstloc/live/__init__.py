@@ -5,11 +5,13 @@
 * :mod:`~burstloc.live.health`: per-meter health, plausible range, clock offsets, silence;
 * :mod:`~burstloc.live.feeds`: raw readings assembled into complete time steps;
 * :mod:`~burstloc.live.windows`: complete steps into the localization windows of the paper's loop;
-* :mod:`~burstloc.live.subset`: the localizers restricted to the meters that report;
+* :mod:`~burstloc.live.subset`: the localizers restricted to the meters that report, and the
+  meters taking part;
 * :mod:`~burstloc.live.decision`: a decision as the monitor reports it;
 * :mod:`~burstloc.live.monitor`: the detector bank, history and localizer over those steps,
   built from the stored configuration (no hydraulic model runs);
 * :mod:`~burstloc.live.history`: the monitor's recent readings, in one ring array;
+* :mod:`~burstloc.live.arming`: the monitor's hold-off after a decision and its re-arming;
 * :mod:`~burstloc.live.monitor_state`: the monitor's state across a restart;
 * :mod:`~burstloc.live.loop`: the loop that wires them and never stops on bad data;
 * :mod:`~burstloc.live.reporter`: its messages for the operator, rate-limited;

@@ -10,22 +10,17 @@ the bank; once a meter alarms, the monitor answers at the localizer's decision t
 rule as ``burstloc evaluate`` (:func:`burstloc.localize.decide.rank_alarms`), ranking again at
 the next look while the arrivals seen so far are not decisive (``Decision.look_again``).
 
-After a decision the monitor holds off for ``holdoff`` seconds (default: the calibrated
-signature delay, 150 s): a burst rings through the network for minutes; the readings still fill
-the history, alarms are ignored. Then the bank starts afresh from the current level and
-*re-arms*: it must run ``rearm`` steps in a row without an alarm (any alarm restarts the bank
-and the count) and the ringing must have died down (the step-to-step changes of the last
-:data:`QUIET_WINDOW` seconds back within :data:`QUIET_FACTOR` of the calibrated noise's, or one
-more hold-off gone by) before an alarm may start a new decision, so the tail of the ringing
-never becomes a phantom second burst. A second burst within the hold-off is not reported
-separately. A decision needs alarms from at least ``corroborate`` meters (default 2;
-:mod:`burstloc.localize.corroborate`): alarms not corroborated by the first decision time are
-kept, with the first alarms of meters that alarm later (a burst on a large main reaches far
-meters late or below the threshold), until enough meters have alarmed (the monitor then decides,
-looking at the arrivals from the reading that corroborated them) or the arrival horizon after
-the first alarm has passed. A single meter's alarm (the calibrated false alarms of a noisy
-meter, the tail of the ringing after the hold-off) is dismissed and counted at that horizon,
-later than the first decision time (on EPANET's Net3, 19.8 s after the alarm).
+After a decision the monitor holds off for ``holdoff`` seconds (default: the calibrated signature
+delay, 150 s), then re-arms (:mod:`burstloc.live.arming`: ``rearm`` alarm-free steps and the ringing
+died down), so that the tail of a burst's ringing never becomes a phantom second burst; a second
+burst within the hold-off is not reported separately. A decision needs alarms from at least
+``corroborate`` meters (default 2; :mod:`burstloc.localize.corroborate`): alarms not corroborated by
+the first decision time are kept, with the first alarms of meters that alarm later (a burst on a
+large main reaches far meters late or below the threshold), until enough meters have alarmed (the
+monitor then decides, looking at the arrivals from the reading that corroborated them) or the
+arrival horizon after the first alarm has passed. A single meter's alarm (the calibrated false
+alarms of a noisy meter, the tail of the ringing after the hold-off) is dismissed and counted at
+that horizon, later than the first decision time (on EPANET's Net3, 19.8 s after the alarm).
 
 **Meters that do not report.** :attr:`BurstMonitor.excluded` (kept by the live loop from
 :mod:`burstloc.live.health`: silent meters) take no part: their alarms are ignored and the
@@ -57,10 +52,11 @@ import numpy as np
 
 from burstloc.constants import MAX_SAMPLE, METER_MODELS, RANKING_LOCALIZERS, MeterModel
 from burstloc.exceptions import ConfigError, InputError
+from burstloc.live.arming import QUIET_WINDOW, Arming, rang_out
 from burstloc.live.decision import LiveDecision
 from burstloc.live.history import RowHistory
 from burstloc.live.observe import LiveObserver
-from burstloc.live.subset import SubsetLocalizers
+from burstloc.live.subset import SubsetLocalizers, taking_part
 from burstloc.localize.classify import ClassifierConfig, EventClassifier, Operation, classify_alarms
 from burstloc.localize.config import Calibration
 from burstloc.localize.corroborate import CORROBORATE, corroborated_at, corroboration_deadline
@@ -81,16 +77,10 @@ from burstloc.readings import Step, step_values
 
 _Part = tuple[np.ndarray, np.ndarray, list[IndexedAlarm], tuple[str, ...], Mapping[str, Localizer]]
 
-__all__ = ["HISTORY_BEFORE_ONSET", "QUIET_FACTOR", "QUIET_WINDOW", "BurstMonitor"]
+__all__ = ["HISTORY_BEFORE_ONSET", "BurstMonitor"]
 
 #: Seconds of readings kept before a burst's onset (the baseline of the signature localizer).
 HISTORY_BEFORE_ONSET = 60.0
-
-#: Re-arming waits until the step-to-step changes of the last QUIET_WINDOW seconds are back to
-#: within QUIET_FACTOR of the calibrated noise's (the ringing has died down), at most one more
-#: hold-off.
-QUIET_WINDOW = 30.0
-QUIET_FACTOR = 1.3
 
 
 class BurstMonitor:
@@ -185,6 +175,7 @@ class BurstMonitor:
             raise ConfigError(f"corroborate must be a whole number >= 1, got {corroborate!r}")
         self.corroborate = corroborate
         self.settle = bool(settle)
+        self._arm = Arming(self.holdoff, self.rearm, self.settle)
         self.dismissed = 0  # alarms not corroborated by enough meters
         self.steady = np.asarray(config.model.signature_sets[0].baseline, dtype=np.float64)
         span = HISTORY_BEFORE_ONSET + cal.decision_delay + cal.arrival_decision_delay
@@ -200,9 +191,6 @@ class BurstMonitor:
         self._resume: float | None = None  # the next look at the arrivals (Decision.look_again)
         self._announced = False  # the pending decision's transient record has been given
         self._early: float | None = None  # the fused localizer's early answer is due then
-        self._quiet_until: float | None = None  # end of the hold-off after a decision
-        self._arming = 0  # alarm-free steps still needed after the hold-off
-        self._arm_by: float | None = None  # re-arming; re-armed by then even if still ringing
         self._noise = np.array([max(config.noise_sigma.get(m, 0.0), 1e-3) for m in self.meters])
         self._quiet_steps = max(math.ceil(QUIET_WINDOW / cal.capture_interval), 5)
         self._grace: dict[str, int] = {}  # meter back from silence -> step it counts again
@@ -222,12 +210,12 @@ class BurstMonitor:
     @property
     def holding_off(self) -> bool:
         """Whether the monitor is ignoring alarms after a decision (see ``holdoff``)."""
-        return self._quiet_until is not None
+        return self._arm.holding_off
 
     @property
     def arming(self) -> bool:
         """Whether the monitor is re-arming after a hold-off (see ``rearm``)."""
-        return self._arm_by is not None
+        return self._arm.arming
 
     def exclude(self, meter: str) -> None:
         """Leave ``meter`` out (silent) until :meth:`include`."""
@@ -278,28 +266,20 @@ class BurstMonitor:
                 f"step at t = {t:g} s is not after the previous one (t = {self._times[-1]:g} s)"
             )
         self._fill = values
-        if self._quiet_until is not None and t + 1e-9 >= self._quiet_until:
+        if self._arm.hold_over(t):
             self._restart_bank()  # the hold-off is over: start afresh from the current level
-            self._quiet_until = None
-            self._arming = self.rearm
-            self._arm_by = t + self.holdoff
         alarms = self.bank.step(values)
         self._times.append(t)
         self._values.append(values)
         self._seen += 1
         self._steps += 1
-        if self._quiet_until is not None:
-            return None
-        if self._arm_by is not None:
-            if alarms:
+        arm = self._arm
+        if arm.quiet_until is not None or arm.arm_by is not None:  # after a decision
+            counts, restart = arm.armed(t, bool(alarms), self._settled)
+            if restart:
                 self._restart_bank()
-                self._arming = self.rearm
-            elif self._arming > 0:
-                self._arming -= 1
-            settled = not self.settle or t + 1e-9 >= self._arm_by or self._settled()
-            if self._arming == 0 and settled:
-                self._arm_by = None
-            return None
+            if not counts:
+                return None
         if alarms:  # each meter's first alarm only: the localizers use first arrivals
             alarmed = {a.channel for a in self._alarms}
             for a in alarms:
@@ -348,14 +328,11 @@ class BurstMonitor:
         return meter not in absent and self._grace.get(meter, -1) <= self._steps
 
     def _settled(self) -> bool:
-        """Whether the ringing has died down: over the last :data:`QUIET_WINDOW` seconds, every
-        reporting meter's step-to-step RMS change is within :data:`QUIET_FACTOR` of its noise's."""
-        w = self._quiet_steps
-        if len(self._values) <= w:
+        """Whether the ringing has died down at every reporting meter
+        (:func:`burstloc.live.arming.rang_out`)."""
+        if len(self._values) <= self._quiet_steps:
             return False
-        recent = self._values.last(w + 1)
-        rms = np.sqrt(np.mean(np.diff(recent, axis=0) ** 2, axis=0))
-        quiet = rms <= QUIET_FACTOR * math.sqrt(2.0) * self._noise
+        quiet = rang_out(self._values, self._quiet_steps, self._noise)
         return all(q or m in self.excluded for q, m in zip(quiet, self.meters, strict=True))
 
     def _forget(self) -> None:
@@ -377,23 +354,13 @@ class BurstMonitor:
         ]
 
     def _taking_part(self) -> _Part:
-        """``(times, readings, alarms, meters, localizers)`` of the meters taking part (those
-        not excluded, with their own localizers when some are)."""
+        """``(times, readings, alarms, meters, localizers)`` of the meters taking part
+        (:func:`burstloc.live.subset.taking_part`)."""
         times = np.fromiter(self._times, dtype=np.float64)
-        readings = self._values.array()
-        alarms = self._shifted(times.size)
-        meters, localizers = self.meters, self.localizers
-        part = [j for j, m in enumerate(self.meters) if m not in self.excluded]
-        if self._subsets is not None and len(part) < len(self.meters):
-            column = {j: k for k, j in enumerate(part)}
-            meters = tuple(self.meters[j] for j in part)
-            localizers = self._subsets.get(meters)
-            readings = readings[:, part]
-            alarms = [
-                IndexedAlarm(column[a.channel], a.index, a.start, a.amplitude)
-                for a in alarms
-                if a.channel in column
-            ]
+        readings, alarms, meters, localizers = taking_part(
+            self.meters, self.excluded, self.localizers, self._subsets,
+            self._values.array(), self._shifted(times.size),
+        )  # fmt: skip
         return times, readings, alarms, meters, localizers
 
     def _early_answer(self) -> LiveDecision | None:
@@ -491,5 +458,5 @@ class BurstMonitor:
             # answered now, whatever time the ranking itself could have been given
             decision = replace(decision, time=float(times[-1]), classification=kind)
         self._forget()
-        self._quiet_until = float(times[-1]) + self.holdoff
+        self._arm.hold(float(times[-1]))
         return self._record(decision, meters, alarms, localizers)

@@ -39,9 +39,9 @@ def monitor_state(monitor: BurstMonitor) -> dict[str, Any]:
         "resume": m._resume,
         "early": m._early,
         "announced": m._announced,
-        "quiet_until": m._quiet_until,
-        "arming": m._arming,
-        "arm_by": m._arm_by,
+        "quiet_until": m._arm.quiet_until,
+        "arming": m._arm.steps_left,
+        "arm_by": m._arm.arm_by,
         "dismissed": m.dismissed,
         "grace": dict(m._grace),
         "excluded": sorted(m.excluded),
@@ -76,9 +76,9 @@ def restore_monitor(monitor: BurstMonitor, state: Mapping[str, Any]) -> None:
     m._resume = state.get("resume")  # states saved before: the looks are taken from the start
     m._announced = bool(state.get("announced", False))  # states saved before: False
     m._early = state.get("early")  # states saved before: no early answer pending
-    m._quiet_until = state["quiet_until"]
-    m._arming = int(state["arming"])
-    m._arm_by = state["arm_by"]
+    m._arm.quiet_until = state["quiet_until"]
+    m._arm.steps_left = int(state["arming"])
+    m._arm.arm_by = state["arm_by"]
     m.dismissed = int(state["dismissed"])
     m._grace = {str(k): int(v) for k, v in state["grace"].items()}
     m.excluded = set(state["excluded"])

@@ -10,14 +10,18 @@ meters, from the public data of the stored
 from __future__ import annotations
 
 from collections import OrderedDict
-from collections.abc import Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import replace
+
+import numpy as np
+from numpy.typing import NDArray
 
 from burstloc.exceptions import ConfigError
 from burstloc.localize.decide import RankingLocalizers
+from burstloc.localize.evidence import IndexedAlarm, Localizer
 from burstloc.localize.model import LocalizationModel
 
-__all__ = ["SubsetLocalizers", "restricted_model"]
+__all__ = ["SubsetLocalizers", "restricted_model", "taking_part"]
 
 
 def restricted_model(model: LocalizationModel, meters: Sequence[str]) -> LocalizationModel:
@@ -64,3 +68,28 @@ class SubsetLocalizers:
                 self._built.popitem(last=False)
         self._built.move_to_end(key)
         return found
+
+
+def taking_part(
+    meters: Sequence[str],
+    excluded: Collection[str],
+    localizers: Mapping[str, Localizer],
+    subsets: SubsetLocalizers | None,
+    readings: NDArray[np.float64],
+    alarms: Sequence[IndexedAlarm],
+) -> tuple[NDArray[np.float64], list[IndexedAlarm], tuple[str, ...], Mapping[str, Localizer]]:
+    """``(readings, alarms, meters, localizers)`` of the meters taking part: all of ``meters``
+    but the ``excluded``, with the subset's own localizers (from ``subsets``; without them, the
+    ``localizers`` as they are and every meter). ``readings`` has a column per meter and the
+    alarms' channels index ``meters``; both are returned for the meters taking part."""
+    part = [j for j, m in enumerate(meters) if m not in excluded]
+    if subsets is None or len(part) == len(meters):
+        return readings, list(alarms), tuple(meters), localizers
+    column = {j: k for k, j in enumerate(part)}
+    kept = tuple(meters[j] for j in part)
+    moved = [
+        IndexedAlarm(column[a.channel], a.index, a.start, a.amplitude)
+        for a in alarms
+        if a.channel in column
+    ]
+    return readings[:, part], moved, kept, subsets.get(kept)
