@@ -2,8 +2,9 @@
 10 000 incidents costs, and what keeping incidents costs the monitor.
 
 Usage: ``.venv/bin/python benches/bench_incidents.py [--writes N] [--incidents N] [--runs N]
-[--no-postgresql] [--sections 123] [--one-process]`` (needs the incidents, web and sim extras;
-PostgreSQL's server binaries, ``scripts/install-postgresql.sh``, for its columns):
+[--no-postgresql] [--sections 123] [--one-process] [--instructions]`` (needs the incidents, web
+and sim extras; PostgreSQL's server binaries, ``scripts/install-postgresql.sh``, for its columns;
+Valgrind for ``--instructions``):
 
 1. **Write latency**: one incident kept (one transaction: the incident and its history row,
    :meth:`IncidentStore.take`) and one acknowledgement (:meth:`IncidentStore.act`), ``--writes``
@@ -34,6 +35,15 @@ PostgreSQL's server binaries, ``scripts/install-postgresql.sh``, for its columns
    configuration read from files made once), so that no run inherits another's state;
    ``--one-process`` runs them all in this process, warm (a fresh process replays about a
    quarter slower and its runs scatter more: benches/README.md).
+   ``--instructions`` counts instead of timing: each way, a fresh process runs the feed of
+   ``--bursts`` bursts and one of a single burst under Valgrind's callgrind (Debian's
+   ``valgrind``; ``PYTHONHASHSEED=0``), and the difference of the two counts is what replaying
+   ``--bursts - 1`` bursts costs in executed instructions, every thread of the process (the
+   writer's with the monitor's), its start, imports and the store's opening left out. The
+   counts do not depend on what else the machine runs: the store's share of the work, where
+   the wall clock of a shared machine scatters by more than the target between two identical
+   runs. (The database server's own work, PostgreSQL's, runs in its processes and is not
+   counted; the time the writer waits for the disk is not work either.)
 """
 
 from __future__ import annotations
@@ -347,6 +357,51 @@ def on_and_off(
     return results
 
 
+def instruction_counts(
+    config: Any, bursts: int, stores: dict[str, Callable[[], Any]], folder: Path
+) -> dict[str, float]:
+    """Instructions (callgrind's count, every thread) of replaying ``bursts`` bursts less one
+    burst, through a fresh process per count: without the store (``"off"``) and on each of
+    ``stores`` (a fresh database each), two processes at a time."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    config_path = folder / "config-instructions.json"
+    config.save(config_path)
+    feeds = {n: folder / f"feed-{n}.npz" for n in (1, bursts)}
+    for n, path in feeds.items():
+        save_feed(burst_feed(config, n), path)
+
+    def fresh(setup: str) -> str | None:
+        if setup == "off":
+            return None
+        made = stores[setup]()  # a fresh database (migrated), left to the child
+        url: str = made.url
+        made.close()
+        return url
+
+    def count(setup: str, n: int, url: str | None) -> int:
+        command = [
+            "valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null",
+            sys.executable, __file__, "--child", str(config_path), str(feeds[n]),
+        ]  # fmt: skip
+        done = subprocess.run(
+            [*command, *([] if url is None else [url])],
+            capture_output=True, text=True, check=True,
+            env={**os.environ, "PYTHONHASHSEED": "0"},
+        )  # fmt: skip
+        for line in done.stderr.splitlines():
+            if "Collected :" in line:
+                return int(line.split(":")[-1])
+        raise RuntimeError(f"no instruction count from callgrind:\n{done.stderr[-2000:]}")
+
+    setups = ["off", *stores]
+    jobs = [(s, n, fresh(s)) for s in setups for n in (bursts, 1)]
+    with ThreadPoolExecutor(2) as pool:
+        done = pool.map(lambda job: count(*job), jobs)
+        counts = {(s, n): c for (s, n, _), c in zip(jobs, done, strict=True)}
+    return {s: float(counts[(s, bursts)] - counts[(s, 1)]) for s in setups}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--writes", type=int, default=2000)
@@ -360,6 +415,11 @@ def main() -> None:
     )
     parser.add_argument(
         "--one-process", action="store_true", help="section 3: every run in this process"
+    )
+    parser.add_argument(
+        "--instructions",
+        action="store_true",
+        help="section 3: executed instructions under callgrind instead of wall time",
     )
     parser.add_argument("--child", nargs="+", help=argparse.SUPPRESS)  # CONFIG FEED [STORE]
     args = parser.parse_args()
@@ -450,6 +510,18 @@ def main() -> None:
         from burstloc.experiments.calibrate import calibrate
 
         config = calibrate(PAPER15, capture_intervals=(0.2,), noise_sigma=0.01, meters=METERS)
+        if args.instructions:
+            counted = instruction_counts(config, args.bursts, stores, folder)
+            print(
+                f"3. the monitor, executed instructions of replaying {args.bursts - 1} bursts "
+                f"(a feed of {args.bursts} less one of 1; callgrind, every thread)"
+            )
+            for setup, count in counted.items():
+                print(
+                    f"   store {setup:10s} {count / 1e9:7.3f} G instructions "
+                    f"(x{count / counted['off']:.4f})"
+                )
+            return
         readings = burst_feed(config, args.bursts)
         results = on_and_off(config, readings, args.runs, stores, folder, args.one_process)
         off = results["off"]

@@ -1,14 +1,14 @@
 """Search regions with the meters a utility has: coverage, length and time, per network.
 
 Usage: ``.venv/bin/python benches/bench_regions.py [NETWORK.inp ...] [--fractions 0.1 0.3]
-[--meters-file F ...] [--workers N]``. Default networks: paper15 and EPANET's Net1, Net2,
-Anytown and Net3 (``make networks``). For each network and fraction of its junctions (at least
-two meters), the meters are placed by ``burstloc place`` (arrival method), then ``burstloc
-evaluate`` runs every pipe burst at mid-pipe through the calibrated CUSUM bank at 0.2 s, 5 clock
-phases, the fused localizer, with the calibrated sensor noise, exactly as on the command line
-(simulations cached; Net3 on its transient-ready model, 30 m pipes). ``--meters-file``
-evaluates given meter files instead (e.g. BattLeDIM's sensors on L-TOWN, written with the format
-of ``burstloc place --out``).
+[--meters-file F ...] [--workers N] [--capture-interval S]``. Default networks: paper15 and EPANET's
+Net1, Net2, Anytown and Net3 (``make networks``). For each network and fraction of its junctions (at
+least two meters), the meters are placed by ``burstloc place`` (arrival method), then ``burstloc
+evaluate`` runs every pipe burst at mid-pipe through the calibrated CUSUM bank at 0.2 s
+(``--capture-interval``: another), 5 clock phases, the fused localizer, with the calibrated sensor
+noise, exactly as on the command line (simulations cached; Net3 on its transient-ready model, 30 m
+pipes). ``--meters-file`` evaluates given meter files instead (e.g. BattLeDIM's sensors on L-TOWN,
+written with the format of ``burstloc place --out``).
 
 Printed per run: top-1 / top-3; the named point within 100 / 300 m of the burst; the coverage of
 the 50 / 80 / 95 % regions; the 95 % region's median and p90 length, also as a share of the
@@ -68,6 +68,7 @@ def _run(
     sample: int | None,
     pipes: list[str] | None = None,
     config: Path | None = None,
+    interval: float = 0.2,
 ) -> dict:
     """``burstloc evaluate`` as on the command line (every open pipe, ``sample`` of them
     drawn with a fixed seed, or ``pipes``; with ``config`` that calibration); its JSON's first
@@ -75,7 +76,7 @@ def _run(
     from burstloc.cli import main
 
     args = [
-        "evaluate", str(network), "--detector", "cusum", "--capture-interval", "0.2",
+        "evaluate", str(network), "--detector", "cusum", "--capture-interval", f"{interval:g}",
         "--localizer", "fused", "--meters-file", str(meters_file), "--json", str(out), "--quiet",
         "--burst-coeff", "0.02",  # the paper's burst, as the tables it keeps were measured
     ]  # fmt: skip
@@ -100,13 +101,17 @@ def _common(network: Path, workers: int | None) -> list[str]:
     return args
 
 
-def _fronts(network: Path, meters_file: Path, out: Path, bursts: int, workers: int | None) -> None:
-    """A calibration at 0.2 s whose paths are timed at the fronts' speed, written to ``out``."""
+def _fronts(
+    network: Path, meters_file: Path, out: Path, bursts: int, workers: int | None, interval: float
+) -> None:
+    """A calibration at ``interval`` s whose paths are timed at the fronts' speed, written to
+    ``out``."""
     from burstloc.cli import main
 
     args = [
         "calibrate", str(network), "--meters-file", str(meters_file), "--out", str(out),
-        "--capture-interval", "0.2", "--front-bursts", str(bursts), "--burst-coeff", "0.02",
+        "--capture-interval", f"{interval:g}", "--front-bursts", str(bursts),
+        "--burst-coeff", "0.02",
     ]  # fmt: skip
     if main(args + _common(network, workers)) != 0:
         raise SystemExit(f"calibrate --front-bursts failed on {network.name}")
@@ -158,6 +163,9 @@ def main() -> None:
     parser.add_argument("--meters-file", type=Path, nargs="+", default=[])
     parser.add_argument("--workers", type=int)
     parser.add_argument(
+        "--capture-interval", type=float, default=0.2, help="seconds between readings (0.2)"
+    )
+    parser.add_argument(
         "--sample", type=int, help="burst this many pipes (seeded) instead of every pipe"
     )
     parser.add_argument(
@@ -179,12 +187,19 @@ def main() -> None:
             meters = json.loads(meters_file.read_text())["meters"]
             junctions = len(load_network(network).junction_name_list)
             wall = time.perf_counter()
-            run = _run(network, meters_file, Path(tmp) / "out.json", args.workers, args.sample)
+            run = _run(
+                network, meters_file, Path(tmp) / "out.json", args.workers, args.sample,
+                interval=args.capture_interval,
+            )  # fmt: skip
             wall = time.perf_counter() - wall
-            _report(network.name, len(meters), junctions, run, _main_length(network), wall)
+            name = f"{network.name} at {args.capture_interval:g} s"
+            _report(name, len(meters), junctions, run, _main_length(network), wall)
             if args.front_bursts:
                 config = Path(tmp) / "fronts.json"
-                _fronts(network, meters_file, config, args.front_bursts, args.workers)
+                _fronts(
+                    network, meters_file, config, args.front_bursts, args.workers,
+                    args.capture_interval,
+                )  # fmt: skip
                 again = _run(
                     network,
                     meters_file,
@@ -192,6 +207,7 @@ def main() -> None:
                     args.workers,
                     args.sample,
                     config=config,
+                    interval=args.capture_interval,
                 )
                 levels = [_pct(level["coverage"]) for level in again["region"]["levels"]]
                 print(
