@@ -213,9 +213,10 @@ Run = tuple[float, float, float, int, float]
 def monitor_run(config: Any, readings: list[Any], observer: Any) -> Run:
     """Decisions/s and readings/s through a fresh live loop (wall clock), the median decision
     latency (s), the decisions, readings/s of the loop thread's own CPU time."""
-    from burstloc.live.health import Health, PlausibleRange
+    from burstloc.live.health import Health
     from burstloc.live.loop import LiveLoop
     from burstloc.live.monitor import BurstMonitor
+    from burstloc.live.plausible import PlausibleRange
     from burstloc.live.reporter import Reporter
 
     monitor = BurstMonitor(PAPER15, config, capture_interval=0.2)

@@ -78,9 +78,10 @@ def messages(lines: list[bytes]) -> list[bytes]:
 
 def fresh_loop(network: Path, config: Any, dt: float) -> tuple[Any, list[dict[str, Any]]]:
     """A live loop as ``burstloc monitor`` builds it, and the records it emits."""
-    from burstloc.live.health import Health, PlausibleRange
+    from burstloc.live.health import Health
     from burstloc.live.loop import LiveLoop
     from burstloc.live.monitor import BurstMonitor
+    from burstloc.live.plausible import PlausibleRange
     from burstloc.live.reporter import Reporter
 
     monitor = BurstMonitor(network, config, capture_interval=dt)

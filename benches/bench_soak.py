@@ -49,10 +49,11 @@ from mosquitto import SUBSCRIPTIONS, broker  # noqa: E402  (the tests' broker fi
 
 from burstloc.experiments.calibrate import calibrate  # noqa: E402
 from burstloc.experiments.paper import ScenarioConfig  # noqa: E402
-from burstloc.live.health import Health, PlausibleRange  # noqa: E402
+from burstloc.live.health import Health  # noqa: E402
 from burstloc.live.loop import LiveLoop  # noqa: E402
 from burstloc.live.monitor import BurstMonitor  # noqa: E402
 from burstloc.live.parse import parse_payload, parse_row  # noqa: E402
+from burstloc.live.plausible import PlausibleRange  # noqa: E402
 from burstloc.live.reporter import Reporter  # noqa: E402
 from burstloc.sim.scenarios.scenario import burst_scenarios  # noqa: E402
 from burstloc.sim.transient.tsnet import simulate_burst  # noqa: E402

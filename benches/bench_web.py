@@ -144,9 +144,10 @@ def highlight_latency(driver: Any, record: dict[str, Any], decisions: int) -> li
 def monitor_run(config: Any, readings: list[Any], observer: Any) -> tuple[float, float, float]:
     """Readings/s through a fresh live loop (wall clock, and the loop thread's own CPU time),
     and the decision's latency (s, wall clock)."""
-    from burstloc.live.health import Health, PlausibleRange
+    from burstloc.live.health import Health
     from burstloc.live.loop import LiveLoop
     from burstloc.live.monitor import BurstMonitor
+    from burstloc.live.plausible import PlausibleRange
     from burstloc.live.reporter import Reporter
 
     monitor = BurstMonitor(PAPER15, config, capture_interval=0.2)

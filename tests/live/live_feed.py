@@ -7,10 +7,11 @@ from typing import Any
 
 import numpy as np
 
-from burstloc.live.health import Health, PlausibleRange
+from burstloc.live.health import Health
 from burstloc.live.loop import LiveLoop
 from burstloc.live.monitor import BurstMonitor
 from burstloc.live.parse import BadReading
+from burstloc.live.plausible import PlausibleRange
 from burstloc.live.reporter import Reporter
 from burstloc.readings import Reading, Step
 

@@ -8,9 +8,10 @@ from pathlib import Path
 import pytest
 from live_feed import Collected, burst_steps, readings
 
-from burstloc.live.health import CLOCK_JUMP, Health, PlausibleRange
+from burstloc.live.health import CLOCK_JUMP, Health
 from burstloc.live.monitor import BurstMonitor
 from burstloc.live.parse import BadReading
+from burstloc.live.plausible import PlausibleRange
 from burstloc.live.state import StateFile, identity
 from burstloc.localize.config import Calibration
 from burstloc.readings import Reading

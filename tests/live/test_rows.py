@@ -13,9 +13,10 @@ import pytest
 from live_feed import Collected
 
 from burstloc.live.feeds import StepFeed
-from burstloc.live.health import Health, PlausibleRange
+from burstloc.live.health import Health
 from burstloc.live.monitor import BurstMonitor
 from burstloc.live.parse import BadReading, parse_payload, parse_row
+from burstloc.live.plausible import PlausibleRange
 from burstloc.localize.config import Calibration
 from burstloc.readings import Reading
 

@@ -125,10 +125,11 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Handle ``burstloc monitor``."""
-    from burstloc.live.health import Health, PlausibleRange
+    from burstloc.live.health import Health
     from burstloc.live.loop import LiveLoop
     from burstloc.live.monitor import BurstMonitor
     from burstloc.live.observe import fan_out
+    from burstloc.live.plausible import PlausibleRange
     from burstloc.live.reporter import Reporter
     from burstloc.live.state import StateFile, identity
     from burstloc.localize.config import Calibration

@@ -2,6 +2,7 @@
 :mod:`burstloc.sim`, WNTR or TSNet.
 
 * :mod:`~burstloc.live.parse`: CSV lines and MQTT payloads to readings, bad input named;
+* :mod:`~burstloc.live.plausible`: each meter's believable readings;
 * :mod:`~burstloc.live.health`: per-meter health, plausible range, clock offsets, silence;
 * :mod:`~burstloc.live.feeds`: raw readings assembled into complete time steps;
 * :mod:`~burstloc.live.windows`: complete steps into the localization windows of the paper's loop;

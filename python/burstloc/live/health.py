@@ -7,7 +7,8 @@ answers the reading to feed (its timestamp corrected for a known clock offset), 
 :class:`~burstloc.live.parse.BadReading` (to report and skip) or ``None`` (held back while the
 meter's clock is off). The rules:
 
-* **Plausible range.** A value outside the meter's range (:class:`PlausibleRange`; default: below
+* **Plausible range.** A value outside the meter's range
+  (:class:`~burstloc.live.plausible.PlausibleRange`; default: below
   -10 m or above twice the highest steady head at the meters) is a bad reading: counted
   (``implausible``), reported, skipped. It never reaches the detectors, so it never starts an
   alarm.
@@ -51,9 +52,10 @@ from typing import Any, NamedTuple
 
 from burstloc.exceptions import ConfigError
 from burstloc.live.parse import BadReading, unknown_meter
+from burstloc.live.plausible import PlausibleRange
 from burstloc.readings import Reading
 
-__all__ = ["CLOCK_JUMP", "CLOCK_WINDOW", "AdmittedRow", "Health", "MeterHealth", "PlausibleRange"]
+__all__ = ["CLOCK_JUMP", "CLOCK_WINDOW", "AdmittedRow", "Health", "MeterHealth"]
 
 #: Readings of one meter that must agree before its clock offset is corrected.
 CLOCK_WINDOW = 25
@@ -63,36 +65,6 @@ CLOCK_WINDOW = 25
 CLOCK_JUMP = 86_400.0
 
 _COUNTS = ("readings", "bad", "implausible", "late", "off_clock", "filled", "replayed")
-
-
-@dataclass(frozen=True)
-class PlausibleRange:
-    """Per meter, the lowest and highest believable reading (m of head)."""
-
-    low: Mapping[str, float]
-    high: Mapping[str, float]
-
-    @classmethod
-    def default(cls, meters: Sequence[str], steady_heads: Sequence[float]) -> PlausibleRange:
-        """Below -10 m or above twice the highest steady head at the meters is implausible."""
-        top = 2.0 * max(max(float(h) for h in steady_heads), 10.0)
-        return cls({m: -10.0 for m in meters}, {m: top for m in meters})
-
-    def with_overrides(self, overrides: Mapping[str | None, tuple[float, float]]) -> PlausibleRange:
-        """This range with ``overrides`` (meter, or ``None`` for every meter, → (low, high)).
-
-        Raises:
-            ConfigError: an unknown meter or an empty or non-finite range.
-        """
-        low, high = dict(self.low), dict(self.high)
-        for meter, (lo, hi) in overrides.items():
-            if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
-                raise ConfigError(f"plausible range must be finite LOW < HIGH, got {lo}:{hi}")
-            if meter is not None and meter not in low:
-                raise ConfigError(f"plausible range for unknown meter {meter!r}")
-            for m in low if meter is None else (meter,):
-                low[m], high[m] = float(lo), float(hi)
-        return PlausibleRange(low, high)
 
 
 class AdmittedRow(NamedTuple):
