@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
-import numpy as np
+import math
 
+import numpy as np
+import pytest
+
+from burstloc.exceptions import ConfigError
 from burstloc.live.arming import Arming, rang_out
 from burstloc.live.history import RowHistory
 
@@ -63,3 +67,15 @@ def test_the_ringing_has_died_down_where_the_step_changes_are_back_to_the_noise(
         history.append(np.array([10.0 + ringing, 20.0, 30.0, 40.0]) + rng.normal(0.0, actual))
     # quiet within QUIET_FACTOR (1.3) of the calibrated noise's step-to-step change
     assert rang_out(history, 150, noise).tolist() == [False, True, False, True]
+
+
+@pytest.mark.parametrize(
+    ("holdoff", "rearm", "named"),
+    [(-1.0, 2, "holdoff"), (math.inf, 2, "holdoff"), (math.nan, 2, "holdoff"),
+     (10.0, -1, "rearm"), (10.0, 2.5, "rearm"), (10.0, True, "rearm")],
+)  # fmt: skip
+def test_a_bad_hold_off_or_re_arming_is_refused_by_name(
+    holdoff: float, rearm: int, named: str
+) -> None:
+    with pytest.raises(ConfigError, match=named):
+        Arming(holdoff, rearm, settle=True)

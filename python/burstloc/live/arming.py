@@ -21,6 +21,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
+from burstloc.exceptions import ConfigError
 from burstloc.live.history import RowHistory
 
 __all__ = ["QUIET_FACTOR", "QUIET_WINDOW", "Arming", "rang_out"]
@@ -51,10 +52,19 @@ class Arming:
     ``holdoff``: seconds of reading time alarms are ignored after a decision; ``rearm``:
     alarm-free steps needed after it; ``settle``: whether re-arming also waits for the ringing
     to die down (or one more hold-off).
+
+    Raises:
+        ConfigError: a ``holdoff`` that is not a finite number of seconds >= 0, a ``rearm`` that
+            is not a whole number of steps >= 0.
     """
 
     def __init__(self, holdoff: float, rearm: int, settle: bool) -> None:
-        self.holdoff = holdoff
+        seconds = float(holdoff)
+        if not (math.isfinite(seconds) and seconds >= 0):
+            raise ConfigError(f"holdoff must be a finite number of seconds >= 0, got {holdoff}")
+        if isinstance(rearm, bool) or not isinstance(rearm, int) or rearm < 0:
+            raise ConfigError(f"rearm must be a whole number of steps >= 0, got {rearm!r}")
+        self.holdoff = seconds
         self.rearm = rearm
         self.settle = settle
         #: End of the hold-off after a decision (reading time), ``None`` outside one.

@@ -165,17 +165,14 @@ class BurstMonitor:
         if localizer not in self.localizers:
             raise ConfigError(f"no {localizer!r} localizer among {sorted(self.localizers)}")
         cal = self.calibration
-        self.holdoff = cal.decision_delay if holdoff is None else float(holdoff)
-        if not (math.isfinite(self.holdoff) and self.holdoff >= 0):
-            raise ConfigError(f"holdoff must be a finite number of seconds >= 0, got {holdoff}")
-        self.rearm = 2 * cal.localization_interval if rearm is None else rearm
-        if isinstance(self.rearm, bool) or not isinstance(self.rearm, int) or self.rearm < 0:
-            raise ConfigError(f"rearm must be a whole number of steps >= 0, got {rearm!r}")
+        self._arm = Arming(
+            cal.decision_delay if holdoff is None else holdoff,
+            2 * cal.localization_interval if rearm is None else rearm,
+            bool(settle),
+        )
         if isinstance(corroborate, bool) or not isinstance(corroborate, int) or corroborate < 1:
             raise ConfigError(f"corroborate must be a whole number >= 1, got {corroborate!r}")
         self.corroborate = corroborate
-        self.settle = bool(settle)
-        self._arm = Arming(self.holdoff, self.rearm, self.settle)
         self.dismissed = 0  # alarms not corroborated by enough meters
         self.steady = np.asarray(config.model.signature_sets[0].baseline, dtype=np.float64)
         span = HISTORY_BEFORE_ONSET + cal.decision_delay + cal.arrival_decision_delay
@@ -206,6 +203,16 @@ class BurstMonitor:
     def pending(self) -> bool:
         """Whether a burst has been detected and awaits its decision."""
         return self._due is not None
+
+    @property
+    def holdoff(self) -> float:
+        """Seconds after a decision during which alarms are ignored."""
+        return self._arm.holdoff
+
+    @property
+    def rearm(self) -> int:
+        """Alarm-free steps needed after the hold-off before an alarm counts again."""
+        return self._arm.rearm
 
     @property
     def holding_off(self) -> bool:
